@@ -1,0 +1,9 @@
+"""``python -m dynevent``: the same as the ``dynevent`` command."""
+
+from __future__ import annotations
+
+import sys
+
+from .cli import main
+
+sys.exit(main())

@@ -1,0 +1,177 @@
+"""Field factories shared by the wire mirrors and the machine inputs.
+
+Each factory returns an ``attrs.field`` whose converter checks the value against
+one wire type and raises :class:`~dynevent.errors.InvalidMessage` naming the
+owning class, the field and the value.  The wire type is recorded in the
+field's metadata under :data:`WIRE_KEY`, for conversion and for strategies.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from collections.abc import Callable, Iterable, Mapping
+from enum import Enum
+from typing import Any, cast
+
+import attrs
+
+from .errors import InvalidMessage
+
+#: The one NaN every float32 field stores (NaN payloads are not kept).
+CANONICAL_NAN = float("nan")
+_F32 = struct.Struct("<f")
+
+
+def _owner(instance: object) -> str:
+    return type(instance).__name__
+
+
+def _integer(low: int, high: int, wire: str) -> attrs.Converter[Any, Any]:
+    def convert(value: Any, instance: object, field: attrs.Attribute[Any]) -> int:
+        if type(value) is not int:
+            if isinstance(value, bool) or not isinstance(value, int):
+                raise InvalidMessage(_owner(instance), field.name, value, f"expected an integer ({wire})")
+            value = int(value)  # an IntEnum member is stored as its plain value
+        if not low <= value <= high:
+            raise InvalidMessage(
+                _owner(instance), field.name, value, f"out of range for {wire} [{low}, {high}]"
+            )
+        checked: int = value
+        return checked
+
+    return attrs.Converter(convert, takes_self=True, takes_field=True)
+
+
+def _float32(value: Any, instance: object, field: attrs.Attribute[Any]) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InvalidMessage(_owner(instance), field.name, value, "expected a number (float32)")
+    try:
+        rounded: float = _F32.unpack(_F32.pack(value))[0]
+    except (OverflowError, struct.error):
+        raise InvalidMessage(
+            _owner(instance), field.name, value, "out of range for float32 (magnitude above 3.4028235e38)"
+        ) from None
+    return CANONICAL_NAN if math.isnan(rounded) else rounded
+
+
+def _string(value: Any, instance: object, field: attrs.Attribute[Any]) -> str:
+    if type(value) is not str:
+        if not isinstance(value, str):
+            raise InvalidMessage(_owner(instance), field.name, value, "expected a string")
+        value = value.value if isinstance(value, Enum) else str.__str__(value)
+    if not value.isascii():
+        try:
+            value.encode("utf-8")
+        except UnicodeEncodeError as exc:
+            raise InvalidMessage(
+                _owner(instance),
+                field.name,
+                value,
+                f"not UTF-8 encodable (lone surrogate at index {exc.start})",
+            ) from None
+    if "\x00" in value:
+        raise InvalidMessage(
+            _owner(instance), field.name, value, f"NUL character at index {value.index(chr(0))}"
+        )
+    return cast(str, value)
+
+
+def _boolean(value: Any, instance: object, field: attrs.Attribute[Any]) -> bool:
+    if type(value) is not bool:
+        raise InvalidMessage(_owner(instance), field.name, value, "expected a bool")
+    return value
+
+
+def _nested(cls: type[Any]) -> attrs.Converter[Any, Any]:
+    def convert(value: Any, instance: object, field: attrs.Attribute[Any]) -> Any:
+        if type(value) is not cls:
+            raise InvalidMessage(_owner(instance), field.name, value, f"expected a {cls.__name__}")
+        return value
+
+    return attrs.Converter(convert, takes_self=True, takes_field=True)
+
+
+def _array(cls: type[Any]) -> attrs.Converter[Any, Any]:
+    def convert(value: Any, instance: object, field: attrs.Attribute[Any]) -> tuple[Any, ...]:
+        if type(value) is not tuple:
+            if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Iterable):
+                raise InvalidMessage(
+                    _owner(instance), field.name, value, f"expected a sequence of {cls.__name__}"
+                )
+            value = tuple(value)
+        for index, item in enumerate(value):
+            if type(item) is not cls:
+                raise InvalidMessage(
+                    _owner(instance), f"{field.name}[{index}]", item, f"expected a {cls.__name__}"
+                )
+        return cast("tuple[Any, ...]", value)
+
+    return attrs.Converter(convert, takes_self=True, takes_field=True)
+
+
+def _wrap(function: Callable[[Any, object, attrs.Attribute[Any]], Any]) -> attrs.Converter[Any, Any]:
+    return attrs.Converter(function, takes_self=True, takes_field=True)
+
+
+WIRE_KEY = "dynevent.wire"
+_CONVERTERS: dict[str, attrs.Converter[Any, Any]] = {
+    "uint8": _integer(0, 2**8 - 1, "uint8"),
+    "uint32": _integer(0, 2**32 - 1, "uint32"),
+    "uint64": _integer(0, 2**64 - 1, "uint64"),
+    "int32": _integer(-(2**31), 2**31 - 1, "int32"),
+    "int64": _integer(-(2**63), 2**63 - 1, "int64"),
+    "float32": _wrap(_float32),
+    "string": _wrap(_string),
+    "bool": _wrap(_boolean),
+}
+
+
+def _float_key(value: float) -> float | None:
+    """Equality key of a float32 field: every NaN is one value, as on the wire."""
+    return None if math.isnan(value) else value
+
+
+def scalar(wire: str, default: Any) -> Any:
+    eq_key = _float_key if wire == "float32" else True
+    return attrs.field(default=default, converter=_CONVERTERS[wire], eq=eq_key, metadata={WIRE_KEY: wire})
+
+
+def u8(default: int = 0) -> Any:
+    return scalar("uint8", default)
+
+
+def u32(default: int = 0) -> Any:
+    return scalar("uint32", default)
+
+
+def u64(default: int = 0) -> Any:
+    return scalar("uint64", default)
+
+
+def i32(default: int = 0) -> Any:
+    return scalar("int32", default)
+
+
+def i64(default: int = 0) -> Any:
+    return scalar("int64", default)
+
+
+def f32(default: float = 0.0) -> Any:
+    return scalar("float32", default)
+
+
+def string(default: str = "") -> Any:
+    return scalar("string", default)
+
+
+def boolean_field(default: bool = False) -> Any:
+    return scalar("bool", default)
+
+
+def message(cls: type[Any]) -> Any:
+    return attrs.field(factory=cls, converter=_nested(cls), metadata={WIRE_KEY: cls})
+
+
+def sequence(cls: type[Any]) -> Any:
+    return attrs.field(factory=tuple, converter=_array(cls), metadata={WIRE_KEY: (cls,)})

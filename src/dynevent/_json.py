@@ -1,0 +1,85 @@
+"""Strict, bounded JSON reading shared by every parser at the edge.
+
+Python's :func:`json.loads` can raise several unrelated exception types on
+hostile text (``RecursionError`` for deep nesting, ``ValueError`` for integers
+with too many digits, ``UnicodeDecodeError`` for bad bytes).  :func:`parse`
+turns every one of them into a single :class:`JsonProblem` carrying a readable
+sentence, and refuses duplicate object keys, which JSON leaves undefined.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+__all__ = ["MAX_DEPTH", "JsonProblem", "dumps", "parse"]
+
+#: Deepest nesting of arrays and objects accepted in any JSON text.
+MAX_DEPTH = 64
+
+
+class JsonProblem(Exception):
+    """Raised by :func:`parse`; callers wrap it in their own located error."""
+
+
+def _pairs(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    result: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in result:
+            raise JsonProblem(f"duplicate key {key!r}")
+        result[key] = value
+    return result
+
+
+def _depth_ok(text: str) -> bool:
+    """Cheap scan: is the bracket nesting (outside strings) within MAX_DEPTH?"""
+    depth = 0
+    in_string = False
+    escaped = False
+    for ch in text:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif ch == "\\":
+                escaped = True
+            elif ch == '"':
+                in_string = False
+        elif ch == '"':
+            in_string = True
+        elif ch in "[{":
+            depth += 1
+            if depth > MAX_DEPTH:
+                return False
+        elif ch in "]}":
+            depth -= 1
+    return True
+
+
+def parse(text: str | bytes | bytearray) -> Any:
+    """Parse JSON text strictly; raise :class:`JsonProblem` on any fault.
+
+    ``NaN``, ``Infinity`` and ``-Infinity`` are accepted, as Python's and
+    rosbridge's encoders write them for non-finite floats.
+    """
+    if isinstance(text, (bytes, bytearray)):
+        try:
+            text = bytes(text).decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise JsonProblem(f"not UTF-8 text (byte {exc.start})") from None
+    if not isinstance(text, str):
+        raise JsonProblem(f"expected JSON text, got {type(text).__name__}")
+    if ("[" in text or "{" in text) and not _depth_ok(text):
+        raise JsonProblem(f"nested deeper than {MAX_DEPTH} levels")
+    try:
+        return json.loads(text, object_pairs_hook=_pairs)
+    except JsonProblem:
+        raise
+    except json.JSONDecodeError as exc:
+        raise JsonProblem(f"not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}") from None
+    except (ValueError, RecursionError) as exc:
+        raise JsonProblem(f"not valid JSON: {exc}") from None
+
+
+def dumps(value: Any) -> str:
+    """Write compact JSON text keeping the order of keys."""
+    return json.dumps(value, separators=(",", ":"), ensure_ascii=False)

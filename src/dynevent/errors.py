@@ -1,0 +1,85 @@
+"""The one exception hierarchy of dynevent.
+
+Exceptions are raised only at the edge: when a message is constructed or
+parsed, when a name is built, when a description, snapshot or vector file is
+read, or when the command line is given bad input.  The protocol machines
+themselves never raise; every refusal there is a value.
+
+Every class here subclasses :class:`ValueError`, so ``except ValueError``
+keeps working for callers who do not know dynevent.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "DyneventError",
+    "InvalidDescription",
+    "InvalidMessage",
+    "InvalidName",
+    "InvalidSnapshot",
+]
+
+_VALUE_REPR_LIMIT = 80
+
+
+def short_repr(value: object) -> str:
+    """Return ``repr(value)`` cut to a readable length for error messages."""
+    try:
+        text = repr(value)
+    except Exception:  # a hostile __repr__ must not hide the real error
+        text = f"<unrepresentable {type(value).__name__}>"
+    if len(text) > _VALUE_REPR_LIMIT:
+        text = f"{text[: _VALUE_REPR_LIMIT - 3]}... ({len(text)} chars)"
+    return text
+
+
+class DyneventError(ValueError):
+    """Base class of every error dynevent raises on bad input."""
+
+
+class InvalidMessage(DyneventError):
+    """A wire message could not be built or parsed.
+
+    ``message`` is the class name (``"Goal"``), ``field`` the dotted path of the
+    offending field (``"logs[2].seq"``; empty when the whole input is at fault)
+    and ``value`` the value that was refused.
+    """
+
+    def __init__(self, message: str, field: str, value: object, problem: str) -> None:
+        self.message_type = message
+        self.field = field
+        self.value = value
+        self.problem = problem
+        where = f"{message}.{field}" if field else message
+        super().__init__(f"{where}: {problem} (got {short_repr(value)})")
+
+
+class InvalidName(DyneventError):
+    """A fleet or robot name is not a valid ROS 2 name token."""
+
+    def __init__(self, field: str, value: object, problem: str) -> None:
+        self.field = field
+        self.value = value
+        self.problem = problem
+        super().__init__(f"{field} name {short_repr(value)} is not a valid ROS 2 name token: {problem}")
+
+
+class InvalidDescription(DyneventError):
+    """A ``dynamic_event`` description could not be parsed.
+
+    ``path`` locates the fault inside the JSON document (``"$.required[1].category"``).
+    """
+
+    def __init__(self, path: str, problem: str) -> None:
+        self.path = path
+        self.problem = problem
+        super().__init__(f"dynamic_event description at {path}: {problem}")
+
+
+class InvalidSnapshot(DyneventError):
+    """A snapshot of a state or a fleet could not be restored."""
+
+    def __init__(self, path: str, problem: str) -> None:
+        self.path = path
+        self.problem = problem
+        super().__init__(f"snapshot at {path}: {problem}")
