@@ -55,7 +55,8 @@ def _float32(value: Any, instance: object, field: attrs.Attribute[Any]) -> float
     return CANONICAL_NAN if math.isnan(rounded) else rounded
 
 
-def _string(value: Any, instance: object, field: attrs.Attribute[Any]) -> str:
+def check_string(value: Any, instance: object, field: attrs.Attribute[Any]) -> str:
+    """Check ``value`` as a wire string for ``field`` of ``instance``; return it as a plain ``str``."""
     if type(value) is not str:
         if not isinstance(value, str):
             raise InvalidMessage(_owner(instance), field.name, value, "expected a string")
@@ -122,7 +123,7 @@ _CONVERTERS: dict[str, attrs.Converter[Any, Any]] = {
     "int32": _integer(-(2**31), 2**31 - 1, "int32"),
     "int64": _integer(-(2**63), 2**63 - 1, "int64"),
     "float32": _wrap(_float32),
-    "string": _wrap(_string),
+    "string": _wrap(check_string),
     "bool": _wrap(_boolean),
 }
 

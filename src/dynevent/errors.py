@@ -55,13 +55,21 @@ class InvalidMessage(DyneventError):
 
 
 class InvalidName(DyneventError):
-    """A fleet or robot name is not a valid ROS 2 name token."""
+    """A fleet or robot name is not a valid ROS 2 name token, or a name is none of the protocol's.
+
+    ``field`` is ``"fleet"`` or ``"robot"`` for a bad token, ``"name"`` for a
+    whole name that could not be parsed.
+    """
 
     def __init__(self, field: str, value: object, problem: str) -> None:
         self.field = field
         self.value = value
         self.problem = problem
-        super().__init__(f"{field} name {short_repr(value)} is not a valid ROS 2 name token: {problem}")
+        if field in ("fleet", "robot"):
+            text = f"{field} name {short_repr(value)} is not a valid ROS 2 name token: {problem}"
+        else:
+            text = f"{field} {short_repr(value)} is not a Dynamic Event name: {problem}"
+        super().__init__(text)
 
 
 class InvalidDescription(DyneventError):

@@ -12,9 +12,12 @@ import enum
 
 __all__ = [
     "TERMINAL_GOAL_STATUSES",
+    "Compatibility",
     "DynamicState",
     "EventType",
     "GoalStatus",
+    "IdPolicy",
+    "RejectReason",
     "Status",
     "Tier",
 ]
@@ -98,3 +101,54 @@ class GoalStatus(str, enum.Enum):
 
 
 TERMINAL_GOAL_STATUSES = frozenset({GoalStatus.SUCCEEDED, GoalStatus.CANCELED, GoalStatus.ABORTED})
+
+
+class RejectReason(str, enum.Enum):
+    """Why a goal request was refused, or why an accepted goal could not start.
+
+    One closed vocabulary shared by the server machine (:func:`dynevent.machine.accept`),
+    the client machine's local refusals and the conformance vectors.  The
+    order of the checks is given in docs/spec.md.
+    """
+
+    SHUTTING_DOWN = "shutting_down"
+    SEQ_MISMATCH = "seq_mismatch"
+    INACTIVE = "inactive"
+    UNINITIALIZED_EVENT_TYPE = "uninitialized_event_type"
+    UNKNOWN_EVENT_TYPE = "unknown_event_type"
+    BUSY = "busy"
+    UNSUPPORTED_CATEGORY = "unsupported_category"
+    DESCRIPTION_NOT_JSON = "description_not_json"
+    DESCRIPTION_INVALID = "description_invalid"
+    NON_FINITE_STUBBORN_PERIOD = "non_finite_stubborn_period"
+    STALE_ID = "stale_id"
+    CANCEL_IDLE = "cancel_idle"
+    CANCEL_ID_MISMATCH = "cancel_id_mismatch"
+    RACE = "race"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+class IdPolicy(str, enum.Enum):
+    """Where a child event's id comes from."""
+
+    #: The NEXT goal's ``id`` becomes the child's id, as the action text says.
+    GOAL = "goal"
+    #: The server assigns the next id itself, ignoring the goal's ``id`` (rmf_ros2).
+    ADAPTER = "adapter"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+class Compatibility(str, enum.Enum):
+    """Which reading of the protocol the server follows where sources disagree."""
+
+    #: The action text is normative: bad event types and bad CANCELs are rejected at request time.
+    STANDARD = "standard"
+    #: rmf_ros2's accept-then-abort for event types and CANCEL checks.
+    RMF_ROS2 = "rmf_ros2"
+
+    def __str__(self) -> str:
+        return self.value

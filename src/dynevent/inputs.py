@@ -1,0 +1,336 @@
+"""What happens to one robot's server: the inputs of the server machine.
+
+Each input is a small frozen class, checked on construction like a wire
+message (a bad value raises :class:`~dynevent.errors.InvalidMessage` naming the
+class, the field and the value), so the machine itself never meets a
+malformed input and never raises.
+
+Time enters the machine only here: every input carries ``now``, in integer
+nanoseconds since the Unix epoch, within the range a ``builtin_interfaces/Time``
+can carry.  Goals are named by their ROS 2 action goal UUID, stored as 32
+lowercase hexadecimal digits.
+"""
+
+from __future__ import annotations
+
+import math
+import uuid
+from typing import Any, ClassVar, TypeAlias
+
+import attrs
+
+from . import _fields
+from ._fields import string, u64
+from .description import EventDescription
+from .errors import DyneventError, InvalidMessage
+from .messages import Goal
+from .vocab import Status, Tier
+
+__all__ = [
+    "MAX_LOG_TEXT_LENGTH",
+    "NOW_RANGE",
+    "Begin",
+    "CancelRequested",
+    "ChildFinished",
+    "ChildProgress",
+    "DescriptionQuery",
+    "GoalRequested",
+    "GoalStarted",
+    "Input",
+    "Interrupt",
+    "Resume",
+    "Shutdown",
+    "TaskCancel",
+    "TaskKill",
+    "Tick",
+    "goal_uuid",
+]
+
+#: Longest log text a child progress input may carry, in characters.
+MAX_LOG_TEXT_LENGTH = 16_384
+
+#: Inclusive range of ``now`` (nanoseconds): what ``builtin_interfaces/Time`` can carry.
+NOW_RANGE = (-(2**31) * 1_000_000_000, 2**31 * 1_000_000_000 - 1)
+
+_STATUSES = frozenset(status.value for status in Status)
+_TIERS = frozenset(tier.value for tier in Tier)
+
+
+def goal_uuid(value: object) -> str:
+    """Canonicalize a goal UUID: 16 bytes, a :class:`uuid.UUID`, or 32 hex digits.
+
+    Returns 32 lowercase hexadecimal digits.  Raises ``ValueError`` (not the
+    project's error: callers wrap it with their own location).
+    """
+    if type(value) is str and len(value) == 32:
+        try:
+            int(value, 16)
+        except ValueError:
+            pass
+        else:
+            return value.lower()
+    if isinstance(value, uuid.UUID):
+        return value.hex
+    if isinstance(value, (bytes, bytearray)):
+        if len(value) != 16:
+            raise ValueError(f"a goal UUID is 16 bytes, got {len(value)}")
+        return bytes(value).hex()
+    if isinstance(value, str):
+        try:
+            return uuid.UUID(value).hex
+        except ValueError:
+            raise ValueError("expected 32 hexadecimal digits") from None
+    raise ValueError("expected 16 bytes, a uuid.UUID or 32 hexadecimal digits")
+
+
+def _uuid(value: Any, instance: object, field: attrs.Attribute[Any]) -> str:
+    try:
+        return goal_uuid(value)
+    except ValueError as exc:
+        raise InvalidMessage(type(instance).__name__, field.name, value, str(exc)) from None
+
+
+def _now(value: Any, instance: object, field: attrs.Attribute[Any]) -> int:
+    if type(value) is not int:
+        raise InvalidMessage(type(instance).__name__, field.name, value, "expected integer nanoseconds")
+    if not NOW_RANGE[0] <= value <= NOW_RANGE[1]:
+        raise InvalidMessage(
+            type(instance).__name__, field.name, value, "outside the range of builtin_interfaces/Time"
+        )
+    return value
+
+
+def _one_of(allowed: frozenset[str], what: str) -> attrs.Converter[Any, Any]:
+    def convert(value: Any, instance: object, field: attrs.Attribute[Any]) -> str:
+        plain = value.value if isinstance(value, (Status, Tier)) else value
+        if plain not in allowed or type(plain) is not str:
+            raise InvalidMessage(
+                type(instance).__name__, field.name, value, f"expected one of the {what}: {sorted(allowed)}"
+            )
+        return plain
+
+    return attrs.Converter(convert, takes_self=True, takes_field=True)
+
+
+def _log_text(value: Any, instance: object, field: attrs.Attribute[Any]) -> str | None:
+    if value is None:
+        return None
+    text: str = _fields.check_string(value, instance, field)
+    if len(text) > MAX_LOG_TEXT_LENGTH:
+        raise InvalidMessage(
+            type(instance).__name__,
+            field.name,
+            value,
+            f"log text of {len(text)} characters is above the limit of {MAX_LOG_TEXT_LENGTH}",
+        )
+    return text
+
+
+def _finite(value: Any, instance: object, field: attrs.Attribute[Any]) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InvalidMessage(type(instance).__name__, field.name, value, "expected a number")
+    try:
+        number = float(value)
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number):
+        raise InvalidMessage(type(instance).__name__, field.name, value, "expected a finite number")
+    return number
+
+
+def _begin_description(value: Any, instance: object, field: attrs.Attribute[Any]) -> str:
+    text: str = _fields.check_string(value, instance, field)
+    try:
+        EventDescription.from_json(text)
+    except DyneventError as exc:
+        raise InvalidMessage(type(instance).__name__, field.name, value, str(exc)) from None
+    return text
+
+
+def _goal(value: Any, instance: object, field: attrs.Attribute[Any]) -> Goal:
+    if type(value) is not Goal:
+        raise InvalidMessage(type(instance).__name__, field.name, value, "expected a Goal")
+    return value
+
+
+def _conv(function: Any) -> Any:
+    return attrs.Converter(function, takes_self=True, takes_field=True)
+
+
+def _checked(function: Any, **kwargs: Any) -> Any:
+    """An ``attrs.field`` whose converter is ``function(value, instance, field)``."""
+    return attrs.field(converter=_conv(function), **kwargs)
+
+
+def _now_field() -> Any:
+    return _checked(_now)
+
+
+def _uuid_field() -> Any:
+    return _checked(_uuid)
+
+
+class _Input:
+    __slots__ = ()
+
+    #: The name of this input in traces, vectors and diagrams.
+    KIND: ClassVar[str] = ""
+
+
+@attrs.frozen(kw_only=True)
+class Begin(_Input):
+    """A task reached a ``dynamic_event`` phase: the dynamic event begins.
+
+    ``description`` is the full JSON text of the ``dynamic_event`` event
+    description; ``event_id`` is the dynamic event's own id in its task.
+    """
+
+    KIND: ClassVar[str] = "begin"
+    description: str = _checked(_begin_description)
+    event_id: int = u64()
+    now: int = _now_field()
+
+
+@attrs.frozen(kw_only=True)
+class GoalRequested(_Input):
+    """A goal request arrived (a ROS ``handle_goal`` callback)."""
+
+    KIND: ClassVar[str] = "goal_requested"
+    goal_uuid: str = _uuid_field()
+    goal: Goal = _checked(_goal)
+    now: int = _now_field()
+
+
+@attrs.frozen(kw_only=True)
+class GoalStarted(_Input):
+    """An accepted goal is handed over for execution (a ROS ``handle_accepted`` callback)."""
+
+    KIND: ClassVar[str] = "goal_started"
+    goal_uuid: str = _uuid_field()
+    now: int = _now_field()
+
+
+@attrs.frozen(kw_only=True)
+class CancelRequested(_Input):
+    """A client asked, through the action protocol, to cancel a goal (``handle_cancel``)."""
+
+    KIND: ClassVar[str] = "cancel_requested"
+    goal_uuid: str = _uuid_field()
+    now: int = _now_field()
+
+
+@attrs.frozen(kw_only=True)
+class ChildProgress(_Input):
+    """The running child event reported a status, optionally with a log line."""
+
+    KIND: ClassVar[str] = "child_progress"
+    status: str = attrs.field(converter=_one_of(_STATUSES, "task_state statuses"))  # type: ignore[misc]
+    now: int = _now_field()
+    log_text: str | None = _checked(_log_text, default=None)
+    tier: str = attrs.field(default="info", converter=_one_of(_TIERS, "log tiers"))  # type: ignore[misc]
+
+
+@attrs.frozen(kw_only=True)
+class ChildFinished(_Input):
+    """The running child event ended with a final status."""
+
+    KIND: ClassVar[str] = "child_finished"
+    status: str = attrs.field(converter=_one_of(_STATUSES, "task_state statuses"))  # type: ignore[misc]
+    now: int = _now_field()
+
+
+@attrs.frozen(kw_only=True)
+class Tick(_Input):
+    """Time passed; the robot is on ``map_name`` at ``(x, y)`` metres."""
+
+    KIND: ClassVar[str] = "tick"
+    now: int = _now_field()
+    map_name: str = string()
+    x: float = _checked(_finite, default=0.0)
+    y: float = _checked(_finite, default=0.0)
+
+
+@attrs.frozen(kw_only=True)
+class Interrupt(_Input):
+    """The task was interrupted (paused)."""
+
+    KIND: ClassVar[str] = "interrupt"
+    now: int = _now_field()
+
+
+@attrs.frozen(kw_only=True)
+class Resume(_Input):
+    """The task's interruption was released."""
+
+    KIND: ClassVar[str] = "resume"
+    now: int = _now_field()
+
+
+@attrs.frozen(kw_only=True)
+class TaskCancel(_Input):
+    """The whole task was cancelled."""
+
+    KIND: ClassVar[str] = "task_cancel"
+    now: int = _now_field()
+
+
+@attrs.frozen(kw_only=True)
+class TaskKill(_Input):
+    """The whole task was killed."""
+
+    KIND: ClassVar[str] = "task_kill"
+    now: int = _now_field()
+
+
+@attrs.frozen(kw_only=True)
+class Shutdown(_Input):
+    """The adapter is shutting down."""
+
+    KIND: ClassVar[str] = "shutdown"
+    now: int = _now_field()
+
+
+@attrs.frozen(kw_only=True)
+class DescriptionQuery(_Input):
+    """A request of the proposal's description service."""
+
+    KIND: ClassVar[str] = "description_query"
+    now: int = _now_field()
+
+
+#: Any input of the server machine.
+Input: TypeAlias = (
+    Begin
+    | GoalRequested
+    | GoalStarted
+    | CancelRequested
+    | ChildProgress
+    | ChildFinished
+    | Tick
+    | Interrupt
+    | Resume
+    | TaskCancel
+    | TaskKill
+    | Shutdown
+    | DescriptionQuery
+)
+
+#: Every input class, by its ``KIND``.
+INPUT_TYPES: dict[str, type[Input]] = {
+    cls.KIND: cls
+    for cls in (
+        Begin,
+        GoalRequested,
+        GoalStarted,
+        CancelRequested,
+        ChildProgress,
+        ChildFinished,
+        Tick,
+        Interrupt,
+        Resume,
+        TaskCancel,
+        TaskKill,
+        Shutdown,
+        DescriptionQuery,
+    )
+}

@@ -1,0 +1,881 @@
+"""The robot-side Dynamic Event machine: pure ``accept`` and ``step`` over a frozen state.
+
+Rule 1: everything that decides what the server does lives in this file.  The
+rules are numbered as in docs/spec.md (``R4.2`` and so on) and every rule is
+cited where it is carried out.  The machine never raises, never reads a clock
+and never does I/O: time arrives in the inputs, and every effect leaves as an
+output value (:mod:`dynevent.outputs`).
+
+The machine's phase (INACTIVE, WAITING, RUNNING) is a projection of the state,
+and :data:`TRANSITIONS` declares, per phase and input, which phases a step may
+lead to; it is the source of the diagram in docs/spec.md and is checked
+against the behaviour by the test suite.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, TypeAlias
+
+import attrs
+
+from . import _json
+from . import inputs as ins
+from . import outputs as outs
+from .messages import (
+    DescriptionResponse,
+    DynamicEventDescription,
+    DynamicEventStatus,
+    Feedback,
+    Goal,
+    LogEntry,
+    Result,
+    Time,
+)
+from .names import validate_token
+from .vocab import Compatibility, DynamicState, EventType, GoalStatus, IdPolicy, RejectReason, Status
+
+__all__ = [
+    "EXECUTION_FAILURES",
+    "TRANSITIONS",
+    "Edge",
+    "Position",
+    "QueuedGoal",
+    "RunningGoal",
+    "ServerConfig",
+    "State",
+    "Stubbornness",
+    "Transition",
+    "Validator",
+    "accept",
+    "accept_any",
+    "status_message",
+    "step",
+]
+
+_U32 = 2**32 - 1
+_U64 = 2**64 - 1
+_NS = 1_000_000_000
+
+#: A description validator: ``(category, parsed description) -> list of errors`` (empty when valid).
+Validator: TypeAlias = Callable[[str, Any], Sequence[str]]
+
+#: rmf_ros2's execution-failure strings, by the fault they report.
+EXECUTION_FAILURES: Mapping[str, str] = {
+    "race": "race condition",
+    "shutdown": "shutting down",
+    "idle_cancel": "an idle dynamic event cannot be cancelled",
+    "cancel_id": "ID for cancel request does not match current event",
+    "event_type": "invalid event_type",
+    "parse": "Description parsing failure",
+    "not_running": "cancelled while not running",
+}
+
+# Child statuses that end a child early: its goal is not answered as succeeded (R8.2).
+_EARLY_END = frozenset({Status.CANCELED.value, Status.KILLED.value, Status.SKIPPED.value})
+
+
+def accept_any(category: str, description: Any) -> Sequence[str]:
+    """A validator that accepts every description of its category."""
+    return ()
+
+
+def _categories(value: Mapping[str, Validator]) -> Mapping[str, Validator]:
+    if not isinstance(value, Mapping):
+        raise TypeError(
+            f"ServerConfig.categories: expected a mapping of category to validator, got {value!r}"
+        )
+    for name, validator in value.items():
+        if not isinstance(name, str) or not callable(validator):
+            raise TypeError(f"ServerConfig.categories: {name!r} must map a str to a callable validator")
+    return dict(value)
+
+
+def _positive(instance: Any, attribute: attrs.Attribute[Any], value: Any) -> None:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not math.isfinite(value)
+        or value <= 0
+    ):
+        raise ValueError(f"ServerConfig.{attribute.name}: expected a positive finite number, got {value!r}")
+
+
+def _at_least_a_centimetre(value: Any) -> Any:
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0:
+        return max(float(value), 0.01)
+    return value  # the validator names the fault
+
+
+@attrs.frozen(kw_only=True, eq=False)
+class ServerConfig:
+    """What a robot's server is configured with; not state, never snapshotted.
+
+    ``categories`` maps each supported event category to its description
+    validator.  ``stubborn_move_threshold`` is never below 0.01 m (a smaller
+    value is raised to it, as rmf_ros2 does).
+    """
+
+    categories: Mapping[str, Validator] = attrs.field(factory=dict, converter=_categories)
+    id_policy: IdPolicy = attrs.field(default=IdPolicy.GOAL, converter=IdPolicy)
+    compatibility: Compatibility = attrs.field(default=Compatibility.STANDARD, converter=Compatibility)
+    stubborn_minimum: float = attrs.field(default=2.0, validator=_positive)
+    stubborn_refresh: float = attrs.field(default=1.0, validator=_positive)
+    stubborn_move_threshold: float = attrs.field(
+        default=0.1,
+        validator=_positive,
+        converter=_at_least_a_centimetre,
+    )
+    max_description_length: int = 1_000_000
+
+    @classmethod
+    def rmf_ros2(cls, categories: Mapping[str, Validator]) -> ServerConfig:
+        """The configuration that behaves as rmf_ros2 does where dynevent diverges by option."""
+        return cls(categories=categories, id_policy=IdPolicy.ADAPTER, compatibility=Compatibility.RMF_ROS2)
+
+
+@attrs.frozen(kw_only=True)
+class QueuedGoal:
+    """A goal that was accepted and has not started yet."""
+
+    goal_uuid: str
+    goal: Goal
+
+
+@attrs.frozen(kw_only=True)
+class RunningGoal:
+    """The NEXT goal that holds the running slot, and its child event.
+
+    ``started`` is false while the child's start is deferred by an
+    interruption.  ``cancel_requested`` records an accepted action-level cancel
+    of this goal; ``canceling`` that the child has been told to stop.
+    """
+
+    goal_uuid: str
+    goal: Goal
+    child_id: int
+    child_status: str
+    started: bool
+    cancel_requested: bool = False
+    canceling: bool = False
+
+
+@attrs.frozen(kw_only=True)
+class Position:
+    """Where a tick last reported the robot."""
+
+    map_name: str
+    x: float
+    y: float
+
+
+@attrs.frozen(kw_only=True)
+class Stubbornness:
+    """An active stubborn hold: ``period`` seconds, held since ``hold_since``, anchored at ``anchor``."""
+
+    period: float
+    hold_since: int
+    next_refresh: int
+    anchor: Position | None
+
+
+@attrs.frozen(kw_only=True)
+class State:
+    """Everything the server knows for one robot.
+
+    Build a fresh one with :meth:`new`.  The phase (``INACTIVE``, ``WAITING``,
+    ``RUNNING``) is derived, never stored.  ``status`` is the dynamic event's
+    own status; ``last_id`` the highest event id used in the current run;
+    ``log_seq`` the next ``LogEntry.seq``; ``task_signal`` is ``""``,
+    ``"canceled"`` or ``"killed"`` once the task was cancelled or killed.
+    """
+
+    fleet: str
+    robot: str
+    seq: int = 0
+    active: bool = False
+    event_id: int = 0
+    description: str = ""
+    status: str = Status.UNINITIALIZED.value
+    last_id: int = 0
+    running: RunningGoal | None = None
+    queued: tuple[QueuedGoal, ...] = ()
+    cancels: tuple[str, ...] = ()
+    interrupted: bool = False
+    task_signal: str = ""
+    stubborn: Stubbornness | None = None
+    position: Position | None = None
+    log_seq: int = 0
+    shutdown: bool = False
+
+    @classmethod
+    def new(cls, fleet: str, robot: str) -> State:
+        """The state of a robot whose server has just started; refuses invalid names."""
+        return cls(fleet=validate_token("fleet", fleet), robot=validate_token("robot", robot))
+
+    @property
+    def phase(self) -> DynamicState:
+        """INACTIVE without an active dynamic event, RUNNING while a goal holds the running slot."""
+        if not self.active:
+            return DynamicState.INACTIVE
+        return DynamicState.WAITING if self.running is None else DynamicState.RUNNING
+
+    @property
+    def current_id(self) -> int:
+        """The id the status topic reports: the child's while running, else the dynamic event's."""
+        if not self.active:
+            return 0
+        return self.event_id if self.running is None else self.running.child_id
+
+
+@attrs.frozen
+class Transition:
+    """What one step did: the new state and the outputs, in order."""
+
+    state: State
+    outputs: tuple[outs.Output, ...]
+
+
+def status_message(state: State, now: int) -> DynamicEventStatus:
+    """The status message that describes ``state`` (R2.2)."""
+    if not state.active:
+        return DynamicEventStatus(
+            dynamic_event_seq=state.seq,
+            dynamic_state=DynamicState.INACTIVE.value,
+            status=Status.UNINITIALIZED.value,
+            id=0,
+            time=Time.from_nanoseconds(now),
+        )
+    phase = DynamicState.WAITING if state.running is None else DynamicState.RUNNING
+    return DynamicEventStatus(
+        dynamic_event_seq=state.seq,
+        dynamic_state=phase.value,
+        status=state.status,
+        id=state.current_id,
+        time=Time.from_nanoseconds(now),
+    )
+
+
+def _status_key(state: State) -> tuple[int, bool, bool, str, int]:
+    return (
+        state.seq,
+        state.active,
+        state.running is None,
+        state.status if state.active else "",
+        state.current_id,
+    )
+
+
+# --------------------------------------------------------------------------- accept
+
+
+def _reject(reason: RejectReason, text: str, failure: str = "", **values: Any) -> outs.Rejected:
+    return outs.Rejected(reason=reason, text=text, execution_failure=failure, **values)
+
+
+def _check_description(goal: Goal, config: ServerConfig) -> tuple[Any, outs.Rejected | None]:
+    """Parse and validate a NEXT goal's description (R4.8 to R4.10)."""
+    failure = EXECUTION_FAILURES["parse"]
+    text = goal.description
+    if len(text) > config.max_description_length:
+        problem = f"description is {len(text)} characters, above the limit of {config.max_description_length}"
+        return None, _reject(
+            RejectReason.DESCRIPTION_INVALID, problem, f"{failure}\n -- {problem}", errors=(problem,)
+        )
+    try:
+        parsed = _json.parse(text)
+    except _json.JsonProblem as exc:
+        return None, _reject(
+            RejectReason.DESCRIPTION_NOT_JSON,
+            f"the description of the {goal.category!r} event is {exc}",
+            f"{failure}\n -- {exc}",
+            errors=(str(exc),),
+        )
+    validator = config.categories[goal.category]
+    try:
+        errors = tuple(str(error) for error in validator(goal.category, parsed))
+    except Exception as exc:  # a faulty validator must not break the machine
+        errors = (f"the validator raised {type(exc).__name__}: {exc}",)
+    if errors:
+        return None, _reject(
+            RejectReason.DESCRIPTION_INVALID,
+            f"the description does not fit the {goal.category!r} category: " + "; ".join(errors),
+            failure + "".join(f"\n -- {error}" for error in errors),
+            errors=errors,
+        )
+    return parsed, None
+
+
+def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
+    """Would the server accept ``goal`` now?  A pure query (R4).
+
+    The checks run in the order of docs/spec.md section 4 and the first that
+    fails decides.  Usable as it is in a ROS ``handle_goal`` callback.
+    """
+    if state.shutdown:  # R4.1
+        return _reject(
+            RejectReason.SHUTTING_DOWN, "the server is shutting down", EXECUTION_FAILURES["shutdown"]
+        )
+    if goal.dynamic_event_seq != state.seq:  # R4.2
+        return _reject(
+            RejectReason.SEQ_MISMATCH,
+            f"Expected {state.seq}, received {goal.dynamic_event_seq}",
+            expected_seq=state.seq,
+            received_seq=goal.dynamic_event_seq,
+        )
+    if not state.active:  # R4.3
+        return _reject(RejectReason.INACTIVE, "no dynamic event is active for this robot")
+    event_type = goal.event_type
+    standard = config.compatibility is Compatibility.STANDARD
+    if standard and event_type == EventType.UNINITIALIZED:  # R4.4
+        return _reject(
+            RejectReason.UNINITIALIZED_EVENT_TYPE,
+            "event_type is 0 (UNINITIALIZED): the goal was default-initialized",
+            EXECUTION_FAILURES["event_type"],
+        )
+    if standard and event_type > EventType.FINISHED:  # R4.5
+        return _reject(
+            RejectReason.UNKNOWN_EVENT_TYPE,
+            f"event_type {event_type} is none of NEXT (1), CANCEL (2), FINISHED (3)",
+            EXECUTION_FAILURES["event_type"],
+        )
+    running = state.running
+    if running is not None and event_type != EventType.CANCEL:  # R4.6
+        return _reject(
+            RejectReason.BUSY,
+            f"event {running.child_id} is running: only a CANCEL with its id is accepted",
+            current_id=running.child_id,
+        )
+    if event_type == EventType.NEXT:
+        if goal.category not in config.categories:  # R4.7
+            supported = tuple(sorted(config.categories))
+            return _reject(
+                RejectReason.UNSUPPORTED_CATEGORY,
+                f"category {goal.category!r} is not supported; supported: {', '.join(supported) or 'none'}",
+                categories=supported,
+            )
+        _, problem = _check_description(goal, config)  # R4.8, R4.9, R4.10
+        if problem is not None:
+            return problem
+        if not math.isfinite(goal.stubborn_period):  # R4.11
+            return _reject(
+                RejectReason.NON_FINITE_STUBBORN_PERIOD,
+                f"stubborn_period {goal.stubborn_period} is not a finite number",
+            )
+        if config.id_policy is IdPolicy.GOAL and goal.id <= state.last_id:  # R4.12
+            return _reject(
+                RejectReason.STALE_ID,
+                f"id {goal.id} is not greater than {state.last_id}, the highest id used in this run",
+                current_id=state.last_id,
+                requested_id=goal.id,
+            )
+    elif event_type == EventType.CANCEL and standard:
+        if running is None:  # R4.13
+            return _reject(
+                RejectReason.CANCEL_IDLE, "no event is running to cancel", EXECUTION_FAILURES["idle_cancel"]
+            )
+        if goal.id != running.child_id:  # R4.14
+            return _reject(
+                RejectReason.CANCEL_ID_MISMATCH,
+                f"the running event is {running.child_id}, the CANCEL names {goal.id}",
+                EXECUTION_FAILURES["cancel_id"],
+                current_id=running.child_id,
+                requested_id=goal.id,
+            )
+    return outs.Accepted(event_type=event_type)
+
+
+# --------------------------------------------------------------------------- step helpers
+
+
+def _log(state: State, text: str, tier: str, now: int) -> tuple[State, LogEntry]:
+    """A new log entry with the robot's next LogEntry.seq, which wraps at 2**32 (R7.3)."""
+    entry = LogEntry(seq=state.log_seq, tier=tier, unix_millis_time=now // 1_000_000, text=text)
+    return attrs.evolve(state, log_seq=(state.log_seq + 1) & _U32), entry
+
+
+def _failure(goal_uuid: str, failure: str) -> outs.AnswerGoal:
+    return outs.AnswerGoal(
+        goal_uuid=goal_uuid, status=GoalStatus.ABORTED, result=Result(execution_failure=failure)
+    )
+
+
+def _finish(before: State, after: State, outputs: list[outs.Output], now: int) -> Transition:
+    """Close a step: append the status message when the status changed (R2.3)."""
+    if _status_key(before) != _status_key(after):
+        outputs.append(outs.PublishStatus(message=status_message(after, now)))
+    return Transition(after, tuple(outputs))
+
+
+def _ignored(state: State, kind: str, why: str) -> Transition:
+    return Transition(state, (outs.Ignored(input=kind, why=why),))
+
+
+def _end_stubbornness(state: State, outputs: list[outs.Output]) -> State:
+    if state.stubborn is None:
+        return state
+    outputs.append(outs.StubbornEnd())
+    return attrs.evolve(state, stubborn=None)
+
+
+def _start_child(
+    state: State, running: RunningGoal, outputs: list[outs.Output], logs: tuple[LogEntry, ...]
+) -> State:
+    """Start the running goal's child (R6.4): stubbornness ends, status becomes underway."""
+    state = _end_stubbornness(state, outputs)  # R12.5
+    goal = running.goal
+    parsed: Any
+    try:
+        parsed = _json.parse(goal.description)
+    except _json.JsonProblem:  # unreachable after R6.2; kept so the machine cannot raise
+        parsed = None
+    outputs.append(
+        outs.StartChild(
+            category=goal.category, description=goal.description, id=running.child_id, parsed=parsed
+        )
+    )
+    underway = Status.UNDERWAY.value
+    running = attrs.evolve(running, started=True, child_status=underway)
+    outputs.append(
+        outs.PublishFeedback(
+            goal_uuid=running.goal_uuid, feedback=Feedback(status=underway, id=running.child_id, logs=logs)
+        )
+    )
+    return attrs.evolve(state, running=running, status=underway)
+
+
+def _answers_at_child_end(state: State, running: RunningGoal, final: str) -> list[outs.Output]:
+    """The running goal's and every waiting CANCEL goal's answers when the child ends (R8.2, R8.3)."""
+    result = Result(status=final, id=running.child_id)
+    if final in _EARLY_END:
+        status = GoalStatus.CANCELED if running.cancel_requested else GoalStatus.ABORTED
+    else:
+        status = GoalStatus.SUCCEEDED
+    answers: list[outs.Output] = [outs.AnswerGoal(goal_uuid=running.goal_uuid, status=status, result=result)]
+    answers.extend(
+        outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.SUCCEEDED, result=result) for uuid in state.cancels
+    )
+    return answers
+
+
+def _end_dynamic_event(state: State, final: str, outputs: list[outs.Output]) -> State:
+    """The dynamic event is over (R11.2, R13.4): the task may move on."""
+    outputs.append(outs.DynamicEventFinished(status=final))
+    return attrs.evolve(state, active=False, status=final, running=None, cancels=())
+
+
+# --------------------------------------------------------------------------- step handlers
+
+
+def _on_begin(state: State, event: ins.Begin, config: ServerConfig) -> Transition:
+    if state.shutdown:  # R18.1
+        return _ignored(state, event.KIND, "the server is shutting down")
+    if state.active:  # R3.4
+        return _ignored(state, event.KIND, "a dynamic event is already active")
+    outputs: list[outs.Output] = []
+    seq = (state.seq + 1) & _U32  # R3.1
+    if seq == 0:  # R3.2
+        outputs.append(outs.SeqWrapped(previous=state.seq, seq=seq))
+    after = attrs.evolve(
+        state,
+        seq=seq,
+        active=True,
+        event_id=event.event_id,
+        description=event.description,
+        status=Status.STANDBY.value,
+        last_id=event.event_id,
+        task_signal="",
+    )
+    outputs.append(  # R3.3
+        outs.PublishBegin(
+            message=DynamicEventDescription(
+                fleet=state.fleet,
+                robot=state.robot,
+                dynamic_event_seq=seq,
+                description=event.description,
+                start_time=Time.from_nanoseconds(event.now),
+            )
+        )
+    )
+    return _finish(state, after, outputs, event.now)
+
+
+def _known_goal(state: State, uuid: str) -> bool:
+    return (
+        any(queued.goal_uuid == uuid for queued in state.queued)
+        or (state.running is not None and state.running.goal_uuid == uuid)
+        or uuid in state.cancels
+    )
+
+
+def _on_goal_requested(state: State, event: ins.GoalRequested, config: ServerConfig) -> Transition:
+    if _known_goal(state, event.goal_uuid):  # R18.2
+        return _ignored(state, event.KIND, "a goal with this uuid is already open")
+    decision = accept(state, event.goal, config)
+    if isinstance(decision, outs.Rejected):  # R4.15
+        return Transition(state, (outs.GoalRejected(goal_uuid=event.goal_uuid, rejection=decision),))
+    queued = (*state.queued, QueuedGoal(goal_uuid=event.goal_uuid, goal=event.goal))  # R4.16
+    return Transition(attrs.evolve(state, queued=queued), (outs.GoalAccepted(goal_uuid=event.goal_uuid),))
+
+
+def _race_lost(state: State, goal: Goal, config: ServerConfig) -> bool:
+    """R5.2: the world changed between the goal's acceptance and its start."""
+    if goal.dynamic_event_seq != state.seq or not state.active:
+        return True
+    if state.running is not None and goal.event_type != EventType.CANCEL:
+        return True
+    return (
+        goal.event_type == EventType.NEXT and config.id_policy is IdPolicy.GOAL and goal.id <= state.last_id
+    )
+
+
+def _on_goal_started(state: State, event: ins.GoalStarted, config: ServerConfig) -> Transition:
+    found = next((queued for queued in state.queued if queued.goal_uuid == event.goal_uuid), None)
+    if found is None:  # R18.3
+        return _ignored(state, event.KIND, "no accepted goal with this uuid is waiting to start")
+    uuid, goal = found.goal_uuid, found.goal
+    before = state
+    state = attrs.evolve(state, queued=tuple(queued for queued in state.queued if queued is not found))
+    outputs: list[outs.Output] = [outs.ExecuteGoal(goal_uuid=uuid)]  # R5.1
+    if _race_lost(state, goal, config):  # R5.2
+        outputs.append(_failure(uuid, EXECUTION_FAILURES["race"]))
+        return _finish(before, state, outputs, event.now)
+    if goal.event_type == EventType.NEXT:
+        state = _start_next(state, uuid, goal, config, outputs, event.now)
+    elif goal.event_type == EventType.CANCEL:
+        state = _start_cancel(state, uuid, goal, outputs, event.now)
+    elif goal.event_type == EventType.FINISHED:  # R11.1
+        state = _end_stubbornness(state, outputs)
+        result = Result(status=Status.COMPLETED.value, id=state.event_id)
+        outputs.append(outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.SUCCEEDED, result=result))
+        state = _end_dynamic_event(state, Status.COMPLETED.value, outputs)
+    else:  # R17.2: only reachable in rmf_ros2 compatibility
+        outputs.append(_failure(uuid, EXECUTION_FAILURES["event_type"]))
+    return _finish(before, state, outputs, event.now)
+
+
+def _start_next(
+    state: State, uuid: str, goal: Goal, config: ServerConfig, outputs: list[outs.Output], now: int
+) -> State:
+    _, problem = _check_description(goal, config)  # R6.1
+    if problem is not None:
+        outputs.append(_failure(uuid, problem.execution_failure))
+        return state
+    # R6.2: the goal names its child, or the server takes the next id
+    child_id = goal.id if config.id_policy is IdPolicy.GOAL else (state.last_id + 1) & _U64
+    logs: tuple[LogEntry, ...] = ()
+    period = goal.stubborn_period
+    if 0.0 < period < config.stubborn_minimum:  # R12.2
+        outputs.append(outs.StubbornClamped(requested=period, applied=config.stubborn_minimum))
+        text = (
+            f"stubborn_period {period:g} s is below the minimum of {config.stubborn_minimum:g} s; "
+            f"{config.stubborn_minimum:g} s will be used"
+        )
+        state, entry = _log(state, text, "warning", now)
+        outputs.append(outs.Log(entry=entry))
+        logs = (entry,)
+    state = attrs.evolve(state, last_id=child_id)
+    if state.interrupted:  # R6.3
+        queued_status = Status.QUEUED.value
+        running = RunningGoal(
+            goal_uuid=uuid, goal=goal, child_id=child_id, child_status=queued_status, started=False
+        )
+        outputs.append(
+            outs.PublishFeedback(
+                goal_uuid=uuid, feedback=Feedback(status=queued_status, id=child_id, logs=logs)
+            )
+        )
+        return attrs.evolve(state, running=running, status=queued_status)
+    running = RunningGoal(goal_uuid=uuid, goal=goal, child_id=child_id, child_status="", started=False)
+    return _start_child(state, running, outputs, logs)  # R6.4
+
+
+def _start_cancel(state: State, uuid: str, goal: Goal, outputs: list[outs.Output], now: int) -> State:
+    running = state.running
+    if running is None:  # R9.1
+        outputs.append(_failure(uuid, EXECUTION_FAILURES["idle_cancel"]))
+        return state
+    if goal.id != running.child_id:  # R9.2
+        outputs.append(_failure(uuid, EXECUTION_FAILURES["cancel_id"]))
+        return state
+    if not running.started:  # R9.4: the child never started; it is cancelled at once
+        state = attrs.evolve(state, cancels=(*state.cancels, uuid))
+        outputs.extend(_answers_at_child_end(state, running, Status.CANCELED.value))
+        return attrs.evolve(state, running=None, cancels=(), status=Status.STANDBY.value)
+    if not running.canceling:  # R9.3
+        outputs.append(outs.CancelChild(id=running.child_id))
+        running = attrs.evolve(running, canceling=True)
+    return attrs.evolve(state, running=running, cancels=(*state.cancels, uuid))
+
+
+def _on_cancel_requested(state: State, event: ins.CancelRequested, config: ServerConfig) -> Transition:
+    uuid = event.goal_uuid
+    accepted = outs.CancelResponse(goal_uuid=uuid, accepted=True)
+    not_running = Result(execution_failure=EXECUTION_FAILURES["not_running"])
+    if any(queued.goal_uuid == uuid for queued in state.queued):  # R10.1
+        after = attrs.evolve(
+            state, queued=tuple(queued for queued in state.queued if queued.goal_uuid != uuid)
+        )
+        answer = outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.CANCELED, result=not_running)
+        return Transition(after, (accepted, answer))
+    if uuid in state.cancels:  # R10.2
+        after = attrs.evolve(state, cancels=tuple(other for other in state.cancels if other != uuid))
+        answer = outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.CANCELED, result=not_running)
+        return Transition(after, (accepted, answer))
+    running = state.running
+    if running is None or running.goal_uuid != uuid:  # R10.5
+        return Transition(state, (outs.CancelResponse(goal_uuid=uuid, accepted=False),))
+    outputs: list[outs.Output] = [accepted]
+    running = attrs.evolve(running, cancel_requested=True)
+    if not running.started:  # R10.4
+        outputs.extend(_answers_at_child_end(state, running, Status.CANCELED.value))
+        after = attrs.evolve(state, running=None, cancels=(), status=Status.STANDBY.value)
+        return _finish(state, after, outputs, event.now)
+    if not running.canceling:  # R10.3
+        outputs.append(outs.CancelChild(id=running.child_id))
+        running = attrs.evolve(running, canceling=True)
+    return Transition(attrs.evolve(state, running=running), tuple(outputs))
+
+
+def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerConfig) -> Transition:
+    running = state.running
+    if running is None or not running.started:  # R18.4
+        return _ignored(state, event.KIND, "no child event is running")
+    outputs: list[outs.Output] = []
+    logs: tuple[LogEntry, ...] = ()
+    after = state
+    if event.log_text is not None:  # R7.2
+        after, entry = _log(after, event.log_text, event.tier, event.now)
+        outputs.append(outs.Log(entry=entry))
+        logs = (entry,)
+    status = event.status
+    outputs.append(  # R7.1
+        outs.PublishFeedback(
+            goal_uuid=running.goal_uuid, feedback=Feedback(status=status, id=running.child_id, logs=logs)
+        )
+    )
+    after = attrs.evolve(
+        after,
+        running=attrs.evolve(running, child_status=status),
+        status=after.status if after.task_signal else status,  # R7.4
+    )
+    return _finish(state, after, outputs, event.now)
+
+
+def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerConfig) -> Transition:
+    running = state.running
+    if running is None or not running.started:  # R18.4
+        return _ignored(state, event.KIND, "no child event is running")
+    outputs = _answers_at_child_end(state, running, event.status)  # R8.1 to R8.3
+    after = attrs.evolve(state, running=None, cancels=())
+    if state.task_signal:  # R13.4
+        after = _end_dynamic_event(after, state.task_signal, outputs)
+        return _finish(state, after, outputs, event.now)
+    after = attrs.evolve(after, status=Status.STANDBY.value)  # R8.4
+    period = running.goal.stubborn_period
+    if period > 0.0:  # R12.1
+        applied = max(period, config.stubborn_minimum)
+        anchor = state.position
+        outputs.append(
+            outs.StubbornBegin(
+                period=applied,
+                since=event.now,
+                map_name=None if anchor is None else anchor.map_name,
+                x=0.0 if anchor is None else anchor.x,
+                y=0.0 if anchor is None else anchor.y,
+            )
+        )
+        stubborn = Stubbornness(
+            period=applied,
+            hold_since=event.now,
+            next_refresh=event.now + _seconds(config.stubborn_refresh),
+            anchor=anchor,
+        )
+        after = attrs.evolve(after, stubborn=stubborn)
+    return _finish(state, after, outputs, event.now)
+
+
+def _seconds(value: float) -> int:
+    return round(value * _NS)
+
+
+def _on_tick(state: State, event: ins.Tick, config: ServerConfig) -> Transition:
+    position = Position(map_name=event.map_name, x=event.x, y=event.y)
+    stubborn = state.stubborn
+    if stubborn is None or event.now < stubborn.next_refresh:  # R12.3
+        return Transition(attrs.evolve(state, position=position), ())
+    refresh = _seconds(config.stubborn_refresh)
+    missed = (event.now - stubborn.next_refresh) // refresh + 1
+    next_refresh = stubborn.next_refresh + missed * refresh
+    anchor = stubborn.anchor
+    moved = (
+        anchor is None
+        or anchor.map_name != position.map_name
+        or math.hypot(position.x - anchor.x, position.y - anchor.y) > config.stubborn_move_threshold
+    )
+    output: outs.Output
+    if moved:  # R12.4
+        output = outs.StubbornHold(
+            period=stubborn.period, since=event.now, map_name=position.map_name, x=position.x, y=position.y
+        )
+        stubborn = Stubbornness(
+            period=stubborn.period, hold_since=event.now, next_refresh=next_refresh, anchor=position
+        )
+    else:
+        output = outs.StubbornDelay(delay=(event.now - stubborn.hold_since) / _NS)
+        stubborn = attrs.evolve(stubborn, next_refresh=next_refresh)
+    return Transition(attrs.evolve(state, position=position, stubborn=stubborn), (output,))
+
+
+def _on_interrupt(state: State, event: ins.Interrupt, config: ServerConfig) -> Transition:
+    if not state.active:  # R18.5
+        return _ignored(state, event.KIND, "no dynamic event is active")
+    if state.interrupted:  # R18.6
+        return _ignored(state, event.KIND, "the task is already interrupted")
+    after = attrs.evolve(state, interrupted=True)
+    running = state.running
+    if running is not None and running.started:  # R14.1
+        return Transition(after, (outs.InterruptChild(id=running.child_id),))
+    return Transition(after, (outs.InterruptConfirmed(),))  # R14.2
+
+
+def _on_resume(state: State, event: ins.Resume, config: ServerConfig) -> Transition:
+    if not state.interrupted:  # R18.6
+        return _ignored(state, event.KIND, "the task is not interrupted")
+    after = attrs.evolve(state, interrupted=False)  # R14.3
+    running = state.running
+    if running is None or not after.active:
+        return Transition(after, ())
+    if running.started:  # R14.4
+        return Transition(after, (outs.ResumeChild(id=running.child_id),))
+    outputs: list[outs.Output] = []
+    after = _start_child(after, running, outputs, ())  # R14.5
+    return _finish(state, after, outputs, event.now)
+
+
+def _on_task_signal(state: State, event: ins.TaskCancel | ins.TaskKill, config: ServerConfig) -> Transition:
+    kill = isinstance(event, ins.TaskKill)
+    signal = Status.KILLED.value if kill else Status.CANCELED.value
+    if not state.active:  # R18.5
+        return _ignored(state, event.KIND, "no dynamic event is active")
+    if state.task_signal in (Status.KILLED.value, signal):  # R18.7
+        return _ignored(state, event.KIND, f"the task was already {state.task_signal}")
+    outputs: list[outs.Output] = []
+    after, entry = _log(
+        state, f"Received signal to {'kill' if kill else 'cancel'}", "info", event.now
+    )  # R13.1
+    outputs.append(outs.Log(entry=entry))
+    after = attrs.evolve(after, task_signal=signal, status=signal)
+    running = after.running
+    if running is not None and running.started:
+        outputs.append(
+            outs.PublishFeedback(
+                goal_uuid=running.goal_uuid,
+                feedback=Feedback(status=running.child_status, id=running.child_id, logs=(entry,)),
+            )
+        )
+    after = _end_stubbornness(after, outputs)  # R12.5
+    if running is not None and running.started:  # R13.2
+        if kill:
+            outputs.append(outs.KillChild(id=running.child_id))
+        elif not running.canceling:
+            outputs.append(outs.CancelChild(id=running.child_id))
+        after = attrs.evolve(after, running=attrs.evolve(running, canceling=True))
+        return _finish(state, after, outputs, event.now)
+    if running is not None:  # R13.3: a deferred child ends before it starts
+        outputs.extend(_answers_at_child_end(after, running, signal))
+    after = _end_dynamic_event(after, signal, outputs)
+    return _finish(state, after, outputs, event.now)
+
+
+def _on_shutdown(state: State, event: ins.Shutdown, config: ServerConfig) -> Transition:
+    if state.shutdown:  # R18.1
+        return _ignored(state, event.KIND, "the server is already shutting down")
+    failure = EXECUTION_FAILURES["shutdown"]
+    outputs: list[outs.Output] = []
+    if state.running is not None:  # R15.1
+        outputs.append(_failure(state.running.goal_uuid, failure))
+    outputs.extend(_failure(uuid, failure) for uuid in state.cancels)
+    for queued in state.queued:
+        outputs.append(outs.ExecuteGoal(goal_uuid=queued.goal_uuid))
+        outputs.append(_failure(queued.goal_uuid, failure))
+    after = _end_stubbornness(state, outputs)  # R12.5
+    after = attrs.evolve(after, shutdown=True, active=False, running=None, queued=(), cancels=())  # R15.2
+    return _finish(state, after, outputs, event.now)
+
+
+def _on_description_query(state: State, event: ins.DescriptionQuery, config: ServerConfig) -> Transition:
+    if not state.active:  # R16.1
+        return Transition(state, (outs.DescriptionAnswer(response=DescriptionResponse()),))
+    response = DescriptionResponse(  # R16.2
+        running=True, status=state.status, description=state.description, id=state.current_id
+    )
+    return Transition(state, (outs.DescriptionAnswer(response=response),))
+
+
+# --------------------------------------------------------------------------- the transition table
+
+
+@attrs.frozen
+class Edge:
+    """One declared way a step may move the phase: ``source --input [guard]--> target`` (rule)."""
+
+    source: DynamicState
+    input: str
+    target: DynamicState
+    guard: str
+    rule: str
+
+
+_Handler: TypeAlias = Callable[[State, Any, ServerConfig], Transition]
+_I, _W, _R = DynamicState.INACTIVE, DynamicState.WAITING, DynamicState.RUNNING
+
+#: Input kind -> its handler.  One handler per input; the phase rules live in :data:`TRANSITIONS`.
+HANDLERS: Mapping[str, _Handler] = {
+    ins.Begin.KIND: _on_begin,
+    ins.GoalRequested.KIND: _on_goal_requested,
+    ins.GoalStarted.KIND: _on_goal_started,
+    ins.CancelRequested.KIND: _on_cancel_requested,
+    ins.ChildProgress.KIND: _on_child_progress,
+    ins.ChildFinished.KIND: _on_child_finished,
+    ins.Tick.KIND: _on_tick,
+    ins.Interrupt.KIND: _on_interrupt,
+    ins.Resume.KIND: _on_resume,
+    ins.TaskCancel.KIND: _on_task_signal,
+    ins.TaskKill.KIND: _on_task_signal,
+    ins.Shutdown.KIND: _on_shutdown,
+    ins.DescriptionQuery.KIND: _on_description_query,
+}
+
+#: Every phase change the machine can make.  A step that is not listed here keeps the phase.
+TRANSITIONS: tuple[Edge, ...] = (
+    Edge(_I, "begin", _W, "not shut down", "R3.1"),
+    Edge(_W, "goal_started", _R, "NEXT", "R6.3, R6.4"),
+    Edge(_W, "goal_started", _I, "FINISHED", "R11.1"),
+    Edge(_W, "task_cancel", _I, "", "R13.3"),
+    Edge(_W, "task_kill", _I, "", "R13.3"),
+    Edge(_W, "shutdown", _I, "", "R15.2"),
+    Edge(_R, "child_finished", _W, "task not cancelled", "R8.4"),
+    Edge(_R, "child_finished", _I, "task cancelled or killed", "R13.4"),
+    Edge(_R, "goal_started", _W, "CANCEL of a deferred child", "R9.4"),
+    Edge(_R, "cancel_requested", _W, "of a deferred child", "R10.4"),
+    Edge(_R, "task_cancel", _I, "deferred child", "R13.3"),
+    Edge(_R, "task_kill", _I, "deferred child", "R13.3"),
+    Edge(_R, "shutdown", _I, "", "R15.2"),
+)
+
+
+def step(state: State, event: ins.Input, config: ServerConfig) -> Transition:
+    """Apply one input to the state: the new state and the outputs, in order.
+
+    Pure and total: any well-typed input in any state yields a transition.
+    """
+    return HANDLERS[event.KIND](state, event, config)
+
+
+def allowed_targets(source: DynamicState, kind: str) -> frozenset[DynamicState]:
+    """The phases a step of input ``kind`` may lead to from ``source`` (the source itself included)."""
+    return frozenset(
+        {source} | {edge.target for edge in TRANSITIONS if edge.source is source and edge.input == kind}
+    )
