@@ -46,7 +46,7 @@ def assert_refused(error: pytest.ExceptionInfo[InvalidName], field: str, value: 
     assert error.value.value == value
     assert problem in error.value.problem
     message = str(error.value)
-    assert message.startswith(f"{field} name ")
+    assert message.startswith(f"{field} name " if field in ("fleet", "robot") else f"{field} ")
     assert repr(value)[:60] in message
     assert problem in message
 
