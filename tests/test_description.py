@@ -21,6 +21,8 @@ from dynevent.description import (
 )
 from dynevent.errors import InvalidDescription
 
+pytestmark = pytest.mark.spec("R1.5")
+
 FULL = (
     '{"category":"patrol","detail":"patrol the lobby",'
     '"estimate":{"category":"go_to_place","description":{"waypoint":"lobby"},"eta":30},'

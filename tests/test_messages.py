@@ -68,12 +68,14 @@ ROS_DEFAULTS = {
 }
 
 
+@pytest.mark.spec("R1.1")
 @pytest.mark.parametrize("cls", ALL, ids=lambda cls: cls.__name__)
 def test_fields_mirror_ros_definition_in_order(cls: type[wire.WireMessage]) -> None:
     assert cls.wire_types() == ROS_FIELDS[cls]
     assert list(cls.wire_types()) == list(ROS_FIELDS[cls])
 
 
+@pytest.mark.spec("R1.1")
 @pytest.mark.parametrize("cls", ALL, ids=lambda cls: cls.__name__)
 def test_defaults_are_ros_defaults(cls: type[wire.WireMessage]) -> None:
     message = cls()
@@ -109,6 +111,7 @@ def test_goal_repr_is_readable() -> None:
     )
 
 
+@pytest.mark.spec("R1.2")
 def test_unknown_event_type_constructs() -> None:
     assert wire.Goal(event_type=7).event_type == 7
     assert wire.Goal(event_type=2**32 - 1).event_type == 2**32 - 1
@@ -123,6 +126,7 @@ def test_enums_are_stored_as_plain_values() -> None:
     assert type(status.dynamic_state) is int and status.dynamic_state == 2
 
 
+@pytest.mark.spec("R1.2")
 def test_float32_is_rounded_as_the_wire_carries_it() -> None:
     goal = wire.Goal(stubborn_period=0.1)
     assert goal.stubborn_period == struct.unpack("<f", struct.pack("<f", 0.1))[0]
@@ -136,6 +140,7 @@ def test_float32_representable_values_construct(value: float) -> None:
     assert wire.Goal.from_json(goal.to_json()) == goal
 
 
+@pytest.mark.spec("R1.2")
 def test_nan_goals_compare_equal_and_hash_alike() -> None:
     one = wire.Goal(stubborn_period=math.nan)
     other = wire.Goal(stubborn_period=float("nan"))
@@ -159,6 +164,7 @@ def test_nan_goals_compare_equal_and_hash_alike() -> None:
         ("description", b"{}", "expected a string"),
     ],
 )
+@pytest.mark.spec("R1.2")
 def test_goal_refusals_name_class_field_and_value(field: str, value: Any, problem: str) -> None:
     with pytest.raises(InvalidMessage) as caught:
         wire.Goal(**{field: value})
@@ -187,6 +193,7 @@ def test_nested_and_array_refusals() -> None:
         wire.DescriptionRequest(at_least_one_field=1)  # type: ignore[arg-type]
 
 
+@pytest.mark.spec("R1.3")
 def test_from_dict_locates_nested_faults() -> None:
     with pytest.raises(InvalidMessage) as caught:
         wire.Feedback.from_dict({"logs": [{}, {"seq": -4}]})
@@ -201,10 +208,12 @@ def test_from_dict_locates_nested_faults() -> None:
         wire.Goal.from_dict([1, 2])
 
 
+@pytest.mark.spec("R1.3")
 def test_from_dict_missing_fields_take_ros_defaults() -> None:
     assert wire.Goal.from_dict({"event_type": 3}) == wire.Goal(event_type=3)
 
 
+@pytest.mark.spec("R1.3")
 def test_from_json_refuses_bad_text() -> None:
     for text in ["", "{", '{"id": 1, "id": 2}', b"\xff\xfe", "[" * 10_000, '{"id": ' + "9" * 5000 + "}"]:
         with pytest.raises(InvalidMessage) as caught:
@@ -219,6 +228,7 @@ def test_time_helpers() -> None:
     assert wire.Time(sec=1) < wire.Time(sec=1, nanosec=1)
 
 
+@pytest.mark.spec("R1.3")
 @pytest.mark.parametrize("cls", ALL, ids=lambda cls: cls.__name__)
 @given(data=st.data())
 def test_round_trip_dict_and_json_is_identity(cls: type[wire.WireMessage], data: st.DataObject) -> None:
@@ -232,6 +242,7 @@ def test_round_trip_dict_and_json_is_identity(cls: type[wire.WireMessage], data:
 FIELD_CASES = [(cls, name, kind) for cls in ALL for name, kind in cls.wire_types().items()]
 
 
+@pytest.mark.spec("R1.2")
 @pytest.mark.parametrize(("cls", "name", "kind"), FIELD_CASES, ids=lambda v: getattr(v, "__name__", str(v)))
 @given(data=st.data())
 def test_every_out_of_range_value_is_refused_naming_the_field(
@@ -246,6 +257,7 @@ def test_every_out_of_range_value_is_refused_naming_the_field(
     assert str(caught.value).startswith(f"{cls.__name__}.{name}")
 
 
+@pytest.mark.spec("R1.3")
 @pytest.mark.parametrize("cls", ALL, ids=lambda cls: cls.__name__)
 @given(data=st.data())
 def test_arbitrary_json_gives_a_message_or_the_one_error(

@@ -25,6 +25,8 @@ from dynevent.names import (
     validate_token,
 )
 
+pytestmark = pytest.mark.spec("R1.4")
+
 BUILDERS: dict[NameKind, Callable[[object, object], str]] = {
     NameKind.ACTION: action_name,
     NameKind.BEGIN: begin_topic,
