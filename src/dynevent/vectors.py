@@ -1,0 +1,370 @@
+"""Conformance vectors: load them, run them against an implementation, report.
+
+A vector is a scripted exchange written from docs/spec.md: a server
+configuration, an initial state, and steps, each an input and the exact
+outputs the spec requires in answer (and optionally the phase, seq and current
+id after it).  The vectors ship with the package (``dynevent/conformance/``,
+one JSON file per spec section, with the JSON Schema ``vector.schema.json``)
+and run against dynevent in process or against any program that speaks the
+driver protocol of :mod:`dynevent.driver`.
+
+Matching is exact, except that the string ``"*"`` in an expected output
+matches any string (for sentences whose wording the spec leaves open).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import select
+import shlex
+import subprocess
+from collections.abc import Iterable, Iterator, Sequence
+from importlib import resources
+from typing import Any, Protocol
+
+import attrs
+
+from . import _json
+from .driver import Driver
+from .errors import DyneventError
+
+__all__ = [
+    "WILDCARD",
+    "ExternalImplementation",
+    "Failure",
+    "Implementation",
+    "InProcessImplementation",
+    "InvalidVector",
+    "Outcome",
+    "Step",
+    "Vector",
+    "load_vectors",
+    "matches",
+    "run_vector",
+    "run_vectors",
+]
+
+#: In an expected output, matches any string.
+WILDCARD = "*"
+
+
+class InvalidVector(DyneventError):
+    """A vector file is malformed; the message names the file and the JSON path."""
+
+    def __init__(self, source: str, path: str, problem: str) -> None:
+        self.source = source
+        self.path = path
+        self.problem = problem
+        super().__init__(f"{source}: {path}: {problem}")
+
+
+class ImplementationError(DyneventError):
+    """The implementation under test broke the driver protocol (crashed, timed out, answered garbage)."""
+
+
+@attrs.frozen
+class Step:
+    """One input and what must come out of it."""
+
+    input: Any
+    expect: tuple[Any, ...]
+    view: Any = None
+
+
+@attrs.frozen
+class Vector:
+    """One conformance vector."""
+
+    name: str
+    rules: tuple[str, ...]
+    summary: str
+    source: str
+    fleet: str
+    robot: str
+    config: Any
+    state: Any
+    steps: tuple[Step, ...]
+
+
+class Implementation(Protocol):
+    """What the runner needs of an implementation under test."""
+
+    def reset(self, fleet: str, robot: str, config: Any, state: Any) -> None:
+        """Start a new server for one robot."""
+
+    def apply(self, event: Any) -> tuple[list[Any], Any]:
+        """Apply one input record; return the output records and the view."""
+
+    def close(self) -> None:
+        """Release the implementation."""
+
+
+def _fail(answer: Any) -> ImplementationError:
+    if isinstance(answer, dict) and answer.get("ok") is False:
+        return ImplementationError(f"the implementation refused the request: {answer.get('error')}")
+    return ImplementationError(f"malformed answer {answer!r}")
+
+
+class InProcessImplementation:
+    """dynevent itself, through the same driver code the external path uses."""
+
+    def __init__(self) -> None:
+        self._driver = Driver()
+
+    def reset(self, fleet: str, robot: str, config: Any, state: Any) -> None:
+        """Start a new server."""
+        answer = self._driver.handle(
+            {"op": "reset", "fleet": fleet, "robot": robot, "config": config, "state": state}
+        )
+        if answer.get("ok") is not True:
+            raise _fail(answer)
+
+    def apply(self, event: Any) -> tuple[list[Any], Any]:
+        """Apply one input."""
+        answer = self._driver.handle({"op": "apply", "input": event})
+        if answer.get("ok") is not True:
+            raise _fail(answer)
+        # the same JSON round trip the external path makes
+        answer = json.loads(_json.dumps(answer))
+        return answer["outputs"], answer.get("view")
+
+    def close(self) -> None:
+        """Nothing to release."""
+
+
+class ExternalImplementation:
+    """An implementation run as a separate program speaking the driver protocol."""
+
+    def __init__(self, command: str, timeout: float = 10.0) -> None:
+        self.command = command
+        self.timeout = timeout
+        try:
+            self._process = subprocess.Popen(
+                shlex.split(command),
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                text=True,
+                encoding="utf-8",
+                bufsize=1,
+            )
+        except (OSError, ValueError) as exc:
+            raise ImplementationError(f"cannot start {command!r}: {exc}") from None
+        hello = self._request({"op": "hello"})
+        if hello.get("ok") is not True or hello.get("protocol") != 1:
+            raise ImplementationError(f"{command!r} does not speak driver protocol 1: {hello!r}")
+        self.name = str(hello.get("implementation", command))
+
+    def _request(self, request: Any) -> dict[str, Any]:
+        stdin, stdout = self._process.stdin, self._process.stdout
+        assert stdin is not None and stdout is not None
+        try:
+            stdin.write(_json.dumps(request) + "\n")
+            stdin.flush()
+        except (BrokenPipeError, OSError):
+            raise ImplementationError(
+                f"{self.command!r} closed its input (exit code {self._process.poll()})"
+            ) from None
+        ready, _, _ = select.select([stdout], [], [], self.timeout)
+        if not ready:
+            raise ImplementationError(f"{self.command!r} did not answer within {self.timeout} s")
+        line = stdout.readline()
+        if not line:
+            raise ImplementationError(f"{self.command!r} ended (exit code {self._process.wait()})")
+        try:
+            answer = _json.parse(line)
+        except _json.JsonProblem as exc:
+            raise ImplementationError(f"{self.command!r} answered with {exc}: {line[:200]!r}") from None
+        if not isinstance(answer, dict):
+            raise _fail(answer)
+        return answer
+
+    def reset(self, fleet: str, robot: str, config: Any, state: Any) -> None:
+        """Start a new server."""
+        answer = self._request(
+            {"op": "reset", "fleet": fleet, "robot": robot, "config": config, "state": state}
+        )
+        if answer.get("ok") is not True:
+            raise _fail(answer)
+
+    def apply(self, event: Any) -> tuple[list[Any], Any]:
+        """Apply one input."""
+        answer = self._request({"op": "apply", "input": event})
+        if answer.get("ok") is not True or not isinstance(answer.get("outputs"), list):
+            raise _fail(answer)
+        return answer["outputs"], answer.get("view")
+
+    def close(self) -> None:
+        """Stop the program."""
+        if self._process.stdin is not None:
+            self._process.stdin.close()
+        try:
+            self._process.wait(timeout=self.timeout)
+        except subprocess.TimeoutExpired:
+            self._process.kill()
+            self._process.wait()
+        if self._process.stdout is not None:
+            self._process.stdout.close()
+
+
+# --------------------------------------------------------------------------- loading
+
+
+def _require(source: str, path: str, data: Any, key: str, kind: type | tuple[type, ...]) -> Any:
+    if not isinstance(data, dict) or key not in data:
+        raise InvalidVector(source, path, f"missing {key!r}")
+    value = data[key]
+    if not isinstance(value, kind) or (isinstance(value, bool) and kind is not bool):
+        raise InvalidVector(source, f"{path}.{key}", f"expected {getattr(kind, '__name__', kind)}")
+    return value
+
+
+def _vector(source: str, path: str, data: Any) -> Vector:
+    if not isinstance(data, dict):
+        raise InvalidVector(source, path, "expected a vector object")
+    known = {"name", "rules", "summary", "fleet", "robot", "config", "state", "steps"}
+    extra = set(data) - known
+    if extra:
+        raise InvalidVector(source, path, f"unknown keys {sorted(extra)}")
+    name = _require(source, path, data, "name", str)
+    rules = _require(source, path, data, "rules", list)
+    if not rules or not all(isinstance(rule, str) for rule in rules):
+        raise InvalidVector(source, f"{path}.rules", "expected a non-empty list of rule numbers")
+    steps_data = _require(source, path, data, "steps", list)
+    steps = []
+    for index, step in enumerate(steps_data):
+        where = f"{path}.steps[{index}]"
+        if not isinstance(step, dict) or set(step) - {"input", "expect", "view"}:
+            raise InvalidVector(
+                source, where, "expected an object with 'input', 'expect' and optional 'view'"
+            )
+        _require(source, where, step, "input", dict)
+        expect = _require(source, where, step, "expect", list)
+        steps.append(Step(input=step["input"], expect=tuple(expect), view=step.get("view")))
+    state = data.get("state", "fresh")
+    return Vector(
+        name=name,
+        rules=tuple(rules),
+        summary=str(data.get("summary", "")),
+        source=source,
+        fleet=_require(source, path, data, "fleet", str),
+        robot=_require(source, path, data, "robot", str),
+        config=_require(source, path, data, "config", dict),
+        state=None if state == "fresh" else state,
+        steps=tuple(steps),
+    )
+
+
+def parse_vector_file(source: str, text: str | bytes) -> list[Vector]:
+    """The vectors of one file's text; raises :class:`InvalidVector` naming ``source``."""
+    try:
+        data = _json.parse(text)
+    except _json.JsonProblem as exc:
+        raise InvalidVector(source, "$", str(exc)) from None
+    vectors = _require(source, "$", data, "vectors", list)
+    return [_vector(source, f"$.vectors[{index}]", item) for index, item in enumerate(vectors)]
+
+
+def load_vectors(paths: Iterable[str | os.PathLike[str]] = ()) -> list[Vector]:
+    """The vectors of the given files, or the shipped ones when none are given."""
+    found: list[Vector] = []
+    chosen = [os.fspath(path) for path in paths]
+    if chosen:
+        for path in chosen:
+            try:
+                with open(path, "rb") as handle:
+                    text = handle.read()
+            except OSError as exc:
+                raise InvalidVector(path, "$", f"cannot read: {exc.strerror}") from None
+            found.extend(parse_vector_file(path, text))
+    else:
+        folder = resources.files("dynevent") / "conformance"
+        for entry in sorted(folder.iterdir(), key=lambda item: item.name):
+            if entry.name.endswith(".json") and not entry.name.endswith(".schema.json"):
+                found.extend(parse_vector_file(f"conformance/{entry.name}", entry.read_bytes()))
+    names = [vector.name for vector in found]
+    duplicates = sorted({name for name in names if names.count(name) > 1})
+    if duplicates:
+        raise InvalidVector("vectors", "$", f"duplicate vector names {duplicates}")
+    return found
+
+
+# --------------------------------------------------------------------------- running
+
+
+def matches(expected: Any, got: Any) -> bool:
+    """Does ``got`` fit ``expected``?  Exact, but ``"*"`` matches any string."""
+    if expected == WILDCARD and isinstance(got, str):
+        return True
+    if isinstance(expected, dict):
+        return (
+            isinstance(got, dict)
+            and expected.keys() == got.keys()
+            and all(matches(value, got[key]) for key, value in expected.items())
+        )
+    if isinstance(expected, list):
+        return isinstance(got, list) and len(expected) == len(got) and all(map(matches, expected, got))
+    if isinstance(expected, bool) or isinstance(got, bool):
+        return expected is got
+    return bool(expected == got)
+
+
+@attrs.frozen
+class Failure:
+    """Where and how a vector failed."""
+
+    step: int
+    input: Any
+    expected: Any
+    got: Any
+    problem: str
+
+    def diff(self) -> str:
+        """A readable account: the step, its input, expected and got, line by line."""
+        lines = [f"step {self.step}: {self.problem}", f"  input:    {_json.dumps(self.input)}"]
+        expected = list(self.expected) if isinstance(self.expected, (list, tuple)) else [self.expected]
+        got = list(self.got) if isinstance(self.got, (list, tuple)) else [self.got]
+        for index in range(max(len(expected), len(got))):
+            want = expected[index] if index < len(expected) else None
+            have = got[index] if index < len(got) else None
+            mark = " " if index < len(expected) and index < len(got) and matches(want, have) else "!"
+            lines.append(f"  {mark} expected: {_json.dumps(want) if index < len(expected) else '(nothing)'}")
+            lines.append(f"  {mark} got:      {_json.dumps(have) if index < len(got) else '(nothing)'}")
+        return "\n".join(lines)
+
+
+@attrs.frozen
+class Outcome:
+    """The result of one vector."""
+
+    vector: Vector
+    failure: Failure | None
+
+    @property
+    def passed(self) -> bool:
+        """True when every step matched."""
+        return self.failure is None
+
+
+def run_vector(vector: Vector, implementation: Implementation) -> Outcome:
+    """Run one vector; stop at the first mismatch."""
+    try:
+        implementation.reset(vector.fleet, vector.robot, vector.config, vector.state)
+    except DyneventError as exc:
+        return Outcome(vector, Failure(0, None, None, None, f"reset failed: {exc}"))
+    for index, step in enumerate(vector.steps, start=1):
+        try:
+            outputs, view = implementation.apply(step.input)
+        except DyneventError as exc:
+            return Outcome(vector, Failure(index, step.input, list(step.expect), [], f"apply failed: {exc}"))
+        if not matches(list(step.expect), outputs):
+            return Outcome(vector, Failure(index, step.input, list(step.expect), outputs, "outputs differ"))
+        if step.view is not None and not matches(step.view, view):
+            return Outcome(vector, Failure(index, step.input, [step.view], [view], "view differs"))
+    return Outcome(vector, None)
+
+
+def run_vectors(vectors: Sequence[Vector], implementation: Implementation) -> Iterator[Outcome]:
+    """Run every vector in turn."""
+    for vector in vectors:
+        yield run_vector(vector, implementation)
