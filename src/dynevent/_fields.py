@@ -12,7 +12,7 @@ import math
 import struct
 from collections.abc import Callable, Iterable, Mapping
 from enum import Enum
-from typing import Any, cast
+from typing import Any, TypeVar, cast
 
 import attrs
 
@@ -176,3 +176,46 @@ def message(cls: type[Any]) -> Any:
 
 def sequence(cls: type[Any]) -> Any:
     return attrs.field(factory=tuple, converter=_array(cls), metadata={WIRE_KEY: (cls,)})
+
+
+_T = TypeVar("_T")
+_set = object.__setattr__
+
+
+def unchecked(cls: type[_T], **values: Any) -> _T:
+    """Build a frozen attrs instance from values already known to be valid, skipping converters.
+
+    For messages the machine builds from checked state; every field must be given.
+    """
+    instance = object.__new__(cls)
+    for name, value in values.items():
+        _set(instance, name, value)
+    return instance
+
+
+def replacer(cls: type[_T]) -> Callable[..., _T]:
+    """A fast ``attrs.evolve`` for one slotted class whose fields need no conversion.
+
+    Generated once per class: ``replace(instance, **changes)`` copies every
+    slot, then applies the changes, without running ``__init__``.
+    """
+    names = [field.name for field in attrs.fields(cls)]  # type: ignore[misc]
+    lines = [
+        "def replace(self, /, **changes):",
+        "    new = _new(_cls)",
+        *(f"    _set(new, {name!r}, self.{name})" for name in names),
+        "    for name, value in changes.items():",
+        "        if name not in _names:",
+        "            raise TypeError(f'{_cls.__name__} has no field {name!r}')",
+        "        _set(new, name, value)",
+        "    return new",
+    ]
+    namespace: dict[str, Any] = {
+        "_new": object.__new__,
+        "_cls": cls,
+        "_set": _set,
+        "_names": frozenset(names),
+    }
+    exec("\n".join(lines), namespace)
+    function: Callable[..., _T] = namespace["replace"]
+    return function

@@ -23,6 +23,7 @@ import attrs
 from . import _json
 from . import inputs as ins
 from . import outputs as outs
+from ._fields import replacer, unchecked
 from .messages import (
     DescriptionResponse,
     DynamicEventDescription,
@@ -229,6 +230,12 @@ class State:
         return self.event_id if self.running is None else self.running.child_id
 
 
+# Fast copies with changes: one generated function per class (attrs.evolve re-runs __init__).
+_replace_state = replacer(State)
+_replace_running = replacer(RunningGoal)
+_replace_stubborn = replacer(Stubbornness)
+
+
 @attrs.frozen
 class Transition:
     """What one step did: the new state and the outputs, in order."""
@@ -237,23 +244,30 @@ class Transition:
     outputs: tuple[outs.Output, ...]
 
 
+def _time(now: int) -> Time:
+    sec, nanosec = divmod(now, _NS)
+    return unchecked(Time, sec=sec, nanosec=nanosec)
+
+
 def status_message(state: State, now: int) -> DynamicEventStatus:
     """The status message that describes ``state`` (R2.2)."""
     if not state.active:
-        return DynamicEventStatus(
+        return unchecked(
+            DynamicEventStatus,
             dynamic_event_seq=state.seq,
             dynamic_state=DynamicState.INACTIVE.value,
             status=Status.UNINITIALIZED.value,
             id=0,
-            time=Time.from_nanoseconds(now),
+            time=_time(now),
         )
     phase = DynamicState.WAITING if state.running is None else DynamicState.RUNNING
-    return DynamicEventStatus(
+    return unchecked(
+        DynamicEventStatus,
         dynamic_event_seq=state.seq,
         dynamic_state=phase.value,
         status=state.status,
         id=state.current_id,
-        time=Time.from_nanoseconds(now),
+        time=_time(now),
     )
 
 
@@ -391,14 +405,20 @@ def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
 
 def _log(state: State, text: str, tier: str, now: int) -> tuple[State, LogEntry]:
     """A new log entry with the robot's next LogEntry.seq, which wraps at 2**32 (R7.3)."""
-    entry = LogEntry(seq=state.log_seq, tier=tier, unix_millis_time=now // 1_000_000, text=text)
-    return attrs.evolve(state, log_seq=(state.log_seq + 1) & _U32), entry
+    entry = unchecked(LogEntry, seq=state.log_seq, tier=tier, unix_millis_time=now // 1_000_000, text=text)
+    return _replace_state(state, log_seq=(state.log_seq + 1) & _U32), entry
+
+
+def _result(failure: str, status: str, event_id: int) -> Result:
+    return unchecked(Result, execution_failure=failure, status=status, id=event_id)
+
+
+def _feedback(status: str, event_id: int, logs: tuple[LogEntry, ...]) -> Feedback:
+    return unchecked(Feedback, status=status, id=event_id, logs=logs)
 
 
 def _failure(goal_uuid: str, failure: str) -> outs.AnswerGoal:
-    return outs.AnswerGoal(
-        goal_uuid=goal_uuid, status=GoalStatus.ABORTED, result=Result(execution_failure=failure)
-    )
+    return outs.AnswerGoal(goal_uuid=goal_uuid, status=GoalStatus.ABORTED, result=_result(failure, "", 0))
 
 
 def _finish(before: State, after: State, outputs: list[outs.Output], now: int) -> Transition:
@@ -416,7 +436,7 @@ def _end_stubbornness(state: State, outputs: list[outs.Output]) -> State:
     if state.stubborn is None:
         return state
     outputs.append(outs.StubbornEnd())
-    return attrs.evolve(state, stubborn=None)
+    return _replace_state(state, stubborn=None)
 
 
 def _start_child(
@@ -436,18 +456,18 @@ def _start_child(
         )
     )
     underway = Status.UNDERWAY.value
-    running = attrs.evolve(running, started=True, child_status=underway)
+    running = _replace_running(running, started=True, child_status=underway)
     outputs.append(
         outs.PublishFeedback(
-            goal_uuid=running.goal_uuid, feedback=Feedback(status=underway, id=running.child_id, logs=logs)
+            goal_uuid=running.goal_uuid, feedback=_feedback(underway, running.child_id, logs)
         )
     )
-    return attrs.evolve(state, running=running, status=underway)
+    return _replace_state(state, running=running, status=underway)
 
 
 def _answers_at_child_end(state: State, running: RunningGoal, final: str) -> list[outs.Output]:
     """The running goal's and every waiting CANCEL goal's answers when the child ends (R8.2, R8.3)."""
-    result = Result(status=final, id=running.child_id)
+    result = _result("", final, running.child_id)
     if final in _EARLY_END:
         status = GoalStatus.CANCELED if running.cancel_requested else GoalStatus.ABORTED
     else:
@@ -462,7 +482,7 @@ def _answers_at_child_end(state: State, running: RunningGoal, final: str) -> lis
 def _end_dynamic_event(state: State, final: str, outputs: list[outs.Output]) -> State:
     """The dynamic event is over (R11.2, R13.4): the task may move on."""
     outputs.append(outs.DynamicEventFinished(status=final))
-    return attrs.evolve(state, active=False, status=final, running=None, cancels=())
+    return _replace_state(state, active=False, status=final, running=None, cancels=())
 
 
 # --------------------------------------------------------------------------- step handlers
@@ -477,7 +497,7 @@ def _on_begin(state: State, event: ins.Begin, config: ServerConfig) -> Transitio
     seq = (state.seq + 1) & _U32  # R3.1
     if seq == 0:  # R3.2
         outputs.append(outs.SeqWrapped(previous=state.seq, seq=seq))
-    after = attrs.evolve(
+    after = _replace_state(
         state,
         seq=seq,
         active=True,
@@ -494,7 +514,7 @@ def _on_begin(state: State, event: ins.Begin, config: ServerConfig) -> Transitio
                 robot=state.robot,
                 dynamic_event_seq=seq,
                 description=event.description,
-                start_time=Time.from_nanoseconds(event.now),
+                start_time=_time(event.now),
             )
         )
     )
@@ -516,7 +536,7 @@ def _on_goal_requested(state: State, event: ins.GoalRequested, config: ServerCon
     if isinstance(decision, outs.Rejected):  # R4.15
         return Transition(state, (outs.GoalRejected(goal_uuid=event.goal_uuid, rejection=decision),))
     queued = (*state.queued, QueuedGoal(goal_uuid=event.goal_uuid, goal=event.goal))  # R4.16
-    return Transition(attrs.evolve(state, queued=queued), (outs.GoalAccepted(goal_uuid=event.goal_uuid),))
+    return Transition(_replace_state(state, queued=queued), (outs.GoalAccepted(goal_uuid=event.goal_uuid),))
 
 
 def _race_lost(state: State, goal: Goal, config: ServerConfig) -> bool:
@@ -536,7 +556,7 @@ def _on_goal_started(state: State, event: ins.GoalStarted, config: ServerConfig)
         return _ignored(state, event.KIND, "no accepted goal with this uuid is waiting to start")
     uuid, goal = found.goal_uuid, found.goal
     before = state
-    state = attrs.evolve(state, queued=tuple(queued for queued in state.queued if queued is not found))
+    state = _replace_state(state, queued=tuple(queued for queued in state.queued if queued is not found))
     outputs: list[outs.Output] = [outs.ExecuteGoal(goal_uuid=uuid)]  # R5.1
     if _race_lost(state, goal, config):  # R5.2
         outputs.append(_failure(uuid, EXECUTION_FAILURES["race"]))
@@ -547,7 +567,7 @@ def _on_goal_started(state: State, event: ins.GoalStarted, config: ServerConfig)
         state = _start_cancel(state, uuid, goal, outputs, event.now)
     elif goal.event_type == EventType.FINISHED:  # R11.1
         state = _end_stubbornness(state, outputs)
-        result = Result(status=Status.COMPLETED.value, id=state.event_id)
+        result = _result("", Status.COMPLETED.value, state.event_id)
         outputs.append(outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.SUCCEEDED, result=result))
         state = _end_dynamic_event(state, Status.COMPLETED.value, outputs)
     else:  # R17.2: only reachable in rmf_ros2 compatibility
@@ -575,18 +595,16 @@ def _start_next(
         state, entry = _log(state, text, "warning", now)
         outputs.append(outs.Log(entry=entry))
         logs = (entry,)
-    state = attrs.evolve(state, last_id=child_id)
+    state = _replace_state(state, last_id=child_id)
     if state.interrupted:  # R6.3
         queued_status = Status.QUEUED.value
         running = RunningGoal(
             goal_uuid=uuid, goal=goal, child_id=child_id, child_status=queued_status, started=False
         )
         outputs.append(
-            outs.PublishFeedback(
-                goal_uuid=uuid, feedback=Feedback(status=queued_status, id=child_id, logs=logs)
-            )
+            outs.PublishFeedback(goal_uuid=uuid, feedback=_feedback(queued_status, child_id, logs))
         )
-        return attrs.evolve(state, running=running, status=queued_status)
+        return _replace_state(state, running=running, status=queued_status)
     running = RunningGoal(goal_uuid=uuid, goal=goal, child_id=child_id, child_status="", started=False)
     return _start_child(state, running, outputs, logs)  # R6.4
 
@@ -600,42 +618,42 @@ def _start_cancel(state: State, uuid: str, goal: Goal, outputs: list[outs.Output
         outputs.append(_failure(uuid, EXECUTION_FAILURES["cancel_id"]))
         return state
     if not running.started:  # R9.4: the child never started; it is cancelled at once
-        state = attrs.evolve(state, cancels=(*state.cancels, uuid))
+        state = _replace_state(state, cancels=(*state.cancels, uuid))
         outputs.extend(_answers_at_child_end(state, running, Status.CANCELED.value))
-        return attrs.evolve(state, running=None, cancels=(), status=Status.STANDBY.value)
+        return _replace_state(state, running=None, cancels=(), status=Status.STANDBY.value)
     if not running.canceling:  # R9.3
         outputs.append(outs.CancelChild(id=running.child_id))
-        running = attrs.evolve(running, canceling=True)
-    return attrs.evolve(state, running=running, cancels=(*state.cancels, uuid))
+        running = _replace_running(running, canceling=True)
+    return _replace_state(state, running=running, cancels=(*state.cancels, uuid))
 
 
 def _on_cancel_requested(state: State, event: ins.CancelRequested, config: ServerConfig) -> Transition:
     uuid = event.goal_uuid
     accepted = outs.CancelResponse(goal_uuid=uuid, accepted=True)
-    not_running = Result(execution_failure=EXECUTION_FAILURES["not_running"])
+    not_running = _result(EXECUTION_FAILURES["not_running"], "", 0)
     if any(queued.goal_uuid == uuid for queued in state.queued):  # R10.1
-        after = attrs.evolve(
+        after = _replace_state(
             state, queued=tuple(queued for queued in state.queued if queued.goal_uuid != uuid)
         )
         answer = outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.CANCELED, result=not_running)
         return Transition(after, (accepted, answer))
     if uuid in state.cancels:  # R10.2
-        after = attrs.evolve(state, cancels=tuple(other for other in state.cancels if other != uuid))
+        after = _replace_state(state, cancels=tuple(other for other in state.cancels if other != uuid))
         answer = outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.CANCELED, result=not_running)
         return Transition(after, (accepted, answer))
     running = state.running
     if running is None or running.goal_uuid != uuid:  # R10.5
         return Transition(state, (outs.CancelResponse(goal_uuid=uuid, accepted=False),))
     outputs: list[outs.Output] = [accepted]
-    running = attrs.evolve(running, cancel_requested=True)
+    running = _replace_running(running, cancel_requested=True)
     if not running.started:  # R10.4
         outputs.extend(_answers_at_child_end(state, running, Status.CANCELED.value))
-        after = attrs.evolve(state, running=None, cancels=(), status=Status.STANDBY.value)
+        after = _replace_state(state, running=None, cancels=(), status=Status.STANDBY.value)
         return _finish(state, after, outputs, event.now)
     if not running.canceling:  # R10.3
         outputs.append(outs.CancelChild(id=running.child_id))
-        running = attrs.evolve(running, canceling=True)
-    return Transition(attrs.evolve(state, running=running), tuple(outputs))
+        running = _replace_running(running, canceling=True)
+    return Transition(_replace_state(state, running=running), tuple(outputs))
 
 
 def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerConfig) -> Transition:
@@ -644,21 +662,29 @@ def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerCon
         return _ignored(state, event.KIND, "no child event is running")
     outputs: list[outs.Output] = []
     logs: tuple[LogEntry, ...] = ()
-    after = state
-    if event.log_text is not None:  # R7.2
-        after, entry = _log(after, event.log_text, event.tier, event.now)
+    log_seq = state.log_seq
+    if event.log_text is not None:  # R7.2, R7.3
+        entry = unchecked(
+            LogEntry,
+            seq=log_seq,
+            tier=event.tier,
+            unix_millis_time=event.now // 1_000_000,
+            text=event.log_text,
+        )
+        log_seq = (log_seq + 1) & _U32
         outputs.append(outs.Log(entry=entry))
         logs = (entry,)
     status = event.status
     outputs.append(  # R7.1
-        outs.PublishFeedback(
-            goal_uuid=running.goal_uuid, feedback=Feedback(status=status, id=running.child_id, logs=logs)
-        )
+        outs.PublishFeedback(goal_uuid=running.goal_uuid, feedback=_feedback(status, running.child_id, logs))
     )
-    after = attrs.evolve(
-        after,
-        running=attrs.evolve(running, child_status=status),
-        status=after.status if after.task_signal else status,  # R7.4
+    if running.child_status != status:
+        running = _replace_running(running, child_status=status)
+    after = _replace_state(
+        state,
+        running=running,
+        status=state.status if state.task_signal else status,  # R7.4
+        log_seq=log_seq,
     )
     return _finish(state, after, outputs, event.now)
 
@@ -668,11 +694,11 @@ def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerCon
     if running is None or not running.started:  # R18.4
         return _ignored(state, event.KIND, "no child event is running")
     outputs = _answers_at_child_end(state, running, event.status)  # R8.1 to R8.3
-    after = attrs.evolve(state, running=None, cancels=())
+    after = _replace_state(state, running=None, cancels=())
     if state.task_signal:  # R13.4
         after = _end_dynamic_event(after, state.task_signal, outputs)
         return _finish(state, after, outputs, event.now)
-    after = attrs.evolve(after, status=Status.STANDBY.value)  # R8.4
+    after = _replace_state(after, status=Status.STANDBY.value)  # R8.4
     period = running.goal.stubborn_period
     if period > 0.0:  # R12.1
         applied = max(period, config.stubborn_minimum)
@@ -692,7 +718,7 @@ def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerCon
             next_refresh=event.now + _seconds(config.stubborn_refresh),
             anchor=anchor,
         )
-        after = attrs.evolve(after, stubborn=stubborn)
+        after = _replace_state(after, stubborn=stubborn)
     return _finish(state, after, outputs, event.now)
 
 
@@ -704,7 +730,7 @@ def _on_tick(state: State, event: ins.Tick, config: ServerConfig) -> Transition:
     position = Position(map_name=event.map_name, x=event.x, y=event.y)
     stubborn = state.stubborn
     if stubborn is None or event.now < stubborn.next_refresh:  # R12.3
-        return Transition(attrs.evolve(state, position=position), ())
+        return Transition(_replace_state(state, position=position), ())
     refresh = _seconds(config.stubborn_refresh)
     missed = (event.now - stubborn.next_refresh) // refresh + 1
     next_refresh = stubborn.next_refresh + missed * refresh
@@ -724,8 +750,8 @@ def _on_tick(state: State, event: ins.Tick, config: ServerConfig) -> Transition:
         )
     else:
         output = outs.StubbornDelay(delay=(event.now - stubborn.hold_since) / _NS)
-        stubborn = attrs.evolve(stubborn, next_refresh=next_refresh)
-    return Transition(attrs.evolve(state, position=position, stubborn=stubborn), (output,))
+        stubborn = _replace_stubborn(stubborn, next_refresh=next_refresh)
+    return Transition(_replace_state(state, position=position, stubborn=stubborn), (output,))
 
 
 def _on_interrupt(state: State, event: ins.Interrupt, config: ServerConfig) -> Transition:
@@ -733,7 +759,7 @@ def _on_interrupt(state: State, event: ins.Interrupt, config: ServerConfig) -> T
         return _ignored(state, event.KIND, "no dynamic event is active")
     if state.interrupted:  # R18.6
         return _ignored(state, event.KIND, "the task is already interrupted")
-    after = attrs.evolve(state, interrupted=True)
+    after = _replace_state(state, interrupted=True)
     running = state.running
     if running is not None and running.started:  # R14.1
         return Transition(after, (outs.InterruptChild(id=running.child_id),))
@@ -743,7 +769,7 @@ def _on_interrupt(state: State, event: ins.Interrupt, config: ServerConfig) -> T
 def _on_resume(state: State, event: ins.Resume, config: ServerConfig) -> Transition:
     if not state.interrupted:  # R18.6
         return _ignored(state, event.KIND, "the task is not interrupted")
-    after = attrs.evolve(state, interrupted=False)  # R14.3
+    after = _replace_state(state, interrupted=False)  # R14.3
     running = state.running
     if running is None or not after.active:
         return Transition(after, ())
@@ -766,13 +792,13 @@ def _on_task_signal(state: State, event: ins.TaskCancel | ins.TaskKill, config: 
         state, f"Received signal to {'kill' if kill else 'cancel'}", "info", event.now
     )  # R13.1
     outputs.append(outs.Log(entry=entry))
-    after = attrs.evolve(after, task_signal=signal, status=signal)
+    after = _replace_state(after, task_signal=signal, status=signal)
     running = after.running
     if running is not None and running.started:
         outputs.append(
             outs.PublishFeedback(
                 goal_uuid=running.goal_uuid,
-                feedback=Feedback(status=running.child_status, id=running.child_id, logs=(entry,)),
+                feedback=_feedback(running.child_status, running.child_id, (entry,)),
             )
         )
     after = _end_stubbornness(after, outputs)  # R12.5
@@ -781,7 +807,7 @@ def _on_task_signal(state: State, event: ins.TaskCancel | ins.TaskKill, config: 
             outputs.append(outs.KillChild(id=running.child_id))
         elif not running.canceling:
             outputs.append(outs.CancelChild(id=running.child_id))
-        after = attrs.evolve(after, running=attrs.evolve(running, canceling=True))
+        after = _replace_state(after, running=_replace_running(running, canceling=True))
         return _finish(state, after, outputs, event.now)
     if running is not None:  # R13.3: a deferred child ends before it starts
         outputs.extend(_answers_at_child_end(after, running, signal))
@@ -801,7 +827,7 @@ def _on_shutdown(state: State, event: ins.Shutdown, config: ServerConfig) -> Tra
         outputs.append(outs.ExecuteGoal(goal_uuid=queued.goal_uuid))
         outputs.append(_failure(queued.goal_uuid, failure))
     after = _end_stubbornness(state, outputs)  # R12.5
-    after = attrs.evolve(after, shutdown=True, active=False, running=None, queued=(), cancels=())  # R15.2
+    after = _replace_state(after, shutdown=True, active=False, running=None, queued=(), cancels=())  # R15.2
     return _finish(state, after, outputs, event.now)
 
 
