@@ -199,7 +199,7 @@ def replacer(cls: type[_T]) -> Callable[..., _T]:
     Generated once per class: ``replace(instance, **changes)`` copies every
     slot, then applies the changes, without running ``__init__``.
     """
-    names = [field.name for field in attrs.fields(cls)]  # type: ignore[misc]
+    names = [field.name for field in attrs.fields(cls)]  # type: ignore[arg-type]
     lines = [
         "def replace(self, /, **changes):",
         "    new = _new(_cls)",

@@ -21,12 +21,19 @@ def _label(input_kind: str, guard: str, rule: str) -> str:
 def _mermaid() -> str:
     lines = ["stateDiagram-v2", "    [*] --> INACTIVE"]
     for edge in TRANSITIONS:
-        lines.append(f"    {edge.source.name} --> {edge.target.name}: {_label(edge.input, edge.guard, edge.rule)}")
+        lines.append(
+            f"    {edge.source.name} --> {edge.target.name}: {_label(edge.input, edge.guard, edge.rule)}"
+        )
     return "\n".join(lines) + "\n"
 
 
 def _dot() -> str:
-    lines = ["digraph dynamic_event {", "    rankdir=LR;", '    start [shape=point, label=""];', "    start -> INACTIVE;"]
+    lines = [
+        "digraph dynamic_event {",
+        "    rankdir=LR;",
+        '    start [shape=point, label=""];',
+        "    start -> INACTIVE;",
+    ]
     for edge in TRANSITIONS:
         label = _label(edge.input, edge.guard, edge.rule).replace('"', '\\"')
         lines.append(f'    {edge.source.name} -> {edge.target.name} [label="{label}"];')
