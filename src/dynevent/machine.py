@@ -289,8 +289,13 @@ def _reject(reason: RejectReason, text: str, failure: str = "", **values: Any) -
 
 
 def _check_description(goal: Goal, config: ServerConfig) -> tuple[Any, outs.Rejected | None]:
-    """Parse and validate a NEXT goal's description (R4.8 to R4.10)."""
+    """Check a NEXT goal's category, then parse and validate its description (R4.7 to R4.10)."""
     failure = EXECUTION_FAILURES["parse"]
+    validator = config.categories.get(goal.category)
+    if validator is None:  # R4.7
+        supported = tuple(sorted(config.categories))
+        problem = f"category {goal.category!r} is not supported; supported: {', '.join(supported) or 'none'}"
+        return None, _reject(RejectReason.UNSUPPORTED_CATEGORY, problem, categories=supported)
     text = goal.description
     if len(text) > config.max_description_length:
         problem = f"description is {len(text)} characters, above the limit of {config.max_description_length}"
@@ -306,7 +311,6 @@ def _check_description(goal: Goal, config: ServerConfig) -> tuple[Any, outs.Reje
             f"{failure}\n -- {exc}",
             errors=(str(exc),),
         )
-    validator = config.categories[goal.category]
     try:
         errors = tuple(str(error) for error in validator(goal.category, parsed))
     except Exception as exc:  # a faulty validator must not break the machine
@@ -362,14 +366,7 @@ def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
             current_id=running.child_id,
         )
     if event_type == EventType.NEXT:
-        if goal.category not in config.categories:  # R4.7
-            supported = tuple(sorted(config.categories))
-            return _reject(
-                RejectReason.UNSUPPORTED_CATEGORY,
-                f"category {goal.category!r} is not supported; supported: {', '.join(supported) or 'none'}",
-                categories=supported,
-            )
-        _, problem = _check_description(goal, config)  # R4.8, R4.9, R4.10
+        _, problem = _check_description(goal, config)  # R4.7 to R4.10
         if problem is not None:
             return problem
         if not math.isfinite(goal.stubborn_period):  # R4.11
@@ -579,8 +576,9 @@ def _start_next(
     state: State, uuid: str, goal: Goal, config: ServerConfig, outputs: list[outs.Output], now: int
 ) -> State:
     _, problem = _check_description(goal, config)  # R6.1
-    if problem is not None:
-        outputs.append(_failure(uuid, problem.execution_failure))
+    if problem is not None:  # rmf_ros2 has no string for R4.7: it never re-checks the category
+        failure = problem.execution_failure or f"{EXECUTION_FAILURES['parse']}\n -- {problem.text}"
+        outputs.append(_failure(uuid, failure))
         return state
     # R6.2: the goal names its child, or the server takes the next id
     child_id = goal.id if config.id_policy is IdPolicy.GOAL else (state.last_id + 1) & _U64
