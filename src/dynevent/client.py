@@ -1,0 +1,947 @@
+"""The remote action client's Dynamic Event machine: pure commands and ``step`` over a frozen state.
+
+The server machine (:mod:`dynevent.machine`) is what a robot runs; this is
+what the other end runs: a behaviour tree, a workflow engine or an operator
+tool that drives one robot through the action
+``rmf/dynamic_event/command/<fleet>/<robot>``.  Like the server, it is a set
+of pure functions over a frozen :class:`ClientState`; each returns a
+:class:`ClientTransition` (the new state and the outputs, in order).  It reads
+no clock (time enters as integer nanoseconds ``now``), does no I/O, draws no
+random numbers and never raises once its inputs are built.
+
+The model
+---------
+
+*The view.*  The client's view of the robot is the last status message it
+adopted: :attr:`ClientState.phase`, :attr:`~ClientState.seq`,
+:attr:`~ClientState.current_id` and :attr:`~ClientState.status`, named as
+the server's ``State.phase``, ``State.seq`` and ``State.current_id``.  The
+server publishes a status message after every step that changes any of them
+(R2.3), so once the client has received every status message published so
+far its view equals the server's.  Status messages of an older run than one
+already seen (seq compared as uint32 serial numbers, so 4294967295 is older
+than 0) are stale and ignored.
+
+*What the client knows besides.*  For the newest run it has heard of (from a
+begin description or a status message): the run's description, the highest
+event id seen in the run (status, feedback, results, rejections and its own
+NEXT goals), the highest child id it knows has ended (from answers to its own
+goals, which may arrive before the status that reports the end) and whether
+its own FINISHED goal ended the run.
+
+*Commands.*  :func:`request_next`, :func:`request_cancel` and
+:func:`request_finish` build a :class:`~dynevent.messages.Goal` with the
+view's seq and the right ``event_type`` and ``id``, name it with a
+deterministic goal UUID (the state's 16-hex-digit prefix and a counter) and
+return it as :class:`SendGoal`.  A NEXT's id is one more than the highest id
+seen in the run, so it is unique in the run and passes the server's id rule
+(R4.12).  A CANCEL names the running child.  When the server, in the state
+the client knows of, would refuse the goal, the command returns
+:class:`Refused` instead, carrying a :class:`~dynevent.outputs.Rejected` with
+the reason the server would give, in the order the server checks (R4):
+``seq_mismatch`` (a newer run has begun and its status has not arrived),
+``inactive``, ``busy`` (an event is running, or a NEXT or FINISHED goal of
+this client is still open: a second one would only race it),
+``unsupported_category`` (when the client was told the robot's categories),
+``description_not_json``, ``non_finite_stubborn_period``, ``stale_id`` (no
+id above the highest one seen is left) and ``cancel_idle``.
+
+*Outcomes.*  Every goal the client sends ends in exactly one :class:`Outcome`
+whose :class:`OutcomeKind` says what became of it, in the spirit of
+``rst.navigation.CommandResult``: see :class:`OutcomeKind` and docs/client.md.
+A NEXT goal with a ``timeout`` that is still open when a tick reaches its
+deadline is cancelled by the client (a CANCEL goal, sent as soon as the child
+is known to run) and reported ``timeout`` when it ends.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Iterable
+from typing import Any, ClassVar, TypeAlias
+
+import attrs
+
+from . import _json
+from .errors import InvalidMessage
+from .inputs import NOW_RANGE, goal_uuid
+from .machine import EXECUTION_FAILURES
+from .messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, LogEntry, Result
+from .outputs import Rejected
+from .vocab import DynamicState, EventType, GoalStatus, RejectReason, Status
+
+__all__ = [
+    "SECOND",
+    "BeginReceived",
+    "ClientInput",
+    "ClientOutput",
+    "ClientState",
+    "ClientTransition",
+    "FeedbackReceived",
+    "GoalResponse",
+    "Ignored",
+    "OpenGoal",
+    "Outcome",
+    "OutcomeKind",
+    "Progress",
+    "Refused",
+    "ResultReceived",
+    "RunBegan",
+    "SendGoal",
+    "StatusReceived",
+    "Tick",
+    "TimedOut",
+    "ViewChanged",
+    "next_deadline",
+    "request_cancel",
+    "request_finish",
+    "request_next",
+    "step",
+]
+
+#: One second in the client's unit of time (integer nanoseconds), e.g. ``timeout=30 * SECOND``.
+SECOND = 1_000_000_000
+
+_U32 = 2**32 - 1
+_U64 = 2**64 - 1
+_HALF_U32 = 2**31
+_HEX = frozenset("0123456789abcdefABCDEF")
+
+
+class OutcomeKind(str, enum.Enum):
+    """What became of one goal: the closed taxonomy of :class:`Outcome`.
+
+    The first six classify a goal that ran to its end by the final status in
+    its :class:`~dynevent.messages.Result` (for a NEXT or CANCEL goal, the
+    child event's; for FINISHED, the dynamic event's).  The last four say why
+    it did not.
+    """
+
+    #: The event ran to its end (final status ``completed``).
+    COMPLETED = "completed"
+    #: The event was cancelled (final status ``canceled``), by a CANCEL goal or the task.
+    CANCELED = "canceled"
+    #: The event was killed (final status ``killed``), e.g. the task was killed.
+    KILLED = "killed"
+    #: The event was skipped (final status ``skipped``).
+    SKIPPED = "skipped"
+    #: The event ended ``failed``.
+    FAILED = "failed"
+    #: The event ended ``error``, or with a status that is not a final one.
+    ERROR = "error"
+    #: The server accepted the goal and could not begin it; ``execution_failure`` holds its string.
+    EXECUTION_FAILURE = "execution_failure"
+    #: The server refused the goal request; ``reason`` says why when the refusal carried one.
+    REJECTED = "rejected"
+    #: The NEXT goal outran its timeout; the client cancelled it and it has now ended.
+    TIMEOUT = "timeout"
+    #: The run ended, or a new run began, before the answer arrived, and the goal never ran.
+    SUPERSEDED = "superseded"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+_BY_FINAL_STATUS: dict[str, OutcomeKind] = {
+    Status.COMPLETED.value: OutcomeKind.COMPLETED,
+    Status.CANCELED.value: OutcomeKind.CANCELED,
+    Status.KILLED.value: OutcomeKind.KILLED,
+    Status.SKIPPED.value: OutcomeKind.SKIPPED,
+    Status.FAILED.value: OutcomeKind.FAILED,
+    Status.ERROR.value: OutcomeKind.ERROR,
+}
+
+# The server's execution-failure strings (first line), by the reason they report.
+_FAILURE_REASONS: dict[str, RejectReason] = {
+    EXECUTION_FAILURES["race"]: RejectReason.RACE,
+    EXECUTION_FAILURES["shutdown"]: RejectReason.SHUTTING_DOWN,
+    EXECUTION_FAILURES["idle_cancel"]: RejectReason.CANCEL_IDLE,
+    EXECUTION_FAILURES["cancel_id"]: RejectReason.CANCEL_ID_MISMATCH,
+    EXECUTION_FAILURES["event_type"]: RejectReason.UNKNOWN_EVENT_TYPE,
+    EXECUTION_FAILURES["parse"]: RejectReason.DESCRIPTION_INVALID,
+}
+
+
+# --------------------------------------------------------------------------- checks at the edge
+
+
+def _check_now(where: str, value: Any) -> int:
+    if type(value) is not int:
+        raise InvalidMessage(where, "now", value, "expected integer nanoseconds")
+    if not NOW_RANGE[0] <= value <= NOW_RANGE[1]:
+        raise InvalidMessage(where, "now", value, "outside the range of builtin_interfaces/Time")
+    return value
+
+
+def _uuid_converter(value: Any, instance: object, field: attrs.Attribute[Any]) -> str:
+    try:
+        return goal_uuid(value)
+    except ValueError as exc:
+        raise InvalidMessage(type(instance).__name__, field.name, value, str(exc)) from None
+
+
+def _now_converter(value: Any, instance: object, field: attrs.Attribute[Any]) -> int:
+    return _check_now(type(instance).__name__, value)
+
+
+def _field(function: Any, **kwargs: Any) -> Any:
+    """An ``attrs.field`` whose converter is ``function(value, instance, field)``."""
+    return attrs.field(converter=attrs.Converter(function, takes_self=True, takes_field=True), **kwargs)
+
+
+def _typed(cls: type) -> Any:
+    """A field that holds exactly an instance of ``cls``."""
+
+    def check(value: Any, instance: object, field: attrs.Attribute[Any]) -> Any:
+        if type(value) is not cls:
+            raise InvalidMessage(type(instance).__name__, field.name, value, f"expected a {cls.__name__}")
+        return value
+
+    return _field(check)
+
+
+def _prefix(value: Any) -> str:
+    if type(value) is not str or len(value) != 16 or not all(ch in _HEX for ch in value):
+        raise InvalidMessage("ClientState", "uuid_prefix", value, "expected 16 hexadecimal digits")
+    return value.lower()
+
+
+# --------------------------------------------------------------------------- inputs
+
+
+class _ClientInput:
+    __slots__ = ()
+
+    #: The name of this input in traces.
+    KIND: ClassVar[str] = ""
+
+
+@attrs.frozen(kw_only=True)
+class BeginReceived(_ClientInput):
+    """A begin description arrived (``rmf/dynamic_event/begin/<fleet>/<robot>``)."""
+
+    KIND: ClassVar[str] = "begin_received"
+    message: DynamicEventDescription = _typed(DynamicEventDescription)
+
+
+@attrs.frozen(kw_only=True)
+class StatusReceived(_ClientInput):
+    """A status message arrived (``rmf/dynamic_event/status/<fleet>/<robot>``)."""
+
+    KIND: ClassVar[str] = "status_received"
+    message: DynamicEventStatus = _typed(DynamicEventStatus)
+
+
+def _rejection(value: Any, instance: object, field: attrs.Attribute[Any]) -> Rejected | None:
+    if value is not None and type(value) is not Rejected:
+        raise InvalidMessage(type(instance).__name__, field.name, value, "expected a Rejected or None")
+    return value
+
+
+@attrs.frozen(kw_only=True)
+class GoalResponse(_ClientInput):
+    """The server answered a goal request: accepted, or rejected.
+
+    A ROS rejection carries no reason (``rejection`` is ``None``); a client
+    talking to dynevent in-process may get the server's
+    :class:`~dynevent.outputs.Rejected`.
+    """
+
+    KIND: ClassVar[str] = "goal_response"
+    goal_uuid: str = _field(_uuid_converter)
+    accepted: bool = attrs.field(validator=attrs.validators.instance_of(bool))
+    rejection: Rejected | None = _field(_rejection, default=None)
+
+    def __attrs_post_init__(self) -> None:
+        if self.accepted and self.rejection is not None:
+            raise InvalidMessage("GoalResponse", "rejection", self.rejection, "an accepted goal has none")
+
+
+@attrs.frozen(kw_only=True)
+class FeedbackReceived(_ClientInput):
+    """Feedback arrived for a goal."""
+
+    KIND: ClassVar[str] = "feedback_received"
+    goal_uuid: str = _field(_uuid_converter)
+    feedback: Feedback = _typed(Feedback)
+
+
+def _terminal(value: Any, instance: object, field: attrs.Attribute[Any]) -> GoalStatus:
+    try:
+        status = GoalStatus(value)
+    except ValueError:
+        status = None
+    if status is None or not status.is_terminal:
+        raise InvalidMessage(
+            type(instance).__name__, field.name, value, "expected succeeded, canceled or aborted"
+        )
+    return status
+
+
+@attrs.frozen(kw_only=True)
+class ResultReceived(_ClientInput):
+    """A goal's terminal answer arrived: its final goal status and its result."""
+
+    KIND: ClassVar[str] = "result_received"
+    goal_uuid: str = _field(_uuid_converter)
+    status: GoalStatus = _field(_terminal)
+    result: Result = _typed(Result)
+
+
+@attrs.frozen(kw_only=True)
+class Tick(_ClientInput):
+    """Time passed: ``now`` in integer nanoseconds.  Timeouts are checked here."""
+
+    KIND: ClassVar[str] = "tick"
+    now: int = _field(_now_converter)
+
+
+#: Any input of the client machine.
+ClientInput: TypeAlias = (
+    BeginReceived | StatusReceived | GoalResponse | FeedbackReceived | ResultReceived | Tick
+)
+
+
+# --------------------------------------------------------------------------- outputs
+
+
+class _ClientOutput:
+    __slots__ = ()
+
+    #: The name of this output in traces.
+    KIND: ClassVar[str] = ""
+
+
+@attrs.frozen(kw_only=True)
+class SendGoal(_ClientOutput):
+    """Send this goal request on the action, under this goal UUID."""
+
+    KIND: ClassVar[str] = "send_goal"
+    goal_uuid: str
+    goal: Goal
+
+
+@attrs.frozen(kw_only=True)
+class Refused(_ClientOutput):
+    """A command was refused locally: the server, as the client knows it, would refuse the goal.
+
+    ``goal`` is the goal that was not sent (``None`` when none could be
+    built); ``rejection`` says why, with the reason the server would give.
+    """
+
+    KIND: ClassVar[str] = "refused"
+    event_type: EventType
+    rejection: Rejected
+    goal: Goal | None
+
+
+@attrs.frozen(kw_only=True)
+class Outcome(_ClientOutput):
+    """What became of one goal of this client: sent once, when the goal is over.
+
+    ``id`` is the event the goal concerns (a NEXT's child, as the result
+    names it; a CANCEL's target; a FINISHED's dynamic event, or 0 before it
+    ran).  ``status`` is the final status of the result (``""`` when the goal
+    never ran).  ``reason`` is known for rejections that carried one and for
+    the server's execution-failure strings.  ``goal_status`` and ``result``
+    are the terminal answer, ``rejection`` the server's refusal, when there
+    was one.
+    """
+
+    KIND: ClassVar[str] = "outcome"
+    goal_uuid: str
+    goal: Goal
+    kind: OutcomeKind
+    id: int
+    status: str
+    text: str
+    reason: RejectReason | None = None
+    execution_failure: str = ""
+    goal_status: GoalStatus | None = None
+    result: Result | None = None
+    rejection: Rejected | None = None
+
+
+@attrs.frozen(kw_only=True)
+class Progress(_ClientOutput):
+    """Feedback for one of this client's goals: the child's status, id and new log entries."""
+
+    KIND: ClassVar[str] = "progress"
+    goal_uuid: str
+    status: str
+    id: int
+    logs: tuple[LogEntry, ...]
+
+
+@attrs.frozen(kw_only=True)
+class RunBegan(_ClientOutput):
+    """A new dynamic event run has begun (first news of its description)."""
+
+    KIND: ClassVar[str] = "run_began"
+    seq: int
+    description: str
+
+
+@attrs.frozen(kw_only=True)
+class ViewChanged(_ClientOutput):
+    """The client's view of the robot changed (a status message was adopted)."""
+
+    KIND: ClassVar[str] = "view_changed"
+    phase: DynamicState
+    seq: int
+    current_id: int
+    status: str
+
+
+@attrs.frozen(kw_only=True)
+class TimedOut(_ClientOutput):
+    """A NEXT goal reached its deadline while open; the client cancels its child."""
+
+    KIND: ClassVar[str] = "timed_out"
+    goal_uuid: str
+    id: int
+    deadline: int
+
+
+@attrs.frozen(kw_only=True)
+class Ignored(_ClientOutput):
+    """Notice: the input had no effect, and why (a stale status, an answer for an unknown goal...)."""
+
+    KIND: ClassVar[str] = "ignored"
+    input: str
+    why: str
+
+
+#: Any output of the client machine.
+ClientOutput: TypeAlias = (
+    SendGoal | Refused | Outcome | Progress | RunBegan | ViewChanged | TimedOut | Ignored
+)
+
+
+# --------------------------------------------------------------------------- state
+
+
+@attrs.frozen(kw_only=True)
+class OpenGoal:
+    """A goal this client sent that has no outcome yet.
+
+    ``accepted`` once the server accepted it; ``child_id`` and
+    ``child_status`` (NEXT) once feedback named the child; ``deadline`` the
+    instant a NEXT with a timeout times out, ``timed_out`` once a tick
+    reached it.
+    """
+
+    goal_uuid: str
+    goal: Goal
+    accepted: bool = False
+    child_id: int | None = None
+    child_status: str = ""
+    deadline: int | None = None
+    timed_out: bool = False
+
+
+def _categories(value: Any) -> frozenset[str] | None:
+    if value is None:
+        return None
+    names = frozenset(value)
+    if not all(isinstance(name, str) for name in names):
+        raise InvalidMessage("ClientState", "categories", value, "expected category names (str)")
+    return names
+
+
+@attrs.frozen(kw_only=True)
+class ClientState:
+    """Everything the client knows; build a fresh one with :meth:`new`.
+
+    The view (``phase``, ``seq``, ``current_id``, ``status``) is the last
+    status message adopted; it starts as a fresh server's.  ``newest_seq`` is
+    the newest run heard of (``None`` before any message), ``description``
+    its begin description (``""`` until it arrives), ``last_id`` the highest
+    id seen in it, ``ended_id`` the highest child id known to have ended in
+    it, ``finished`` whether this client's FINISHED ended it.  ``goals`` are
+    the open goals, in the order they were sent; ``counter`` numbers the goal
+    UUIDs (``uuid_prefix`` followed by the counter as 16 hex digits).
+    ``categories``, when given, are the robot's supported categories.
+    """
+
+    uuid_prefix: str = attrs.field(converter=_prefix)
+    counter: int = 0
+    categories: frozenset[str] | None = attrs.field(default=None, converter=_categories)
+    phase: DynamicState = DynamicState.INACTIVE
+    seq: int = 0
+    current_id: int = 0
+    status: str = Status.UNINITIALIZED.value
+    newest_seq: int | None = None
+    description: str = ""
+    last_id: int = 0
+    ended_id: int | None = None
+    finished: bool = False
+    goals: tuple[OpenGoal, ...] = ()
+
+    @classmethod
+    def new(cls, uuid_prefix: str, *, categories: Iterable[str] | None = None) -> ClientState:
+        """A client that has heard nothing yet; ``uuid_prefix`` is 16 hexadecimal digits."""
+        return cls(uuid_prefix=uuid_prefix, categories=categories)
+
+    def goal(self, uuid: str) -> OpenGoal | None:
+        """The open goal named ``uuid``, if any."""
+        return next((goal for goal in self.goals if goal.goal_uuid == uuid), None)
+
+
+@attrs.frozen
+class ClientTransition:
+    """What one command or step did: the new client state and the outputs, in order."""
+
+    state: ClientState
+    outputs: tuple[ClientOutput, ...]
+
+
+# --------------------------------------------------------------------------- knowledge
+
+
+def _newer(seq: int, than: int) -> bool:
+    """Is run ``seq`` after run ``than``?  uint32 serial-number order (RFC 1982)."""
+    return 0 < ((seq - than) & _U32) < _HALF_U32
+
+
+def _run_over(state: ClientState, seq: int) -> bool:
+    """Does the client know that run ``seq`` has ended?"""
+    if state.newest_seq is None:
+        return False
+    if state.newest_seq != seq:
+        return True
+    return state.finished or (state.phase is DynamicState.INACTIVE and state.seq == seq)
+
+
+def _ended(state: ClientState, child_id: int) -> bool:
+    """Does the client know that child ``child_id`` of the newest run has ended?  (Ids rise in a run.)"""
+    return state.ended_id is not None and child_id <= state.ended_id
+
+
+def _new_run(state: ClientState, seq: int) -> ClientState:
+    return attrs.evolve(state, newest_seq=seq, description="", last_id=0, ended_id=None, finished=False)
+
+
+def _seen_id(state: ClientState, seq: int, value: int) -> ClientState:
+    """Record an id seen in run ``seq`` (only the newest run's ids matter)."""
+    if seq != state.newest_seq or value <= state.last_id:
+        return state
+    return attrs.evolve(state, last_id=value)
+
+
+def _take_uuid(state: ClientState) -> tuple[str, ClientState]:
+    uuid = f"{state.uuid_prefix}{state.counter:016x}"
+    return uuid, attrs.evolve(state, counter=(state.counter + 1) & _U64)
+
+
+def _running_child(state: ClientState) -> int | None:
+    """The id of the child the client believes runs now, if any (the newest, as ids rise in a run)."""
+    candidates = [
+        goal.child_id
+        for goal in state.goals
+        if goal.goal.event_type == EventType.NEXT
+        and goal.goal.dynamic_event_seq == state.seq
+        and goal.child_id is not None
+        and not _ended(state, goal.child_id)
+    ]
+    if state.phase is DynamicState.RUNNING and not _ended(state, state.current_id):
+        candidates.append(state.current_id)
+    return max(candidates) if candidates else None
+
+
+def _cancel_open(state: ClientState, seq: int, child_id: int) -> bool:
+    return any(
+        goal.goal.event_type == EventType.CANCEL
+        and goal.goal.dynamic_event_seq == seq
+        and goal.goal.id == child_id
+        for goal in state.goals
+    )
+
+
+# --------------------------------------------------------------------------- commands
+
+
+def _refuse(reason: RejectReason, text: str, **values: Any) -> Rejected:
+    return Rejected(reason=reason, text=text, **values)
+
+
+def _common_refusal(state: ClientState, event_type: EventType) -> Rejected | None:
+    """The refusals every goal type shares, in the server's order (R4.2, R4.3, R4.6)."""
+    if state.newest_seq is not None and state.newest_seq != state.seq:  # R4.2
+        return _refuse(
+            RejectReason.SEQ_MISMATCH,
+            f"run {state.newest_seq} has begun and its status has not arrived; "
+            f"a goal for run {state.seq} would be refused",
+            expected_seq=state.newest_seq,
+            received_seq=state.seq,
+        )
+    if state.phase is DynamicState.INACTIVE or state.finished:  # R4.3
+        return _refuse(RejectReason.INACTIVE, "no dynamic event is active for this robot")
+    if event_type == EventType.CANCEL:
+        return None
+    if state.phase is DynamicState.RUNNING and not _ended(state, state.current_id):  # R4.6
+        return _refuse(
+            RejectReason.BUSY,
+            f"event {state.current_id} is running: only a CANCEL with its id is accepted",
+            current_id=state.current_id,
+        )
+    for goal in state.goals:
+        if goal.goal.dynamic_event_seq == state.seq and goal.goal.event_type in (
+            EventType.NEXT,
+            EventType.FINISHED,
+        ):
+            kind = EventType(goal.goal.event_type).name
+            return _refuse(
+                RejectReason.BUSY,
+                f"this client's {kind} goal {goal.goal_uuid} is still open; another would race it",
+                current_id=goal.child_id,
+            )
+    return None
+
+
+def _check_timeout(value: Any) -> int | None:
+    if value is None:
+        return None
+    if type(value) is not int or value <= 0:
+        raise InvalidMessage(
+            "request_next", "timeout", value, "expected positive integer nanoseconds or None"
+        )
+    return value
+
+
+def _send(state: ClientState, goal: Goal, deadline: int | None = None) -> ClientTransition:
+    uuid, state = _take_uuid(state)
+    opened = OpenGoal(goal_uuid=uuid, goal=goal, deadline=deadline)
+    state = attrs.evolve(state, goals=(*state.goals, opened))
+    if goal.event_type == EventType.NEXT:
+        state = _seen_id(state, goal.dynamic_event_seq, goal.id)
+    return ClientTransition(state, (SendGoal(goal_uuid=uuid, goal=goal),))
+
+
+def _refused(state: ClientState, event_type: EventType, rejection: Rejected, goal: Goal) -> ClientTransition:
+    return ClientTransition(state, (Refused(event_type=event_type, rejection=rejection, goal=goal),))
+
+
+def request_next(
+    state: ClientState,
+    category: str,
+    description: str,
+    *,
+    stubborn_period: float = 0.0,
+    timeout: int | None = None,
+    now: int,
+) -> ClientTransition:
+    """Ask the robot to run the next event: a NEXT goal, or a local refusal.
+
+    The goal's id is one more than the highest id seen in the run.
+    ``timeout`` (integer nanoseconds, e.g. ``30 * SECOND``) makes the client
+    cancel the child if the goal is still open at ``now + timeout``.  Values
+    the wire cannot carry (a category holding NUL, a stubborn period beyond
+    float32) raise :class:`~dynevent.errors.InvalidMessage`, as does a
+    timeout that is not a positive integer; NaN and infinite stubborn periods
+    are wire-legal and refused locally, as the server would.
+    """
+    now = _check_now("request_next", now)
+    timeout = _check_timeout(timeout)
+    spare = state.last_id < _U64
+    goal = Goal(
+        dynamic_event_seq=state.seq,
+        event_type=EventType.NEXT,
+        category=category,
+        description=description,
+        id=state.last_id + 1 if spare else state.last_id,
+        stubborn_period=stubborn_period,
+    )
+    refusal = _common_refusal(state, EventType.NEXT)
+    if refusal is None and state.categories is not None and category not in state.categories:  # R4.7
+        supported = tuple(sorted(state.categories))
+        refusal = _refuse(
+            RejectReason.UNSUPPORTED_CATEGORY,
+            f"category {category!r} is not supported; supported: {', '.join(supported) or 'none'}",
+            categories=supported,
+        )
+    if refusal is None:  # R4.9
+        try:
+            _json.parse(description)
+        except _json.JsonProblem as exc:
+            refusal = _refuse(
+                RejectReason.DESCRIPTION_NOT_JSON,
+                f"the description of the {category!r} event is {exc}",
+                errors=(str(exc),),
+            )
+    if refusal is None and not math.isfinite(goal.stubborn_period):  # R4.11
+        refusal = _refuse(
+            RejectReason.NON_FINITE_STUBBORN_PERIOD,
+            f"stubborn_period {goal.stubborn_period} is not a finite number",
+        )
+    if refusal is None and not spare:  # R4.12
+        refusal = _refuse(
+            RejectReason.STALE_ID,
+            f"no id above {state.last_id}, the highest id seen in this run, is left",
+            current_id=state.last_id,
+            requested_id=goal.id,
+        )
+    if refusal is not None:
+        return _refused(state, EventType.NEXT, refusal, goal)
+    return _send(state, goal, None if timeout is None else now + timeout)
+
+
+def request_cancel(state: ClientState, *, now: int) -> ClientTransition:
+    """Ask the robot to cancel the running event: a CANCEL goal naming it, or a local refusal.
+
+    The running event is the newest child the client knows runs: the view's
+    while RUNNING, or the child of its own open NEXT goal once feedback named
+    it, unless an answer has told the client that child has ended.
+    """
+    now = _check_now("request_cancel", now)
+    target = _running_child(state)
+    goal = Goal(
+        dynamic_event_seq=state.seq,
+        event_type=EventType.CANCEL,
+        id=state.current_id if target is None else target,
+    )
+    refusal = _common_refusal(state, EventType.CANCEL)
+    if refusal is None and target is None:  # R4.13
+        refusal = _refuse(
+            RejectReason.CANCEL_IDLE,
+            "no event is running to cancel",
+            execution_failure=EXECUTION_FAILURES["idle_cancel"],
+        )
+    if refusal is not None:
+        return _refused(state, EventType.CANCEL, refusal, goal)
+    return _send(state, goal)
+
+
+def request_finish(state: ClientState, *, now: int) -> ClientTransition:
+    """Tell the robot the dynamic event is finished: a FINISHED goal, or a local refusal."""
+    now = _check_now("request_finish", now)
+    goal = Goal(dynamic_event_seq=state.seq, event_type=EventType.FINISHED)
+    refusal = _common_refusal(state, EventType.FINISHED)
+    if refusal is not None:
+        return _refused(state, EventType.FINISHED, refusal, goal)
+    return _send(state, goal)
+
+
+def next_deadline(state: ClientState) -> int | None:
+    """The earliest instant a tick would time a goal out (``None`` if none): when to tick next."""
+    deadlines = [goal.deadline for goal in state.goals if goal.deadline is not None and not goal.timed_out]
+    return min(deadlines) if deadlines else None
+
+
+# --------------------------------------------------------------------------- step handlers
+
+
+def _replace(state: ClientState, goal: OpenGoal) -> ClientState:
+    return attrs.evolve(
+        state, goals=tuple(goal if other.goal_uuid == goal.goal_uuid else other for other in state.goals)
+    )
+
+
+def _remove(state: ClientState, uuid: str) -> ClientState:
+    return attrs.evolve(state, goals=tuple(other for other in state.goals if other.goal_uuid != uuid))
+
+
+def _timeout_cancel(state: ClientState, goal: OpenGoal) -> tuple[ClientState, tuple[ClientOutput, ...]]:
+    """Send the CANCEL of a timed-out NEXT once its child is known to run and no CANCEL of ours is open."""
+    seq = goal.goal.dynamic_event_seq
+    if not goal.timed_out or seq != state.seq or _run_over(state, seq):
+        return state, ()
+    child = goal.child_id
+    if (
+        child is None
+        and goal.accepted
+        and state.phase is DynamicState.RUNNING
+        and state.current_id == goal.goal.id
+    ):
+        child = goal.goal.id  # id policy "goal": the status names our child when feedback was lost
+    if child is None or _ended(state, child) or _cancel_open(state, seq, child):
+        return state, ()
+    cancel = Goal(dynamic_event_seq=seq, event_type=EventType.CANCEL, id=child)
+    transition = _send(state, cancel)
+    return transition.state, transition.outputs
+
+
+def _on_begin(state: ClientState, event: BeginReceived) -> ClientTransition:
+    message = event.message
+    seq = message.dynamic_event_seq
+    if state.newest_seq is not None and seq != state.newest_seq and not _newer(seq, state.newest_seq):
+        return ClientTransition(
+            state, (Ignored(input=event.KIND, why=f"begin of run {seq}, older than run {state.newest_seq}"),)
+        )
+    if state.newest_seq is None or seq != state.newest_seq:
+        state = _new_run(state, seq)
+    if state.description:
+        return ClientTransition(state, (Ignored(input=event.KIND, why=f"run {seq} was already described"),))
+    state = attrs.evolve(state, description=message.description)
+    return ClientTransition(state, (RunBegan(seq=seq, description=message.description),))
+
+
+def _on_status(state: ClientState, event: StatusReceived) -> ClientTransition:
+    message = event.message
+    seq = message.dynamic_event_seq
+    if state.newest_seq is not None and seq != state.newest_seq and not _newer(seq, state.newest_seq):
+        why = f"status of run {seq}, older than run {state.newest_seq}"
+        return ClientTransition(state, (Ignored(input=event.KIND, why=why),))
+    try:
+        phase = DynamicState(message.dynamic_state)
+    except ValueError:
+        why = f"dynamic_state {message.dynamic_state} is none of INACTIVE, WAITING, RUNNING"
+        return ClientTransition(state, (Ignored(input=event.KIND, why=why),))
+    if state.newest_seq is None or seq != state.newest_seq:
+        state = _new_run(state, seq)
+    before = (state.phase, state.seq, state.current_id, state.status)
+    state = attrs.evolve(state, phase=phase, seq=seq, current_id=message.id, status=message.status)
+    if phase is not DynamicState.INACTIVE:
+        state = _seen_id(state, seq, message.id)
+    outputs: list[ClientOutput] = []
+    if (phase, seq, message.id, message.status) != before:
+        outputs.append(ViewChanged(phase=phase, seq=seq, current_id=message.id, status=message.status))
+    for goal in state.goals:
+        if goal.goal.event_type == EventType.NEXT and goal.timed_out:
+            state, sent = _timeout_cancel(state, goal)
+            outputs.extend(sent)
+    return ClientTransition(state, tuple(outputs))
+
+
+def _unknown(state: ClientState, event: ClientInput, uuid: str) -> ClientTransition:
+    return ClientTransition(state, (Ignored(input=event.KIND, why=f"no open goal {uuid}"),))
+
+
+def _on_response(state: ClientState, event: GoalResponse) -> ClientTransition:
+    goal = state.goal(event.goal_uuid)
+    if goal is None:
+        return _unknown(state, event, event.goal_uuid)
+    if event.accepted:
+        goal = attrs.evolve(goal, accepted=True)
+        state, sent = _timeout_cancel(_replace(state, goal), goal)
+        return ClientTransition(state, sent)
+    if goal.accepted:
+        return ClientTransition(
+            state, (Ignored(input=event.KIND, why=f"goal {goal.goal_uuid} was accepted"),)
+        )
+    rejection = event.rejection
+    seq = goal.goal.dynamic_event_seq
+    over = _run_over(state, seq)
+    state = _remove(state, goal.goal_uuid)
+    if rejection is not None and rejection.current_id is not None:  # the server's running or last id
+        state = _seen_id(state, seq, rejection.current_id)
+    reason = None if rejection is None else rejection.reason
+    if over:
+        kind, text = OutcomeKind.SUPERSEDED, f"refused after run {seq} ended"
+    else:
+        kind = OutcomeKind.REJECTED
+        text = "refused by the server" + ("" if rejection is None else f": {rejection.text}")
+    outcome = Outcome(
+        goal_uuid=goal.goal_uuid,
+        goal=goal.goal,
+        kind=kind,
+        id=goal.goal.id,
+        status="",
+        text=text,
+        reason=reason,
+        rejection=rejection,
+    )
+    return ClientTransition(state, (outcome,))
+
+
+def _on_feedback(state: ClientState, event: FeedbackReceived) -> ClientTransition:
+    goal = state.goal(event.goal_uuid)
+    if goal is None:
+        return _unknown(state, event, event.goal_uuid)
+    feedback = event.feedback
+    goal = attrs.evolve(goal, accepted=True, child_id=feedback.id, child_status=feedback.status)
+    state = _seen_id(_replace(state, goal), goal.goal.dynamic_event_seq, feedback.id)
+    outputs: list[ClientOutput] = [
+        Progress(goal_uuid=goal.goal_uuid, status=feedback.status, id=feedback.id, logs=feedback.logs)
+    ]
+    state, sent = _timeout_cancel(state, goal)
+    outputs.extend(sent)
+    return ClientTransition(state, tuple(outputs))
+
+
+def _classify(state: ClientState, goal: OpenGoal, event: ResultReceived) -> Outcome:
+    """The outcome of a goal from its terminal answer, given what the client knew before it."""
+    result = event.result
+    failure = result.execution_failure
+    kind: OutcomeKind
+    reason: RejectReason | None = None
+    seq = goal.goal.dynamic_event_seq
+    if failure:
+        reason = _FAILURE_REASONS.get(failure.split("\n", 1)[0])
+        if event.status is GoalStatus.CANCELED:
+            kind, text = OutcomeKind.CANCELED, f"cancelled before it began: {failure}"
+        elif _run_over(state, seq):
+            kind, text = OutcomeKind.SUPERSEDED, f"could not begin after run {seq} ended: {failure}"
+        else:
+            kind, text = OutcomeKind.EXECUTION_FAILURE, f"could not begin: {failure}"
+    elif goal.goal.event_type == EventType.NEXT and goal.timed_out:
+        kind = OutcomeKind.TIMEOUT
+        text = f"outran its timeout; the event ended {result.status!r}"
+    else:
+        kind = _BY_FINAL_STATUS.get(result.status, OutcomeKind.ERROR)
+        text = f"the event ended {result.status!r}"
+        if result.status not in _BY_FINAL_STATUS:
+            text += ", which is not a final status"
+    # a result names the child (or the dynamic event) only when the goal ran; a CANCEL names its target
+    event_id = goal.goal.id if failure or goal.goal.event_type == EventType.CANCEL else result.id
+    return Outcome(
+        goal_uuid=goal.goal_uuid,
+        goal=goal.goal,
+        kind=kind,
+        id=event_id,
+        status=result.status,
+        text=text,
+        reason=reason,
+        execution_failure=failure,
+        goal_status=event.status,
+        result=result,
+    )
+
+
+def _on_result(state: ClientState, event: ResultReceived) -> ClientTransition:
+    goal = state.goal(event.goal_uuid)
+    if goal is None:
+        return _unknown(state, event, event.goal_uuid)
+    outcome = _classify(state, goal, event)
+    state = _remove(state, goal.goal_uuid)
+    result = event.result
+    seq = goal.goal.dynamic_event_seq
+    if not result.execution_failure and seq == state.newest_seq:
+        if goal.goal.event_type == EventType.FINISHED and event.status is GoalStatus.SUCCEEDED:
+            state = attrs.evolve(state, finished=True)
+        elif goal.goal.event_type in (EventType.NEXT, EventType.CANCEL):
+            state = _seen_id(state, seq, result.id)
+            if state.ended_id is None or result.id > state.ended_id:
+                state = attrs.evolve(state, ended_id=result.id)
+    return ClientTransition(state, (outcome,))
+
+
+def _on_tick(state: ClientState, event: Tick) -> ClientTransition:
+    outputs: list[ClientOutput] = []
+    for goal in state.goals:
+        deadline = goal.deadline
+        if deadline is None or goal.timed_out or event.now < deadline:
+            continue
+        expired = attrs.evolve(goal, timed_out=True)
+        state = _replace(state, expired)
+        child = goal.child_id if goal.child_id is not None else goal.goal.id
+        outputs.append(TimedOut(goal_uuid=goal.goal_uuid, id=child, deadline=deadline))
+        state, sent = _timeout_cancel(state, expired)
+        outputs.extend(sent)
+    return ClientTransition(state, tuple(outputs))
+
+
+def step(state: ClientState, event: ClientInput) -> ClientTransition:
+    """Apply one input to the client state: the new state and the outputs, in order.  Pure and total."""
+    if isinstance(event, BeginReceived):
+        return _on_begin(state, event)
+    if isinstance(event, StatusReceived):
+        return _on_status(state, event)
+    if isinstance(event, GoalResponse):
+        return _on_response(state, event)
+    if isinstance(event, FeedbackReceived):
+        return _on_feedback(state, event)
+    if isinstance(event, ResultReceived):
+        return _on_result(state, event)
+    return _on_tick(state, event)
