@@ -14,8 +14,10 @@ matches any string (for sentences whose wording the spec leaves open).
 
 from __future__ import annotations
 
+import fnmatch
 import json
 import os
+import re
 import select
 import shlex
 import subprocess
@@ -25,7 +27,7 @@ from typing import Any, Protocol
 
 import attrs
 
-from . import _json
+from . import __version__, _json
 from .driver import Driver
 from .errors import DyneventError
 
@@ -34,15 +36,22 @@ __all__ = [
     "ExternalImplementation",
     "Failure",
     "Implementation",
+    "ImplementationError",
     "InProcessImplementation",
     "InvalidVector",
     "Outcome",
+    "RuleTally",
     "Step",
     "Vector",
+    "format_report",
     "load_vectors",
     "matches",
+    "outcome_record",
+    "rule_table",
     "run_vector",
     "run_vectors",
+    "select_vectors",
+    "summary_record",
 ]
 
 #: In an expected output, matches any string.
@@ -111,6 +120,7 @@ class InProcessImplementation:
 
     def __init__(self) -> None:
         self._driver = Driver()
+        self.name = f"dynevent {__version__} (in process)"
 
     def reset(self, fleet: str, robot: str, config: Any, state: Any) -> None:
         """Start a new server."""
@@ -150,9 +160,13 @@ class ExternalImplementation:
             )
         except (OSError, ValueError) as exc:
             raise ImplementationError(f"cannot start {command!r}: {exc}") from None
-        hello = self._request({"op": "hello"})
-        if hello.get("ok") is not True or hello.get("protocol") != 1:
-            raise ImplementationError(f"{command!r} does not speak driver protocol 1: {hello!r}")
+        try:
+            hello = self._request({"op": "hello"})
+            if hello.get("ok") is not True or hello.get("protocol") != 1:
+                raise ImplementationError(f"{command!r} does not speak driver protocol 1: {hello!r}")
+        except ImplementationError:
+            self.close()
+            raise
         self.name = str(hello.get("implementation", command))
 
     def _request(self, request: Any) -> dict[str, Any]:
@@ -368,3 +382,123 @@ def run_vectors(vectors: Sequence[Vector], implementation: Implementation) -> It
     """Run every vector in turn."""
     for vector in vectors:
         yield run_vector(vector, implementation)
+
+
+# --------------------------------------------------------------------------- reporting
+
+_RULE = re.compile(r"R(\d+)\.(\d+)")
+
+
+def _rule_key(rule: str) -> tuple[int, int, str]:
+    found = _RULE.fullmatch(rule)
+    return (int(found.group(1)), int(found.group(2)), "") if found else (10**9, 0, rule)
+
+
+def select_vectors(vectors: Sequence[Vector], filters: Sequence[str] | None) -> list[Vector]:
+    """The vectors any filter selects (all of them when there is no filter).
+
+    A filter that is a rule number (``R9.3``) selects the vectors citing it; one
+    with glob characters (``*?[``) is matched against the whole name; any
+    other selects the vectors whose name contains it.
+    """
+    if not filters:
+        return list(vectors)
+
+    def chosen(vector: Vector, pattern: str) -> bool:
+        if _RULE.fullmatch(pattern):
+            return pattern in vector.rules
+        if any(char in pattern for char in "*?["):
+            return fnmatch.fnmatchcase(vector.name, pattern)
+        return pattern in vector.name
+
+    return [vector for vector in vectors if any(chosen(vector, pattern) for pattern in filters)]
+
+
+@attrs.frozen
+class RuleTally:
+    """How the vectors citing one rule fared."""
+
+    rule: str
+    vectors: int
+    passed: int
+
+    @property
+    def failed(self) -> int:
+        """Vectors citing the rule that failed."""
+        return self.vectors - self.passed
+
+
+def rule_table(outcomes: Iterable[Outcome]) -> list[RuleTally]:
+    """One tally per cited rule, in rule order."""
+    counts: dict[str, list[int]] = {}
+    for outcome in outcomes:
+        for rule in dict.fromkeys(outcome.vector.rules):
+            tally = counts.setdefault(rule, [0, 0])
+            tally[0] += 1
+            tally[1] += outcome.passed
+    return [
+        RuleTally(rule, total, passed)
+        for rule, (total, passed) in sorted(counts.items(), key=lambda item: _rule_key(item[0]))
+    ]
+
+
+def format_report(outcomes: Sequence[Outcome], implementation: str = "") -> str:
+    """The human report: the table by rule, a diff per failed vector, and ``N passed, M failed``."""
+    lines = [f"implementation: {implementation}"] if implementation else []
+    table = rule_table(outcomes)
+    width = max([len("rule"), *(len(tally.rule) for tally in table)])
+    lines.append(f"{'rule':<{width}}  {'vectors':>7}  {'passed':>6}  {'failed':>6}")
+    for tally in table:
+        mark = "" if tally.failed == 0 else "  FAIL"
+        lines.append(f"{tally.rule:<{width}}  {tally.vectors:>7}  {tally.passed:>6}  {tally.failed:>6}{mark}")
+    failed = [outcome for outcome in outcomes if outcome.failure is not None]
+    for outcome in failed:
+        vector = outcome.vector
+        assert outcome.failure is not None
+        lines.append("")
+        lines.append(f"FAIL {vector.name} ({vector.source}) [{', '.join(vector.rules)}]")
+        if vector.summary:
+            lines.append(f"  {vector.summary}")
+        lines.extend(f"  {line}" for line in outcome.failure.diff().splitlines())
+    lines.append("")
+    lines.append(f"{len(outcomes) - len(failed)} passed, {len(failed)} failed")
+    return "\n".join(lines)
+
+
+def outcome_record(outcome: Outcome) -> dict[str, Any]:
+    """One vector's result as a JSON object (``dynevent vectors --json``)."""
+    vector, failure = outcome.vector, outcome.failure
+    return {
+        "type": "vector",
+        "name": vector.name,
+        "source": vector.source,
+        "rules": list(vector.rules),
+        "summary": vector.summary,
+        "passed": outcome.passed,
+        "failure": None
+        if failure is None
+        else {
+            "step": failure.step,
+            "problem": failure.problem,
+            "input": failure.input,
+            "expected": failure.expected,
+            "got": failure.got,
+            "diff": failure.diff(),
+        },
+    }
+
+
+def summary_record(outcomes: Sequence[Outcome], implementation: str = "") -> dict[str, Any]:
+    """The closing JSON object of ``dynevent vectors --json``."""
+    passed = sum(outcome.passed for outcome in outcomes)
+    return {
+        "type": "summary",
+        "implementation": implementation,
+        "vectors": len(outcomes),
+        "passed": passed,
+        "failed": len(outcomes) - passed,
+        "rules": {
+            tally.rule: {"vectors": tally.vectors, "passed": tally.passed, "failed": tally.failed}
+            for tally in rule_table(outcomes)
+        },
+    }
