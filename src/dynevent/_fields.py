@@ -179,43 +179,42 @@ def sequence(cls: type[Any]) -> Any:
 
 
 _T = TypeVar("_T")
-_set = object.__setattr__
+_KEEP: Any = object()  # "no change" marker of generated replace functions
 
 
-def unchecked(cls: type[_T], **values: Any) -> _T:
-    """Build a frozen attrs instance from values already known to be valid, skipping converters.
+def _generate(cls: type, name: str, signature: str, body: list[str]) -> Any:
+    """Compile a function over ``cls``'s fields that sets slots through their descriptors."""
+    names = [field.name for field in attrs.fields(cls)]
+    namespace: dict[str, Any] = {"_new": object.__new__, "_cls": cls, "_KEEP": _KEEP}
+    for field in names:
+        namespace[f"_set_{field}"] = cls.__dict__[field].__set__  # the slot's own setter skips frozen checks
+    source = "\n".join(
+        [f"def {name}({signature.format(names=names)}):", "    new = _new(_cls)", *body, "    return new"]
+    )
+    exec(source, namespace)
+    return namespace[name]
 
-    For messages the machine builds from checked state; every field must be given.
+
+def maker(cls: type[_T]) -> Callable[..., _T]:
+    """A keyword-only constructor for ``cls`` that skips converters and validators.
+
+    For values the machine builds from state it has already checked; every
+    field must be given.
     """
-    instance = object.__new__(cls)
-    for name, value in values.items():
-        _set(instance, name, value)
-    return instance
+    names = [field.name for field in attrs.fields(cls)]  # type: ignore[arg-type]
+    body = [f"    _set_{field}(new, {field})" for field in names]
+    function: Callable[..., _T] = _generate(cls, "make", "*, " + ", ".join(names), body)
+    return function
 
 
 def replacer(cls: type[_T]) -> Callable[..., _T]:
-    """A fast ``attrs.evolve`` for one slotted class whose fields need no conversion.
+    """A fast ``attrs.evolve`` for one slotted class: keyword-only changes, no ``__init__``.
 
-    Generated once per class: ``replace(instance, **changes)`` copies every
-    slot, then applies the changes, without running ``__init__``.
+    Generated once per class: ``replace(instance, field=value, ...)`` copies
+    every slot, taking the given values instead where there are some.
     """
     names = [field.name for field in attrs.fields(cls)]  # type: ignore[arg-type]
-    lines = [
-        "def replace(self, /, **changes):",
-        "    new = _new(_cls)",
-        *(f"    _set(new, {name!r}, self.{name})" for name in names),
-        "    for name, value in changes.items():",
-        "        if name not in _names:",
-        "            raise TypeError(f'{_cls.__name__} has no field {name!r}')",
-        "        _set(new, name, value)",
-        "    return new",
-    ]
-    namespace: dict[str, Any] = {
-        "_new": object.__new__,
-        "_cls": cls,
-        "_set": _set,
-        "_names": frozenset(names),
-    }
-    exec("\n".join(lines), namespace)
-    function: Callable[..., _T] = namespace["replace"]
+    body = [f"    _set_{field}(new, self.{field} if {field} is _KEEP else {field})" for field in names]
+    signature = "self, /, *, " + ", ".join(f"{field}=_KEEP" for field in names)
+    function: Callable[..., _T] = _generate(cls, "replace", signature, body)
     return function

@@ -68,7 +68,9 @@ def parse(text: str | bytes | bytearray) -> Any:
             raise JsonProblem(f"not UTF-8 text (byte {exc.start})") from None
     if not isinstance(text, str):
         raise JsonProblem(f"expected JSON text, got {type(text).__name__}")
-    if ("[" in text or "{" in text) and not _depth_ok(text):
+    if text.count("[") + text.count("{") > MAX_DEPTH and not _depth_ok(
+        text
+    ):  # scan only when it could be deep
         raise JsonProblem(f"nested deeper than {MAX_DEPTH} levels")
     try:
         return json.loads(text, object_pairs_hook=_pairs)

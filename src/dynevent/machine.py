@@ -23,7 +23,7 @@ import attrs
 from . import _json
 from . import inputs as ins
 from . import outputs as outs
-from ._fields import replacer, unchecked
+from ._fields import maker, replacer
 from .messages import (
     DescriptionResponse,
     DynamicEventDescription,
@@ -230,7 +230,12 @@ class State:
         return self.event_id if self.running is None else self.running.child_id
 
 
-# Fast copies with changes: one generated function per class (attrs.evolve re-runs __init__).
+# Messages built from checked state skip their converters; copies skip __init__ (attrs.evolve re-runs it).
+_make_status = maker(DynamicEventStatus)
+_make_feedback = maker(Feedback)
+_make_log_entry = maker(LogEntry)
+_make_result = maker(Result)
+_make_time = maker(Time)
 _replace_state = replacer(State)
 _replace_running = replacer(RunningGoal)
 _replace_stubborn = replacer(Stubbornness)
@@ -246,14 +251,13 @@ class Transition:
 
 def _time(now: int) -> Time:
     sec, nanosec = divmod(now, _NS)
-    return unchecked(Time, sec=sec, nanosec=nanosec)
+    return _make_time(sec=sec, nanosec=nanosec)
 
 
 def status_message(state: State, now: int) -> DynamicEventStatus:
     """The status message that describes ``state`` (R2.2)."""
     if not state.active:
-        return unchecked(
-            DynamicEventStatus,
+        return _make_status(
             dynamic_event_seq=state.seq,
             dynamic_state=DynamicState.INACTIVE.value,
             status=Status.UNINITIALIZED.value,
@@ -261,8 +265,7 @@ def status_message(state: State, now: int) -> DynamicEventStatus:
             time=_time(now),
         )
     phase = DynamicState.WAITING if state.running is None else DynamicState.RUNNING
-    return unchecked(
-        DynamicEventStatus,
+    return _make_status(
         dynamic_event_seq=state.seq,
         dynamic_state=phase.value,
         status=state.status,
@@ -402,16 +405,16 @@ def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
 
 def _log(state: State, text: str, tier: str, now: int) -> tuple[State, LogEntry]:
     """A new log entry with the robot's next LogEntry.seq, which wraps at 2**32 (R7.3)."""
-    entry = unchecked(LogEntry, seq=state.log_seq, tier=tier, unix_millis_time=now // 1_000_000, text=text)
+    entry = _make_log_entry(seq=state.log_seq, tier=tier, unix_millis_time=now // 1_000_000, text=text)
     return _replace_state(state, log_seq=(state.log_seq + 1) & _U32), entry
 
 
 def _result(failure: str, status: str, event_id: int) -> Result:
-    return unchecked(Result, execution_failure=failure, status=status, id=event_id)
+    return _make_result(execution_failure=failure, status=status, id=event_id)
 
 
 def _feedback(status: str, event_id: int, logs: tuple[LogEntry, ...]) -> Feedback:
-    return unchecked(Feedback, status=status, id=event_id, logs=logs)
+    return _make_feedback(status=status, id=event_id, logs=logs)
 
 
 def _failure(goal_uuid: str, failure: str) -> outs.AnswerGoal:
@@ -437,16 +440,23 @@ def _end_stubbornness(state: State, outputs: list[outs.Output]) -> State:
 
 
 def _start_child(
-    state: State, running: RunningGoal, outputs: list[outs.Output], logs: tuple[LogEntry, ...]
+    state: State,
+    running: RunningGoal,
+    outputs: list[outs.Output],
+    logs: tuple[LogEntry, ...],
+    parsed: Any = None,
 ) -> State:
-    """Start the running goal's child (R6.4): stubbornness ends, status becomes underway."""
+    """Start the running goal's child (R6.4): stubbornness ends, status becomes underway.
+
+    ``parsed`` is the description already parsed by R6.1; a deferred start (R14.5) parses it again.
+    """
     state = _end_stubbornness(state, outputs)  # R12.5
     goal = running.goal
-    parsed: Any
-    try:
-        parsed = _json.parse(goal.description)
-    except _json.JsonProblem:  # unreachable after R6.2; kept so the machine cannot raise
-        parsed = None
+    if parsed is None:
+        try:
+            parsed = _json.parse(goal.description)
+        except _json.JsonProblem:  # unreachable after R6.1; kept so the machine cannot raise
+            parsed = None
     outputs.append(
         outs.StartChild(
             category=goal.category, description=goal.description, id=running.child_id, parsed=parsed
@@ -575,7 +585,7 @@ def _on_goal_started(state: State, event: ins.GoalStarted, config: ServerConfig)
 def _start_next(
     state: State, uuid: str, goal: Goal, config: ServerConfig, outputs: list[outs.Output], now: int
 ) -> State:
-    _, problem = _check_description(goal, config)  # R6.1
+    parsed, problem = _check_description(goal, config)  # R6.1
     if problem is not None:  # rmf_ros2 has no string for R4.7: it never re-checks the category
         failure = problem.execution_failure or f"{EXECUTION_FAILURES['parse']}\n -- {problem.text}"
         outputs.append(_failure(uuid, failure))
@@ -604,7 +614,7 @@ def _start_next(
         )
         return _replace_state(state, running=running, status=queued_status)
     running = RunningGoal(goal_uuid=uuid, goal=goal, child_id=child_id, child_status="", started=False)
-    return _start_child(state, running, outputs, logs)  # R6.4
+    return _start_child(state, running, outputs, logs, parsed)  # R6.4
 
 
 def _start_cancel(state: State, uuid: str, goal: Goal, outputs: list[outs.Output], now: int) -> State:
@@ -662,8 +672,7 @@ def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerCon
     logs: tuple[LogEntry, ...] = ()
     log_seq = state.log_seq
     if event.log_text is not None:  # R7.2, R7.3
-        entry = unchecked(
-            LogEntry,
+        entry = _make_log_entry(
             seq=log_seq,
             tier=event.tier,
             unix_millis_time=event.now // 1_000_000,

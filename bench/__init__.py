@@ -1,0 +1,1 @@
+"""Benchmarks of dynevent against peer implementations of the same rules (see bench/run.py)."""
