@@ -6,28 +6,15 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from . import __version__
-from .messages import Feedback, Goal, LogEntry, Result
-from .names import action_name
-from .vocab import EventType, Status, Tier
+from . import __version__, check, demo, explain
+from .diagram import FORMATS, render
 
 __all__ = ["main"]
 
-
-def _demo(_: argparse.Namespace) -> int:
-    print(f"action: {action_name('tinyRobot', 'tinyRobot1')}")
-    goal = Goal(
-        dynamic_event_seq=1, event_type=EventType.NEXT, category="go_to_place", description='"pantry"', id=1
-    )
-    print(f"goal:     {goal.to_json()}")
-    feedback = Feedback(
-        status=Status.UNDERWAY,
-        id=1,
-        logs=(LogEntry(seq=0, tier=Tier.INFO, unix_millis_time=0, text="moving"),),
-    )
-    print(f"feedback: {feedback.to_json()}")
-    print(f"result:   {Result(status=Status.COMPLETED, id=1).to_json()}")
-    return 0
+_EPILOG = (
+    "Without a command, runs the demo.  Exit status: 0 ok, 1 findings or failures (check: violations; "
+    "explain: the goal is refused; vectors: a vector fails), 2 usage or input errors.  See docs/cli.md."
+)
 
 
 def _vectors(args: argparse.Namespace) -> int:
@@ -93,13 +80,33 @@ def _add_vectors_command(commands: argparse._SubParsersAction[argparse.ArgumentP
     parser.set_defaults(run=_vectors)
 
 
+def _diagram(args: argparse.Namespace) -> int:
+    print(render(args.format), end="")
+    return 0
+
+
+def _add_diagram_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    parser = commands.add_parser(
+        "diagram",
+        help="print the server's phase diagram",
+        description="Print the server machine's phase diagram, drawn from dynevent.machine.TRANSITIONS "
+        "(the Mermaid form is the one docs/spec.md embeds).  Exit status: 0.",
+    )
+    parser.add_argument(
+        "--format", choices=FORMATS, default="mermaid", help="mermaid (the default) or dot (Graphviz)"
+    )
+    parser.set_defaults(run=_diagram)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``dynevent`` command; return its exit code."""
-    parser = argparse.ArgumentParser(prog="dynevent", description=__doc__)
+    parser = argparse.ArgumentParser(prog="dynevent", description=__doc__, epilog=_EPILOG)
     parser.add_argument("--version", action="version", version=f"dynevent {__version__}")
     commands = parser.add_subparsers(dest="command")
-    demo = commands.add_parser("demo", help="show a short scripted exchange")
-    demo.set_defaults(run=_demo)
+    demo.add_command(commands)
+    check.add_command(commands)
+    explain.add_command(commands)
+    _add_diagram_command(commands)
     _add_vectors_command(commands)
     args = parser.parse_args(argv)
     if args.command is None:

@@ -1,0 +1,1501 @@
+"""``dynevent check``: replay an observed trace of one robot against the machine, in observer mode.
+
+A trace (docs/trace-format.md) is what was seen on the wire for one robot:
+begin and status messages, goal requests with their UUIDs, goal responses,
+feedback, terminal answers and action-level cancels, each with its time.
+The observer keeps a server state (:class:`dynevent.machine.State`) and
+infers the server's inputs from what it sees:
+
+- a ``begin`` is a ``Begin`` input (the event id arrives with the status
+  message that follows);
+- a ``goal`` and its ``goal_response`` are a ``GoalRequested`` input: the
+  machine's decision is compared with the response;
+- every other observation must be an output of the machine.  An
+  observation the machine already owes (an output of an inferred step not
+  seen yet) is compared with it.  Otherwise the observer *abduces* the
+  input that produced it from a short, fixed list of candidates: the start
+  of an accepted goal (``GoalStarted``), a child's progress (``ChildProgress``,
+  from feedback), a child's end (``ChildFinished``, from the running goal's
+  answer), a task cancel or kill, an interruption or a resume, a shutdown.
+  The first candidate whose first output on the action (or whose status
+  message) is the observation is taken; its other outputs are owed.
+
+When no candidate explains an observation, or the machine's output differs
+from it, the observer reports a :class:`Finding` (line, docs/spec.md rule,
+code, what was seen, what was expected), then resynchronises with the
+smallest change that makes the state agree with what the server evidently
+did (it queues a goal the server accepted, starts a NEXT whose feedback
+shows it running, forgets goals the server displaced), so that one fault is
+reported once and later records are judged against the server's real
+condition.
+
+:func:`check_trace` is the API; :func:`read_trace` parses a trace and raises
+:class:`TraceError` (naming the source, line and field) on unreadable input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Iterable, Iterator
+from typing import Any
+
+import attrs
+
+from . import _json, machine
+from . import inputs as ins
+from . import outputs as outs
+from .errors import DyneventError, InvalidMessage
+from .explain import REASON_RULES, UNKNOWN_GOAL, goal_text, state_from_status, status_text
+from .machine import QueuedGoal, RunningGoal, ServerConfig, State
+from .messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
+from .records import InvalidRecord, config_from_json
+from .vocab import DynamicState, EventType, GoalStatus, IdPolicy, RejectReason, Status, Tier
+
+__all__ = [
+    "RECORD_TYPES",
+    "Finding",
+    "Record",
+    "Report",
+    "TraceError",
+    "add_command",
+    "check_records",
+    "check_trace",
+    "format_report",
+    "read_trace",
+    "step_records",
+    "trace_records",
+]
+
+#: The record types of a trace, and the fields each may hold besides ``type`` and ``time``.
+RECORD_TYPES: dict[str, frozenset[str]] = {
+    "config": frozenset({"fleet", "robot", "config"}),
+    "begin": frozenset({"message"}),
+    "status": frozenset({"message"}),
+    "goal": frozenset({"goal_uuid", "goal"}),
+    "goal_response": frozenset({"goal_uuid", "accepted", "reason"}),
+    "feedback": frozenset({"goal_uuid", "feedback"}),
+    "result": frozenset({"goal_uuid", "status", "result"}),
+    "cancel_request": frozenset({"goal_uuid"}),
+    "cancel_response": frozenset({"goal_uuid", "accepted"}),
+}
+
+_REQUIRED: dict[str, frozenset[str]] = {
+    "config": frozenset(),
+    "begin": frozenset({"message"}),
+    "status": frozenset({"message"}),
+    "goal": frozenset({"goal_uuid", "goal"}),
+    "goal_response": frozenset({"goal_uuid", "accepted"}),
+    "feedback": frozenset({"goal_uuid", "feedback"}),
+    "result": frozenset({"goal_uuid", "status", "result"}),
+    "cancel_request": frozenset({"goal_uuid"}),
+    "cancel_response": frozenset({"goal_uuid", "accepted"}),
+}
+
+_U32 = 2**32 - 1
+_NS = 1_000_000_000
+_STATUSES = frozenset(status.value for status in Status)
+_TIERS = frozenset(tier.value for tier in Tier)
+_TERMINAL = {
+    status.value: status for status in (GoalStatus.SUCCEEDED, GoalStatus.ABORTED, GoalStatus.CANCELED)
+}
+_FAILURES = machine.EXECUTION_FAILURES
+_SIGNAL_LOGS: dict[str, type[ins.TaskCancel] | type[ins.TaskKill]] = {
+    "Received signal to cancel": ins.TaskCancel,
+    "Received signal to kill": ins.TaskKill,
+}
+# Reasons that depend on the configuration, which a trace without a config record does not give.
+_CONFIG_REASONS = frozenset({RejectReason.UNSUPPORTED_CATEGORY, RejectReason.DESCRIPTION_INVALID})
+_REASON_ORDER = {reason: index for index, reason in enumerate(REASON_RULES)}
+
+
+class TraceError(DyneventError):
+    """A trace could not be read: ``source``, ``line`` (from 1) and ``field`` say where."""
+
+    def __init__(self, source: str, line: int, field: str, problem: str) -> None:
+        self.source = source
+        self.line = line
+        self.field = field
+        self.problem = problem
+        super().__init__(f"{source}:{line}: {field}: {problem}")
+
+
+@attrs.frozen(kw_only=True)
+class Record:
+    """One observation of a trace.
+
+    ``kind`` is the record's ``type``; ``time`` integer nanoseconds;
+    ``message`` the begin or status message, the goal, the feedback or the
+    result; ``accepted`` the answer of a goal or cancel response; ``status``
+    the goal status of a result; ``reason`` the reason a goal response gave.
+    """
+
+    line: int
+    kind: str
+    time: int
+    goal_uuid: str = ""
+    message: Any = None
+    accepted: bool = False
+    status: str = ""
+    reason: RejectReason | None = None
+
+
+@attrs.frozen(kw_only=True)
+class Finding:
+    """One protocol violation: the trace ``line``, the docs/spec.md ``rule``, a short ``code``, what was
+    seen (``message``) and what the rules expect (``expected``)."""
+
+    line: int
+    rule: str
+    code: str
+    message: str
+    expected: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """The finding as plain JSON values."""
+        return {
+            "line": self.line,
+            "rule": self.rule,
+            "code": self.code,
+            "message": self.message,
+            "expected": self.expected,
+        }
+
+
+@attrs.frozen(kw_only=True)
+class Report:
+    """What :func:`check_trace` found in a trace of ``records`` observations."""
+
+    source: str
+    records: int
+    findings: tuple[Finding, ...]
+
+    @property
+    def clean(self) -> bool:
+        """No violation was found."""
+        return not self.findings
+
+
+# --------------------------------------------------------------------------- reading
+
+
+def _time(value: Any, source: str, line: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TraceError(source, line, "time", f"expected a number of seconds, got {_json.dumps(value)}")
+    nanoseconds = None
+    if math.isfinite(value) and abs(value) < 2**32:
+        nanoseconds = value * _NS if isinstance(value, int) else round(value * _NS)
+    if nanoseconds is None or not ins.NOW_RANGE[0] <= nanoseconds <= ins.NOW_RANGE[1]:
+        raise TraceError(source, line, "time", f"{value!r} is outside the range of builtin_interfaces/Time")
+    return nanoseconds
+
+
+def _uuid(data: dict[str, Any], source: str, line: int) -> str:
+    try:
+        return ins.goal_uuid(data["goal_uuid"])
+    except ValueError as exc:
+        raise TraceError(source, line, "goal_uuid", str(exc)) from None
+
+
+def _wire(cls: type[Any], data: dict[str, Any], key: str, source: str, line: int) -> Any:
+    try:
+        return cls.from_dict(data[key])
+    except InvalidMessage as exc:
+        field = f"{key}.{exc.field}" if exc.field else key
+        raise TraceError(source, line, field, f"{exc.problem} (got {_json.dumps(exc.value)})") from None
+    except (TypeError, ValueError) as exc:  # a value JSON cannot hold reached the message
+        raise TraceError(source, line, key, str(exc)) from None
+
+
+def _boolean(data: dict[str, Any], key: str, source: str, line: int) -> bool:
+    value = data[key]
+    if type(value) is not bool:
+        raise TraceError(source, line, key, f"expected true or false, got {_json.dumps(value)}")
+    return value
+
+
+def _record(data: Any, source: str, line: int) -> Record | dict[str, Any]:
+    """A trace record, or the fields of the config record."""
+    if not isinstance(data, dict):
+        raise TraceError(source, line, "$", f"expected a JSON object, got {type(data).__name__}")
+    kind = data.get("type")
+    if not isinstance(kind, str) or kind not in RECORD_TYPES:
+        raise TraceError(source, line, "type", f"expected one of {sorted(RECORD_TYPES)}, got {kind!r}")
+    allowed = RECORD_TYPES[kind] | {"type"} | (set() if kind == "config" else {"time"})
+    unknown = sorted(set(data) - allowed)
+    if unknown:
+        raise TraceError(source, line, unknown[0], f"unknown field of a {kind!r} record")
+    required = _REQUIRED[kind] | (set() if kind == "config" else {"time"})
+    missing = sorted(required - set(data))
+    if missing:
+        raise TraceError(source, line, missing[0], f"missing field of a {kind!r} record")
+    if kind == "config":
+        return data
+    time = _time(data["time"], source, line)
+    if kind in ("begin", "status"):
+        cls = DynamicEventDescription if kind == "begin" else DynamicEventStatus
+        return Record(line=line, kind=kind, time=time, message=_wire(cls, data, "message", source, line))
+    uuid = _uuid(data, source, line)
+    if kind == "goal":
+        goal = _wire(Goal, data, "goal", source, line)
+        return Record(line=line, kind=kind, time=time, goal_uuid=uuid, message=goal)
+    if kind == "goal_response":
+        reason = data.get("reason")
+        parsed: RejectReason | None = None
+        if reason is not None:
+            try:
+                parsed = RejectReason(reason)
+            except ValueError:
+                choices = [member.value for member in RejectReason]
+                raise TraceError(
+                    source, line, "reason", f"expected one of {choices}, got {reason!r}"
+                ) from None
+        accepted = _boolean(data, "accepted", source, line)
+        if accepted and parsed is not None:
+            raise TraceError(source, line, "reason", "an accepted goal has no rejection reason")
+        return Record(line=line, kind=kind, time=time, goal_uuid=uuid, accepted=accepted, reason=parsed)
+    if kind == "feedback":
+        feedback = _wire(Feedback, data, "feedback", source, line)
+        return Record(line=line, kind=kind, time=time, goal_uuid=uuid, message=feedback)
+    if kind == "result":
+        status = data["status"]
+        if status not in _TERMINAL:
+            raise TraceError(
+                source, line, "status", f"expected one of {sorted(_TERMINAL)}, got {_json.dumps(status)}"
+            )
+        result = _wire(Result, data, "result", source, line)
+        return Record(line=line, kind=kind, time=time, goal_uuid=uuid, status=status, message=result)
+    if kind == "cancel_response":
+        accepted = _boolean(data, "accepted", source, line)
+        return Record(line=line, kind=kind, time=time, goal_uuid=uuid, accepted=accepted)
+    return Record(line=line, kind=kind, time=time, goal_uuid=uuid)
+
+
+@attrs.frozen(kw_only=True)
+class _Header:
+    fleet: str | None = None
+    robot: str | None = None
+    config: ServerConfig | None = None
+
+
+def _header(data: dict[str, Any], source: str, line: int) -> _Header:
+    names: dict[str, str] = {}
+    for key in ("fleet", "robot"):
+        value = data.get(key)
+        if value is not None and not isinstance(value, str):
+            raise TraceError(source, line, key, f"expected a string, got {_json.dumps(value)}")
+        if value is not None:
+            names[key] = value
+    config = None
+    if "config" in data:
+        try:
+            config = config_from_json(data["config"], "config")
+        except InvalidRecord as exc:
+            raise TraceError(source, line, exc.path, exc.problem) from None
+    return _Header(fleet=names.get("fleet"), robot=names.get("robot"), config=config)
+
+
+def read_trace(lines: Iterable[str], source: str = "<trace>") -> tuple[_Header, list[Record]]:
+    """Parse a trace: its optional config record and its observations.
+
+    Blank lines and lines starting with ``#`` are skipped.  Raises
+    :class:`TraceError` naming ``source``, the line and the field.
+    """
+    header = _Header()
+    records: list[Record] = []
+    seen_any = False
+    for number, raw in enumerate(lines, start=1):
+        text = raw.strip()
+        if not text or text.startswith("#"):
+            continue
+        try:
+            data = _json.parse(text)
+        except _json.JsonProblem as exc:
+            raise TraceError(source, number, "$", str(exc)) from None
+        parsed = _record(data, source, number)
+        if isinstance(parsed, dict):
+            if seen_any:
+                raise TraceError(source, number, "type", "a 'config' record must come before every other")
+            header = _header(parsed, source, number)
+        else:
+            records.append(parsed)
+        seen_any = True
+    return header, records
+
+
+def _seconds(now: int) -> int | float:
+    return now // _NS if now % _NS == 0 else now / _NS
+
+
+def step_records(event: ins.Input, outputs: Iterable[outs.Output]) -> list[dict[str, Any]]:
+    """The trace records a tap at the server writes for one step of the machine, in order.
+
+    A goal request gives its ``goal`` record, then the ``goal_response``
+    (with the reason, as an in-process binding can give it); an action-level
+    cancel its ``cancel_request`` and ``cancel_response``; every publication,
+    feedback and answer its record.  The other outputs are not on the wire.
+    Feeding a server's steps through this gives a trace that
+    :func:`check_trace` finds clean.
+    """
+    time = _seconds(event.now)
+    rows: list[dict[str, Any]] = []
+    if isinstance(event, ins.GoalRequested):
+        rows.append(
+            {"time": time, "type": "goal", "goal_uuid": event.goal_uuid, "goal": event.goal.to_dict()}
+        )
+    if isinstance(event, ins.CancelRequested):
+        rows.append({"time": time, "type": "cancel_request", "goal_uuid": event.goal_uuid})
+    for output in outputs:
+        if isinstance(output, outs.GoalAccepted):
+            rows.append(
+                {"time": time, "type": "goal_response", "goal_uuid": output.goal_uuid, "accepted": True}
+            )
+        elif isinstance(output, outs.GoalRejected):
+            rows.append(
+                {
+                    "time": time,
+                    "type": "goal_response",
+                    "goal_uuid": output.goal_uuid,
+                    "accepted": False,
+                    "reason": output.rejection.reason.value,
+                }
+            )
+        elif isinstance(output, outs.CancelResponse):
+            rows.append(
+                {
+                    "time": time,
+                    "type": "cancel_response",
+                    "goal_uuid": output.goal_uuid,
+                    "accepted": output.accepted,
+                }
+            )
+        elif isinstance(output, outs.PublishBegin):
+            rows.append({"time": time, "type": "begin", "message": output.message.to_dict()})
+        elif isinstance(output, outs.PublishStatus):
+            rows.append({"time": time, "type": "status", "message": output.message.to_dict()})
+        elif isinstance(output, outs.PublishFeedback):
+            rows.append(
+                {
+                    "time": time,
+                    "type": "feedback",
+                    "goal_uuid": output.goal_uuid,
+                    "feedback": output.feedback.to_dict(),
+                }
+            )
+        elif isinstance(output, outs.AnswerGoal):
+            rows.append(
+                {
+                    "time": time,
+                    "type": "result",
+                    "goal_uuid": output.goal_uuid,
+                    "status": output.status.value,
+                    "result": output.result.to_dict(),
+                }
+            )
+    return rows
+
+
+# --------------------------------------------------------------------------- the observer
+
+
+@attrs.define
+class _GoalSeen:
+    """What the trace showed of one goal."""
+
+    goal: Goal
+    line: int
+    responded: bool = False
+    accepted: bool = False
+    answered: int | None = None  # the line of its terminal answer
+    owed: bool = False  # dropped from the state on resynchronisation: its answers are not judged
+
+
+@attrs.frozen
+class _Owed:
+    """An output of an inferred step that has not been observed yet."""
+
+    channel: str
+    output: outs.Output
+    rule: str
+
+
+def _channel(output: outs.Output) -> str | None:
+    if isinstance(output, outs.PublishStatus):
+        return "status"
+    if isinstance(output, (outs.PublishFeedback, outs.AnswerGoal)):
+        return f"goal:{output.goal_uuid}"
+    if isinstance(output, outs.CancelResponse):
+        return f"cancel:{output.goal_uuid}"
+    return None
+
+
+def _first_line(text: str) -> str:
+    return text.split("\n", 1)[0]
+
+
+def _answer_rule(event: ins.Input, output: outs.AnswerGoal, before: State) -> str:
+    failure = _first_line(output.result.execution_failure)
+    by_failure = {
+        _FAILURES["race"]: "R5.2",
+        _FAILURES["shutdown"]: "R15.1",
+        _FAILURES["idle_cancel"]: "R9.1",
+        _FAILURES["cancel_id"]: "R9.2",
+        _FAILURES["event_type"]: "R17.2",
+        _FAILURES["parse"]: "R6.1",
+        _FAILURES["not_running"]: "R10.1",
+    }
+    if failure in by_failure:
+        return by_failure[failure]
+    if isinstance(event, ins.ChildFinished):
+        running = before.running
+        return "R8.2" if running is not None and running.goal_uuid == output.goal_uuid else "R8.3"
+    if isinstance(event, ins.GoalStarted):
+        return "R9.4" if before.running is not None else "R11.1"
+    if isinstance(event, ins.CancelRequested):
+        return "R10.4"
+    return "R13.3"
+
+
+def _rule(event: ins.Input, output: outs.Output, before: State) -> str:
+    if isinstance(output, outs.PublishStatus):
+        return "R2.2"
+    if isinstance(output, outs.AnswerGoal):
+        return _answer_rule(event, output, before)
+    if isinstance(output, outs.PublishFeedback):
+        if isinstance(event, ins.ChildProgress):
+            return "R7.1"
+        if isinstance(event, (ins.TaskCancel, ins.TaskKill)):
+            return "R13.1"
+        return "R6.3" if output.feedback.status == Status.QUEUED.value else "R6.4"
+    if isinstance(output, outs.CancelResponse):
+        uuid = output.goal_uuid
+        if any(queued.goal_uuid == uuid for queued in before.queued):
+            return "R10.1"
+        if uuid in before.cancels:
+            return "R10.2"
+        running = before.running
+        if running is not None and running.goal_uuid == uuid:
+            return "R10.3" if running.started else "R10.4"
+        return "R10.5"
+    return "R2.3"
+
+
+def _newer(seq: int, than: int) -> bool:
+    """Serial-number order of uint32 seqs: is ``seq`` after ``than``?"""
+    return 0 < ((seq - than) & _U32) < 2**31
+
+
+def _same_status(a: DynamicEventStatus, b: DynamicEventStatus) -> bool:
+    return (a.dynamic_event_seq, a.dynamic_state, a.status, a.id) == (
+        b.dynamic_event_seq,
+        b.dynamic_state,
+        b.status,
+        b.id,
+    )
+
+
+def _exact(output: outs.Output, record: Record) -> bool:
+    """Does the machine's feedback or answer say what the record says?"""
+    if isinstance(output, outs.PublishFeedback):
+        feedback: Feedback = record.message
+        return (output.feedback.status, output.feedback.id) == (feedback.status, feedback.id)
+    if isinstance(output, outs.AnswerGoal):
+        result: Result = record.message
+        expected = output.result
+        return (
+            output.status.value,
+            expected.id,
+            expected.status,
+            _first_line(expected.execution_failure),
+        ) == (
+            record.status,
+            result.id,
+            result.status,
+            _first_line(result.execution_failure),
+        )
+    return False
+
+
+def _owes(owed: _Owed, record: Record) -> bool:
+    """Is ``record`` the owed output?"""
+    output = owed.output
+    if isinstance(output, outs.PublishStatus):
+        return record.kind == "status" and _same_status(output.message, record.message)
+    if isinstance(output, (outs.PublishFeedback, outs.AnswerGoal)):
+        wanted = "feedback" if isinstance(output, outs.PublishFeedback) else "result"
+        return record.kind == wanted and record.goal_uuid == output.goal_uuid and _exact(output, record)
+    return False
+
+
+def _answer_text(status: str, result: Result) -> str:
+    detail = _first_line(result.execution_failure) or f"{result.status} id={result.id}"
+    if result.execution_failure:
+        detail = repr(detail)
+    return f"{status}: {detail}"
+
+
+def _race_why(state: State, goal: Goal) -> str:
+    if goal.dynamic_event_seq != state.seq:
+        return f"its seq {goal.dynamic_event_seq} is no longer the run's seq {state.seq}"
+    if not state.active:
+        return "no dynamic event is active any more"
+    if state.running is not None:
+        return f"event {state.running.child_id} holds the running slot"
+    return f"its id {goal.id} is no longer above {state.last_id}, the highest id used"
+
+
+class _Observer:
+    """Observer mode: see the module docs."""
+
+    def __init__(self, header: _Header) -> None:
+        self.config_known = header.config is not None
+        self.config = header.config if header.config is not None else ServerConfig()
+        self.names = (header.fleet, header.robot) if header.fleet or header.robot else None
+        self.state: State | None = None
+        self.owed: list[_Owed] = []
+        self.goals: dict[str, _GoalSeen] = {}
+        self.findings: list[Finding] = []
+        self.log_seq: int | None = None
+        self.event_id_pending = False
+        self.now = ins.NOW_RANGE[0]
+        self.line = 0
+        self.duplicates: set[str] = set()
+        self.last_end: tuple[int, Result] | None = None
+        self.partial = False  # the trace begins mid-way: goals it never showed may be open
+        self.upcoming: Record | None = None  # the record after the one being judged
+        self.records: list[Record] = []  # the whole trace, and the index of the record being judged
+        self.index = 0
+        self.last_id_unknown = False  # the run began before the trace: its highest id is not known
+        self.start_uncertain = False  # a RUNNING "queued" status: a deferred child, or one reporting queued
+
+    # ------------------------------------------------------------------ bookkeeping
+
+    def flag(self, rule: str, code: str, message: str, expected: str) -> None:
+        self.findings.append(
+            Finding(line=self.line, rule=rule, code=code, message=message, expected=expected)
+        )
+
+    @property
+    def st(self) -> State:
+        assert self.state is not None  # set by the first record
+        return self.state
+
+    def config_for(self, goal: Goal) -> ServerConfig:
+        """The configuration; without a config record, every category a goal names is taken as supported."""
+        if self.config_known or goal.event_type != EventType.NEXT or goal.category in self.config.categories:
+            return self.config
+        categories = {**self.config.categories, goal.category: machine.accept_any}
+        return attrs.evolve(self.config, categories=categories)
+
+    def learn(self, goal: Goal) -> None:
+        self.config = self.config_for(goal)
+
+    def simulate(self, events: list[ins.Input]) -> tuple[State, list[_Owed]]:
+        """The state after ``events`` and the observable outputs they owe, without committing."""
+        state = self.st
+        owed: list[_Owed] = []
+        for event in events:
+            transition = machine.step(state, event, self.config)
+            for output in transition.outputs:
+                channel = _channel(output)
+                if channel is not None:
+                    owed.append(_Owed(channel, output, _rule(event, output, state)))
+            state = transition.state
+        return state, owed
+
+    def commit(self, state: State, owed: list[_Owed]) -> None:
+        self.state = state
+        self.owed.extend(owed)
+
+    def forget_channel(self, channel: str) -> None:
+        self.owed = [item for item in self.owed if item.channel != channel]
+
+    def displace(self, uuids: Iterable[str]) -> None:
+        """The server no longer runs these goals as the state says: their answers are not judged."""
+        for uuid in uuids:
+            seen = self.goals.get(uuid)
+            if seen is not None and seen.answered is None:
+                seen.owed = True
+            self.forget_channel(f"goal:{uuid}")
+
+    # ------------------------------------------------------------------ feeding
+
+    def feed(self, record: Record) -> None:
+        self.line = record.line
+        self.now = max(self.now, record.time)
+        if self.state is None and self.sync(record):
+            return
+        handler = getattr(self, f"on_{record.kind}")
+        handler(record)
+
+    def sync(self, record: Record) -> bool:
+        """Set the starting state from the first record; True when the record is used up."""
+        base = State.new("fleet", "robot")
+        self.partial = record.kind == "status" or (
+            record.kind == "begin" and record.message.dynamic_event_seq != 1
+        )
+        if record.kind == "status":
+            message: DynamicEventStatus = record.message
+            try:
+                self.state = state_from_status(message)
+                self.last_id_unknown = message.dynamic_state != DynamicState.INACTIVE
+                self.start_uncertain = self.st.running is not None and not self.st.running.started
+                self.event_id_pending = message.dynamic_state == DynamicState.RUNNING
+            except ValueError as exc:
+                self.state = attrs.evolve(base, seq=message.dynamic_event_seq)
+                self.flag(
+                    "R2.2", "status_phase", f"status {status_text(message)}: {exc}", "dynamic_state 0, 1 or 2"
+                )
+            return True
+        if record.kind == "begin":
+            self.state = attrs.evolve(base, seq=(record.message.dynamic_event_seq - 1) & _U32)
+            return False
+        self.state = base  # a trace from the server's start
+        return False
+
+    def on_goal(self, record: Record) -> None:
+        seen = self.goals.get(record.goal_uuid)
+        if seen is not None and seen.answered is None and (not seen.responded or seen.accepted):
+            self.flag(
+                "R18.2",
+                "goal_uuid_reused",
+                f"goal {record.goal_uuid} requested again while it is open (since line {seen.line})",
+                "a fresh goal UUID for every goal",
+            )
+            self.duplicates.add(record.goal_uuid)
+            return
+        self.goals[record.goal_uuid] = _GoalSeen(goal=record.message, line=record.line)
+
+    def on_goal_response(self, record: Record) -> None:
+        if record.goal_uuid in self.duplicates:
+            self.duplicates.discard(record.goal_uuid)
+            return
+        seen = self.goals.get(record.goal_uuid)
+        if seen is None or seen.responded:
+            raise _Unreadable("goal_uuid", "no goal record with this uuid awaits a response")
+        seen.responded, seen.accepted = True, record.accepted
+        goal = seen.goal
+        decision = machine.accept(self.st, goal, self.config_for(goal))
+        if not self.agrees(decision, record):
+            self.explain_response(goal, record)
+            decision = machine.accept(self.st, goal, self.config_for(goal))
+        if record.accepted:
+            self.learn(goal)
+        if isinstance(decision, outs.Accepted) == record.accepted:
+            if isinstance(decision, outs.Rejected) and not self.same_reason(decision, record):
+                self.flag(
+                    REASON_RULES[decision.reason],
+                    "wrong_reason",
+                    f"{goal_text(goal)} rejected as {record.reason}",
+                    f"rejected as {decision.reason.value}, the first check that fails: {decision.text}",
+                )
+            if record.accepted:
+                event = ins.GoalRequested(goal_uuid=record.goal_uuid, goal=goal, now=self.now)
+                self.commit(*self.simulate([event]))
+            return
+        if isinstance(decision, outs.Rejected):  # accepted, but the rules refuse it
+            self.flag(
+                REASON_RULES[decision.reason],
+                f"accepted_{decision.reason.value}",
+                f"{goal_text(goal)} accepted",
+                f"rejected: {decision.reason.value} ({decision.text})",
+            )
+            queued = (*self.st.queued, QueuedGoal(goal_uuid=record.goal_uuid, goal=goal))
+            self.state = attrs.evolve(self.st, queued=queued)
+            return
+        if self.unknowable(goal, record):
+            return
+        if (
+            self.last_id_unknown
+            and goal.event_type == EventType.NEXT
+            and record.reason in (None, RejectReason.STALE_ID)
+        ):
+            # a status shows the current id; ids used before the trace began may be higher (R4.12)
+            self.state = attrs.evolve(self.st, last_id=max(self.st.last_id, goal.id))
+            return
+        said = f" as {record.reason.value}" if record.reason is not None else ""
+        self.flag(
+            "R4.16",
+            "rejected_acceptable",
+            f"{goal_text(goal)} rejected{said}",
+            "accepted: the goal passes every check of R4",
+        )
+
+    def agrees(self, decision: outs.Decision, record: Record) -> bool:
+        if isinstance(decision, outs.Accepted) != record.accepted:
+            return False
+        return not isinstance(decision, outs.Rejected) or self.same_reason(decision, record)
+
+    def same_reason(self, decision: outs.Rejected, record: Record) -> bool:
+        reason = record.reason
+        if reason is None or reason is decision.reason:
+            return True
+        return (
+            not self.config_known
+            and reason in _CONFIG_REASONS
+            and _REASON_ORDER[reason] < _REASON_ORDER[decision.reason]
+        )
+
+    def unknowable(self, goal: Goal, record: Record) -> bool:
+        """Could an unknown configuration have refused this NEXT?"""
+        if self.config_known or goal.event_type != EventType.NEXT:
+            return False
+        return record.reason is None or record.reason in _CONFIG_REASONS
+
+    def explain_response(self, goal: Goal, record: Record) -> None:
+        """The response may follow starts of accepted goals whose outputs come later: try them."""
+        events: list[ins.Input] = []
+        for queued in self.st.queued:
+            events.append(ins.GoalStarted(goal_uuid=queued.goal_uuid, now=self.now))
+            state, owed = self.simulate(events)
+            decision = machine.accept(state, goal, self.config_for(goal))
+            if self.agrees(decision, record):
+                self.commit(state, owed)
+                return
+        if record.reason is RejectReason.SHUTTING_DOWN:
+            state, owed = self.simulate([ins.Shutdown(now=self.now)])
+            self.commit(state, owed)
+
+    def on_cancel_request(self, record: Record) -> None:
+        if self.partial and record.goal_uuid not in self.goals:
+            return  # a goal from before the trace, maybe: its response tells (on_cancel_response)
+        seen = self.goals.get(record.goal_uuid)
+        if seen is not None and seen.owed:
+            return  # a goal the state no longer follows: its cancel is not judged either
+        running = self.st.running
+        if self.start_uncertain and running is not None and running.goal_uuid == record.goal_uuid:
+            # a deferred child is cancelled at once (R10.4); a started one ends later (R10.3)
+            answer = self.ahead(record.goal_uuid)
+            deferred = (
+                answer is not None
+                and answer.kind == "result"
+                and answer.status == GoalStatus.CANCELED.value
+                and answer.message.status == Status.CANCELED.value
+                and self.records.index(answer) <= self.index + 2
+            )
+            if not deferred:
+                self.state = attrs.evolve(self.st, running=attrs.evolve(running, started=True))
+            self.start_uncertain = False
+        self.commit(*self.simulate([ins.CancelRequested(goal_uuid=record.goal_uuid, now=self.now)]))
+
+    def on_cancel_response(self, record: Record) -> None:
+        channel = f"cancel:{record.goal_uuid}"
+        if not any(item.channel == channel for item in self.owed):
+            if self.partial and record.goal_uuid not in self.goals:
+                if not record.accepted:
+                    return  # a goal unknown to the server as well
+                upcoming = self.upcoming
+                queued = (
+                    upcoming is not None
+                    and upcoming.kind == "result"
+                    and upcoming.goal_uuid == record.goal_uuid
+                    and _first_line(upcoming.message.execution_failure) == _FAILURES["not_running"]
+                )
+                self.bind_unknown(record.goal_uuid, running_goal=not queued)
+                if queued:
+                    return  # an accepted goal that had not started (R10.1, R10.2)
+            self.on_cancel_request(record)
+        index = next((i for i, item in enumerate(self.owed) if item.channel == channel), None)
+        if index is None:
+            return
+        owed = self.owed.pop(index)
+        assert isinstance(owed.output, outs.CancelResponse)
+        if owed.output.accepted != record.accepted:
+            word = {True: "accepted", False: "rejected"}
+            self.flag(
+                owed.rule,
+                "cancel_response",
+                f"cancel of goal {record.goal_uuid} {word[record.accepted]}",
+                f"{word[owed.output.accepted]} ({owed.rule})",
+            )
+
+    def on_begin(self, record: Record) -> None:
+        message: DynamicEventDescription = record.message
+        names = (message.fleet, message.robot)
+        if self.names is None:
+            self.names = names
+        elif names != self.names:
+            self.flag(
+                "R3.3",
+                "begin_names",
+                f"begin names {message.fleet}/{message.robot}",
+                f"the robot of this trace, {self.names[0]}/{self.names[1]}",
+            )
+        state = self.st
+        if state.shutdown:
+            self.flag("R15.2", "begin_after_shutdown", f"begin of run {message.dynamic_event_seq}", "nothing")
+            state = attrs.evolve(state, shutdown=False)
+        if state.active:
+            self.flag(
+                "R3.4",
+                "begin_while_active",
+                f"begin of run {message.dynamic_event_seq} while run {state.seq} is active",
+                "the end of the run first: FINISHED, a task cancel or kill, with an INACTIVE status",
+            )
+            open_goals = [queued.goal_uuid for queued in state.queued] + list(state.cancels)
+            if state.running is not None:
+                open_goals.append(state.running.goal_uuid)
+            self.displace(open_goals)
+            state = attrs.evolve(state, active=False, running=None, queued=(), cancels=(), stubborn=None)
+        expected = (state.seq + 1) & _U32
+        if message.dynamic_event_seq != expected:
+            self.flag(
+                "R3.1",
+                "begin_seq",
+                f"begin of run {message.dynamic_event_seq}",
+                f"seq {expected}, one above the previous run's {state.seq}",
+            )
+            state = attrs.evolve(state, seq=(message.dynamic_event_seq - 1) & _U32)
+        try:
+            event = ins.Begin(description=message.description, event_id=0, now=self.now)
+        except InvalidMessage as exc:
+            self.flag(
+                "R1.5",
+                "begin_description",
+                f"begin description: {exc.problem}",
+                "a dynamic_event description",
+            )
+            event = ins.Begin(description="{}", event_id=0, now=self.now)
+        self.state = state
+        self.commit(*self.simulate([event]))
+        self.event_id_pending = True
+        self.last_id_unknown = self.start_uncertain = False
+
+    def adopt_event_id(self, message: DynamicEventStatus) -> None:
+        """The begin did not say the dynamic event's id; the WAITING status that follows does."""
+        state = self.st
+        if not (
+            self.event_id_pending
+            and message.dynamic_state == DynamicState.WAITING
+            and state.active
+            and state.running is None
+            and message.dynamic_event_seq == state.seq
+        ):
+            return
+        self.event_id_pending = False
+        self.state = attrs.evolve(state, event_id=message.id, last_id=max(state.last_id, message.id))
+        patched = []
+        for item in self.owed:
+            output = item.output
+            if (
+                isinstance(output, outs.PublishStatus)
+                and output.message.dynamic_state == DynamicState.WAITING
+                and output.message.id == 0
+            ):
+                fixed = outs.PublishStatus(message=attrs.evolve(output.message, id=message.id))
+                patched.append(attrs.evolve(item, output=fixed))
+            else:
+                patched.append(item)
+        self.owed = patched
+
+    def on_status(self, record: Record) -> None:
+        message: DynamicEventStatus = record.message
+        if message.dynamic_state not in (0, 1, 2):
+            self.flag(
+                "R2.2",
+                "status_phase",
+                f"status with dynamic_state {message.dynamic_state}",
+                "dynamic_state 0 (INACTIVE), 1 (WAITING) or 2 (RUNNING)",
+            )
+            return
+        self.adopt_event_id(message)
+        statuses = [index for index, item in enumerate(self.owed) if item.channel == "status"]
+        for index in statuses:
+            output = self.owed[index].output
+            assert isinstance(output, outs.PublishStatus)
+            if _same_status(output.message, message):
+                # a status topic keeps one message: earlier ones may be overwritten unseen
+                self.owed = [
+                    item for i, item in enumerate(self.owed) if i > index or item.channel != "status"
+                ]
+                return
+        current = machine.status_message(self.st, self.now)
+        if _same_status(current, message):
+            return  # a repeat of the state's status (e.g. the latched message, read again)
+        # in the server's order a step's answers and feedback come before its status: prefer a
+        # candidate that owes none, then accept one whose other outputs are still to come
+        found: tuple[State, list[_Owed]] | None = None
+        for events in self.candidates(record):
+            state, owed = self.simulate(events)
+            published = [item.output for item in owed if isinstance(item.output, outs.PublishStatus)]
+            if not published or not _same_status(published[-1].message, message):
+                continue
+            if not any(item.channel.startswith("goal:") for item in owed):
+                found = (state, owed)
+                break
+            if found is None:
+                found = (state, owed)
+        if found is not None:
+            state, owed = found
+            self.commit(state, [item for item in owed if item.channel != "status"])
+            self.owed = [item for item in self.owed if item.channel != "status"]
+            return
+        self.owed = [item for item in self.owed if item.channel != "status"]
+        self.flag(
+            "R2.2",
+            "status_mismatch",
+            f"status {status_text(message)}",
+            f"{status_text(current)}, the state's status",
+        )
+
+    # ------------------------------------------------------------------ the action's answers
+
+    def bind_unknown(self, uuid: str, running_goal: bool = True) -> _GoalSeen | None:
+        """What the trace showed of this goal; a goal it never showed may have begun before it.
+
+        In a trace that begins mid-way, the first unknown goal seen while the
+        state's running goal is unknown (known from a RUNNING status) is taken
+        to be that goal, unless ``running_goal`` says the observation cannot
+        be the running goal's; any other unknown goal is not judged.
+        """
+        running = self.st.running
+        if uuid in self.goals:
+            return self.goals[uuid]
+        if not self.partial:
+            return None
+        if running is None or running.goal_uuid != UNKNOWN_GOAL or not running_goal:
+            seen = _GoalSeen(goal=Goal(), line=0, responded=True, accepted=True, owed=True)
+            self.goals[uuid] = seen
+            return seen
+        self.state = attrs.evolve(self.st, running=attrs.evolve(running, goal_uuid=uuid))
+        seen = _GoalSeen(goal=running.goal, line=0, responded=True, accepted=True)
+        self.goals[uuid] = seen
+        return seen
+
+    def check_logs(self, feedback: Feedback) -> None:
+        for entry in feedback.logs:
+            last = self.log_seq
+            if last is not None and not _newer(entry.seq, last):
+                how = "repeats" if entry.seq == last else "goes backwards"
+                self.flag(
+                    "R7.3",
+                    "log_seq",
+                    f"LogEntry.seq {entry.seq} after {last}: the log seq {how}",
+                    f"a LogEntry.seq above {last}: every entry takes the robot's next log seq",
+                )
+            self.log_seq = entry.seq
+
+    def on_feedback(self, record: Record) -> None:
+        feedback: Feedback = record.message
+        self.check_logs(feedback)
+        uuid = record.goal_uuid
+        seen = self.bind_unknown(uuid)
+        label = f"feedback {feedback.status} id={feedback.id} for goal {uuid}"
+        if seen is None or not seen.accepted:
+            what = "never requested in this trace" if seen is None else "rejected"
+            self.flag("R7.1", "feedback_not_running", f"{label}, {what}", "no feedback: no goal of it runs")
+            return
+        if seen.answered is not None:
+            self.flag(
+                "R19.1",
+                "after_answer",
+                f"{label} after its terminal answer (line {seen.answered})",
+                "nothing after a goal's terminal answer",
+            )
+            return
+        state = self.st
+        if seen.line == 0 and seen.owed and state.active and state.running is None:
+            # a NEXT accepted before the trace began starts now
+            seen.owed = False
+            goal = Goal(dynamic_event_seq=state.seq, event_type=EventType.NEXT, id=feedback.id)
+            self.force_start(uuid, goal, feedback)
+            return
+        if seen.owed:
+            return
+        channel = f"goal:{uuid}"
+        for index, item in enumerate(self.owed):
+            if item.channel != channel:
+                continue
+            if not isinstance(item.output, outs.PublishFeedback):
+                break
+            if item.output.feedback.status == feedback.status and item.output.feedback.id == feedback.id:
+                del self.owed[index]
+                self.check_clamp(item, feedback)
+                return
+        found = self.abduce_uncertain(record)
+        if found is not None:
+            events, state, owed, first = found
+            owed.remove(first)
+            self.commit(state, owed)
+            self.compare_feedback(first, feedback, events)
+            return
+        self.unexplained_feedback(record, seen)
+
+    def abduce_uncertain(self, record: Record) -> tuple[list[ins.Input], State, list[_Owed], _Owed] | None:
+        """:meth:`abduce`, also in the world where a child whose start a status left uncertain has started."""
+        found = self.abduce(record)
+        running = self.st.running
+        if not self.start_uncertain or running is None or running.started:
+            return found
+        if found is not None and _exact(found[3].output, record) and self.confirmed(found):
+            return found
+        saved = self.st
+        self.state = attrs.evolve(saved, running=attrs.evolve(running, started=True), interrupted=False)
+        other = self.abduce(record)
+        found_exact = found is not None and _exact(found[3].output, record)
+        if (
+            other is not None
+            and _exact(other[3].output, record)
+            and (self.confirmed(other) or not found_exact)
+        ):
+            self.start_uncertain = False
+            return other
+        self.state = saved
+        return found
+
+    def ahead(self, uuid: str) -> Record | None:
+        """The next record about this goal."""
+        for record in self.records[self.index + 1 :]:
+            if record.goal_uuid == uuid and record.kind in ("feedback", "result"):
+                return record
+        return None
+
+    def confirmed(self, found: tuple[list[ins.Input], State, list[_Owed], _Owed]) -> bool:
+        """Does the next record show the next output this candidate owes?"""
+        rest = [item for item in found[2] if item is not found[3]]
+        return bool(rest) and self.upcoming is not None and _owes(rest[0], self.upcoming)
+
+    def abduce(self, record: Record) -> tuple[list[ins.Input], State, list[_Owed], _Owed] | None:
+        """The first candidate whose first output on the action is this feedback or answer.
+
+        A candidate that reproduces the observation exactly is preferred; else
+        the first whose output is of the same kind for the same goal (the
+        differences are then reported).
+        """
+        channel = f"goal:{record.goal_uuid}"
+        kind = outs.PublishFeedback if record.kind == "feedback" else outs.AnswerGoal
+        near = None
+        exact: list[tuple[list[ins.Input], State, list[_Owed], _Owed]] = []
+        for events in self.candidates(record):
+            state, owed = self.simulate(events)
+            first = next((item for item in owed if item.channel.startswith("goal:")), None)
+            if first is None or first.channel != channel or not isinstance(first.output, kind):
+                continue
+            if _exact(first.output, record):
+                exact.append((events, state, owed, first))
+            elif near is None:
+                near = (events, state, owed, first)
+        # candidates that agree on this record differ in what comes next: let the next record choose
+        for found in exact:
+            if self.confirmed(found):
+                return found
+        return exact[0] if exact else near
+
+    def compare_feedback(self, owed: _Owed, feedback: Feedback, events: list[ins.Input]) -> None:
+        assert isinstance(owed.output, outs.PublishFeedback)
+        expected = owed.output.feedback
+        if expected.id != feedback.id:
+            if isinstance(events[-1], (ins.GoalStarted, ins.Resume)):
+                policy = "the NEXT goal's id" if self.config.id_policy is IdPolicy.GOAL else "the next id"
+                self.flag(
+                    "R6.2",
+                    "child_id",
+                    f"the child started for goal {owed.output.goal_uuid} has id {feedback.id}",
+                    f"id {expected.id}, {policy}",
+                )
+                self.patch_child_id(feedback.id)
+            else:
+                self.flag(
+                    owed.rule,
+                    "feedback_id",
+                    f"feedback id={feedback.id} for goal {owed.output.goal_uuid}",
+                    f"id={expected.id}, the running child's",
+                )
+        if expected.status != feedback.status:
+            self.flag(
+                owed.rule,
+                "feedback_status",
+                f"feedback {feedback.status} for goal {owed.output.goal_uuid}",
+                f"feedback {expected.status}",
+            )
+        self.check_clamp(owed, feedback)
+
+    def check_clamp(self, owed: _Owed, feedback: Feedback) -> None:
+        """A start's feedback carries the warning of a clamped stubborn period (R12.2)."""
+        output = owed.output
+        if owed.rule not in ("R6.3", "R6.4") or not isinstance(output, outs.PublishFeedback):
+            return
+        warnings = [entry for entry in output.feedback.logs if entry.tier == Tier.WARNING.value]
+        if warnings and not any(entry.tier == Tier.WARNING.value for entry in feedback.logs):
+            self.flag(
+                "R12.2",
+                "clamp_not_reported",
+                f"the start feedback of goal {output.goal_uuid} carries no warning",
+                f"a warning log entry: {warnings[0].text}",
+            )
+
+    def patch_child_id(self, child_id: int) -> None:
+        running = self.st.running
+        if running is None:
+            return
+        self.state = attrs.evolve(self.st, running=attrs.evolve(running, child_id=child_id), last_id=child_id)
+        current = machine.status_message(self.st, self.now)
+        self.owed = [
+            attrs.evolve(item, output=outs.PublishStatus(message=current))
+            if isinstance(item.output, outs.PublishStatus)
+            and item.output.message.dynamic_state == DynamicState.RUNNING
+            else item
+            for item in self.owed
+        ]
+
+    def unexplained_feedback(self, record: Record, seen: _GoalSeen) -> None:
+        feedback: Feedback = record.message
+        uuid = record.goal_uuid
+        label = f"feedback {feedback.status} id={feedback.id} for goal {uuid}"
+        state = self.st
+        goal = seen.goal
+        queued = any(item.goal_uuid == uuid for item in state.queued)
+        pending = next(
+            (
+                item
+                for item in self.owed
+                if item.channel == f"goal:{uuid}" and isinstance(item.output, outs.AnswerGoal)
+            ),
+            None,
+        )
+        if queued and goal.event_type == EventType.NEXT:
+            _, owed = self.simulate([ins.GoalStarted(goal_uuid=uuid, now=self.now)])
+            answer = next((item for item in owed if isinstance(item.output, outs.AnswerGoal)), None)
+            if answer is not None and answer.rule == "R5.2":
+                self.flag(
+                    "R5.2",
+                    "race_not_lost",
+                    f"{label}: its NEXT ({goal_text(goal)}) started a child",
+                    f"aborted: 'race condition', as {_race_why(state, goal)}",
+                )
+            elif answer is not None and isinstance(answer.output, outs.AnswerGoal):
+                expected = _answer_text(answer.output.status.value, answer.output.result)
+                self.flag(answer.rule, "feedback_not_running", f"{label}: its NEXT started a child", expected)
+            self.force_start(uuid, goal, feedback)
+            return
+        if pending is not None:
+            assert isinstance(pending.output, outs.AnswerGoal)
+            self.flag(
+                pending.rule,
+                "feedback_not_running",
+                f"{label}, whose event has ended",
+                _answer_text(pending.output.status.value, pending.output.result),
+            )
+            return
+        kind = EventType(goal.event_type).name if goal.event_type <= 3 else f"event_type {goal.event_type}"
+        self.flag("R7.1", "feedback_not_running", f"{label}, a {kind} goal that runs no child", "no feedback")
+
+    def force_start(self, uuid: str, goal: Goal, feedback: Feedback) -> None:
+        """The server runs this NEXT, whatever the rules say: make it the running goal."""
+        state = self.st
+        displaced = list(state.cancels)
+        if state.running is not None:
+            displaced.append(state.running.goal_uuid)
+            # accepted CANCELs of the displaced child, not started yet, wait for it too
+            old = state.running.child_id
+            displaced.extend(
+                item.goal_uuid
+                for item in state.queued
+                if item.goal.event_type == EventType.CANCEL and item.goal.id == old
+            )
+        self.displace(displaced)
+        running = RunningGoal(
+            goal_uuid=uuid,
+            goal=goal,
+            child_id=feedback.id,
+            child_status=feedback.status,
+            started=feedback.status != Status.QUEUED.value,
+        )
+        self.state = attrs.evolve(
+            state,
+            queued=tuple(item for item in state.queued if item.goal_uuid not in (uuid, *displaced)),
+            running=running,
+            cancels=(),
+            status=feedback.status,
+            last_id=feedback.id,
+            stubborn=None,
+            active=True,
+        )
+        self.owed = [item for item in self.owed if item.channel != "status"]
+
+    def on_result(self, record: Record) -> None:
+        result: Result = record.message
+        uuid = record.goal_uuid
+        # the running goal is answered at its child's end, or at shutdown
+        failure = _first_line(result.execution_failure)
+        seen = self.bind_unknown(uuid, failure in ("", _FAILURES["shutdown"]))
+        label = f"answer {_answer_text(record.status, result)} for goal {uuid}"
+        if seen is None or not seen.accepted:
+            what = "never requested in this trace" if seen is None else "rejected"
+            self.flag(
+                "R19.1", "answer_not_accepted", f"{label}, {what}", "no answer: the goal was never accepted"
+            )
+            return
+        if seen.answered is not None:
+            self.flag(
+                "R19.1",
+                "second_answer",
+                f"{label}: a second terminal answer (the first on line {seen.answered})",
+                "exactly one terminal answer per goal",
+            )
+            return
+        seen.answered = record.line
+        if seen.owed:
+            return
+        channel = f"goal:{uuid}"
+        pending = next(
+            (
+                item
+                for item in self.owed
+                if item.channel == channel and isinstance(item.output, outs.AnswerGoal)
+            ),
+            None,
+        )
+        if pending is not None:
+            self.forget_channel(channel)
+            self.compare_answer(pending, record)
+            return
+        if self.started_unseen(record):
+            return
+        found = self.abduce_uncertain(record)
+        if found is not None:
+            events, state, owed, first = found
+            self.commit(state, [item for item in owed if item.channel != channel])
+            self.compare_answer(first, record)
+            if isinstance(events[-1], ins.ChildFinished) and isinstance(first.output, outs.AnswerGoal):
+                self.last_end = (record.line, first.output.result)
+            return
+        self.unexplained_answer(record, seen)
+
+    def started_unseen(self, record: Record) -> bool:
+        """A CANCEL's start shows nothing on the wire: its answer may say it waited for the last child."""
+        state = self.st
+        uuid = record.goal_uuid
+        queued = next((item for item in state.queued if item.goal_uuid == uuid), None)
+        seen = self.goals.get(uuid)
+        if queued is None or queued.goal.event_type != EventType.CANCEL or self.last_end is None:
+            return False
+        line, result = self.last_end
+        if seen is None or seen.line > line or record.status != GoalStatus.SUCCEEDED.value:
+            return False
+        if record.message != result:
+            return False
+        self.state = attrs.evolve(state, queued=tuple(item for item in state.queued if item is not queued))
+        return True
+
+    def compare_answer(self, owed: _Owed, record: Record) -> None:
+        output = owed.output
+        assert isinstance(output, outs.AnswerGoal)
+        result: Result = record.message
+        expected, observed = output.result, result
+        label = f"goal {record.goal_uuid} answered {_answer_text(record.status, result)}"
+        want = _answer_text(output.status.value, expected)
+        seen = self.goals.get(record.goal_uuid)
+        early = {record.status, output.status.value} == {GoalStatus.ABORTED.value, GoalStatus.CANCELED.value}
+        if early and seen is not None and seen.line == 0:
+            pass  # a goal from before the trace: whether it was cancelled through the action is not known
+        elif record.status != output.status.value:
+            self.flag(owed.rule, "goal_status", label, f"{want} ({owed.rule})")
+        elif expected.id != observed.id:
+            rule = "R8.1" if owed.rule in ("R8.2", "R8.3") else owed.rule
+            self.flag(rule, "result_id", f"{label}: the result id does not match", f"{want} ({rule})")
+        elif (_first_line(expected.execution_failure), expected.status) != (
+            _first_line(observed.execution_failure),
+            observed.status,
+        ):
+            rule = "R8.1" if owed.rule in ("R8.2", "R8.3") else owed.rule
+            self.flag(rule, "result", label, f"{want} ({rule})")
+
+    def unexplained_answer(self, record: Record, seen: _GoalSeen) -> None:
+        uuid = record.goal_uuid
+        state = self.st
+        label = f"goal {uuid} answered {_answer_text(record.status, record.message)}"
+        running = state.running
+        queued = next((item for item in state.queued if item.goal_uuid == uuid), None)
+        if uuid in state.cancels or (
+            queued is not None and queued.goal.event_type == EventType.CANCEL and running
+        ):
+            child = running.child_id if running is not None else 0
+            self.flag(
+                "R9.3",
+                "cancel_answered_early",
+                f"{label} while child {child} still runs",
+                f"the CANCEL waits for child {child} to end, then is answered with its result (R8.3)",
+            )
+            self.state = attrs.evolve(
+                state,
+                cancels=tuple(other for other in state.cancels if other != uuid),
+                queued=tuple(item for item in state.queued if item.goal_uuid != uuid),
+            )
+            return
+        if queued is not None:
+            start = "its child starts" if queued.goal.event_type == EventType.NEXT else "it runs"
+            self.flag("R6.4", "unexpected_answer", label, f"no answer yet: {start}")
+            self.state = attrs.evolve(
+                state, queued=tuple(item for item in state.queued if item.goal_uuid != uuid)
+            )
+            return
+        if running is not None and running.goal_uuid == uuid:
+            self.flag("R6.3", "unexpected_answer", label, "no answer while the child's start is deferred")
+            self.state = attrs.evolve(state, running=None, status=Status.STANDBY.value)
+            return
+        self.flag("R19.1", "unexpected_answer", label, "no answer: the goal is not open")
+
+    # ------------------------------------------------------------------ abduction
+
+    def candidates(self, record: Record) -> Iterator[list[ins.Input]]:
+        """The inputs that may have produced ``record``, most likely first (see the module docs)."""
+        state = self.st
+        now = self.now
+        running = state.running
+        uuid = record.goal_uuid
+        if record.kind == "feedback":
+            feedback: Feedback = record.message
+            texts = [entry.text for entry in feedback.logs]
+            if running is not None and running.goal_uuid == uuid:
+                for signal_text, signal in _SIGNAL_LOGS.items():
+                    if signal_text in texts:
+                        yield [signal(now=now)]
+                if running.started:
+                    status = feedback.status if feedback.status in _STATUSES else running.child_status
+                    last = feedback.logs[-1] if feedback.logs else None
+                    tier = last.tier if last is not None and last.tier in _TIERS else "info"
+                    log_text = last.text[: ins.MAX_LOG_TEXT_LENGTH] if last is not None else None
+                    yield [ins.ChildProgress(status=status, log_text=log_text, tier=tier, now=now)]
+                else:
+                    yield [ins.Resume(now=now)]
+            if any(item.goal_uuid == uuid for item in state.queued):
+                yield [ins.GoalStarted(goal_uuid=uuid, now=now)]
+                if state.interrupted:
+                    yield [ins.Resume(now=now), ins.GoalStarted(goal_uuid=uuid, now=now)]
+                else:
+                    yield [ins.Interrupt(now=now), ins.GoalStarted(goal_uuid=uuid, now=now)]
+            return
+        if record.kind == "result":
+            result: Result = record.message
+            if any(item.goal_uuid == uuid for item in state.queued):
+                yield [ins.GoalStarted(goal_uuid=uuid, now=now)]
+            if running is not None and running.started:
+                final = result.status if result.status in _STATUSES else Status.COMPLETED.value
+                yield [ins.ChildFinished(status=final, now=now)]
+            if running is not None and not running.started and running.goal_uuid == uuid:
+                for queued in state.queued:  # a CANCEL's start cancels a deferred child at once (R9.4)
+                    if queued.goal.event_type == EventType.CANCEL:
+                        yield [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now)]
+                yield [ins.TaskCancel(now=now)]
+                yield [ins.TaskKill(now=now)]
+            if _first_line(result.execution_failure) == _FAILURES["shutdown"]:
+                yield [ins.Shutdown(now=now)]
+            return
+        message: DynamicEventStatus = record.message
+        for queued in state.queued:
+            yield [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now)]
+        if running is not None and running.started and message.status in _STATUSES:
+            yield [ins.ChildProgress(status=message.status, now=now)]
+        if running is not None and not running.started:
+            yield [ins.Resume(now=now)]
+        if message.status == Status.KILLED.value:
+            yield [ins.TaskKill(now=now)]
+        if message.status == Status.CANCELED.value or message.dynamic_state == DynamicState.INACTIVE:
+            yield [ins.TaskCancel(now=now)]
+
+
+class _Unreadable(Exception):
+    """A record the observer cannot use: its field and the problem (turned into a TraceError)."""
+
+    def __init__(self, field: str, problem: str) -> None:
+        self.field = field
+        self.problem = problem
+        super().__init__(problem)
+
+
+def check_records(header: _Header, records: Iterable[Record], source: str = "<trace>") -> Report:
+    """Replay parsed records in observer mode; see :func:`check_trace`."""
+    observer = _Observer(header)
+    listed = list(records)
+    observer.records = listed
+    for index, record in enumerate(listed):
+        observer.index = index
+        observer.upcoming = listed[index + 1] if index + 1 < len(listed) else None
+        try:
+            observer.feed(record)
+        except _Unreadable as exc:
+            raise TraceError(source, record.line, exc.field, exc.problem) from None
+    return Report(source=source, records=len(listed), findings=tuple(observer.findings))
+
+
+def check_trace(text: str | Iterable[str], source: str = "<trace>") -> Report:
+    """Check a trace (its text, or its lines) in observer mode; each violation is a :class:`Finding`.
+
+    Raises :class:`TraceError` (naming ``source``, the line and the field)
+    when the trace cannot be read.
+    """
+    lines = text.splitlines() if isinstance(text, str) else text
+    header, records = read_trace(lines, source)
+    return check_records(header, records, source)
+
+
+def format_report(report: Report) -> str:
+    """The findings as text, one per line with what was expected, then a summary line."""
+    lines = []
+    for finding in report.findings:
+        lines.append(f"{report.source}:{finding.line}: {finding.rule} {finding.code}: {finding.message}")
+        lines.append(f"    expected: {finding.expected}")
+    count = len(report.findings)
+    noun = "violation" if count == 1 else "violations"
+    summary = f"{report.source}: {report.records} records, {count or 'no'} {noun}"
+    lines.append(summary)
+    return "\n".join(lines) + "\n"
+
+
+def trace_records(report: Report) -> list[dict[str, Any]]:
+    """The JSON lines of ``dynevent check --json``: one object per finding, then a summary."""
+    rows: list[dict[str, Any]] = [
+        {"type": "violation", "file": report.source, **finding.to_dict()} for finding in report.findings
+    ]
+    rows.append(
+        {
+            "type": "summary",
+            "file": report.source,
+            "records": report.records,
+            "violations": len(report.findings),
+        }
+    )
+    return rows
+
+
+def _run(args: argparse.Namespace) -> int:
+    source = args.trace
+    try:
+        if source == "-":
+            report = check_trace(sys.stdin.read(), "<stdin>")
+        else:
+            with open(source, encoding="utf-8") as stream:
+                report = check_trace(stream.read(), source)
+    except OSError as exc:
+        print(f"dynevent check: {source}: cannot read: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except UnicodeDecodeError as exc:
+        print(f"dynevent check: {source}: not UTF-8 text (byte {exc.start})", file=sys.stderr)
+        return 2
+    except TraceError as exc:
+        print(f"dynevent check: {exc}", file=sys.stderr)
+        return 2
+    if args.json:
+        for row in trace_records(report):
+            print(_json.dumps(row))
+    else:
+        print(format_report(report), end="")
+    return 0 if report.clean else 1
+
+
+def add_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Register ``dynevent check``."""
+    parser = commands.add_parser(
+        "check",
+        help="check an observed trace of one robot against the protocol rules",
+        description="Replay TRACE, a JSON-lines record of what was observed on the wire for one robot "
+        "(docs/trace-format.md), against the server machine in observer mode, and report every "
+        "protocol violation with its line, its docs/spec.md rule and what was expected.  Exit status: "
+        "0 when the trace is clean, 1 when it holds violations, 2 on a usage error or unreadable input "
+        "(the message names the file, the line and the field).",
+    )
+    parser.add_argument("trace", metavar="TRACE", help="the trace file, or - for standard input")
+    parser.add_argument("--json", action="store_true", help="one JSON object per violation, then a summary")
+    parser.set_defaults(run=_run)

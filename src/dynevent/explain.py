@@ -1,0 +1,566 @@
+"""``dynevent explain``: would this goal be accepted by a robot whose status message is this, and if not, why?
+
+A ``DynamicEventStatus`` message tells the seq, the phase and the current id
+(the dynamic event's own id while WAITING, the running child's while
+RUNNING).  :func:`state_from_status` rebuilds the server state those allow;
+:func:`explain` runs :func:`dynevent.machine.accept` on it, and when the goal
+is refused, says which check refused it (reason code, sentence, values, rule)
+and what to send instead, re-checking each correction until one passes.
+
+What a status message cannot tell is said, not guessed: the robot's
+categories and their description schemas (unless ``categories`` are given),
+the highest id used in the run (R4.12), whether the server is shutting down
+(R4.1), and what other goals are in flight (an accepted goal can still lose
+a race, R5.2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+import attrs
+
+from . import _json, machine
+from . import inputs as ins
+from . import outputs as outs
+from .errors import DyneventError, InvalidMessage
+from .machine import RunningGoal, ServerConfig, State
+from .messages import DynamicEventStatus, Goal
+from .vocab import Compatibility, DynamicState, EventType, GoalStatus, RejectReason, Status
+
+__all__ = [
+    "REASON_RULES",
+    "UNKNOWN_GOAL",
+    "Explanation",
+    "add_command",
+    "explain",
+    "format_explanation",
+    "state_from_status",
+]
+
+#: The goal UUID of a running goal known only from a status message.
+UNKNOWN_GOAL = "0" * 32
+
+#: The docs/spec.md rule of each reject reason.
+REASON_RULES: dict[RejectReason, str] = {
+    RejectReason.SHUTTING_DOWN: "R4.1",
+    RejectReason.SEQ_MISMATCH: "R4.2",
+    RejectReason.INACTIVE: "R4.3",
+    RejectReason.UNINITIALIZED_EVENT_TYPE: "R4.4",
+    RejectReason.UNKNOWN_EVENT_TYPE: "R4.5",
+    RejectReason.BUSY: "R4.6",
+    RejectReason.UNSUPPORTED_CATEGORY: "R4.7",
+    RejectReason.DESCRIPTION_NOT_JSON: "R4.9",
+    RejectReason.DESCRIPTION_INVALID: "R4.10",
+    RejectReason.NON_FINITE_STUBBORN_PERIOD: "R4.11",
+    RejectReason.STALE_ID: "R4.12",
+    RejectReason.CANCEL_IDLE: "R4.13",
+    RejectReason.CANCEL_ID_MISMATCH: "R4.14",
+    RejectReason.RACE: "R5.2",
+}
+
+_CANDIDATE = "0" * 31 + "1"  # the goal under examination, in the simulated server
+_STATUSES = frozenset(status.value for status in Status)
+
+
+def state_from_status(message: DynamicEventStatus, fleet: str = "fleet", robot: str = "robot") -> State:
+    """The server state a status message describes, as far as it can (R2.2).
+
+    INACTIVE gives an inactive state of that seq.  WAITING gives an active
+    run whose dynamic event has the message's id; the highest id used in the
+    run is taken to be that id.  RUNNING gives a run whose running goal is
+    unknown (:data:`UNKNOWN_GOAL`), with a child of the message's id, started
+    unless the status is ``queued`` (a start deferred by an interruption, R6.3).  Raises
+    ``ValueError`` for a ``dynamic_state`` that is none of 0, 1, 2.
+    """
+    base = State.new(fleet, robot)
+    seq, phase = message.dynamic_event_seq, message.dynamic_state
+    if phase == DynamicState.INACTIVE:
+        return attrs.evolve(base, seq=seq)
+    if phase == DynamicState.WAITING:
+        return attrs.evolve(
+            base,
+            seq=seq,
+            active=True,
+            event_id=message.id,
+            description="{}",
+            status=message.status,
+            last_id=message.id,
+        )
+    if phase == DynamicState.RUNNING:
+        goal = Goal(dynamic_event_seq=seq, event_type=EventType.NEXT, id=message.id)
+        running = RunningGoal(
+            goal_uuid=UNKNOWN_GOAL,
+            goal=goal,
+            child_id=message.id,
+            child_status=message.status,
+            started=message.status != Status.QUEUED.value,
+        )
+        return attrs.evolve(
+            base,
+            seq=seq,
+            active=True,
+            description="{}",
+            status=message.status,
+            last_id=message.id,
+            running=running,
+            interrupted=not running.started,  # only an interruption defers a child's start (R6.3)
+        )
+    raise ValueError(f"dynamic_state {phase} is none of INACTIVE (0), WAITING (1), RUNNING (2)")
+
+
+def status_text(message: DynamicEventStatus) -> str:
+    """One line for a status message: ``RUNNING seq=3 id=8 underway``."""
+    try:
+        phase = DynamicState(message.dynamic_state).name
+    except ValueError:
+        phase = f"dynamic_state={message.dynamic_state}"
+    return f"{phase} seq={message.dynamic_event_seq} id={message.id} {message.status}"
+
+
+def goal_text(goal: Goal) -> str:
+    """One line for a goal: ``NEXT seq=1 id=6 go_to_place "pantry" stubborn=0.5``."""
+    try:
+        name = EventType(goal.event_type).name
+    except ValueError:
+        name = f"event_type={goal.event_type}"
+    text = f"{name} seq={goal.dynamic_event_seq}"
+    if goal.event_type != EventType.FINISHED:
+        text += f" id={goal.id}"
+    if goal.event_type == EventType.NEXT:
+        text += f" {goal.category} {goal.description}"
+        if goal.stubborn_period != 0.0:
+            text += f" stubborn={goal.stubborn_period:g}"
+    return text
+
+
+@attrs.frozen(kw_only=True)
+class Explanation:
+    """What :func:`explain` found.
+
+    ``decision`` is the machine's; ``rule`` the docs/spec.md rule that
+    decided.  ``at_start`` says what the goal does when it starts right after
+    its acceptance (``""`` when refused), ``aborted_at_start`` whether it is
+    then aborted (rmf_ros2 mode accepts goals that fail there).  ``then`` are
+    the refusals met after correcting the first, in order; ``instead`` the
+    goal to send (re-checked: the machine accepts it), if one can be given,
+    and ``advice`` what to do, in words.  ``unknown`` lists what the status
+    message cannot tell.  ``consistent`` is false when the status message is
+    not one a conforming server publishes (R2.2), with the reason in
+    ``inconsistency``.
+    """
+
+    status: DynamicEventStatus
+    goal: Goal
+    decision: outs.Decision
+    rule: str
+    at_start: str
+    aborted_at_start: bool
+    then: tuple[outs.Rejected, ...]
+    instead: Goal | None
+    advice: str
+    unknown: tuple[str, ...]
+    inconsistency: str
+
+    @property
+    def accepted(self) -> bool:
+        """The goal is accepted and begins (exit status 0 of ``dynevent explain``)."""
+        return isinstance(self.decision, outs.Accepted) and not self.aborted_at_start
+
+    def to_dict(self) -> dict[str, Any]:
+        """The explanation as plain JSON values."""
+        decision = self.decision
+        verdict = "rejected"
+        if isinstance(decision, outs.Accepted):
+            verdict = "aborted_at_start" if self.aborted_at_start else "accepted"
+        return {
+            "verdict": verdict,
+            "rule": self.rule,
+            "reason": decision.reason.value if isinstance(decision, outs.Rejected) else None,
+            "text": decision.text if isinstance(decision, outs.Rejected) else "",
+            "values": _values(decision) if isinstance(decision, outs.Rejected) else {},
+            "execution_failure": decision.execution_failure if isinstance(decision, outs.Rejected) else "",
+            "at_start": self.at_start,
+            "then": [
+                {"reason": later.reason.value, "rule": REASON_RULES[later.reason], "text": later.text}
+                for later in self.then
+            ],
+            "instead": None if self.instead is None else self.instead.to_dict(),
+            "advice": self.advice,
+            "unknown": list(self.unknown),
+            "consistent": not self.inconsistency,
+            "inconsistency": self.inconsistency,
+            "status": self.status.to_dict(),
+            "goal": self.goal.to_dict(),
+        }
+
+
+def _values(rejection: outs.Rejected) -> dict[str, Any]:
+    values: dict[str, Any] = {}
+    for name in ("expected_seq", "received_seq", "current_id", "requested_id"):
+        value = getattr(rejection, name)
+        if value is not None:
+            values[name] = value
+    if rejection.categories:
+        values["categories"] = list(rejection.categories)
+    if rejection.errors:
+        values["errors"] = list(rejection.errors)
+    return values
+
+
+def _inconsistency(message: DynamicEventStatus) -> str:
+    phase = message.dynamic_state
+    if phase not in (0, 1, 2):
+        return f"dynamic_state {phase} is none of INACTIVE (0), WAITING (1), RUNNING (2)"
+    if phase == DynamicState.INACTIVE and (message.status != Status.UNINITIALIZED.value or message.id != 0):
+        return "an INACTIVE status message always says status 'uninitialized' and id 0 (R2.2)"
+    if message.status not in _STATUSES:
+        return f"status {message.status!r} is none of the 12 task statuses"
+    return ""
+
+
+def _start(state: State, goal: Goal, config: ServerConfig) -> tuple[str, bool]:
+    """What the accepted goal does when it starts at once: a sentence, and whether it is aborted."""
+    now = 0
+    requested = machine.step(state, ins.GoalRequested(goal_uuid=_CANDIDATE, goal=goal, now=now), config)
+    started = machine.step(requested.state, ins.GoalStarted(goal_uuid=_CANDIDATE, now=now), config)
+    for output in started.outputs:
+        if isinstance(output, outs.AnswerGoal) and output.goal_uuid == _CANDIDATE:
+            result = output.result
+            if output.status is GoalStatus.ABORTED:
+                failure = result.execution_failure.split("\n", 1)[0]
+                return (
+                    f"it is aborted when it starts: {failure!r} ({_abort_rule(result.execution_failure)})",
+                    True,
+                )
+            if goal.event_type == EventType.CANCEL:
+                return (
+                    f"the deferred child {result.id} is cancelled at once; the goal succeeds with status "
+                    f"{result.status!r} (R9.4)",
+                    False,
+                )
+            return (
+                f"the dynamic event ends: the goal succeeds with status {result.status!r} and id "
+                f"{result.id} (R11.1)",
+                False,
+            )
+    clamp = ""
+    for output in started.outputs:
+        if isinstance(output, outs.StubbornClamped):
+            clamp = (
+                f"; its stubborn period of {output.requested:g} s will be raised to "
+                f"{output.applied:g} s, with a warning (R12.2)"
+            )
+    for output in started.outputs:
+        if isinstance(output, outs.StartChild):
+            return f"child {output.id} starts (R6.4){clamp}", False
+        if isinstance(output, outs.PublishFeedback) and output.feedback.status == Status.QUEUED.value:
+            return f"child {output.feedback.id} is deferred until the task resumes (R6.3){clamp}", False
+        if isinstance(output, outs.CancelChild):
+            return (
+                f"child {output.id} is told to cancel; the goal is answered when the child ends (R9.3)",
+                False,
+            )
+    if goal.event_type == EventType.CANCEL:
+        return "the child is already stopping; the goal is answered when it ends (R9.3)", False
+    return "", False
+
+
+def _abort_rule(failure: str) -> str:
+    first = failure.split("\n", 1)[0]
+    rules = {
+        machine.EXECUTION_FAILURES["idle_cancel"]: "R9.1",
+        machine.EXECUTION_FAILURES["cancel_id"]: "R9.2",
+        machine.EXECUTION_FAILURES["event_type"]: "R17.2",
+        machine.EXECUTION_FAILURES["parse"]: "R6.1",
+        machine.EXECUTION_FAILURES["race"]: "R5.2",
+    }
+    return rules.get(first, "R5.2")
+
+
+def _fix(state: State, goal: Goal, rejection: outs.Rejected) -> tuple[Goal | None, str, bool]:
+    """A corrected goal (or ``None``), the advice, and whether to keep correcting it."""
+    reason = rejection.reason
+    running = state.running
+    if reason is RejectReason.SEQ_MISMATCH:
+        if state.active:
+            return attrs.evolve(goal, dynamic_event_seq=state.seq), f"use the run's seq, {state.seq}", True
+        return None, _no_run(state), False
+    if reason is RejectReason.INACTIVE:
+        return None, _no_run(state), False
+    if reason in (RejectReason.UNINITIALIZED_EVENT_TYPE, RejectReason.UNKNOWN_EVENT_TYPE):
+        return None, "set event_type to 1 (NEXT), 2 (CANCEL) or 3 (FINISHED)", False
+    if reason is RejectReason.BUSY and running is not None:
+        cancel = Goal(dynamic_event_seq=state.seq, event_type=EventType.CANCEL, id=running.child_id)
+        return (
+            cancel,
+            f"event {running.child_id} is running: CANCEL it first (the goal above), or wait until the "
+            "status says WAITING, then send the goal again",
+            False,
+        )
+    if reason is RejectReason.UNSUPPORTED_CATEGORY:
+        supported = ", ".join(rejection.categories) or "none"
+        return None, f"use one of the robot's categories: {supported}", False
+    if reason is RejectReason.DESCRIPTION_NOT_JSON:
+        quoted = json.dumps(goal.description, ensure_ascii=False)
+        return (
+            attrs.evolve(goal, description=quoted),
+            "the description is JSON text: a plain name is written in quotes",
+            True,
+        )
+    if reason is RejectReason.NON_FINITE_STUBBORN_PERIOD:
+        return attrs.evolve(goal, stubborn_period=0.0), "give a finite stubborn_period (0 for none)", True
+    if reason is RejectReason.STALE_ID:
+        fresh = state.last_id + 1
+        return (
+            attrs.evolve(goal, id=fresh),
+            f"give the NEXT a fresh id, above every id used in the run (at least {fresh})",
+            True,
+        )
+    if reason is RejectReason.CANCEL_IDLE:
+        return None, "nothing is running: there is nothing to cancel", False
+    if reason is RejectReason.CANCEL_ID_MISMATCH and running is not None:
+        return (
+            attrs.evolve(goal, id=running.child_id),
+            f"a CANCEL names the running event, {running.child_id}",
+            True,
+        )
+    return None, rejection.text, False
+
+
+def _no_run(state: State) -> str:
+    if state.active:
+        return f"the run's seq is {state.seq}"
+    return (
+        f"no dynamic event is active: wait for the next begin (it will carry seq {(state.seq + 1) % 2**32}) "
+        "and its WAITING status"
+    )
+
+
+def _unknowns(state: State, goal: Goal, decision: outs.Decision, categories_known: bool) -> list[str]:
+    unknown = ["whether the server is shutting down (R4.1)"]
+    next_goal = goal.event_type == EventType.NEXT
+    if next_goal and not categories_known:
+        unknown.append(
+            f"the robot's categories: a status message does not list them, so {goal.category!r} was "
+            "taken as supported (give --categories)"
+        )
+    if next_goal:
+        unknown.append(
+            "whether the description fits its category's schema: only its JSON was checked (R4.10)"
+        )
+    if next_goal and state.active:
+        unknown.append(
+            f"the highest id used in this run: the status shows {state.current_id}, and a child that has "
+            "ended may have used a higher one (R4.12)"
+        )
+    if isinstance(decision, outs.Accepted):
+        unknown.append("goals accepted before this one: one that starts first makes it lose the race (R5.2)")
+    running = state.running
+    if running is not None and not running.started:
+        unknown.append(
+            f"whether child {running.child_id} is deferred by an interruption (R6.3), as taken here, or "
+            "has started and reported 'queued': a status message shows both alike"
+        )
+    if goal.event_type == EventType.CANCEL and state.running is not None:
+        unknown.append(
+            "whether the child ends before the CANCEL starts: it is then aborted with "
+            f"{machine.EXECUTION_FAILURES['idle_cancel']!r} (R9.1)"
+        )
+    return unknown
+
+
+def explain(
+    status: DynamicEventStatus,
+    goal: Goal,
+    *,
+    categories: tuple[str, ...] | None = None,
+    compatibility: Compatibility | str = Compatibility.STANDARD,
+) -> Explanation:
+    """Would a robot whose last status message is ``status`` accept ``goal``?  See the module docs.
+
+    Without ``categories`` the goal's own category is taken as supported.
+    ``compatibility="rmf_ros2"`` judges as rmf_ros2 does (R17): bad event
+    types and CANCELs are accepted, then aborted when they start.
+    """
+    compatibility = Compatibility(compatibility)
+    inconsistency = _inconsistency(status)
+    fallback = (
+        attrs.evolve(status, dynamic_state=DynamicState.INACTIVE) if status.dynamic_state > 2 else status
+    )
+    state = state_from_status(fallback)
+    names = categories if categories is not None else ((goal.category,) if goal.category else ())
+    validators = dict.fromkeys(names, machine.accept_any)
+    if compatibility is Compatibility.RMF_ROS2:
+        config = ServerConfig.rmf_ros2(validators)
+    else:
+        config = ServerConfig(categories=validators)
+    decision = machine.accept(state, goal, config)
+    if isinstance(decision, outs.Accepted):
+        at_start, aborted = _start(state, goal, config)
+        rule = "R17.1" if compatibility is Compatibility.RMF_ROS2 and aborted else "R4.16"
+        advice = "" if not aborted else "see the refusal above: standard servers refuse this goal at once"
+        instead = None
+        if aborted:
+            refusal = machine.accept(state, goal, ServerConfig(categories=validators))
+            if isinstance(refusal, outs.Rejected):
+                instead, advice, _ = _fix(state, goal, refusal)
+                advice = f"{refusal.reason.value}: {refusal.text}; {advice}"
+        return Explanation(
+            status=status,
+            goal=goal,
+            decision=decision,
+            rule=rule,
+            at_start=at_start,
+            aborted_at_start=aborted,
+            then=(),
+            instead=instead,
+            advice=advice,
+            unknown=tuple(_unknowns(state, goal, decision, categories is not None)),
+            inconsistency=inconsistency,
+        )
+    then: list[outs.Rejected] = []
+    instead, advice, keep = _fix(state, goal, decision)
+    # a correction must begin, not only be accepted: check it as the spec does (rmf_ros2 aborts at start
+    # exactly the goals the standard refuses, R17.1)
+    strict = ServerConfig(categories=validators)
+    for _ in range(8):  # each correction removes one refusal; there are fewer than eight kinds
+        if instead is None or not keep:
+            break
+        later = machine.accept(state, instead, strict)
+        if isinstance(later, outs.Accepted):
+            break
+        then.append(later)
+        fixed, more, keep = _fix(state, instead, later)
+        advice = f"{advice}; then {more}"
+        instead = fixed
+    if instead is not None and not isinstance(machine.accept(state, instead, strict), outs.Accepted):
+        instead = None
+    return Explanation(
+        status=status,
+        goal=goal,
+        decision=decision,
+        rule=REASON_RULES[decision.reason],
+        at_start="",
+        aborted_at_start=False,
+        then=tuple(then),
+        instead=instead,
+        advice=advice,
+        unknown=tuple(_unknowns(state, goal, decision, categories is not None)),
+        inconsistency=inconsistency,
+    )
+
+
+def format_explanation(explanation: Explanation) -> str:
+    """The explanation as aligned text."""
+    lines = [f"robot:    {status_text(explanation.status)}", f"goal:     {goal_text(explanation.goal)}"]
+    if explanation.inconsistency:
+        lines.append(f"warning:  this status message is inconsistent: {explanation.inconsistency}")
+    decision = explanation.decision
+    if isinstance(decision, outs.Rejected):
+        lines.append(f"verdict:  rejected: {decision.reason.value} ({explanation.rule})")
+        lines.append(f"why:      {decision.text}")
+        values = _values(decision)
+        if values:
+            lines.append("values:   " + ", ".join(f"{name}={value}" for name, value in values.items()))
+        if decision.execution_failure:
+            first = decision.execution_failure.split("\n", 1)[0]
+            lines.append(f"rmf_ros2: {first!r}")
+        for later in explanation.then:
+            lines.append(f"then:     {later.reason.value} ({REASON_RULES[later.reason]}): {later.text}")
+    elif explanation.aborted_at_start:
+        lines.append(f"verdict:  accepted ({explanation.rule}), then aborted")
+        lines.append(f"start:    {explanation.at_start}")
+    else:
+        lines.append(f"verdict:  accepted ({explanation.rule})")
+        if explanation.at_start:
+            lines.append(f"start:    {explanation.at_start}")
+    if explanation.instead is not None:
+        lines.append(f"instead:  {explanation.instead.to_json()}")
+        lines.append(f"          ({goal_text(explanation.instead)})")
+    if explanation.advice:
+        lines.append(f"advice:   {explanation.advice}")
+    lines.append("unknown:  " + explanation.unknown[0])
+    lines.extend(f"          {item}" for item in explanation.unknown[1:])
+    return "\n".join(lines) + "\n"
+
+
+class _ArgumentError(DyneventError):
+    def __init__(self, argument: str, problem: str) -> None:
+        super().__init__(f"{argument}: {problem}")
+
+
+def _parse_message(argument: str, cls: type[Any], text: str) -> Any:
+    try:
+        return cls.from_json(text)
+    except InvalidMessage as exc:
+        raise _ArgumentError(argument, str(exc)) from None
+
+
+def _parse_categories(text: str | None) -> tuple[str, ...] | None:
+    if text is None:
+        return None
+    names = tuple(name.strip() for name in text.split(","))
+    if any(not name for name in names):
+        raise _ArgumentError("--categories", f"an empty category name in {text!r}")
+    return names
+
+
+def _run(args: argparse.Namespace) -> int:
+    try:
+        status = _parse_message("--status", DynamicEventStatus, args.status)
+        goal = _parse_message("--goal", Goal, args.goal)
+        categories = _parse_categories(args.categories)
+    except _ArgumentError as exc:
+        print(f"dynevent explain: {exc}", file=sys.stderr)
+        return 2
+    explanation = explain(status, goal, categories=categories, compatibility=args.compat)
+    if args.json:
+        print(_json.dumps(explanation.to_dict()))
+    else:
+        print(format_explanation(explanation), end="")
+    return 0 if explanation.accepted else 1
+
+
+def add_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Register ``dynevent explain``."""
+    parser = commands.add_parser(
+        "explain",
+        help="would a robot in this state accept this goal? if not, why, and what to send instead",
+        description="Rebuild the server state a DynamicEventStatus message describes and say whether "
+        "the goal would be accepted; if not, the reason code, its docs/spec.md rule, the values, and "
+        "the goal to send instead.  Also says what a status message cannot tell.  Exit status: 0 "
+        "when the goal is accepted and begins, 1 when it is rejected or aborted at its start, 2 on a "
+        "usage error or bad JSON (the message names the argument and the field).",
+    )
+    parser.add_argument(
+        "--status",
+        required=True,
+        metavar="STATUS_JSON",
+        help="the robot's DynamicEventStatus as JSON, e.g. '{\"dynamic_event_seq\": 3, "
+        '"dynamic_state": 2, "status": "underway", "id": 8}\'',
+    )
+    parser.add_argument(
+        "--goal",
+        required=True,
+        metavar="GOAL_JSON",
+        help='the DynamicEvent goal as JSON (ROS field names), e.g. \'{"dynamic_event_seq": 3, '
+        '"event_type": 2, "id": 8}\'',
+    )
+    parser.add_argument(
+        "--categories",
+        metavar="A,B",
+        help="the robot's supported categories, comma-separated (default: unknown; the goal's own "
+        "category is taken as supported)",
+    )
+    parser.add_argument(
+        "--compat",
+        choices=[mode.value for mode in Compatibility],
+        default=Compatibility.STANDARD.value,
+        help="judge as the spec says (standard, the default) or as rmf_ros2 does (accept, then abort)",
+    )
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.set_defaults(run=_run)
