@@ -6,6 +6,19 @@ pulls in hypothesis.  Nothing in the core imports this package.
 
 from __future__ import annotations
 
+from .stateful import (
+    DEFAULT_CONFIG,
+    DyneventServer,
+    ImplementationServer,
+    Observer,
+    ProtocolViolation,
+    ServerStateMachine,
+    ServerUnderTest,
+    ServerView,
+    input_sequences,
+    server_inputs,
+    server_state_machine,
+)
 from .strategies import (
     hostile_json_values,
     json_values,
@@ -13,4 +26,20 @@ from .strategies import (
     wire_dicts,
 )
 
-__all__ = ["hostile_json_values", "json_values", "messages", "wire_dicts"]
+__all__ = [
+    "DEFAULT_CONFIG",
+    "DyneventServer",
+    "ImplementationServer",
+    "Observer",
+    "ProtocolViolation",
+    "ServerStateMachine",
+    "ServerUnderTest",
+    "ServerView",
+    "hostile_json_values",
+    "input_sequences",
+    "json_values",
+    "messages",
+    "server_inputs",
+    "server_state_machine",
+    "wire_dicts",
+]
