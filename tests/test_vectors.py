@@ -313,3 +313,13 @@ def test_the_rule_table_counts_each_vector_once_per_rule(shipped: list[vectors.V
     report = vectors.format_report(outcomes, "x")
     assert report.splitlines()[0] == "implementation: x"
     assert report.splitlines()[-1] == f"{len(shipped)} passed, 0 failed"
+
+
+def test_every_divergence_has_a_vector() -> None:
+    """Each section of docs/divergences.md is shown by at least one vector that names it."""
+    text = (Path(__file__).resolve().parents[1] / "docs" / "divergences.md").read_text(encoding="utf-8")
+    sections = set(re.findall(r"^## (D\d+)\.", text, flags=re.MULTILINE))
+    assert sections, "docs/divergences.md lists no D-sections"
+    covered = {item for vector in vectors.load_vectors() for item in vector.divergences}
+    assert sections - covered == set(), f"divergences without a vector: {sorted(sections - covered)}"
+    assert covered - sections == set(), f"vectors name unknown divergences: {sorted(covered - sections)}"

@@ -87,6 +87,7 @@ class Vector:
 
     name: str
     rules: tuple[str, ...]
+    divergences: tuple[str, ...]
     summary: str
     source: str
     fleet: str
@@ -236,7 +237,7 @@ def _require(source: str, path: str, data: Any, key: str, kind: type | tuple[typ
 def _vector(source: str, path: str, data: Any) -> Vector:
     if not isinstance(data, dict):
         raise InvalidVector(source, path, "expected a vector object")
-    known = {"name", "rules", "summary", "fleet", "robot", "config", "state", "steps"}
+    known = {"name", "rules", "divergences", "summary", "fleet", "robot", "config", "state", "steps"}
     extra = set(data) - known
     if extra:
         raise InvalidVector(source, path, f"unknown keys {sorted(extra)}")
@@ -244,6 +245,9 @@ def _vector(source: str, path: str, data: Any) -> Vector:
     rules = _require(source, path, data, "rules", list)
     if not rules or not all(isinstance(rule, str) for rule in rules):
         raise InvalidVector(source, f"{path}.rules", "expected a non-empty list of rule numbers")
+    divergences = data.get("divergences", [])
+    if not isinstance(divergences, list) or not all(isinstance(item, str) for item in divergences):
+        raise InvalidVector(source, f"{path}.divergences", 'expected a list of divergence numbers ("D1"...)')
     steps_data = _require(source, path, data, "steps", list)
     steps = []
     for index, step in enumerate(steps_data):
@@ -259,6 +263,7 @@ def _vector(source: str, path: str, data: Any) -> Vector:
     return Vector(
         name=name,
         rules=tuple(rules),
+        divergences=tuple(divergences),
         summary=str(data.get("summary", "")),
         source=source,
         fleet=_require(source, path, data, "fleet", str),
