@@ -20,6 +20,7 @@ from scenario import (
     deferred,
     entry,
     feedback,
+    finished_goal,
     next_goal,
     running,
     start_child,
@@ -300,9 +301,32 @@ def test_an_interruption_outlives_the_child_it_was_handed_to() -> None:
 def test_resume_after_the_run_ended_still_clears() -> None:
     run = waiting()
     run.interrupt()
-    run.task_cancel()
+    run.submit(u(1), finished_goal(1))
+    assert run.phase is INACTIVE and run.state.interrupted
     assert run.resume() == ()
     assert not run.state.interrupted
+
+
+@pytest.mark.spec("R13.6", "R18.6")
+@pytest.mark.parametrize("signal", ["task_cancel", "task_kill"])
+def test_a_task_signal_ends_the_interruption_with_the_task(signal: str) -> None:
+    run = waiting()
+    run.interrupt()
+    getattr(run, signal)()
+    assert run.phase is INACTIVE and not run.state.interrupted
+    run.assert_ignored(run.resume(), "resume")
+
+
+@pytest.mark.spec("R13.6", "R6.4")
+def test_the_next_task_does_not_inherit_an_interruption() -> None:
+    run = running(child_id=5)
+    run.interrupt()
+    run.task_kill()
+    run.child_end("killed")
+    assert run.phase is INACTIVE and not run.state.interrupted
+    run.begin(event_id=20)
+    outputs = run.submit(u(9), next_goal(2, 21))
+    assert any(isinstance(output, outs.StartChild) for output in outputs)  # not deferred
 
 
 @pytest.mark.spec("R14.4")

@@ -486,10 +486,18 @@ def _answers_at_child_end(state: State, running: RunningGoal, final: str) -> lis
     return answers
 
 
-def _end_dynamic_event(state: State, final: str, outputs: list[outs.Output]) -> State:
-    """The dynamic event is over (R11.2, R13.4): the task may move on."""
+def _end_dynamic_event(
+    state: State, final: str, outputs: list[outs.Output], task_over: bool = False
+) -> State:
+    """The dynamic event is over (R11.2, R13.4): the task may move on.
+
+    When a task signal ends it, the task itself is over and its interruption with it (R13.6).
+    """
     outputs.append(outs.DynamicEventFinished(status=final))
-    return _replace_state(state, active=False, status=final, running=None, cancels=())
+    interrupted = False if task_over else state.interrupted
+    return _replace_state(
+        state, active=False, status=final, running=None, cancels=(), interrupted=interrupted
+    )
 
 
 # --------------------------------------------------------------------------- step handlers
@@ -703,7 +711,7 @@ def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerCon
     outputs = _answers_at_child_end(state, running, event.status)  # R8.1 to R8.3
     after = _replace_state(state, running=None, cancels=())
     if state.task_signal:  # R13.4
-        after = _end_dynamic_event(after, state.task_signal, outputs)
+        after = _end_dynamic_event(after, state.task_signal, outputs, task_over=True)
         return _finish(state, after, outputs, event.now)
     after = _replace_state(after, status=Status.STANDBY.value)  # R8.4
     period = running.goal.stubborn_period
@@ -818,7 +826,7 @@ def _on_task_signal(state: State, event: ins.TaskCancel | ins.TaskKill, config: 
         return _finish(state, after, outputs, event.now)
     if running is not None:  # R13.3: a deferred child ends before it starts
         outputs.extend(_answers_at_child_end(after, running, signal))
-    after = _end_dynamic_event(after, signal, outputs)
+    after = _end_dynamic_event(after, signal, outputs, task_over=True)
     return _finish(state, after, outputs, event.now)
 
 
