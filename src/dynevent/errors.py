@@ -13,6 +13,7 @@ from __future__ import annotations
 
 __all__ = [
     "DyneventError",
+    "InvalidConfig",
     "InvalidDescription",
     "InvalidMessage",
     "InvalidName",
@@ -52,6 +53,19 @@ class InvalidMessage(DyneventError):
         self.problem = problem
         where = f"{message}.{field}" if field else message
         super().__init__(f"{where}: {problem} (got {short_repr(value)})")
+
+
+class InvalidConfig(DyneventError, TypeError):
+    """A server configuration field has a value the machine cannot work with.
+
+    Also a :class:`TypeError`, as a wrong argument to a constructor is.
+    """
+
+    def __init__(self, field: str, value: object, problem: str) -> None:
+        self.field = field
+        self.value = value
+        self.problem = problem
+        super().__init__(f"ServerConfig.{field}: {problem} (got {short_repr(value)})")
 
 
 class InvalidName(DyneventError):

@@ -24,6 +24,7 @@ from . import _json
 from . import inputs as ins
 from . import outputs as outs
 from ._fields import maker, replacer
+from .errors import InvalidConfig
 from .messages import (
     DescriptionResponse,
     DynamicEventDescription,
@@ -84,13 +85,28 @@ def accept_any(category: str, description: Any) -> Sequence[str]:
 
 def _categories(value: Mapping[str, Validator]) -> Mapping[str, Validator]:
     if not isinstance(value, Mapping):
-        raise TypeError(
-            f"ServerConfig.categories: expected a mapping of category to validator, got {value!r}"
-        )
+        raise InvalidConfig("categories", value, "expected a mapping of category to validator")
     for name, validator in value.items():
         if not isinstance(name, str) or not callable(validator):
-            raise TypeError(f"ServerConfig.categories: {name!r} must map a str to a callable validator")
+            raise InvalidConfig("categories", {name: validator}, "each category must map a str to a callable")
     return dict(value)
+
+
+def _id_policy(value: Any) -> IdPolicy:
+    try:
+        return IdPolicy(value)
+    except ValueError:
+        raise InvalidConfig(
+            "id_policy", value, f"expected one of {[item.value for item in IdPolicy]}"
+        ) from None
+
+
+def _compatibility(value: Any) -> Compatibility:
+    try:
+        return Compatibility(value)
+    except ValueError:
+        choices = [item.value for item in Compatibility]
+        raise InvalidConfig("compatibility", value, f"expected one of {choices}") from None
 
 
 def _positive(instance: Any, attribute: attrs.Attribute[Any], value: Any) -> None:
@@ -100,7 +116,12 @@ def _positive(instance: Any, attribute: attrs.Attribute[Any], value: Any) -> Non
         or not math.isfinite(value)
         or value <= 0
     ):
-        raise ValueError(f"ServerConfig.{attribute.name}: expected a positive finite number, got {value!r}")
+        raise InvalidConfig(attribute.name, value, "expected a positive finite number")
+
+
+def _positive_integer(instance: Any, attribute: attrs.Attribute[Any], value: Any) -> None:
+    if type(value) is not int or value <= 0:
+        raise InvalidConfig(attribute.name, value, "expected a positive integer")
 
 
 def _at_least_a_centimetre(value: Any) -> Any:
@@ -115,12 +136,13 @@ class ServerConfig:
 
     ``categories`` maps each supported event category to its description
     validator.  ``stubborn_move_threshold`` is never below 0.01 m (a smaller
-    value is raised to it, as rmf_ros2 does).
+    value is raised to it, as rmf_ros2 does).  A bad value raises
+    :class:`~dynevent.errors.InvalidConfig` naming the field.
     """
 
     categories: Mapping[str, Validator] = attrs.field(factory=dict, converter=_categories)
-    id_policy: IdPolicy = attrs.field(default=IdPolicy.GOAL, converter=IdPolicy)
-    compatibility: Compatibility = attrs.field(default=Compatibility.STANDARD, converter=Compatibility)
+    id_policy: IdPolicy = attrs.field(default=IdPolicy.GOAL, converter=_id_policy)
+    compatibility: Compatibility = attrs.field(default=Compatibility.STANDARD, converter=_compatibility)
     stubborn_minimum: float = attrs.field(default=2.0, validator=_positive)
     stubborn_refresh: float = attrs.field(default=1.0, validator=_positive)
     stubborn_move_threshold: float = attrs.field(
@@ -128,7 +150,7 @@ class ServerConfig:
         validator=_positive,
         converter=_at_least_a_centimetre,
     )
-    max_description_length: int = 1_000_000
+    max_description_length: int = attrs.field(default=1_000_000, validator=_positive_integer)
 
     @classmethod
     def rmf_ros2(cls, categories: Mapping[str, Validator]) -> ServerConfig:
