@@ -950,12 +950,6 @@ def _wrapped_adapter_run() -> tuple[ClientState, machine.State, machine.ServerCo
     return state, server, config
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="client bug: _ended() assumes ids rise in a run; after the adapter id wraps to 0, "
-    "the client believes running child 0 has ended (ended_id = 2**64 - 1)",
-)
 def test_client_knows_the_child_runs_after_an_adapter_id_wrap() -> None:
     # Found by tests/test_loopback.py::test_client_and_server_agree (config adapter_ids,
     # begin event_id 2**64 - 2), which fails on this example once Hypothesis draws it.

@@ -514,9 +514,14 @@ def _run_over(state: ClientState, seq: int) -> bool:
     return state.finished or (state.phase is DynamicState.INACTIVE and state.seq == seq)
 
 
+def _not_after(first: int, second: int) -> bool:
+    """Is id ``first`` at or before ``second``?  Ids rise in a run, modulo 2**64 (an adapter's ids wrap)."""
+    return (second - first) & _U64 < 2**63
+
+
 def _ended(state: ClientState, child_id: int) -> bool:
-    """Does the client know that child ``child_id`` of the newest run has ended?  (Ids rise in a run.)"""
-    return state.ended_id is not None and child_id <= state.ended_id
+    """Does the client know that child ``child_id`` of the newest run has ended?"""
+    return state.ended_id is not None and _not_after(child_id, state.ended_id)
 
 
 def _new_run(state: ClientState, seq: int) -> ClientState:
@@ -912,7 +917,7 @@ def _on_result(state: ClientState, event: ResultReceived) -> ClientTransition:
             state = attrs.evolve(state, finished=True)
         elif goal.goal.event_type in (EventType.NEXT, EventType.CANCEL):
             state = _seen_id(state, seq, result.id)
-            if state.ended_id is None or result.id > state.ended_id:
+            if state.ended_id is None or not _not_after(result.id, state.ended_id):
                 state = attrs.evolve(state, ended_id=result.id)
     return ClientTransition(state, (outcome,))
 
