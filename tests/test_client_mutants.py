@@ -44,56 +44,24 @@ from dynevent.client import (
 )
 from dynevent.errors import InvalidMessage
 from dynevent.inputs import NOW_RANGE
-from dynevent.messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
-from dynevent.vocab import DynamicState, EventType, GoalStatus, RejectReason
+from dynevent.messages import DynamicEventStatus, Feedback, Goal, Result
+from dynevent.vocab import EventType, GoalStatus, RejectReason
+from test_client import (  # the client tests' own builders
+    INACTIVE,
+    PREFIX,
+    RUNNING,
+    U32,
+    U64,
+    WAITING,
+    answer,
+    begin,
+    feed,
+    sent,
+    status,
+    waiting,
+)
 
-PREFIX = "00000000000000ab"
-U32 = 2**32 - 1
-U64 = 2**64 - 1
-WAITING, RUNNING, INACTIVE = DynamicState.WAITING, DynamicState.RUNNING, DynamicState.INACTIVE
 UUID = "a" * 32
-
-
-def status(seq: int, phase: DynamicState, id: int = 0, text: str = "standby") -> StatusReceived:
-    if phase is INACTIVE:
-        text = "uninitialized"
-    return StatusReceived(
-        message=DynamicEventStatus(dynamic_event_seq=seq, dynamic_state=phase, status=text, id=id)
-    )
-
-
-def begin(seq: int, description: str = "{}") -> BeginReceived:
-    return BeginReceived(
-        message=DynamicEventDescription(fleet="f", robot="r", dynamic_event_seq=seq, description=description)
-    )
-
-
-def answer(
-    uuid: str, goal_status: GoalStatus, final: str = "", id: int = 0, failure: str = ""
-) -> ResultReceived:
-    return ResultReceived(
-        goal_uuid=uuid, status=goal_status, result=Result(execution_failure=failure, status=final, id=id)
-    )
-
-
-def feed(state: ClientState, *events: ClientInput) -> tuple[ClientState, list[ClientOutput]]:
-    outputs: list[ClientOutput] = []
-    for event in events:
-        transition = client.step(state, event)
-        state = transition.state
-        outputs.extend(transition.outputs)
-    return state, outputs
-
-
-def waiting(seq: int = 1, event_id: int = 5, **kwargs: Any) -> ClientState:
-    state, _ = feed(ClientState.new(PREFIX, **kwargs), begin(seq), status(seq, WAITING, event_id))
-    return state
-
-
-def sent(transition: ClientTransition) -> tuple[ClientState, SendGoal]:
-    (output,) = transition.outputs
-    assert isinstance(output, SendGoal), output
-    return transition.state, output
 
 
 def refusal(transition: ClientTransition) -> outs.Rejected:
