@@ -109,7 +109,7 @@ def test_the_clean_example_is_clean() -> None:
 
 def test_a_whole_run_is_clean() -> None:
     trace = Trace().started().feedback(1, "underway", 6, logs=(0,)).feedback(1, "delayed", 6, logs=(1,))
-    trace.status(1, 2, "delayed", 6).result(1, "succeeded", "completed", 6).status(1, 1, "standby", 5)
+    trace.status(1, 2, "delayed", 6).result(1, "succeeded", "completed", 6).status(1, 1, "standby", 6)
     trace.goal(2, event_type=3).result(2, "succeeded", "completed", 5).status(1, 0, "uninitialized", 0)
     assert trace.check().clean
 
@@ -229,7 +229,7 @@ def test_a_refusal_with_the_wrong_reason() -> None:
 
 
 def test_a_second_terminal_answer() -> None:
-    trace = Trace().started().result(1, "succeeded", "completed", 6).status(1, 1, "standby", 5)
+    trace = Trace().started().result(1, "succeeded", "completed", 6).status(1, 1, "standby", 6)
     trace.result(1, "aborted", "canceled", 6)
     assert found(trace.check()) == [(trace.line, "R19.1", "second_answer")]
 
@@ -342,7 +342,7 @@ def test_a_cancel_response_against_r10() -> None:
 
 def test_an_action_level_cancel_is_followed() -> None:
     trace = Trace().started().add("cancel_response", goal_uuid=uuid(1), accepted=True)
-    trace.result(1, "canceled", "canceled", 6).status(1, 1, "standby", 5)
+    trace.result(1, "canceled", "canceled", 6).status(1, 1, "standby", 6)
     assert trace.check().clean
 
 
@@ -361,7 +361,7 @@ def test_a_goal_uuid_reused_while_open() -> None:
 
 def test_a_trace_from_a_late_subscriber_binds_the_running_goal() -> None:
     trace = Trace(config=False).status(4, 2, "underway", 12).feedback(9, "delayed", 12)
-    trace.result(9, "succeeded", "completed", 12).status(4, 1, "standby", 3)
+    trace.result(9, "succeeded", "completed", 12).status(4, 1, "standby", 12)
     trace.goal(10, event_type=3, dynamic_event_seq=4).result(10, "succeeded", "completed", 3)
     assert trace.check().clean
 

@@ -77,7 +77,7 @@ def test_a_goal_is_requested_then_started_by_the_binding() -> None:
         ("adapter", "start_child"),
     ]
     assert outcome_kinds(lb) == [(EventType.NEXT, OutcomeKind.COMPLETED)]
-    assert view(lb.client) == view(lb.server) == (DynamicState.WAITING, 1, 5)
+    assert view(lb.client) == view(lb.server) == (DynamicState.WAITING, 1, 6)  # R2.2
 
 
 def test_a_late_client_gets_the_transient_local_begin_and_status() -> None:
@@ -242,7 +242,7 @@ def test_canceled_by_our_cancel() -> None:
         (EventType.NEXT, OutcomeKind.CANCELED),
         (EventType.CANCEL, OutcomeKind.CANCELED),
     ]
-    assert view(lb.client) == view(lb.server) == (DynamicState.WAITING, 1, 5)
+    assert view(lb.client) == view(lb.server) == (DynamicState.WAITING, 1, 6)
 
 
 def test_killed_when_the_task_is_killed() -> None:
@@ -277,7 +277,7 @@ def test_timeout_of_a_deferred_child_with_all_feedback_lost() -> None:
         (EventType.NEXT, OutcomeKind.TIMEOUT),
         (EventType.CANCEL, OutcomeKind.CANCELED),
     ]
-    assert view(lb.client) == view(lb.server) == (DynamicState.WAITING, 1, 5)
+    assert view(lb.client) == view(lb.server) == (DynamicState.WAITING, 1, 6)
 
 
 def test_execution_failure_race_with_another_client() -> None:
@@ -450,7 +450,11 @@ class Agreement:
     def check_view(self) -> None:
         lb = self.lb
         if not lb.statuses_in_flight:  # (b) every status delivered: the views agree
-            assert view(lb.client) == view(lb.server), lb.format_timeline()
+            expected = {view(lb.server)}
+            server = lb.server
+            if lb.config.compatibility is Compatibility.RMF_ROS2 and server.phase is DynamicState.WAITING:
+                expected.add((DynamicState.RUNNING, server.seq, server.last_id))  # R17.4: the wire's view
+            assert view(lb.client) in expected, lb.format_timeline()
 
     def command(self, outputs: tuple[client.ClientOutput, ...], quiet: bool, server: machine.State) -> None:
         config = self.lb.config
@@ -462,6 +466,9 @@ class Agreement:
                 continue  # the server numbers children itself: no id rule to break
             if reason is RejectReason.CANCEL_IDLE and config.compatibility is Compatibility.RMF_ROS2:
                 continue  # rmf_ros2 accepts an idle CANCEL and aborts it when it starts
+            stale_running = self.lb.client.phase is DynamicState.RUNNING and server.phase is DynamicState.WAITING
+            if reason is RejectReason.BUSY and stale_running and config.compatibility is Compatibility.RMF_ROS2:
+                continue  # R17.4: rmf_ros2's last status after a child's end says RUNNING
             # (c) a local refusal at a quiescent moment is the server's refusal, for the same reason
             decision = machine.accept(server, output.goal, config)
             assert isinstance(decision, outs.Rejected), (output, decision)

@@ -95,7 +95,7 @@ def test_status_message_of_each_phase() -> None:
     run.progress("delayed")
     assert status_message(run.state, now) == status(1, RUNNING, "delayed", 41, now).message
     run.child_end("completed")
-    assert status_message(run.state, now) == status(1, WAITING, "standby", 40, now).message
+    assert status_message(run.state, now) == status(1, WAITING, "standby", 41, now).message  # R2.2
     run.submit(u(2), finished_goal(1))
     # INACTIVE keeps the seq but reports uninitialized and id 0, whatever the stored status.
     assert run.state.status == "completed"
@@ -133,7 +133,7 @@ def test_status_message_is_last_and_describes_the_state_after_the_whole_step() -
     # the goal is answered first; the message already says WAITING, standby, the event's own id
     assert outputs == (
         answer(u(1), SUCCEEDED, "", "completed", 5),
-        status(1, WAITING, "standby", 1, s(200)),
+        status(1, WAITING, "standby", 5, s(200)),
     )
     assert outputs[-1].message == status_message(run.state, s(200))
 

@@ -112,7 +112,7 @@ def test_cancel_of_a_deferred_child_cancels_it_at_once() -> None:
         _execute(u(2)),
         answer(u(1), ABORTED, "", "canceled", 5),
         answer(u(2), SUCCEEDED, "", "canceled", 5),
-        status(1, WAITING, "standby", 1),
+        status(1, WAITING, "standby", 5),
     )
     assert (run.state.running, run.state.cancels, run.state.status) == (None, (), "standby")
     assert run.phase is WAITING
@@ -182,7 +182,7 @@ def test_cancel_of_a_waiting_cancel_goal() -> None:
     assert run.child_end("canceled") == (
         answer(u(1), ABORTED, "", "canceled", 5),
         answer(u(3), SUCCEEDED, "", "canceled", 5),
-        status(1, WAITING, "standby", 1),
+        status(1, WAITING, "standby", 5),
     )
 
 
@@ -225,7 +225,7 @@ def test_cancel_of_the_running_goal_with_a_deferred_child() -> None:
     assert run.cancel(u(1)) == (
         _response(u(1)),
         answer(u(1), CANCELED, "", "canceled", 5),
-        status(1, WAITING, "standby", 1),
+        status(1, WAITING, "standby", 5),
     )
     assert (run.state.running, run.state.status, run.phase) == (None, "standby", WAITING)
     # the child never starts

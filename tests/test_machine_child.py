@@ -172,7 +172,7 @@ def test_child_end_answers_the_goal(final: str) -> None:
     goal_status = ABORTED if final in EARLY_END else SUCCEEDED
     assert run.child_end(final) == (
         answer(u(1), goal_status, "", final, 5),
-        status(1, WAITING, "standby", 1, s(300)),
+        status(1, WAITING, "standby", 5, s(300)),
     )
     assert run.state.running is None
     assert run.state.status == "standby"
@@ -188,7 +188,7 @@ def test_child_end_after_an_action_level_cancel(final: str) -> None:
     goal_status = CANCELED if final in EARLY_END else SUCCEEDED
     assert run.child_end(final) == (
         answer(u(1), goal_status, "", final, 5),
-        status(1, WAITING, "standby", 1),
+        status(1, WAITING, "standby", 5),
     )
 
 
@@ -209,7 +209,7 @@ def test_child_end_begins_stubbornness_when_asked() -> None:
     assert run.child_end("completed", now=s(400)) == (
         answer(u(1), SUCCEEDED, "", "completed", 5),
         outs.StubbornBegin(period=2.5, since=s(400), map_name="L2", x=3.0, y=-4.0),
-        status(1, WAITING, "standby", 1, s(400)),
+        status(1, WAITING, "standby", 5, s(400)),
     )
 
 
@@ -228,7 +228,7 @@ def test_waiting_cancels_succeed_in_start_order() -> None:
         answer(u(1), ABORTED, "", "canceled", 5),
         answer(u(2), SUCCEEDED, "", "canceled", 5),
         answer(u(3), SUCCEEDED, "", "canceled", 5),
-        status(1, WAITING, "standby", 1),
+        status(1, WAITING, "standby", 5),
     )
     assert not run.state.cancels
 
@@ -240,7 +240,7 @@ def test_a_cancel_that_came_too_late_shares_the_completed_result() -> None:
     assert run.child_end("completed") == (
         answer(u(1), SUCCEEDED, "", "completed", 5),
         answer(u(2), SUCCEEDED, "", "completed", 5),
-        status(1, WAITING, "standby", 1),
+        status(1, WAITING, "standby", 5),
     )
 
 
@@ -252,5 +252,5 @@ def test_cancel_goal_and_action_level_cancel_together() -> None:
     assert run.child_end("killed") == (
         answer(u(1), GoalStatus.CANCELED, "", "killed", 5),
         answer(u(2), SUCCEEDED, "", "killed", 5),
-        status(1, WAITING, "standby", 1),
+        status(1, WAITING, "standby", 5),
     )

@@ -172,7 +172,7 @@ def test_a_request_for_an_open_uuid_is_ignored() -> None:
 def test_a_start_of_a_goal_that_is_not_queued_is_ignored() -> None:
     run = waiting()
     run.assert_ignored(run.start(u(1)), "goal_started")  # never requested
-    run.request(u(2), next_goal(1, 0))  # rejected
+    run.request(u(2), next_goal(1, 1))  # rejected: id 1 is not above the run's id (R4.12)
     run.assert_ignored(run.start(u(2)), "goal_started")
     run.submit(u(3), next_goal(1, 5))
     run.assert_ignored(run.start(u(3)), "goal_started")  # already running

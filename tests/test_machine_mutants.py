@@ -128,9 +128,10 @@ def test_stubborn_settings_must_be_positive_finite_numbers(field: str, value: An
     [
         ("id_policy", "bogus", "expected one of ['goal', 'adapter']"),
         ("compatibility", 3, "expected one of ['standard', 'rmf_ros2']"),
-        ("max_description_length", 0, "expected a positive integer"),
-        ("max_description_length", True, "expected a positive integer"),
-        ("max_description_length", 2.5, "expected a positive integer"),
+        ("max_description_length", 0, "expected a positive integer of at most 1000000 (bytes)"),
+        ("max_description_length", True, "expected a positive integer of at most 1000000 (bytes)"),
+        ("max_description_length", 2.5, "expected a positive integer of at most 1000000 (bytes)"),
+        ("max_description_length", 1_000_001, "expected a positive integer of at most 1000000 (bytes)"),
     ],
 )
 def test_other_settings_name_the_field(field: str, value: Any, problem: str) -> None:
@@ -340,7 +341,7 @@ def _shut_down() -> Run:
             lambda: waiting(config=attrs.evolve(CONFIG, max_description_length=4)),
             next_goal(1, 2, description='"abc"'),
             R.DESCRIPTION_INVALID,
-            "description is 5 characters, above the limit of 4",
+            "description is 5 bytes, above the limit of 4",
         ),
         (
             waiting,
@@ -393,7 +394,7 @@ def test_rejection_sentences(build: Callable[[], Run], sent: Any, reason: Reject
 def test_too_long_errors_and_failure_string() -> None:
     run = waiting(config=attrs.evolve(CONFIG, max_description_length=4))
     rejection = _rejection(run.request(u(9), next_goal(1, 2, description='"abc"')))
-    problem = "description is 5 characters, above the limit of 4"
+    problem = "description is 5 bytes, above the limit of 4"
     assert rejection.errors == (problem,)
     assert rejection.execution_failure == f"{PARSE_FAILURE}\n -- {problem}"
 

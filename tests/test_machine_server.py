@@ -135,7 +135,7 @@ def test_execution_finished() -> None:
     execution = Execution(server, 5)
     assert execution.finished(now=T0) == (
         answer(u(1), SUCCEEDED, "", "completed", 5),
-        status(1, WAITING, "standby", 1),
+        status(1, WAITING, "standby", 5),
     )
     assert not execution.okay()
 
@@ -161,7 +161,7 @@ def test_automatic_cancel_finishes_the_child_at_once() -> None:
     )
     assert execution.cancel(now=T0) == (
         answer(u(1), CANCELED, "", "canceled", 5),
-        status(1, WAITING, "standby", 1),
+        status(1, WAITING, "standby", 5),
     )
     assert not execution.okay()
     assert server.state.running is None
@@ -176,7 +176,7 @@ def test_automatic_kill_finishes_the_child_killed() -> None:
     assert execution.kill(now=T0) == (
         answer(u(1), ABORTED, "", "killed", 5),
         answer(u(2), SUCCEEDED, "", "killed", 5),
-        status(1, WAITING, "standby", 1),
+        status(1, WAITING, "standby", 5),
     )
 
 
@@ -195,7 +195,7 @@ def test_without_automatic_cancel_the_adapter_winds_down() -> None:
     # a plain finished() after a cancel ends canceled
     assert execution.finished(now=s(101)) == (
         answer(u(1), CANCELED, "", "canceled", 5),
-        status(1, WAITING, "standby", 1, s(101)),
+        status(1, WAITING, "standby", 5, s(101)),
     )
 
 

@@ -52,7 +52,7 @@ def test_stubbornness_begins_at_the_last_reported_position() -> None:
     assert run.child_end("completed", now=T0) == (
         answer(u(1), SUCCEEDED, "", "completed", 5),
         outs.StubbornBegin(period=3.0, since=T0, map_name="L3", x=1.5, y=-2.5),
-        status(1, WAITING, "standby", 1),
+        status(1, WAITING, "standby", 5),
     )
     assert run.state.stubborn == Stubbornness(
         period=3.0, hold_since=T0, next_refresh=T0 + s(1), anchor=Position(map_name="L3", x=1.5, y=-2.5)
@@ -94,7 +94,7 @@ def test_no_stubbornness_for_a_period_of_zero_or_less(period: float) -> None:
     run = running(child_id=5, stubborn=period)
     assert run.child_end("completed") == (
         answer(u(1), SUCCEEDED, "", "completed", 5),
-        status(1, WAITING, "standby", 1),
+        status(1, WAITING, "standby", 5),
     )
     assert run.state.stubborn is None
 

@@ -146,7 +146,7 @@ def test_wildcards_only_stand_for_open_wording(shipped: list[vectors.Vector]) ->
 
 
 def test_vectors_are_short_and_summarised(shipped: list[vectors.Vector]) -> None:
-    assert 60 <= len(shipped) <= 130
+    assert 60 <= len(shipped) <= 160
     for vector in shipped:
         assert vector.summary, vector.name
         assert len(vector.steps) <= 20, vector.name
@@ -191,9 +191,9 @@ def test_a_broken_implementation_fails_with_a_diff() -> None:
 
 
 def test_filter_selects_by_name_glob_and_rule() -> None:
-    result = _dynevent("--filter", "cancel-keeps-the-robot-running")
+    result = _dynevent("--filter", "*cancel-*")
     assert result.returncode == 0
-    assert "2 passed, 0 failed" in result.stdout  # the standard vector and its rmf_ros2 twin
+    assert "26 passed, 0 failed" in result.stdout  # the names holding "cancel-", in both modes
     result = _dynevent("--filter", "request-*-id*", "--json")
     names = [json.loads(line)["name"] for line in result.stdout.splitlines()[:-1]]
     assert names and all(re.fullmatch(r"request-.*-id.*", name) for name in names)

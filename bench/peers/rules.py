@@ -23,6 +23,7 @@ from typing import Any
 INACTIVE, WAITING, RUNNING = 0, 1, 2
 NEXT, CANCEL, FINISHED = 1, 2, 3
 _U32 = 2**32 - 1
+_U64 = 2**64 - 1
 _EARLY_END = frozenset({"canceled", "killed", "skipped"})
 
 #: A goal in raw form: (seq, event_type, category, description, id, stubborn_period).
@@ -125,7 +126,7 @@ class Rules:
                 return ("reject", "description_not_json")
             if not math.isfinite(period):
                 return ("reject", "non_finite_stubborn_period")
-            if goal_id <= self.last_id:
+            if self.stale(goal_id):
                 return ("reject", "stale_id")
         elif event_type == CANCEL:
             running = self.running
@@ -136,6 +137,10 @@ class Rules:
         return ("accept",)
 
     # ------------------------------------------------------------------ inputs
+
+    def stale(self, goal_id: int) -> bool:
+        """A NEXT's id is used up (0 asks for the next one, while one is left)."""
+        return self.last_id == _U64 if goal_id == 0 else goal_id <= self.last_id
 
     def begin(self, event_id: int, description: str, now: int) -> list[tuple[Any, ...]]:
         """A dynamic event begins."""
@@ -171,7 +176,7 @@ class Rules:
             seq != self.seq
             or phase == INACTIVE
             or (phase == RUNNING and event_type != CANCEL)
-            or (event_type == NEXT and goal_id <= self.last_id)
+            or (event_type == NEXT and self.stale(goal_id))
         ):
             out.append(("answer", uuid, "aborted", "race condition", "", 0))
             return out
@@ -187,12 +192,13 @@ class Rules:
                 out.append(("log", self.log_seq, "warning", text))
                 logs = (self.log_seq,)
                 self.log_seq = (self.log_seq + 1) & _U32
-            self.last_id = goal_id
+            child_id = goal_id or (self.last_id + 1) & _U64
+            self.last_id = child_id
             if self.stubborn is not None:
                 self.stubborn = None
                 out.append(("stubborn_end",))
-            out.append(("start_child", goal_id))
-            self.running = Running(uuid, goal, goal_id, "underway")
+            out.append(("start_child", child_id))
+            self.running = Running(uuid, goal, child_id, "underway")
             out.append(("feedback", uuid, "underway", goal_id, logs))
             self.status = "underway"
             self.ev_start()  # type: ignore[attr-defined]
@@ -260,7 +266,7 @@ class Rules:
             applied = max(period, self.stubborn_minimum)
             self.stubborn = applied
             out.append(("stubborn_begin", applied))
-        out.append(("status", self.seq, WAITING, "standby", self.event_id))
+        out.append(("status", self.seq, WAITING, "standby", self.last_id))
         return out
 
     # ------------------------------------------------------------------ snapshots

@@ -82,6 +82,16 @@ def parse(text: str | bytes | bytearray) -> Any:
         raise JsonProblem(f"not valid JSON: {exc}") from None
 
 
+def utf8_size(text: str) -> int:
+    """The length of ``text`` in UTF-8 bytes: the one unit of every description limit."""
+    return len(text) if text.isascii() else len(text.encode("utf-8", "surrogatepass"))
+
+
+def dumps_sorted(value: Any) -> str:
+    """Write compact JSON text with keys sorted at every level."""
+    return json.dumps(value, separators=(",", ":"), ensure_ascii=False, sort_keys=True)
+
+
 def dumps(value: Any) -> str:
     """Write compact JSON text keeping the order of keys."""
     return json.dumps(value, separators=(",", ":"), ensure_ascii=False)

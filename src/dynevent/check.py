@@ -566,7 +566,7 @@ class _Observer:
         self.upcoming: Record | None = None  # the record after the one being judged
         self.records: list[Record] = []  # the whole trace, and the index of the record being judged
         self.index = 0
-        self.last_id_unknown = False  # the run began before the trace: its highest id is not known
+        self.event_id_unknown = False  # the run began before the trace: its own id is not known
         self.start_uncertain = False  # a RUNNING "queued" status: a deferred child, or one reporting queued
 
     # ------------------------------------------------------------------ bookkeeping
@@ -639,9 +639,9 @@ class _Observer:
             message: DynamicEventStatus = record.message
             try:
                 self.state = state_from_status(message)
-                self.last_id_unknown = message.dynamic_state != DynamicState.INACTIVE
+                # a status names the highest id used (R2.2), not the dynamic event's own id
+                self.event_id_unknown = message.dynamic_state != DynamicState.INACTIVE
                 self.start_uncertain = self.st.running is not None and not self.st.running.started
-                self.event_id_pending = message.dynamic_state == DynamicState.RUNNING
             except ValueError as exc:
                 self.state = attrs.evolve(base, seq=message.dynamic_event_seq)
                 self.flag(
@@ -705,14 +705,6 @@ class _Observer:
             self.state = attrs.evolve(self.st, queued=queued)
             return
         if self.unknowable(goal, record):
-            return
-        if (
-            self.last_id_unknown
-            and goal.event_type == EventType.NEXT
-            and record.reason in (None, RejectReason.STALE_ID)
-        ):
-            # a status shows the current id; ids used before the trace began may be higher (R4.12)
-            self.state = attrs.evolve(self.st, last_id=max(self.st.last_id, goal.id))
             return
         said = f" as {record.reason.value}" if record.reason is not None else ""
         self.flag(
@@ -860,7 +852,7 @@ class _Observer:
         self.state = state
         self.commit(*self.simulate([event]))
         self.event_id_pending = True
-        self.last_id_unknown = self.start_uncertain = False
+        self.event_id_unknown = self.start_uncertain = False
 
     def adopt_event_id(self, message: DynamicEventStatus) -> None:
         """The begin did not say the dynamic event's id; the WAITING status that follows does."""
@@ -1292,6 +1284,9 @@ class _Observer:
             pass  # a goal from before the trace: whether it was cancelled through the action is not known
         elif record.status != output.status.value:
             self.flag(owed.rule, "goal_status", label, f"{want} ({owed.rule})")
+        elif owed.rule == "R11.1" and self.event_id_unknown:
+            self.event_id_unknown = False  # the first FINISHED of a run joined late names its own id
+            self.state = attrs.evolve(self.st, event_id=observed.id)
         elif expected.id != observed.id:
             rule = "R8.1" if owed.rule in ("R8.2", "R8.3") else owed.rule
             self.flag(rule, "result_id", f"{label}: the result id does not match", f"{want} ({rule})")

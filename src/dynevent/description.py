@@ -54,7 +54,7 @@ from typing import Any
 
 import attrs
 
-from dynevent._json import MAX_DEPTH, JsonProblem, dumps, parse
+from dynevent._json import MAX_DEPTH, JsonProblem, dumps, parse, utf8_size
 from dynevent.errors import InvalidDescription, short_repr
 
 __all__ = [
@@ -500,7 +500,7 @@ class EventDescription:
         """
         if isinstance(text, str):
             # surrogatepass: a lone surrogate is refused after parsing, with its location
-            size = len(text.encode("utf-8", "surrogatepass"))
+            size = utf8_size(text)
         elif isinstance(text, (bytes, bytearray)):
             size = len(text)
         else:

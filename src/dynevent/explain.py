@@ -70,10 +70,11 @@ def state_from_status(message: DynamicEventStatus, fleet: str = "fleet", robot: 
     """The server state a status message describes, as far as it can (R2.2).
 
     INACTIVE gives an inactive state of that seq.  WAITING gives an active
-    run whose dynamic event has the message's id; the highest id used in the
-    run is taken to be that id.  RUNNING gives a run whose running goal is
-    unknown (:data:`UNKNOWN_GOAL`), with a child of the message's id, started
-    unless the status is ``queued`` (a start deferred by an interruption, R6.3).  Raises
+    run whose highest id used is the message's id (R2.2); the dynamic event's
+    own id is taken to be that id too, which holds until its first child.
+    RUNNING gives a run whose running goal is unknown (:data:`UNKNOWN_GOAL`),
+    with a child of the message's id, started unless the status is ``queued``
+    (a start deferred by an interruption, R6.3).  Raises
     ``ValueError`` for a ``dynamic_state`` that is none of 0, 1, 2.
     """
     base = State.new(fleet, robot)
@@ -303,6 +304,13 @@ def _fix(state: State, goal: Goal, rejection: outs.Rejected) -> tuple[Goal | Non
         )
     if reason is RejectReason.UNSUPPORTED_CATEGORY:
         supported = ", ".join(rejection.categories) or "none"
+        unquoted = _unquoted(goal.category)
+        if unquoted is not None and unquoted in rejection.categories:
+            return (
+                attrs.evolve(goal, category=unquoted),
+                f"the category is JSON-quoted ({goal.category}): a category is a plain name, {unquoted}",
+                True,
+            )
         return None, f"use one of the robot's categories: {supported}", False
     if reason is RejectReason.DESCRIPTION_NOT_JSON:
         quoted = json.dumps(goal.description, ensure_ascii=False)
@@ -314,10 +322,13 @@ def _fix(state: State, goal: Goal, rejection: outs.Rejected) -> tuple[Goal | Non
     if reason is RejectReason.NON_FINITE_STUBBORN_PERIOD:
         return attrs.evolve(goal, stubborn_period=0.0), "give a finite stubborn_period (0 for none)", True
     if reason is RejectReason.STALE_ID:
+        if state.last_id >= 2**64 - 1:
+            return None, f"no id is left above {state.last_id} in this run: FINISH it, begin another", False
         fresh = state.last_id + 1
         return (
             attrs.evolve(goal, id=fresh),
-            f"give the NEXT a fresh id, above every id used in the run (at least {fresh})",
+            f"give the NEXT a fresh id, above every id used in the run (at least {fresh}), "
+            "or id 0 to let the server choose it",
             True,
         )
     if reason is RejectReason.CANCEL_IDLE:
@@ -329,6 +340,17 @@ def _fix(state: State, goal: Goal, rejection: outs.Rejected) -> tuple[Goal | Non
             True,
         )
     return None, rejection.text, False
+
+
+def _unquoted(category: str) -> str | None:
+    """The name inside a JSON-quoted category (``"go_to_place"`` with its quotes), else None."""
+    if not (category.startswith('"') and category.endswith('"')):
+        return None
+    try:
+        name = json.loads(category)
+    except ValueError:
+        return None
+    return name if isinstance(name, str) else None
 
 
 def _no_run(state: State) -> str:

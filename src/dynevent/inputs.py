@@ -20,7 +20,7 @@ from typing import Any, ClassVar, TypeAlias
 import attrs
 
 from . import _fields
-from ._fields import string, u64
+from ._fields import boolean_field, string, u64
 from .description import EventDescription
 from .errors import DyneventError, InvalidMessage
 from .messages import Goal
@@ -182,13 +182,16 @@ class Begin(_Input):
     """A task reached a ``dynamic_event`` phase: the dynamic event begins.
 
     ``description`` is the full JSON text of the ``dynamic_event`` event
-    description; ``event_id`` is the dynamic event's own id in its task.
+    description; ``event_id`` is the dynamic event's own id in its task;
+    ``interrupted`` says whether that task is interrupted as the run begins
+    (an interruption belongs to the task, R3.1).
     """
 
     KIND: ClassVar[str] = "begin"
     description: str = _checked(_begin_description)
     event_id: int = u64()
     now: int = _now_field()
+    interrupted: bool = boolean_field()
 
 
 @attrs.frozen(kw_only=True)

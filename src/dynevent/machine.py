@@ -24,6 +24,7 @@ from . import _json
 from . import inputs as ins
 from . import outputs as outs
 from ._fields import maker, replacer
+from .description import DEFAULT_CATEGORY, MAX_DESCRIPTION_BYTES
 from .errors import InvalidConfig
 from .messages import (
     DescriptionResponse,
@@ -89,6 +90,12 @@ def _categories(value: Mapping[str, Validator]) -> Mapping[str, Validator]:
     for name, validator in value.items():
         if not isinstance(name, str) or not callable(validator):
             raise InvalidConfig("categories", {name: validator}, "each category must map a str to a callable")
+        if name == DEFAULT_CATEGORY:  # R4.17: a nested run would take the robot's only slot
+            raise InvalidConfig(
+                "categories",
+                name,
+                f"{DEFAULT_CATEGORY!r} can never be a child category: a nested run would break the outer one",
+            )
     return dict(value)
 
 
@@ -119,9 +126,11 @@ def _positive(instance: Any, attribute: attrs.Attribute[Any], value: Any) -> Non
         raise InvalidConfig(attribute.name, value, "expected a positive finite number")
 
 
-def _positive_integer(instance: Any, attribute: attrs.Attribute[Any], value: Any) -> None:
-    if type(value) is not int or value <= 0:
-        raise InvalidConfig(attribute.name, value, "expected a positive integer")
+def _description_limit(instance: Any, attribute: attrs.Attribute[Any], value: Any) -> None:
+    if type(value) is not int or not 0 < value <= MAX_DESCRIPTION_BYTES:
+        raise InvalidConfig(
+            attribute.name, value, f"expected a positive integer of at most {MAX_DESCRIPTION_BYTES} (bytes)"
+        )
 
 
 def _at_least_a_centimetre(value: Any) -> Any:
@@ -135,8 +144,10 @@ class ServerConfig:
     """What a robot's server is configured with; not state, never snapshotted.
 
     ``categories`` maps each supported event category to its description
-    validator.  ``stubborn_move_threshold`` is never below 0.01 m (a smaller
-    value is raised to it, as rmf_ros2 does).  A bad value raises
+    validator; ``dynamic_event`` is refused (R4.17).  ``stubborn_move_threshold``
+    is never below 0.01 m (a smaller value is raised to it, as rmf_ros2 does).
+    ``max_description_length`` is in UTF-8 bytes, as the begin description's
+    limit is, and never above it (R4.8).  A bad value raises
     :class:`~dynevent.errors.InvalidConfig` naming the field.
     """
 
@@ -150,7 +161,7 @@ class ServerConfig:
         validator=_positive,
         converter=_at_least_a_centimetre,
     )
-    max_description_length: int = attrs.field(default=1_000_000, validator=_positive_integer)
+    max_description_length: int = attrs.field(default=MAX_DESCRIPTION_BYTES, validator=_description_limit)
 
     @classmethod
     def rmf_ros2(cls, categories: Mapping[str, Validator]) -> ServerConfig:
@@ -246,10 +257,10 @@ class State:
 
     @property
     def current_id(self) -> int:
-        """The id the status topic reports: the child's while running, else the dynamic event's."""
+        """The id the status topic reports (R2.2): the child's while running, else the highest used."""
         if not self.active:
             return 0
-        return self.event_id if self.running is None else self.running.child_id
+        return self.last_id if self.running is None else self.running.child_id
 
 
 # Messages built from checked state skip their converters; copies skip __init__ (attrs.evolve re-runs it).
@@ -296,6 +307,17 @@ def status_message(state: State, now: int) -> DynamicEventStatus:
     )
 
 
+def _running_status(state: State, status: str, child_id: int, now: int) -> DynamicEventStatus:
+    """A RUNNING status message naming a child, whatever the state (rmf_ros2 mode, R17.4, R17.5)."""
+    return _make_status(
+        dynamic_event_seq=state.seq,
+        dynamic_state=DynamicState.RUNNING.value,
+        status=status,
+        id=child_id,
+        time=_time(now),
+    )
+
+
 def _status_key(state: State) -> tuple[int, bool, bool, str, int]:
     return (
         state.seq,
@@ -322,8 +344,9 @@ def _check_description(goal: Goal, config: ServerConfig) -> tuple[Any, outs.Reje
         problem = f"category {goal.category!r} is not supported; supported: {', '.join(supported) or 'none'}"
         return None, _reject(RejectReason.UNSUPPORTED_CATEGORY, problem, categories=supported)
     text = goal.description
-    if len(text) > config.max_description_length:
-        problem = f"description is {len(text)} characters, above the limit of {config.max_description_length}"
+    size = _json.utf8_size(text)
+    if size > config.max_description_length:
+        problem = f"description is {size} bytes, above the limit of {config.max_description_length}"
         return None, _reject(
             RejectReason.DESCRIPTION_INVALID, problem, f"{failure}\n -- {problem}", errors=(problem,)
         )
@@ -399,13 +422,12 @@ def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
                 RejectReason.NON_FINITE_STUBBORN_PERIOD,
                 f"stubborn_period {goal.stubborn_period} is not a finite number",
             )
-        if config.id_policy is IdPolicy.GOAL and goal.id <= state.last_id:  # R4.12
-            return _reject(
-                RejectReason.STALE_ID,
-                f"id {goal.id} is not greater than {state.last_id}, the highest id used in this run",
-                current_id=state.last_id,
-                requested_id=goal.id,
-            )
+        if _stale(state, goal, config):  # R4.12
+            if goal.id == 0:
+                text = f"id 0 asks the server for the next id, and none is left above {state.last_id}"
+            else:
+                text = f"id {goal.id} is not greater than {state.last_id}, the highest id used in this run"
+            return _reject(RejectReason.STALE_ID, text, current_id=state.last_id, requested_id=goal.id)
     elif event_type == EventType.CANCEL and standard:
         if running is None:  # R4.13
             return _reject(
@@ -420,6 +442,20 @@ def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
                 requested_id=goal.id,
             )
     return outs.Accepted(event_type=event_type)
+
+
+def _stale(state: State, goal: Goal, config: ServerConfig) -> bool:
+    """R4.12: under id policy ``goal`` a NEXT names a fresh id, or 0 while one is left to assign."""
+    if config.id_policy is not IdPolicy.GOAL:
+        return False
+    return state.last_id == _U64 if goal.id == 0 else goal.id <= state.last_id
+
+
+def _child_id(state: State, goal: Goal, config: ServerConfig) -> int:
+    """R6.2: the goal's id names the child, unless it is 0 or the adapter numbers children."""
+    if config.id_policy is IdPolicy.GOAL and goal.id != 0:
+        return goal.id
+    return (state.last_id + 1) & _U64
 
 
 # --------------------------------------------------------------------------- step helpers
@@ -534,15 +570,22 @@ def _on_begin(state: State, event: ins.Begin, config: ServerConfig) -> Transitio
     seq = (state.seq + 1) & _U32  # R3.1
     if seq == 0:  # R3.2
         outputs.append(outs.SeqWrapped(previous=state.seq, seq=seq))
+    description = event.description
+    if config.compatibility is Compatibility.RMF_ROS2:  # R17.6: re-serialised, compact, keys sorted
+        try:
+            description = _json.dumps_sorted(_json.parse(description))
+        except (_json.JsonProblem, ValueError):  # unreachable: Begin checked it; the machine cannot raise
+            description = event.description
     after = _replace_state(
         state,
         seq=seq,
         active=True,
         event_id=event.event_id,
-        description=event.description,
+        description=description,
         status=Status.STANDBY.value,
         last_id=event.event_id,
         task_signal="",
+        interrupted=event.interrupted,
     )
     outputs.append(  # R3.3
         outs.PublishBegin(
@@ -550,7 +593,7 @@ def _on_begin(state: State, event: ins.Begin, config: ServerConfig) -> Transitio
                 fleet=state.fleet,
                 robot=state.robot,
                 dynamic_event_seq=seq,
-                description=event.description,
+                description=description,
                 start_time=_time(event.now),
             )
         )
@@ -582,9 +625,7 @@ def _race_lost(state: State, goal: Goal, config: ServerConfig) -> bool:
         return True
     if state.running is not None and goal.event_type != EventType.CANCEL:
         return True
-    return (
-        goal.event_type == EventType.NEXT and config.id_policy is IdPolicy.GOAL and goal.id <= state.last_id
-    )
+    return goal.event_type == EventType.NEXT and _stale(state, goal, config)
 
 
 def _on_goal_started(state: State, event: ins.GoalStarted, config: ServerConfig) -> Transition:
@@ -620,8 +661,7 @@ def _start_next(
         failure = problem.execution_failure or f"{EXECUTION_FAILURES['parse']}\n -- {problem.text}"
         outputs.append(_failure(uuid, failure))
         return state
-    # R6.2: the goal names its child, or the server takes the next id
-    child_id = goal.id if config.id_policy is IdPolicy.GOAL else (state.last_id + 1) & _U64
+    child_id = _child_id(state, goal, config)  # R6.2
     logs: tuple[LogEntry, ...] = ()
     period = goal.stubborn_period
     if 0.0 < period < config.stubborn_minimum:  # R12.2
@@ -723,6 +763,10 @@ def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerCon
         status=state.status if state.task_signal else status,  # R7.4
         log_seq=log_seq,
     )
+    if config.compatibility is Compatibility.RMF_ROS2:  # R17.5: every report, the child's own status
+        wire = _running_status(after, status, running.child_id, event.now)
+        outputs.append(outs.PublishStatus(message=wire))
+        return Transition(after, tuple(outputs))
     return _finish(state, after, outputs, event.now)
 
 
@@ -756,6 +800,10 @@ def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerCon
             anchor=anchor,
         )
         after = _replace_state(after, stubborn=stubborn)
+    if config.compatibility is Compatibility.RMF_ROS2:  # R17.4: published while the slot is still held
+        stale = _running_status(after, event.status, running.child_id, event.now)
+        outputs.append(outs.PublishStatus(message=stale))
+        return Transition(after, tuple(outputs))
     return _finish(state, after, outputs, event.now)
 
 

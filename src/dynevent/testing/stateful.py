@@ -67,10 +67,11 @@ from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, 
 from .. import _json, machine
 from .. import inputs as ins
 from .. import outputs as outs
+from .._json import dumps_sorted, parse
 from ..machine import ServerConfig, State
 from ..messages import DynamicEventStatus, Goal, Time
 from ..records import config_from_json, input_to_json, output_from_json
-from ..vocab import DynamicState, EventType, GoalStatus, IdPolicy, Status, Tier
+from ..vocab import Compatibility, DynamicState, EventType, GoalStatus, IdPolicy, Status, Tier
 from .strategies import messages
 
 __all__ = [
@@ -337,10 +338,10 @@ class Observer:
 
     @property
     def current_id(self) -> int:
-        """The id the status topic must report (R2.2)."""
+        """The id the status topic must report (R2.2): the running child's, else the highest used."""
         if not self.active:
             return 0
-        return self.event_id if self.running is None else self.running.child_id
+        return self.last_id if self.running is None else self.running.child_id
 
     @property
     def child_started(self) -> bool:
@@ -409,6 +410,7 @@ class Observer:
                 del self.goals[event.goal_uuid]
             self.rejected.discard(event.goal_uuid)
         before = self._key()
+        wire_status = self._wire_status(event)
         seq_before, active_before = self.seq, self.active
         ended = self.running
         ended_goal = None if ended is None else self.goals[ended.goal_uuid].goal
@@ -429,6 +431,13 @@ class Observer:
         ):
             self._check_race(self.goals[event.goal_uuid], seq_before, active_before)
         after = self._key()
+        if wire_status is not None:  # R17.4, R17.5: rmf_ros2 mode publishes what rmf_ros2's wire shows
+            if len(statuses) != 1 or outputs[-1] is not statuses[0] or statuses[0].message != wire_status:
+                raise self._fail(
+                    "R17.4" if isinstance(event, ins.ChildFinished) else "R17.5",
+                    f"status message {wire_status} as the last output expected; got {outputs}",
+                )
+            return
         if statuses:
             if len(statuses) > 1 or outputs[-1] is not statuses[0]:
                 raise self._fail("R2.3", f"one status message, as the last output, expected; got {outputs}")
@@ -442,6 +451,24 @@ class Observer:
             raise self._fail(
                 "R2.3", f"status {before} -> {after} {what}; status messages: {[s.message for s in statuses]}"
             )
+
+    def _wire_status(self, event: ins.Input) -> DynamicEventStatus | None:
+        """The status message rmf_ros2 mode publishes for a child's report or end (R17.4, R17.5)."""
+        running = self.running
+        if self.config.compatibility is not Compatibility.RMF_ROS2 or running is None or not running.started:
+            return None
+        if isinstance(event, ins.ChildFinished) and self.task_signal:
+            return None  # the run ends: R13.4 and R2.3 as in standard mode
+        if not isinstance(event, (ins.ChildProgress, ins.ChildFinished)):
+            return None
+        sec, nanosec = divmod(event.now, _SECOND)
+        return DynamicEventStatus(
+            dynamic_event_seq=self.seq,
+            dynamic_state=DynamicState.RUNNING,
+            status=event.status,
+            id=running.child_id,
+            time=Time(sec=sec, nanosec=nanosec),
+        )
 
     def _check_race(self, record: _GoalRecord, seq: int, active: bool) -> None:
         """R5.2: a goal that starts in another run, or with no run active, loses the race."""
@@ -605,6 +632,12 @@ class Observer:
             record = self._require_open(event.goal_uuid, "StartChild")
             if record.goal.event_type != EventType.NEXT:
                 raise self._fail("R19.2", f"StartChild for a goal of event type {record.goal.event_type}")
+            named = self.config.id_policy is IdPolicy.GOAL and record.goal.id != 0
+            expected = record.goal.id if named else (self.last_id + 1) & _U64
+            if output.id != expected:
+                raise self._fail(
+                    "R6.2", f"StartChild({output.id}) for goal id {record.goal.id}, expected {expected}"
+                )
             self.running = _Running(event.goal_uuid, output.id, started=True)
         self.last_id = output.id
         self.status = Status.UNDERWAY.value
@@ -625,9 +658,12 @@ class Observer:
         self.active = True
         self.event_id = event.event_id
         self.description = event.description
+        if self.config.compatibility is Compatibility.RMF_ROS2:  # R17.6
+            self.description = dumps_sorted(parse(event.description))
         self.last_id = event.event_id
         self.status = Status.STANDBY.value
         self.task_signal = ""
+        self.interrupted = event.interrupted  # R3.1: the beginning task's own interruption
 
     def _after(self, event: ins.Input, outputs: list[outs.Output], emptied: bool) -> None:
         ignored = len(outputs) == 1 and isinstance(outputs[0], outs.Ignored)
@@ -724,7 +760,8 @@ class ServerStateMachine(RuleBasedStateMachine):
         valid = self._valid_descriptions(category) or list(_DESCRIPTIONS)
         model = self.model
         if self.server_config.id_policy is IdPolicy.GOAL:
-            goal_id = min(model.last_id + data.draw(st.integers(1, 3), label="id step"), _U64)
+            step = data.draw(st.integers(0, 3), label="id step")  # 0: the server assigns the id (R6.2)
+            goal_id = 0 if step == 0 else min(model.last_id + step, _U64)
         else:
             goal_id = data.draw(st.integers(0, 5), label="id")
         return Goal(
@@ -788,7 +825,10 @@ class ServerStateMachine(RuleBasedStateMachine):
     def begin(self, event_id: int, data: st.DataObject) -> None:
         """A task reaches a dynamic event phase."""
         description = data.draw(st.sampled_from(_BEGIN_DESCRIPTIONS), label="description")
-        self.apply(ins.Begin(description=description, event_id=event_id, now=self._tick()))
+        interrupted = data.draw(st.integers(0, 4), label="interrupted") == 0
+        self.apply(
+            ins.Begin(description=description, event_id=event_id, now=self._tick(), interrupted=interrupted)
+        )
 
     @precondition(lambda self: self.model.active)
     @rule(data=st.data())
