@@ -202,6 +202,13 @@ def test_request_cancel_uses_feedback_before_the_status_arrives() -> None:
     assert cancel.goal.id == 6
 
 
+def test_request_cancel_names_its_own_child_when_a_status_names_another() -> None:
+    state, _ = running(child=6)  # our NEXT's feedback named child 6; its answer has not arrived
+    state, _ = feed(state, status(1, RUNNING, 9, "underway"))  # a status names another client's child
+    state, cancel = sent(client.request_cancel(state, now=0))
+    assert cancel.goal.id == 6
+
+
 def test_request_cancel_may_target_another_clients_child_and_repeat() -> None:
     state, _ = feed(waiting(), status(1, RUNNING, 77, "underway"))
     state, first = sent(client.request_cancel(state, now=0))

@@ -541,8 +541,14 @@ def _take_uuid(state: ClientState) -> tuple[str, ClientState]:
 
 
 def _running_child(state: ClientState) -> int | None:
-    """The id of the child the client believes runs now, if any (the newest, as ids rise in a run)."""
-    candidates = [
+    """The id of the child the client believes runs now, if any.
+
+    The child its own open NEXT started comes first: a CANCEL must name it,
+    even while a status names another client's child (a status and this
+    client's feedback can disagree while messages are in flight).  Otherwise
+    the view's child while RUNNING.
+    """
+    own = [
         goal.child_id
         for goal in state.goals
         if goal.goal.event_type == EventType.NEXT
@@ -550,9 +556,11 @@ def _running_child(state: ClientState) -> int | None:
         and goal.child_id is not None
         and not _ended(state, goal.child_id)
     ]
+    if own:
+        return max(own)
     if state.phase is DynamicState.RUNNING and not _ended(state, state.current_id):
-        candidates.append(state.current_id)
-    return max(candidates) if candidates else None
+        return state.current_id
+    return None
 
 
 def _cancel_open(state: ClientState, seq: int, child_id: int) -> bool:
