@@ -252,3 +252,34 @@ def test_rmf_ros2_mode_re_serialises_the_begin_description() -> None:
     standard = waiting()
     standard.step(ins.TaskCancel(now=standard.now))
     assert standard.begin(event_id=3, description=text)[0].message.description == text  # type: ignore[attr-defined]
+
+
+# --------------------------------------------------------------------------- R5.3: goals the transport accepted
+
+
+@pytest.mark.spec("R5.3", "R19.1")
+def test_a_submitted_goal_that_lost_a_race_is_executed_then_aborted_with_the_refusal() -> None:
+    run = waiting()
+    assert isinstance(run.accept(next_goal(1, 8)), outs.Accepted)  # the transport's goal callback
+    run.task_cancel()  # meanwhile, on another thread: the run ends
+    outputs = run.step(ins.GoalSubmitted(goal_uuid=u(1), goal=next_goal(1, 8), now=run.now))
+    assert outputs[0] == outs.ExecuteGoal(goal_uuid=u(1))
+    answer = outputs[1]
+    assert isinstance(answer, outs.AnswerGoal) and answer.status is GoalStatus.ABORTED
+    assert answer.result.execution_failure.split("\n")[0] == "race condition"
+    assert "no dynamic event is active" in answer.result.execution_failure
+    assert len(outputs) == 2
+    assert run.state == run.before
+
+
+@pytest.mark.spec("R5.3", "R4.16", "R5.1")
+def test_a_submitted_goal_is_requested_and_started_in_one_step() -> None:
+    submitted = waiting()
+    outputs = submitted.step(ins.GoalSubmitted(goal_uuid=u(1), goal=next_goal(1, 8), now=submitted.now))
+    two_steps = waiting()
+    two_steps.request(u(1), next_goal(1, 8))
+    assert outputs == two_steps.start(u(1))
+    assert submitted.state == two_steps.state
+    assert submitted.step(ins.GoalSubmitted(goal_uuid=u(1), goal=next_goal(1, 9), now=submitted.now)) == (
+        outs.Ignored(input="goal_submitted", why="a goal with this uuid is already open"),
+    )

@@ -36,6 +36,7 @@ __all__ = [
     "DescriptionQuery",
     "GoalRequested",
     "GoalStarted",
+    "GoalSubmitted",
     "Input",
     "Interrupt",
     "Resume",
@@ -214,6 +215,21 @@ class GoalStarted(_Input):
 
 
 @attrs.frozen(kw_only=True)
+class GoalSubmitted(_Input):
+    """A goal the transport has already accepted arrives, to be requested and started in one step.
+
+    For bindings whose goal callback cannot name the goal (rclpy's gets no
+    goal UUID): they check the goal with :func:`dynevent.machine.accept`, let
+    the transport accept it, and submit it here with its UUID (R5.3).
+    """
+
+    KIND: ClassVar[str] = "goal_submitted"
+    goal_uuid: str = _uuid_field()
+    goal: Goal = _checked(_goal)
+    now: int = _now_field()
+
+
+@attrs.frozen(kw_only=True)
 class CancelRequested(_Input):
     """A client asked, through the action protocol, to cancel a goal (``handle_cancel``)."""
 
@@ -306,6 +322,7 @@ Input: TypeAlias = (
     Begin
     | GoalRequested
     | GoalStarted
+    | GoalSubmitted
     | CancelRequested
     | ChildProgress
     | ChildFinished
@@ -325,6 +342,7 @@ INPUT_TYPES: dict[str, type[Input]] = {
         Begin,
         GoalRequested,
         GoalStarted,
+        GoalSubmitted,
         CancelRequested,
         ChildProgress,
         ChildFinished,

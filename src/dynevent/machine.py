@@ -619,6 +619,18 @@ def _on_goal_requested(state: State, event: ins.GoalRequested, config: ServerCon
     return Transition(_replace_state(state, queued=queued), (outs.GoalAccepted(goal_uuid=event.goal_uuid),))
 
 
+def _on_goal_submitted(state: State, event: ins.GoalSubmitted, config: ServerConfig) -> Transition:
+    uuid = event.goal_uuid
+    if _known_goal(state, uuid):  # R18.2
+        return _ignored(state, event.KIND, "a goal with this uuid is already open")
+    decision = accept(state, event.goal, config)
+    if isinstance(decision, outs.Rejected):  # R5.3: the transport accepted it; it lost a race since
+        failure = f"{EXECUTION_FAILURES['race']}\n -- {decision.text}"
+        return Transition(state, (outs.ExecuteGoal(goal_uuid=uuid), _failure(uuid, failure)))
+    queued = (*state.queued, QueuedGoal(goal_uuid=uuid, goal=event.goal))
+    return _start_goal(state, _replace_state(state, queued=queued), uuid, event.now, config)
+
+
 def _race_lost(state: State, goal: Goal, config: ServerConfig) -> bool:
     """R5.2: the world changed between the goal's acceptance and its start."""
     if goal.dynamic_event_seq != state.seq or not state.active:
@@ -629,20 +641,24 @@ def _race_lost(state: State, goal: Goal, config: ServerConfig) -> bool:
 
 
 def _on_goal_started(state: State, event: ins.GoalStarted, config: ServerConfig) -> Transition:
-    found = next((queued for queued in state.queued if queued.goal_uuid == event.goal_uuid), None)
-    if found is None:  # R18.3
+    if not any(queued.goal_uuid == event.goal_uuid for queued in state.queued):  # R18.3
         return _ignored(state, event.KIND, "no accepted goal with this uuid is waiting to start")
-    uuid, goal = found.goal_uuid, found.goal
-    before = state
+    return _start_goal(state, state, event.goal_uuid, event.now, config)
+
+
+def _start_goal(before: State, state: State, uuid: str, now: int, config: ServerConfig) -> Transition:
+    """Start the queued goal ``uuid`` (R5): ``before`` is the state the step began from."""
+    found = next(queued for queued in state.queued if queued.goal_uuid == uuid)
+    goal = found.goal
     state = _replace_state(state, queued=tuple(queued for queued in state.queued if queued is not found))
     outputs: list[outs.Output] = [outs.ExecuteGoal(goal_uuid=uuid)]  # R5.1
     if _race_lost(state, goal, config):  # R5.2
         outputs.append(_failure(uuid, EXECUTION_FAILURES["race"]))
-        return _finish(before, state, outputs, event.now)
+        return _finish(before, state, outputs, now)
     if goal.event_type == EventType.NEXT:
-        state = _start_next(state, uuid, goal, config, outputs, event.now)
+        state = _start_next(state, uuid, goal, config, outputs, now)
     elif goal.event_type == EventType.CANCEL:
-        state = _start_cancel(state, uuid, goal, outputs, event.now)
+        state = _start_cancel(state, uuid, goal, outputs, now)
     elif goal.event_type == EventType.FINISHED:  # R11.1
         state = _end_stubbornness(state, outputs)
         result = _result("", Status.COMPLETED.value, state.event_id)
@@ -650,7 +666,7 @@ def _on_goal_started(state: State, event: ins.GoalStarted, config: ServerConfig)
         state = _end_dynamic_event(state, Status.COMPLETED.value, outputs)
     else:  # R17.2: only reachable in rmf_ros2 compatibility
         outputs.append(_failure(uuid, EXECUTION_FAILURES["event_type"]))
-    return _finish(before, state, outputs, event.now)
+    return _finish(before, state, outputs, now)
 
 
 def _start_next(
@@ -947,6 +963,7 @@ HANDLERS: Mapping[str, _Handler] = {
     ins.Begin.KIND: _on_begin,
     ins.GoalRequested.KIND: _on_goal_requested,
     ins.GoalStarted.KIND: _on_goal_started,
+    ins.GoalSubmitted.KIND: _on_goal_submitted,
     ins.CancelRequested.KIND: _on_cancel_requested,
     ins.ChildProgress.KIND: _on_child_progress,
     ins.ChildFinished.KIND: _on_child_finished,
@@ -964,12 +981,15 @@ TRANSITIONS: tuple[Edge, ...] = (
     Edge(_I, "begin", _W, "not shut down", "R3.1"),
     Edge(_W, "goal_started", _R, "NEXT", "R6.3, R6.4"),
     Edge(_W, "goal_started", _I, "FINISHED", "R11.1"),
+    Edge(_W, "goal_submitted", _R, "NEXT", "R5.3, R6.3, R6.4"),
+    Edge(_W, "goal_submitted", _I, "FINISHED", "R5.3, R11.1"),
     Edge(_W, "task_cancel", _I, "", "R13.3"),
     Edge(_W, "task_kill", _I, "", "R13.3"),
     Edge(_W, "shutdown", _I, "", "R15.2"),
     Edge(_R, "child_finished", _W, "task not cancelled", "R8.4"),
     Edge(_R, "child_finished", _I, "task cancelled or killed", "R13.4"),
     Edge(_R, "goal_started", _W, "CANCEL of a deferred child", "R9.4"),
+    Edge(_R, "goal_submitted", _W, "CANCEL of a deferred child", "R5.3, R9.4"),
     Edge(_R, "cancel_requested", _W, "of a deferred child", "R10.4"),
     Edge(_R, "task_cancel", _I, "deferred child", "R13.3"),
     Edge(_R, "task_kill", _I, "deferred child", "R13.3"),
