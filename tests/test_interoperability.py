@@ -254,7 +254,7 @@ def test_rmf_ros2_mode_re_serialises_the_begin_description() -> None:
     assert standard.begin(event_id=3, description=text)[0].message.description == text  # type: ignore[attr-defined]
 
 
-# --------------------------------------------------------------------------- R5.3: goals the transport accepted
+# --------------------------------------------------------------------------- R5.3: goals already accepted
 
 
 @pytest.mark.spec("R5.3", "R19.1")

@@ -466,8 +466,9 @@ class Agreement:
                 continue  # the server numbers children itself: no id rule to break
             if reason is RejectReason.CANCEL_IDLE and config.compatibility is Compatibility.RMF_ROS2:
                 continue  # rmf_ros2 accepts an idle CANCEL and aborts it when it starts
-            stale_running = self.lb.client.phase is DynamicState.RUNNING and server.phase is DynamicState.WAITING
-            if reason is RejectReason.BUSY and stale_running and config.compatibility is Compatibility.RMF_ROS2:
+            compat = config.compatibility is Compatibility.RMF_ROS2
+            stale = self.lb.client.phase is DynamicState.RUNNING and server.phase is DynamicState.WAITING
+            if reason is RejectReason.BUSY and stale and compat:
                 continue  # R17.4: rmf_ros2's last status after a child's end says RUNNING
             # (c) a local refusal at a quiescent moment is the server's refusal, for the same reason
             decision = machine.accept(server, output.goal, config)
