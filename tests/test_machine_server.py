@@ -187,6 +187,7 @@ def test_without_automatic_cancel_the_adapter_winds_down() -> None:
     server.step(ins.CancelRequested(goal_uuid=u(1), now=T0))
     assert execution.cancel(now=T0) == ()
     assert not execution.okay()
+    assert (execution.stopping, execution.done) == ("canceled", False)  # stopping, not finished
     assert server.state.running is not None
     # still winding down: reports still reach the goal
     assert execution.underway("parking", now=T0)[1] == feedback(
@@ -197,6 +198,7 @@ def test_without_automatic_cancel_the_adapter_winds_down() -> None:
         answer(u(1), CANCELED, "", "canceled", 5),
         status(1, WAITING, "standby", 5, s(101)),
     )
+    assert execution.done and not execution.okay()
 
 
 @pytest.mark.spec("R13.2", "R13.4")

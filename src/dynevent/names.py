@@ -42,7 +42,10 @@ from dynevent.errors import InvalidName
 
 __all__ = [
     "BEGIN_TOPIC",
+    "BEGIN_TOPIC_DEPTH",
     "MAX_NAME_LENGTH",
+    "ROBOT_BEGIN_TOPIC_DEPTH",
+    "STATUS_TOPIC_DEPTH",
     "NameKind",
     "ParsedName",
     "action_name",
@@ -56,6 +59,14 @@ __all__ = [
 
 #: The fleet-wide begin topic, on which every robot's begin is also published.
 BEGIN_TOPIC = "rmf/dynamic_event/begin"
+
+# The topics' history depths (R1.4); all three are reliable and transient-local.
+#: The fleet-wide begin topic keeps the last 100 begins (of every robot).
+BEGIN_TOPIC_DEPTH = 100
+#: A robot's own begin topic keeps its last begin.
+ROBOT_BEGIN_TOPIC_DEPTH = 1
+#: A robot's status topic keeps its last status message.
+STATUS_TOPIC_DEPTH = 1
 
 #: ``RMW_TOPIC_MAX_NAME_LENGTH``: longest fully qualified topic or service name.
 MAX_NAME_LENGTH = 255 - 8

@@ -12,7 +12,7 @@ the spirit of rmf_fleet_adapter's ``ActionExecution``: it turns calls such as
 from __future__ import annotations
 
 import threading
-from typing import Any
+from typing import Any, Protocol
 
 from . import inputs as ins
 from . import machine, snapshot
@@ -21,7 +21,14 @@ from .messages import DynamicEventStatus, Goal
 from .outputs import Decision, Output
 from .vocab import Status, Tier
 
-__all__ = ["Execution", "LockedRobotServer", "RobotServer"]
+__all__ = ["Execution", "LockedRobotServer", "RobotServer", "Stepper"]
+
+
+class Stepper(Protocol):
+    """Anything that applies a machine input and returns the outputs: a server, or a binding."""
+
+    def step(self, event: ins.Input) -> tuple[Output, ...]:
+        """Apply ``event``; return the outputs to carry out."""
 
 
 class RobotServer:
@@ -123,7 +130,7 @@ class Execution:
     After the child has finished every method does nothing and returns ``()``.
     """
 
-    def __init__(self, server: RobotServer, child_id: int, *, automatic_cancel: bool = True) -> None:
+    def __init__(self, server: Stepper, child_id: int, *, automatic_cancel: bool = True) -> None:
         self._server = server
         self.child_id = child_id
         self.automatic_cancel = automatic_cancel
@@ -134,6 +141,16 @@ class Execution:
     def okay(self) -> bool:
         """False once the child was told to cancel or stop, or has finished."""
         return self._stopping is None and not self._done
+
+    @property
+    def done(self) -> bool:
+        """The child has finished (:meth:`finished` was called, or an automatic cancel finished it)."""
+        return self._done
+
+    @property
+    def stopping(self) -> str | None:
+        """``"canceled"`` or ``"killed"`` once the child was told to stop, else None."""
+        return self._stopping
 
     def _report(self, status: Status, text: str | None, tier: Tier, now: int) -> tuple[Output, ...]:
         if self._done:

@@ -1,0 +1,277 @@
+"""The client machine (:mod:`dynevent.client`) over an rclpy action client and the robot's topics.
+
+:class:`DynamicEventClient` subscribes to the robot's status and begin
+topics, keeps a :class:`~dynevent.client.ClientState` from them, and turns
+:meth:`~DynamicEventClient.next`, :meth:`~DynamicEventClient.cancel` and
+:meth:`~DynamicEventClient.finish` into goals, each followed by a
+:class:`GoalRun`: its feedback as it arrives, then one typed
+:class:`~dynevent.client.Outcome`, or at once a
+:class:`~dynevent.client.Refused` when the robot, as the client knows it,
+would refuse the goal.  A run is awaitable inside the node's executor
+(``outcome = await run``) and can be waited on from another thread with a
+bound (:meth:`GoalRun.wait`).
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from collections.abc import Callable
+from typing import Any
+
+from action_msgs.msg import GoalStatus as RosGoalStatus
+from rclpy.action import ActionClient
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.task import Future
+
+from .. import client as cl
+from ..errors import DyneventError, InvalidMessage
+from ..inputs import NOW_RANGE
+from ..names import ROBOT_BEGIN_TOPIC_DEPTH, STATUS_TOPIC_DEPTH, action_name, begin_topic, status_topic
+from ..vocab import GoalStatus
+from . import convert
+from .convert import DynamicEvent, RosDescription, RosStatus
+from .server import latched
+
+__all__ = ["DynamicEventClient", "GoalRun", "GoalWaitTimeout"]
+
+_TERMINAL = {
+    RosGoalStatus.STATUS_SUCCEEDED: GoalStatus.SUCCEEDED,
+    RosGoalStatus.STATUS_CANCELED: GoalStatus.CANCELED,
+    RosGoalStatus.STATUS_ABORTED: GoalStatus.ABORTED,
+}
+
+#: How often the client machine's clock advances (its NEXT timeouts are checked then), in seconds.
+TICK_PERIOD = 0.1
+
+
+class GoalWaitTimeout(DyneventError, TimeoutError):
+    """:meth:`GoalRun.wait` reached its bound before the goal was over."""
+
+
+class GoalRun:
+    """One goal of a :class:`DynamicEventClient`: its progress, then its one outcome.
+
+    ``result`` is the :class:`~dynevent.client.Outcome` once the goal is
+    over, or the :class:`~dynevent.client.Refused` of a goal never sent.
+    ``progress`` holds every :class:`~dynevent.client.Progress` so far.
+    """
+
+    def __init__(self, on_progress: Callable[[cl.Progress], None] | None = None) -> None:
+        self.goal_uuid: str | None = None
+        self.progress: list[cl.Progress] = []
+        self.result: cl.Outcome | cl.Refused | None = None
+        self._on_progress = on_progress
+        self._over = threading.Event()
+        self._future: Any = Future()
+
+    def done(self) -> bool:
+        """The goal is over (or was never sent)."""
+        return self._over.is_set()
+
+    def wait(self, timeout: float) -> cl.Outcome | cl.Refused:
+        """Block until the goal is over, at most ``timeout`` seconds (another thread spins the node)."""
+        if not self._over.wait(timeout):
+            raise GoalWaitTimeout(f"goal {self.goal_uuid} still open after {timeout:g} s")
+        assert self.result is not None
+        return self.result
+
+    def __await__(self) -> Any:
+        """Await the outcome inside the node's executor."""
+        return self._future.__await__()
+
+    def _report(self, progress: cl.Progress) -> None:
+        self.progress.append(progress)
+        if self._on_progress is not None:
+            self._on_progress(progress)
+
+    def _end(self, result: cl.Outcome | cl.Refused) -> None:
+        self.result = result
+        self._over.set()
+        self._future.set_result(result)
+
+
+class DynamicEventClient:
+    """A Dynamic Event client of one robot on ``node``, which an executor must spin."""
+
+    def __init__(
+        self, node: Any, fleet: str, robot: str, *, categories: Any = None, uuid_prefix: str | None = None
+    ) -> None:
+        self._node = node
+        self._lock = threading.Lock()
+        prefix = uuid_prefix if uuid_prefix is not None else os.urandom(8).hex()
+        self._state = cl.ClientState.new(prefix, categories=categories)
+        self._runs: dict[str, GoalRun] = {}
+        self._views = threading.Condition(self._lock)
+        group = MutuallyExclusiveCallbackGroup()
+        self._status = node.create_subscription(
+            RosStatus,
+            status_topic(fleet, robot),
+            self._on_status,
+            latched(STATUS_TOPIC_DEPTH),
+            callback_group=group,
+        )
+        self._begin = node.create_subscription(
+            RosDescription,
+            begin_topic(fleet, robot),
+            self._on_begin,
+            latched(ROBOT_BEGIN_TOPIC_DEPTH),
+            callback_group=group,
+        )
+        self._action = ActionClient(node, DynamicEvent, action_name(fleet, robot), callback_group=group)
+        self._timer = node.create_timer(TICK_PERIOD, self._on_tick, callback_group=group)
+
+    # ---------------------------------------------------------------- views
+
+    @property
+    def state(self) -> cl.ClientState:
+        """The client machine's state: the view of the robot and the open goals."""
+        with self._lock:
+            return self._state
+
+    def now(self) -> int:
+        """The node's clock, in integer nanoseconds."""
+        nanoseconds: int = self._node.get_clock().now().nanoseconds
+        return min(max(nanoseconds, NOW_RANGE[0]), NOW_RANGE[1])
+
+    def wait_for_server(self, timeout: float) -> bool:
+        """Wait (at most ``timeout`` seconds) until the robot's action server is there."""
+        return bool(self._action.wait_for_server(timeout_sec=timeout))
+
+    def wait_for_status(self, timeout: float) -> bool:
+        """Wait (at most ``timeout`` seconds, from another thread than the executor's) for a status."""
+        with self._views:
+            return self._views.wait_for(lambda: self._state.newest_seq is not None, timeout)
+
+    # ---------------------------------------------------------------- commands
+
+    def next(
+        self,
+        category: str,
+        description: str,
+        *,
+        stubborn_period: float = 0.0,
+        timeout: float | None = None,
+        on_progress: Callable[[cl.Progress], None] | None = None,
+    ) -> GoalRun:
+        """Ask the robot to run the next event (a NEXT goal); ``timeout`` seconds cancels it when due."""
+        deadline = None if timeout is None else _nanoseconds("timeout", timeout)
+        return self._command(
+            lambda state, now: cl.request_next(
+                state, category, description, stubborn_period=stubborn_period, timeout=deadline, now=now
+            ),
+            on_progress,
+        )
+
+    def cancel(self, on_progress: Callable[[cl.Progress], None] | None = None) -> GoalRun:
+        """Ask the robot to cancel the running event (a CANCEL goal naming it)."""
+        return self._command(lambda state, now: cl.request_cancel(state, now=now), on_progress)
+
+    def finish(self) -> GoalRun:
+        """Tell the robot that the dynamic event is over (a FINISHED goal)."""
+        return self._command(lambda state, now: cl.request_finish(state, now=now), None)
+
+    def destroy(self) -> None:
+        """Release the action client, subscriptions and timer."""
+        self._action.destroy()
+        self._node.destroy_subscription(self._status)
+        self._node.destroy_subscription(self._begin)
+        self._node.destroy_timer(self._timer)
+
+    # ---------------------------------------------------------------- plumbing
+
+    def _command(
+        self,
+        command: Callable[[cl.ClientState, int], cl.ClientTransition],
+        on_progress: Callable[[cl.Progress], None] | None,
+    ) -> GoalRun:
+        run = GoalRun(on_progress)
+        with self._lock:
+            transition = command(self._state, self.now())
+            self._state = transition.state
+            for output in transition.outputs:
+                if isinstance(output, cl.SendGoal):
+                    run.goal_uuid = output.goal_uuid
+                    self._runs[output.goal_uuid] = run
+        for output in transition.outputs:
+            if isinstance(output, cl.Refused):
+                run._end(output)
+        self._carry_out(transition.outputs)
+        return run
+
+    def _step(self, event: cl.ClientInput) -> None:
+        with self._lock:
+            transition = cl.step(self._state, event)
+            self._state = transition.state
+            self._views.notify_all()
+        self._carry_out(transition.outputs)
+
+    def _carry_out(self, outputs: tuple[cl.ClientOutput, ...]) -> None:
+        for output in outputs:
+            if isinstance(output, cl.SendGoal):
+                self._send(output)
+            elif isinstance(output, cl.Progress):
+                run = self._runs.get(output.goal_uuid)
+                if run is not None:
+                    run._report(output)
+            elif isinstance(output, cl.Outcome):
+                ended = self._runs.pop(output.goal_uuid, None)
+                if ended is not None:
+                    ended._end(output)
+
+    def _send(self, send: cl.SendGoal) -> None:
+        uuid = send.goal_uuid
+        response = self._action.send_goal_async(
+            convert.goal_to_ros(send.goal),
+            feedback_callback=lambda message: self._on_feedback(uuid, message),
+            goal_uuid=convert.uuid_to_ros(uuid),
+        )
+        response.add_done_callback(lambda future: self._on_response(uuid, future))
+
+    def _on_response(self, uuid: str, future: Any) -> None:
+        handle = future.result()
+        accepted = bool(handle is not None and handle.accepted)
+        self._step(cl.GoalResponse(goal_uuid=uuid, accepted=accepted))
+        if accepted:
+            handle.get_result_async().add_done_callback(lambda done: self._on_result(uuid, done))
+
+    def _on_result(self, uuid: str, future: Any) -> None:
+        response = future.result()
+        status = _TERMINAL.get(response.status, GoalStatus.ABORTED)
+        self._step(
+            cl.ResultReceived(goal_uuid=uuid, status=status, result=convert.result_from_ros(response.result))
+        )
+
+    def _on_feedback(self, uuid: str, message: Any) -> None:
+        try:
+            feedback = convert.feedback_from_ros(message.feedback)
+        except InvalidMessage as exc:
+            self._node.get_logger().warning(f"feedback for goal {uuid} refused: {exc}")
+            return
+        self._step(cl.FeedbackReceived(goal_uuid=uuid, feedback=feedback))
+
+    def _on_status(self, message: Any) -> None:
+        try:
+            status = convert.status_from_ros(message)
+        except InvalidMessage as exc:
+            self._node.get_logger().warning(f"status refused: {exc}")
+            return
+        self._step(cl.StatusReceived(message=status))
+
+    def _on_begin(self, message: Any) -> None:
+        try:
+            begin = convert.begin_from_ros(message)
+        except InvalidMessage as exc:
+            self._node.get_logger().warning(f"begin refused: {exc}")
+            return
+        self._step(cl.BeginReceived(message=begin))
+
+    def _on_tick(self) -> None:
+        if self.state.goals:
+            self._step(cl.Tick(now=self.now()))
+
+
+def _nanoseconds(field: str, seconds: float) -> int:
+    if isinstance(seconds, bool) or not isinstance(seconds, (int, float)) or not 0 < seconds < 1e9:
+        raise InvalidMessage("DynamicEventClient", field, seconds, "expected positive seconds")
+    return round(seconds * 1_000_000_000)

@@ -1,0 +1,174 @@
+"""Conversions between dynevent's mirrors and the rosidl message classes of ``rmf_task_msgs``.
+
+Incoming messages go through the mirrors' checks: a goal that a mirror
+refuses raises :class:`~dynevent.errors.InvalidMessage` naming the field and
+the value, which the server turns into a refusal instead of a traceback in a
+callback.  Outgoing messages are built field by field from checked mirrors.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from builtin_interfaces.msg import Time as RosTime
+from rmf_task_msgs.action import DynamicEvent
+from rmf_task_msgs.msg import DynamicEventDescription as RosDescription
+from rmf_task_msgs.msg import DynamicEventStatus as RosStatus
+from rmf_task_msgs.msg import LogEntry as RosLogEntry
+from unique_identifier_msgs.msg import UUID as RosUUID
+
+from ..errors import InvalidMessage
+from ..inputs import goal_uuid
+from ..messages import (
+    DynamicEventDescription,
+    DynamicEventStatus,
+    Feedback,
+    Goal,
+    LogEntry,
+    Result,
+    Time,
+)
+
+__all__ = [
+    "DynamicEvent",
+    "RosDescription",
+    "RosStatus",
+    "begin_from_ros",
+    "begin_to_ros",
+    "feedback_from_ros",
+    "feedback_to_ros",
+    "goal_from_ros",
+    "goal_to_ros",
+    "log_entry_to_ros",
+    "result_from_ros",
+    "result_to_ros",
+    "status_from_ros",
+    "status_to_ros",
+    "time_to_ros",
+    "uuid_from_ros",
+    "uuid_to_ros",
+]
+
+
+def uuid_from_ros(value: Any) -> str:
+    """A goal UUID (``unique_identifier_msgs/UUID`` or its 16 uint8 values) as 32 hex digits."""
+    raw = getattr(value, "uuid", value)
+    try:
+        return goal_uuid(bytes(bytearray(raw)))
+    except (TypeError, ValueError) as exc:
+        raise InvalidMessage("UUID", "uuid", raw, str(exc)) from None
+
+
+def uuid_to_ros(value: str) -> Any:
+    """The ``unique_identifier_msgs/UUID`` of a goal UUID written as 32 hex digits."""
+    return RosUUID(uuid=list(bytes.fromhex(goal_uuid(value))))
+
+
+def time_to_ros(time: Time) -> Any:
+    """A ``builtin_interfaces/Time``."""
+    return RosTime(sec=time.sec, nanosec=time.nanosec)
+
+
+def _time_from_ros(message: Any) -> Time:
+    return Time(sec=message.sec, nanosec=message.nanosec)
+
+
+def goal_from_ros(message: Any) -> Goal:
+    """The mirror of a received goal; raises :class:`InvalidMessage` for a value the mirror refuses."""
+    return Goal(
+        dynamic_event_seq=message.dynamic_event_seq,
+        event_type=message.event_type,
+        category=message.category,
+        description=message.description,
+        id=message.id,
+        stubborn_period=float(message.stubborn_period),
+    )
+
+
+def goal_to_ros(goal: Goal) -> Any:
+    """A ``DynamicEvent.Goal``."""
+    return DynamicEvent.Goal(
+        dynamic_event_seq=goal.dynamic_event_seq,
+        event_type=goal.event_type,
+        category=goal.category,
+        description=goal.description,
+        id=goal.id,
+        stubborn_period=goal.stubborn_period,
+    )
+
+
+def result_to_ros(result: Result) -> Any:
+    """A ``DynamicEvent.Result``."""
+    return DynamicEvent.Result(execution_failure=result.execution_failure, status=result.status, id=result.id)
+
+
+def result_from_ros(message: Any) -> Result:
+    """The mirror of a received result."""
+    return Result(execution_failure=message.execution_failure, status=message.status, id=message.id)
+
+
+def log_entry_to_ros(entry: LogEntry) -> Any:
+    """A ``rmf_task_msgs/LogEntry``."""
+    return RosLogEntry(
+        seq=entry.seq, tier=entry.tier, unix_millis_time=entry.unix_millis_time, text=entry.text
+    )
+
+
+def feedback_to_ros(feedback: Feedback) -> Any:
+    """A ``DynamicEvent.Feedback`` with its log entries."""
+    return DynamicEvent.Feedback(
+        status=feedback.status, id=feedback.id, logs=[log_entry_to_ros(entry) for entry in feedback.logs]
+    )
+
+
+def feedback_from_ros(message: Any) -> Feedback:
+    """The mirror of received feedback."""
+    logs = tuple(
+        LogEntry(seq=entry.seq, tier=entry.tier, unix_millis_time=entry.unix_millis_time, text=entry.text)
+        for entry in message.logs
+    )
+    return Feedback(status=message.status, id=message.id, logs=logs)
+
+
+def status_to_ros(status: DynamicEventStatus) -> Any:
+    """A ``rmf_task_msgs/DynamicEventStatus``."""
+    return RosStatus(
+        dynamic_event_seq=status.dynamic_event_seq,
+        dynamic_state=status.dynamic_state,
+        status=status.status,
+        id=status.id,
+        time=time_to_ros(status.time),
+    )
+
+
+def status_from_ros(message: Any) -> DynamicEventStatus:
+    """The mirror of a received status message."""
+    return DynamicEventStatus(
+        dynamic_event_seq=message.dynamic_event_seq,
+        dynamic_state=message.dynamic_state,
+        status=message.status,
+        id=message.id,
+        time=_time_from_ros(message.time),
+    )
+
+
+def begin_to_ros(begin: DynamicEventDescription) -> Any:
+    """A ``rmf_task_msgs/DynamicEventDescription``."""
+    return RosDescription(
+        fleet=begin.fleet,
+        robot=begin.robot,
+        dynamic_event_seq=begin.dynamic_event_seq,
+        description=begin.description,
+        start_time=time_to_ros(begin.start_time),
+    )
+
+
+def begin_from_ros(message: Any) -> DynamicEventDescription:
+    """The mirror of a received begin message."""
+    return DynamicEventDescription(
+        fleet=message.fleet,
+        robot=message.robot,
+        dynamic_event_seq=message.dynamic_event_seq,
+        description=message.description,
+        start_time=_time_from_ros(message.start_time),
+    )

@@ -1,0 +1,476 @@
+"""One robot's Dynamic Event server on an rclpy node: the machine behind a real action server.
+
+How rclpy's callbacks meet the machine (docs/ros.md has the whole story):
+
+- ``goal_callback`` gets the goal without its UUID, so it only asks
+  :func:`dynevent.machine.accept` and answers ACCEPT or REJECT (the refusal's
+  reason goes to the node's log: ROS actions carry none).
+- ``handle_accepted_callback`` has the goal handle: the goal is submitted to
+  the machine with its UUID (:class:`~dynevent.inputs.GoalSubmitted`, R5.3),
+  request and start in one step under the server's lock.  Between the two
+  callbacks other threads may have changed the state; a goal that lost that
+  race is still answered (aborted, ``race condition``).
+- ``cancel_callback`` steps :class:`~dynevent.inputs.CancelRequested` and
+  answers with the machine's :class:`~dynevent.outputs.CancelResponse`.
+- Every other output goes to an outbox, carried out in order by a guard
+  condition's callback.  The guard condition wakes the executor from any
+  thread (an adapter's own threads report progress), and it shares a
+  mutually exclusive callback group with the action server, so it never runs
+  while rclpy is inside a goal or cancel request: an answer ``canceled`` that
+  the machine gives inside the cancel callback is carried out only after
+  rclpy has moved the goal to CANCELING, where ``canceled()`` is legal.
+- The execute callback of each goal awaits the machine's answer (an rclpy
+  future completed by the outbox) and ends the goal with it.
+
+Time comes from the node's clock, so simulated time works.
+"""
+
+from __future__ import annotations
+
+import collections
+import threading
+from collections.abc import Callable
+from typing import Any, Protocol
+
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.task import Future
+
+from .. import inputs as ins
+from .. import machine
+from .. import outputs as outs
+from ..errors import InvalidMessage
+from ..inputs import NOW_RANGE
+from ..machine import ServerConfig, State
+from ..names import (
+    BEGIN_TOPIC,
+    BEGIN_TOPIC_DEPTH,
+    ROBOT_BEGIN_TOPIC_DEPTH,
+    STATUS_TOPIC_DEPTH,
+    action_name,
+    begin_topic,
+    status_topic,
+)
+from ..server import Execution
+from ..vocab import GoalStatus, Status, Tier
+from . import convert
+from .convert import DynamicEvent, RosDescription, RosStatus
+
+__all__ = ["ChildEvents", "ChildExecution", "DynamicEventServer", "StubbornHolds", "latched"]
+
+
+def latched(depth: int) -> QoSProfile:
+    """The QoS of the Dynamic Event topics: reliable, transient-local, keeping ``depth`` messages (R1.4)."""
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST,
+        depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL,
+    )
+
+
+class ChildExecution:
+    """The adapter's handle on one running child event, with the node's clock.
+
+    Report with :meth:`underway`, :meth:`delayed`, :meth:`blocked` and
+    :meth:`error` (each with an optional log line) and end it with
+    :meth:`finished`.  After a cancel or kill was asked for, :attr:`stopping`
+    says which; the status given to :meth:`finished` is then the stop's
+    unless it says otherwise.  Calls after the end do nothing.
+    """
+
+    def __init__(self, server: DynamicEventServer, start: outs.StartChild) -> None:
+        self._server = server
+        self._execution = Execution(server, start.id, automatic_cancel=False)
+        #: The child's id, its category, its description (JSON text) and the parsed description.
+        self.id = start.id
+        self.category = start.category
+        self.description = start.description
+        self.parsed = start.parsed
+
+    @property
+    def done(self) -> bool:
+        """The child has finished."""
+        return self._execution.done
+
+    @property
+    def stopping(self) -> str | None:
+        """``"canceled"`` or ``"killed"`` once the child was told to stop."""
+        return self._execution.stopping
+
+    def okay(self) -> bool:
+        """Neither told to stop nor finished."""
+        return self._execution.okay()
+
+    def underway(self, text: str | None = None) -> None:
+        """The child is making progress (an info log line when ``text`` is given)."""
+        self._execution.underway(text, now=self._server.now())
+
+    def delayed(self, text: str | None = None) -> None:
+        """The child is delayed (warning)."""
+        self._execution.delayed(text, now=self._server.now())
+
+    def blocked(self, text: str | None = None) -> None:
+        """The child is blocked (warning)."""
+        self._execution.blocked(text, now=self._server.now())
+
+    def error(self, text: str | None = None) -> None:
+        """The child hit an error (error)."""
+        self._execution.error(text, now=self._server.now())
+
+    def finished(self, status: Status | str = Status.COMPLETED) -> None:
+        """The child ended with ``status`` (``completed`` unless it was stopped early)."""
+        self._execution.finished(now=self._server.now(), status=Status(status))
+
+    def _stop(self, kill: bool) -> None:
+        now = self._server.now()
+        if kill:
+            self._execution.kill(now=now)
+        else:
+            self._execution.cancel(now=now)
+
+    def __repr__(self) -> str:
+        return f"ChildExecution(id={self.id}, category={self.category!r}, {self._execution!r})"
+
+
+class ChildEvents(Protocol):
+    """What the adapter implements to run child events.  Every method must return quickly."""
+
+    def start(self, execution: ChildExecution) -> None:
+        """Start the child; report through ``execution`` from any thread."""
+
+    def cancel(self, execution: ChildExecution) -> None:
+        """Stop the child, then call ``execution.finished()``."""
+
+    def kill(self, execution: ChildExecution) -> None:
+        """Stop the child at once, then call ``execution.finished()``."""
+
+    def interrupt(self, execution: ChildExecution) -> None:
+        """The task is interrupted: pause the child."""
+
+    def resume(self, execution: ChildExecution) -> None:
+        """The task's interruption is over: go on."""
+
+
+class StubbornHolds(Protocol):
+    """What the adapter implements to hold its place in traffic after a child (stubbornness)."""
+
+    def begin(self, period: float, map_name: str | None, x: float, y: float) -> None:
+        """Declare a holding itinerary of ``period`` seconds here and negotiate stubbornly."""
+
+    def hold(self, period: float, map_name: str, x: float, y: float) -> None:
+        """The robot moved: hold again from its new place."""
+
+    def delay(self, seconds: float) -> None:
+        """Report the cumulative delay since the hold began."""
+
+    def end(self) -> None:
+        """Release the hold."""
+
+
+class DynamicEventServer:
+    """One robot's Dynamic Event server on ``node`` (several may share a node: a fleet).
+
+    ``children`` runs child events; ``stubbornness`` holds the robot's place
+    (without one, stubbornness is only logged); ``on_finished(status)`` is
+    called when the dynamic event ends and the task may move on,
+    ``on_interrupt_confirmed()`` when an interruption took effect.
+    ``begin_publisher`` shares one fleet-wide begin publisher between the
+    robots of a node (:meth:`fleet_begin_publisher`).  The node must be spun
+    by an executor (single- or multi-threaded); every method may be called
+    from any thread.
+    """
+
+    def __init__(
+        self,
+        node: Any,
+        fleet: str,
+        robot: str,
+        config: ServerConfig,
+        children: ChildEvents,
+        *,
+        stubbornness: StubbornHolds | None = None,
+        on_finished: Callable[[str], None] | None = None,
+        on_interrupt_confirmed: Callable[[], None] | None = None,
+        begin_publisher: Any | None = None,
+        state: State | None = None,
+    ) -> None:
+        self._node = node
+        self._config = config
+        self._children = children
+        self._stubbornness = stubbornness
+        self._on_finished = on_finished
+        self._on_interrupt_confirmed = on_interrupt_confirmed
+        self._state = state if state is not None else State.new(fleet, robot)
+        if (self._state.fleet, self._state.robot) != (fleet, robot):
+            raise InvalidMessage(
+                "DynamicEventServer",
+                "state",
+                f"{self._state.fleet}/{self._state.robot}",
+                f"the state belongs to another robot than {fleet}/{robot}",
+            )
+        self._lock = threading.Lock()
+        self._outbox: collections.deque[outs.Output] = collections.deque()
+        self._answers: dict[str, Any] = {}
+        self._handles: dict[str, Any] = {}
+        self._executions: dict[int, ChildExecution] = {}
+        self._position: tuple[str, float, float] | None = None
+        self._log = node.get_logger().get_child(f"{fleet}.{robot}")
+        self._group = MutuallyExclusiveCallbackGroup()
+        self._status = node.create_publisher(
+            RosStatus, status_topic(fleet, robot), latched(STATUS_TOPIC_DEPTH)
+        )
+        self._begin = node.create_publisher(
+            RosDescription, begin_topic(fleet, robot), latched(ROBOT_BEGIN_TOPIC_DEPTH)
+        )
+        self._fleet_begin = (
+            begin_publisher if begin_publisher is not None else self.fleet_begin_publisher(node)
+        )
+        self._wake = node.create_guard_condition(self._drain, callback_group=self._group)
+        self._action = ActionServer(
+            node,
+            DynamicEvent,
+            action_name(fleet, robot),
+            execute_callback=self._execute,
+            goal_callback=self._goal_callback,
+            handle_accepted_callback=self._handle_accepted,
+            cancel_callback=self._cancel_callback,
+            callback_group=self._group,
+        )
+        self._timer = node.create_timer(config.stubborn_refresh, self._refresh, callback_group=self._group)
+        with self._lock:  # the current status at start (the status topic keeps it for late joiners)
+            self._outbox.append(outs.PublishStatus(message=machine.status_message(self._state, self.now())))
+        self._wake.trigger()
+
+    # ---------------------------------------------------------------- plumbing
+
+    @staticmethod
+    def fleet_begin_publisher(node: Any) -> Any:
+        """A publisher of the fleet-wide begin topic, to share between the robots of ``node``."""
+        return node.create_publisher(RosDescription, BEGIN_TOPIC, latched(BEGIN_TOPIC_DEPTH))
+
+    @property
+    def state(self) -> State:
+        """The machine's current state (a frozen value)."""
+        with self._lock:
+            return self._state
+
+    @property
+    def config(self) -> ServerConfig:
+        """The configuration."""
+        return self._config
+
+    def now(self) -> int:
+        """The node's clock (ROS time), in integer nanoseconds within what the machine accepts."""
+        nanoseconds: int = self._node.get_clock().now().nanoseconds
+        return min(max(nanoseconds, NOW_RANGE[0]), NOW_RANGE[1])
+
+    def step(self, event: ins.Input) -> tuple[outs.Output, ...]:
+        """Apply ``event`` under the lock; its outputs are carried out in order, on the executor."""
+        with self._lock:
+            outputs = self._step(event)
+        self._wake.trigger()
+        return outputs
+
+    def _step(self, event: ins.Input) -> tuple[outs.Output, ...]:
+        transition = machine.step(self._state, event, self._config)
+        self._state = transition.state
+        self._outbox.extend(transition.outputs)
+        return transition.outputs
+
+    # ---------------------------------------------------------------- the adapter's inputs
+
+    def begin(self, description: str, event_id: int, *, interrupted: bool = False) -> None:
+        """A task reached its ``dynamic_event`` phase (R3)."""
+        self.step(
+            ins.Begin(description=description, event_id=event_id, now=self.now(), interrupted=interrupted)
+        )
+
+    def interrupt(self) -> None:
+        """The task was interrupted (R14)."""
+        self.step(ins.Interrupt(now=self.now()))
+
+    def resume(self) -> None:
+        """The task's interruption is over (R14)."""
+        self.step(ins.Resume(now=self.now()))
+
+    def task_cancel(self) -> None:
+        """The whole task was cancelled (R13)."""
+        self.step(ins.TaskCancel(now=self.now()))
+
+    def task_kill(self) -> None:
+        """The whole task was killed (R13)."""
+        self.step(ins.TaskKill(now=self.now()))
+
+    def update_position(self, map_name: str, x: float, y: float) -> None:
+        """Where the robot is; stubbornness refreshes from the last position given (R12.3)."""
+        self._position = (map_name, x, y)
+        self.step(ins.Tick(now=self.now(), map_name=map_name, x=x, y=y))
+
+    def shutdown(self) -> None:
+        """Answer every open goal ``shutting down`` and refuse later requests (R15)."""
+        self.step(ins.Shutdown(now=self.now()))
+
+    def destroy(self) -> None:
+        """Release the action server, publishers, timer and guard condition (after :meth:`shutdown`)."""
+        self._action.destroy()
+        self._node.destroy_timer(self._timer)
+        self._node.destroy_publisher(self._status)
+        self._node.destroy_publisher(self._begin)
+        self._node.destroy_guard_condition(self._wake)
+
+    def _refresh(self) -> None:
+        position = self._position
+        if position is not None and self.state.stubborn is not None:
+            self.step(ins.Tick(now=self.now(), map_name=position[0], x=position[1], y=position[2]))
+
+    # ---------------------------------------------------------------- rclpy's callbacks
+
+    def _goal_callback(self, request: Any) -> GoalResponse:
+        try:
+            goal = convert.goal_from_ros(request)
+        except InvalidMessage as exc:
+            self._log.warning(f"goal refused: {exc}")
+            return GoalResponse.REJECT
+        with self._lock:
+            decision = machine.accept(self._state, goal, self._config)
+        if isinstance(decision, outs.Rejected):
+            self._log.info(f"goal refused: {decision.reason.value}: {decision.text}")
+            return GoalResponse.REJECT
+        return GoalResponse.ACCEPT
+
+    def _handle_accepted(self, goal_handle: Any) -> None:
+        uuid = convert.uuid_from_ros(goal_handle.goal_id)
+        goal = convert.goal_from_ros(goal_handle.request)  # it passed the goal callback's check
+        with self._lock:
+            transition = machine.step(
+                self._state, ins.GoalSubmitted(goal_uuid=uuid, goal=goal, now=self.now()), self._config
+            )
+            first = transition.outputs[0]
+            if isinstance(first, outs.Ignored):  # R18.2: a UUID still open in a restored state
+                self._log.error(f"goal {uuid}: {first.why}; aborted")
+                goal_handle.execute(_abort_at_once(first.why))
+                return
+            self._state = transition.state
+            self._answers[uuid] = Future()
+            self._handles[uuid] = goal_handle
+            goal_handle.execute()  # ExecuteGoal, R5.1: from EXECUTING every answer is legal
+            self._outbox.extend(transition.outputs[1:])
+        self._wake.trigger()
+
+    def _cancel_callback(self, goal_handle: Any) -> CancelResponse:
+        uuid = convert.uuid_from_ros(goal_handle.goal_id)
+        with self._lock:
+            outputs = self._step(ins.CancelRequested(goal_uuid=uuid, now=self.now()))
+        self._wake.trigger()  # carried out after rclpy has moved the goal to CANCELING (same group)
+        response = next((output for output in outputs if isinstance(output, outs.CancelResponse)), None)
+        return CancelResponse.ACCEPT if response is not None and response.accepted else CancelResponse.REJECT
+
+    async def _execute(self, goal_handle: Any) -> Any:
+        uuid = convert.uuid_from_ros(goal_handle.goal_id)
+        answer: outs.AnswerGoal = await self._answers[uuid]
+        del self._answers[uuid]
+        if answer.status is GoalStatus.SUCCEEDED:
+            goal_handle.succeed()
+        elif answer.status is GoalStatus.CANCELED:
+            goal_handle.canceled()
+        else:
+            goal_handle.abort()
+        return convert.result_to_ros(answer.result)
+
+    # ---------------------------------------------------------------- carrying out the outputs
+
+    def _drain(self) -> None:
+        # one drain at a time: the guard condition's group is mutually exclusive; outputs of steps
+        # that the adapter takes from inside a callback join the outbox and are carried out here too
+        while True:
+            with self._lock:
+                if not self._outbox:
+                    return
+                output = self._outbox.popleft()
+            self._carry_out(output)
+
+    def _carry_out(self, output: outs.Output) -> None:
+        if isinstance(output, outs.PublishStatus):
+            self._status.publish(convert.status_to_ros(output.message))
+        elif isinstance(output, outs.PublishFeedback):
+            handle = self._handles.get(output.goal_uuid)
+            if handle is not None:
+                handle.publish_feedback(convert.feedback_to_ros(output.feedback))
+        elif isinstance(output, outs.AnswerGoal):
+            self._handles.pop(output.goal_uuid, None)
+            future = self._answers.get(output.goal_uuid)  # the goal's execute callback takes it
+            if future is not None:
+                future.set_result(output)
+        elif isinstance(output, outs.PublishBegin):
+            message = convert.begin_to_ros(output.message)
+            self._begin.publish(message)
+            self._fleet_begin.publish(message)
+        elif isinstance(output, outs.StartChild):
+            started = ChildExecution(self, output)
+            self._executions[output.id] = started
+            self._children.start(started)
+        elif isinstance(output, (outs.CancelChild, outs.KillChild)):
+            execution = self._executions.get(output.id)
+            if execution is not None:
+                kill = isinstance(output, outs.KillChild)
+                execution._stop(kill)
+                (self._children.kill if kill else self._children.cancel)(execution)
+        elif isinstance(output, (outs.InterruptChild, outs.ResumeChild)):
+            paused = self._executions.get(output.id)
+            if paused is not None:
+                interrupt = isinstance(output, outs.InterruptChild)
+                (self._children.interrupt if interrupt else self._children.resume)(paused)
+        else:
+            self._carry_out_other(output)
+        self._forget_finished()
+
+    def _carry_out_other(self, output: outs.Output) -> None:
+        holds = self._stubbornness
+        if isinstance(output, outs.StubbornBegin):
+            self._log.info(f"stubborn for {output.period:g} s")
+            if holds is not None:
+                holds.begin(output.period, output.map_name, output.x, output.y)
+        elif isinstance(output, outs.StubbornHold):
+            if holds is not None:
+                holds.hold(output.period, output.map_name, output.x, output.y)
+        elif isinstance(output, outs.StubbornDelay):
+            if holds is not None:
+                holds.delay(output.delay)
+        elif isinstance(output, outs.StubbornEnd):
+            if holds is not None:
+                holds.end()
+        elif isinstance(output, outs.DynamicEventFinished):
+            self._log.info(f"dynamic event finished: {output.status}")
+            if self._on_finished is not None:
+                self._on_finished(output.status)
+        elif isinstance(output, outs.InterruptConfirmed):
+            if self._on_interrupt_confirmed is not None:
+                self._on_interrupt_confirmed()
+        elif isinstance(output, outs.Log):
+            _LOG_CALLS[output.entry.tier](self._log, output.entry.text)
+        elif isinstance(output, outs.StubbornClamped):
+            self._log.warning(f"stubborn_period {output.requested:g} s clamped to {output.applied:g} s")
+        elif isinstance(output, (outs.SeqWrapped, outs.Ignored)):
+            self._log.debug(repr(output))
+
+    def _forget_finished(self) -> None:
+        for child_id in [key for key, execution in self._executions.items() if execution.done]:
+            del self._executions[child_id]
+
+
+def _abort_at_once(why: str) -> Callable[[Any], Any]:
+    def execute(goal_handle: Any) -> Any:
+        goal_handle.abort()
+        return DynamicEvent.Result(execution_failure=why)
+
+    return execute
+
+
+_LOG_CALLS: dict[str, Callable[[Any, str], Any]] = {
+    Tier.UNINITIALIZED.value: lambda log, text: log.info(text),
+    Tier.INFO.value: lambda log, text: log.info(text),
+    Tier.WARNING.value: lambda log, text: log.warning(text),
+    Tier.ERROR.value: lambda log, text: log.error(text),
+}

@@ -1,0 +1,43 @@
+"""The ROS tests: real rclpy, real DDS, on loopback only, in a domain of their own.
+
+They need ROS 2 and the ``rmf_task_msgs`` interfaces importable (source
+``build/ros/env.sh``, made by ``tests/ros/setup-ros-env.sh``).  Without them
+the ROS tests are not collected and ``test_environment.py`` shows the skip
+and its reason, except under ``CI=true``, where the run fails instead: CI
+must run them.  Every test has a deadline (faulthandler ends a hung process)
+and every wait in them a bound.
+"""
+
+from __future__ import annotations
+
+import faulthandler
+import os
+from collections.abc import Iterator
+
+import pytest
+from ros_support import ROS, TEST_DEADLINE, WHY, Graph, keep_dds_local
+
+if ROS:
+    keep_dds_local()
+    collect_ignore_glob: list[str] = []
+else:
+    collect_ignore_glob = ["test_ros_*.py"]
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    if not ROS and os.environ.get("CI") == "true":
+        raise pytest.UsageError(f"CI=true and the ROS tests cannot run: {WHY}")
+
+
+@pytest.fixture(autouse=True)
+def _deadline() -> Iterator[None]:
+    faulthandler.dump_traceback_later(TEST_DEADLINE, exit=True)
+    yield
+    faulthandler.cancel_dump_traceback_later()
+
+
+@pytest.fixture
+def graph() -> Iterator[Graph]:
+    made = Graph()
+    yield made
+    made.close()

@@ -1,0 +1,77 @@
+"""What the ROS tests share: whether ROS 2 is here, the graph fixture's class, bounded waits."""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import random
+import threading
+from collections.abc import Callable
+from typing import Any
+
+ROS = all(importlib.util.find_spec(name) is not None for name in ("rclpy", "rmf_task_msgs"))
+WHY = "ROS 2 is not importable (rclpy, rmf_task_msgs): run tests/ros/setup-ros-env.sh, then . build/ros/env.sh"
+
+#: The longest any ROS test may take, in seconds; then the process is ended with a traceback dump.
+TEST_DEADLINE = 120
+#: The bound of every single wait in the ROS tests, in seconds.
+WAIT = 15.0
+
+
+def keep_dds_local() -> None:
+    """One DDS domain per test run, so that parallel runs never meet; discovery stays on this machine."""
+    os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(1, 100)))
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    os.environ.pop("ROS_STATIC_PEERS", None)
+    os.environ.pop("ROS_LOCALHOST_ONLY", None)
+
+
+def wait_for(condition: Callable[[], bool], what: str, timeout: float = WAIT) -> None:
+    """Wait until ``condition()`` holds, at most ``timeout`` seconds (checked every 10 ms)."""
+    event = threading.Event()
+    deadline = timeout
+    while not condition():
+        if deadline <= 0:
+            raise AssertionError(f"timed out after {timeout:g} s waiting for {what}")
+        event.wait(0.01)
+        deadline -= 0.01
+
+
+class Graph:
+    """An rclpy context with nodes spun by a multi-threaded executor on a background thread."""
+
+    def __init__(self) -> None:
+        import rclpy
+        from rclpy.executors import MultiThreadedExecutor
+
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        self.executor = MultiThreadedExecutor(num_threads=4, context=self.context)
+        self.nodes: list[Any] = []
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+        self._thread.start()
+
+    def _spin(self) -> None:
+        from rclpy.executors import ExternalShutdownException
+
+        try:
+            self.executor.spin()
+        except ExternalShutdownException:
+            pass
+
+    def node(self, name: str) -> Any:
+        import rclpy
+
+        node = rclpy.create_node(name, context=self.context)
+        self.nodes.append(node)
+        self.executor.add_node(node)
+        return node
+
+    def close(self) -> None:
+        import rclpy
+
+        self.executor.shutdown(timeout_sec=5)
+        for node in self.nodes:
+            node.destroy_node()
+        rclpy.shutdown(context=self.context)
+        self._thread.join(timeout=5)

@@ -1,0 +1,36 @@
+"""Stands for the ROS tests where ROS 2 is absent, so that their skip shows, with its reason."""
+
+from __future__ import annotations
+
+import pytest
+
+from ros_support import ROS, WHY
+
+
+def test_ros_2_and_the_interfaces_are_importable() -> None:
+    if not ROS:
+        pytest.skip(WHY)
+    import rclpy
+    from rmf_task_msgs.action import DynamicEvent
+
+    assert rclpy.ok is not None
+    assert DynamicEvent.Goal.EVENT_TYPE_NEXT == 1
+
+
+def test_no_core_module_imports_rclpy() -> None:
+    """Importing every dynevent module but the binding leaves rclpy unimported."""
+    import subprocess
+    import sys
+
+    code = (
+        "import importlib, pkgutil, sys, dynevent\n"
+        "names = [m.name for m in pkgutil.walk_packages(dynevent.__path__, 'dynevent.')]\n"
+        "for name in names:\n"
+        "    if not name.startswith('dynevent.ros'):\n"
+        "        importlib.import_module(name)\n"
+        "bad = sorted(m for m in sys.modules if m.split('.')[0] in ('rclpy', 'rmf_task_msgs'))\n"
+        "print(len(names), bad)\n"
+        "sys.exit(1 if bad else 0)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stdout + done.stderr

@@ -1,0 +1,401 @@
+"""dynevent.ros over real rclpy and DDS on loopback: each spec section at least once.
+
+The server is :class:`dynevent.ros.DynamicEventServer` with a scripted
+adapter (the test drives each child through its :class:`ChildExecution`);
+the clients are the binding's own, and a plain rclpy client written the way
+the public one-shot client is.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+from rclpy.action import ActionClient
+from rmf_task_msgs.action import DynamicEvent
+from rmf_task_msgs.msg import DynamicEventStatus
+from ros_support import WAIT, Graph, wait_for
+
+from dynevent import client as cl
+from dynevent.machine import ServerConfig, accept_any
+from dynevent.names import action_name, status_topic
+from dynevent.ros import ChildExecution, DynamicEventClient, DynamicEventServer
+from dynevent.ros.server import latched
+
+FLEET, ROBOT = "tinyRobot", "tinyRobot1"
+CONFIG = ServerConfig(categories={"go_to_place": accept_any, "perform_action": accept_any})
+SUCCEEDED, CANCELED, ABORTED = 4, 5, 6  # action_msgs/GoalStatus
+
+
+class Adapter:
+    """Child events the test drives by hand; stubbornness and the task's end recorded."""
+
+    def __init__(self) -> None:
+        self.started: list[ChildExecution] = []
+        self.calls: list[tuple[str, int]] = []
+        self.holds: list[tuple[Any, ...]] = []
+        self.finished: list[str] = []
+
+    def start(self, execution: ChildExecution) -> None:
+        self.started.append(execution)
+
+    def cancel(self, execution: ChildExecution) -> None:
+        self.calls.append(("cancel", execution.id))
+
+    def kill(self, execution: ChildExecution) -> None:
+        self.calls.append(("kill", execution.id))
+
+    def interrupt(self, execution: ChildExecution) -> None:
+        self.calls.append(("interrupt", execution.id))
+
+    def resume(self, execution: ChildExecution) -> None:
+        self.calls.append(("resume", execution.id))
+
+    # stubbornness
+    def begin(self, period: float, map_name: str | None, x: float, y: float) -> None:
+        self.holds.append(("begin", period, map_name))
+
+    def hold(self, period: float, map_name: str, x: float, y: float) -> None:
+        self.holds.append(("hold", period, map_name))
+
+    def delay(self, seconds: float) -> None:
+        self.holds.append(("delay",))
+
+    def end(self) -> None:
+        self.holds.append(("end",))
+
+    def child(self, index: int = -1) -> ChildExecution:
+        wait_for(lambda: len(self.started) > (index if index >= 0 else 0), "a child to start")
+        return self.started[index]
+
+
+class Robot:
+    """A server for one robot on its own node, and its adapter."""
+
+    def __init__(self, graph: Graph, config: ServerConfig = CONFIG, name: str = "server") -> None:
+        self.adapter = Adapter()
+        self.node = graph.node(name)
+        self.server = DynamicEventServer(
+            self.node,
+            FLEET,
+            ROBOT,
+            config,
+            self.adapter,
+            stubbornness=self.adapter,
+            on_finished=self.adapter.finished.append,
+        )
+
+
+class RawGoal:
+    """One goal sent by a plain rclpy action client."""
+
+    def __init__(self) -> None:
+        self.accepted: bool | None = None
+        self.handle: Any = None
+        self.feedback: list[Any] = []
+        self.status: int | None = None
+        self.result: Any = None
+        self.responded = threading.Event()
+        self.ended = threading.Event()
+
+    def wait_response(self) -> bool:
+        assert self.responded.wait(WAIT), "no goal response"
+        assert self.accepted is not None
+        return self.accepted
+
+    def wait_result(self) -> tuple[int, Any]:
+        assert self.ended.wait(WAIT), "no result"
+        assert self.status is not None
+        return self.status, self.result
+
+
+class RawClient:
+    """A plain rclpy client, written as the public one-shot client is: the first status decides."""
+
+    def __init__(self, graph: Graph, name: str) -> None:
+        self.node = graph.node(name)
+        self.action = ActionClient(self.node, DynamicEvent, action_name(FLEET, ROBOT))
+        self.statuses: list[Any] = []
+        self.node.create_subscription(
+            DynamicEventStatus, status_topic(FLEET, ROBOT), self.statuses.append, latched(1)
+        )
+        assert self.action.wait_for_server(timeout_sec=WAIT)
+        wait_for(lambda: bool(self.statuses), "the first status message")
+        wait_for(lambda: self.node.count_publishers(status_topic(FLEET, ROBOT)) > 0, "the status publisher")
+
+    def send(self, **fields: Any) -> RawGoal:
+        goal = RawGoal()
+        message = DynamicEvent.Goal(**fields)
+
+        def on_result(future: Any) -> None:
+            response = future.result()
+            goal.status, goal.result = response.status, response.result
+            goal.ended.set()
+
+        def on_response(future: Any) -> None:
+            goal.handle = future.result()
+            goal.accepted = bool(goal.handle.accepted)
+            goal.responded.set()
+            if goal.accepted:
+                goal.handle.get_result_async().add_done_callback(on_result)
+
+        self.action.send_goal_async(message, feedback_callback=goal.feedback.append).add_done_callback(
+            on_response
+        )
+        return goal
+
+    def first_status(self) -> Any:
+        return self.statuses[0]
+
+
+def _client(graph: Graph, name: str = "client") -> DynamicEventClient:
+    made = DynamicEventClient(graph.node(name), FLEET, ROBOT)
+    assert made.wait_for_server(WAIT)
+    assert made.wait_for_status(WAIT)
+    return made
+
+
+def _feedback_matched(robot: Robot) -> None:
+    """Feedback is a volatile topic: wait until a client's feedback subscription is there."""
+    topic = action_name(FLEET, ROBOT) + "/_action/feedback"
+    wait_for(lambda: robot.node.count_subscribers(topic) > 0, "the feedback subscription")
+
+
+def _outcome(run: Any) -> cl.Outcome:
+    result = run.wait(WAIT)
+    assert isinstance(result, cl.Outcome), result
+    return result
+
+
+@pytest.fixture
+def robot(graph: Graph) -> Iterator[Robot]:
+    made = Robot(graph)
+    made.server.begin('{"category": "patrol"}', 7)
+    yield made
+    made.server.shutdown()
+
+
+# --------------------------------------------------------------------------- §6, §7, §8: NEXT
+
+
+@pytest.mark.spec("R6.4", "R7.1", "R7.2", "R8.2", "R2.2")
+def test_next_with_progress_and_logs(graph: Graph, robot: Robot) -> None:
+    client = _client(graph)
+    _feedback_matched(robot)
+    run = client.next("go_to_place", '"pantry"')
+    child = robot.adapter.child()
+    assert (child.id, child.category, child.parsed) == (8, "go_to_place", "pantry")
+    child.underway("leaving the lobby")
+    wait_for(lambda: any(progress.logs for progress in run.progress), "the log line's feedback")
+    child.finished()
+    outcome = _outcome(run)
+    assert (outcome.kind, outcome.id, outcome.status) == (cl.OutcomeKind.COMPLETED, 8, "completed")
+    logs = [entry.text for progress in run.progress for entry in progress.logs]
+    assert logs == ["leaving the lobby"]
+    wait_for(lambda: client.state.current_id == 8, "the WAITING status naming child 8")
+
+
+# --------------------------------------------------------------------------- §9: CANCEL while running
+
+
+@pytest.mark.spec("R9.3", "R8.3", "R2.1")
+def test_cancel_while_running(graph: Graph, robot: Robot) -> None:
+    client = _client(graph)
+    run = client.next("go_to_place", '"pantry"')
+    child = robot.adapter.child()
+    wait_for(lambda: client.state.phase == 2, "RUNNING")
+    cancel = client.cancel()
+    wait_for(lambda: ("cancel", 8) in robot.adapter.calls, "the adapter told to cancel")
+    assert child.stopping == "canceled" and not child.done
+    assert robot.server.state.phase == 2  # RUNNING until the child really ends
+    child.finished()
+    assert child.done
+    assert _outcome(run).kind is cl.OutcomeKind.CANCELED
+    assert _outcome(cancel).kind is cl.OutcomeKind.CANCELED
+
+
+# --------------------------------------------------------------------------- §10: action-level cancel
+
+
+@pytest.mark.spec("R10.3", "R8.2")
+def test_action_level_cancel_of_the_running_goal(graph: Graph, robot: Robot) -> None:
+    raw = RawClient(graph, "raw")
+    goal = raw.send(dynamic_event_seq=1, event_type=1, category="go_to_place", description='"a"', id=8)
+    assert goal.wait_response()
+    child = robot.adapter.child()
+    cancelling = goal.handle.cancel_goal_async()
+    wait_for(lambda: cancelling.done(), "the cancel response")
+    assert len(cancelling.result().goals_canceling) == 1
+    wait_for(lambda: ("cancel", 8) in robot.adapter.calls, "the adapter told to cancel")
+    child.finished()
+    status, result = goal.wait_result()
+    assert (status, result.status, result.id) == (CANCELED, "canceled", 8)
+
+
+@pytest.mark.spec("R10.2", "R19.1")
+def test_action_level_cancel_of_a_waiting_cancel_goal_is_answered_canceled(graph: Graph, robot: Robot) -> None:
+    """The machine answers this goal canceled inside rclpy's cancel callback; it reaches the client."""
+    raw = RawClient(graph, "raw")
+    next_goal = raw.send(dynamic_event_seq=1, event_type=1, category="go_to_place", description='"a"', id=8)
+    assert next_goal.wait_response()
+    child = robot.adapter.child()
+    cancel_goal = raw.send(dynamic_event_seq=1, event_type=2, id=8)
+    assert cancel_goal.wait_response()
+    wait_for(lambda: ("cancel", 8) in robot.adapter.calls, "the adapter told to cancel")
+    cancelling = cancel_goal.handle.cancel_goal_async()
+    status, result = cancel_goal.wait_result()
+    assert (status, result.execution_failure) == (CANCELED, "cancelled while not running")
+    assert cancelling.done() or cancelling.result() is not None
+    child.finished()
+    assert next_goal.wait_result()[0] == ABORTED  # canceled early, without an action-level cancel
+
+
+@pytest.mark.spec("R10.4", "R6.3", "R19.1")
+def test_action_level_cancel_of_a_deferred_child_is_answered_canceled(graph: Graph, robot: Robot) -> None:
+    raw = RawClient(graph, "raw")
+    robot.server.interrupt()
+    goal = raw.send(dynamic_event_seq=1, event_type=1, category="go_to_place", description='"a"', id=8)
+    assert goal.wait_response()
+    wait_for(lambda: robot.server.state.running is not None, "the deferred child")
+    assert robot.adapter.started == []
+    goal.handle.cancel_goal_async()
+    status, result = goal.wait_result()
+    assert (status, result.status, result.id) == (CANCELED, "canceled", 8)
+
+
+# --------------------------------------------------------------------------- §5: races
+
+
+@pytest.mark.spec("R5.3", "R19.1", "R19.2")
+def test_two_nexts_racing_one_runs_and_each_gets_one_answer(graph: Graph, robot: Robot) -> None:
+    first, second = RawClient(graph, "first"), RawClient(graph, "second")
+    fields = {"dynamic_event_seq": 1, "event_type": 1, "category": "go_to_place", "description": '"a"'}
+    goals = [first.send(id=8, **fields), second.send(id=9, **fields)]
+    accepted = [goal.wait_response() for goal in goals]
+    child = robot.adapter.child()
+    assert len(robot.adapter.started) == 1
+    child.finished()
+    answers = sorted(goal.wait_result()[0] for goal, ok in zip(goals, accepted, strict=True) if ok)
+    assert answers in ([SUCCEEDED], [SUCCEEDED, ABORTED])  # the loser is refused, or aborted (race)
+
+
+@pytest.mark.spec("R5.3")
+def test_a_goal_that_loses_a_race_between_rclpys_two_callbacks_is_aborted(graph: Graph) -> None:
+    """The window between rclpy's goal callback and accepted callback, made to happen every time."""
+    robot = Robot(graph)
+    robot.server.begin("{}", 7)
+    checked = robot.server._goal_callback
+
+    def goal_callback_then_the_task_is_cancelled(request: Any) -> Any:
+        response = checked(request)
+        robot.server.task_cancel()  # another thread of the adapter, in the window
+        return response
+
+    robot.server._action.register_goal_callback(goal_callback_then_the_task_is_cancelled)
+    raw = RawClient(graph, "raw")
+    goal = raw.send(dynamic_event_seq=1, event_type=1, category="go_to_place", description='"a"', id=8)
+    assert goal.wait_response()
+    status, result = goal.wait_result()
+    assert status == ABORTED
+    assert result.execution_failure.split("\n")[0] == "race condition"
+    assert robot.adapter.started == []
+
+
+# --------------------------------------------------------------------------- §11, §12, §15, §2
+
+
+@pytest.mark.spec("R11.1", "R11.2")
+def test_finished_ends_the_run(graph: Graph, robot: Robot) -> None:
+    client = _client(graph)
+    outcome = _outcome(client.finish())
+    assert (outcome.kind, outcome.id) == (cl.OutcomeKind.COMPLETED, 7)
+    wait_for(lambda: robot.adapter.finished == ["completed"], "the task told to move on")
+    wait_for(lambda: client.state.phase == 0, "INACTIVE")
+
+
+@pytest.mark.spec("R12.1", "R12.2")
+def test_a_clamped_stubborn_period(graph: Graph, robot: Robot) -> None:
+    client = _client(graph)
+    _feedback_matched(robot)
+    robot.server.update_position("L1", 1.0, 2.0)
+    run = client.next("go_to_place", '"a"', stubborn_period=0.5)
+    child = robot.adapter.child()
+    wait_for(lambda: bool(run.progress), "the start feedback")
+    warnings = [entry.text for progress in run.progress for entry in progress.logs if entry.tier == "warning"]
+    assert warnings and "below the minimum" in warnings[0]
+    child.finished()
+    _outcome(run)
+    wait_for(lambda: ("begin", 2.0, "L1") in robot.adapter.holds, "stubbornness for 2 s")
+
+
+@pytest.mark.spec("R15.1", "R19.1")
+def test_shutdown_answers_open_goals(graph: Graph) -> None:
+    robot = Robot(graph)
+    robot.server.begin("{}", 7)
+    raw = RawClient(graph, "raw")
+    next_goal = raw.send(dynamic_event_seq=1, event_type=1, category="go_to_place", description='"a"', id=8)
+    assert next_goal.wait_response()
+    robot.adapter.child()
+    cancel_goal = raw.send(dynamic_event_seq=1, event_type=2, id=8)
+    assert cancel_goal.wait_response()
+    robot.server.shutdown()
+    for goal in (next_goal, cancel_goal):
+        status, result = goal.wait_result()
+        assert (status, result.execution_failure) == (ABORTED, "shutting down")
+    late = raw.send(dynamic_event_seq=1, event_type=1, category="go_to_place", description='"a"', id=9)
+    assert not late.wait_response()  # refused (R4.1)
+
+
+@pytest.mark.spec("R2.2", "R2.3", "R1.4")
+def test_a_late_joining_status_subscriber_gets_the_current_status(graph: Graph, robot: Robot) -> None:
+    client = _client(graph)
+    run = client.next("go_to_place", '"a"')
+    robot.adapter.child().finished()
+    _outcome(run)
+    wait_for(lambda: client.state.current_id == 8 and client.state.phase == 1, "WAITING, id 8")
+    late = RawClient(graph, "late")
+    first = late.first_status()
+    assert (first.dynamic_event_seq, first.dynamic_state, first.status, first.id) == (1, 1, "standby", 8)
+
+
+# --------------------------------------------------------------------------- R20.1: the public client's way
+
+
+@pytest.mark.spec("R20.1", "R4.13", "R4.3")
+def test_a_plain_one_shot_client_drives_a_whole_run(graph: Graph, robot: Robot) -> None:
+    """Each goal from a fresh client whose first status decides seq and id, as rmf_demos' client does."""
+
+    def one_shot(name: str, **fields: Any) -> tuple[RawGoal, Any]:
+        raw = RawClient(graph, name)
+        status = raw.first_status()
+        if fields.get("event_type") == 1:
+            fields["id"] = status.id + 1
+        elif fields.get("event_type") == 2:
+            fields["id"] = status.id
+        return raw.send(dynamic_event_seq=status.dynamic_event_seq, **fields), status
+
+    for index, place in enumerate(("pantry", "lobby")):
+        goal, _ = one_shot(f"place{index}", event_type=1, category="go_to_place", description=f'"{place}"')
+        assert goal.wait_response()
+        robot.adapter.child(index).finished()
+        status, result = goal.wait_result()
+        assert (status, result.id) == (SUCCEEDED, 8 + index)
+        wait_for(lambda: robot.server.state.phase == 1, "WAITING")
+    goal, _ = one_shot("place2", event_type=1, category="go_to_place", description='"dock"')
+    assert goal.wait_response()
+    robot.adapter.child(2)
+    cancel, seen = one_shot("cancel", event_type=2)
+    assert seen.dynamic_state == 2 and cancel.wait_response()
+    robot.adapter.child(2).finished()
+    assert cancel.wait_result()[0] == SUCCEEDED
+    wait_for(lambda: robot.server.state.phase == 1, "WAITING")
+    idle_cancel, _ = one_shot("idle", event_type=2)
+    assert not idle_cancel.wait_response()
+    finished, _ = one_shot("end", event_type=3, id=0)
+    assert finished.wait_response()
+    assert finished.wait_result()[0] == SUCCEEDED
+    wait_for(lambda: robot.server.state.phase == 0, "INACTIVE")
+    after, _ = one_shot("after", event_type=1, category="go_to_place", description='"x"')
+    assert not after.wait_response()
