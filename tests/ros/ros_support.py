@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import os
 import random
@@ -10,7 +11,9 @@ from collections.abc import Callable
 from typing import Any
 
 ROS = all(importlib.util.find_spec(name) is not None for name in ("rclpy", "rmf_task_msgs"))
-WHY = "ROS 2 is not importable (rclpy, rmf_task_msgs): run tests/ros/setup-ros-env.sh, then . build/ros/env.sh"
+WHY = (
+    "ROS 2 is not importable (rclpy, rmf_task_msgs): run tests/ros/setup-ros-env.sh, then . build/ros/env.sh"
+)
 
 #: The longest any ROS test may take, in seconds; then the process is ended with a traceback dump.
 TEST_DEADLINE = 120
@@ -54,10 +57,8 @@ class Graph:
     def _spin(self) -> None:
         from rclpy.executors import ExternalShutdownException
 
-        try:
+        with contextlib.suppress(ExternalShutdownException):
             self.executor.spin()
-        except ExternalShutdownException:
-            pass
 
     def node(self, name: str) -> Any:
         import rclpy

@@ -226,7 +226,7 @@ def test_action_level_cancel_of_the_running_goal(graph: Graph, robot: Robot) -> 
     assert goal.wait_response()
     child = robot.adapter.child()
     cancelling = goal.handle.cancel_goal_async()
-    wait_for(lambda: cancelling.done(), "the cancel response")
+    wait_for(cancelling.done, "the cancel response")
     assert len(cancelling.result().goals_canceling) == 1
     wait_for(lambda: ("cancel", 8) in robot.adapter.calls, "the adapter told to cancel")
     child.finished()
@@ -235,7 +235,9 @@ def test_action_level_cancel_of_the_running_goal(graph: Graph, robot: Robot) -> 
 
 
 @pytest.mark.spec("R10.2", "R19.1")
-def test_action_level_cancel_of_a_waiting_cancel_goal_is_answered_canceled(graph: Graph, robot: Robot) -> None:
+def test_action_level_cancel_of_a_waiting_cancel_goal_is_answered_canceled(
+    graph: Graph, robot: Robot
+) -> None:
     """The machine answers this goal canceled inside rclpy's cancel callback; it reaches the client."""
     raw = RawClient(graph, "raw")
     next_goal = raw.send(dynamic_event_seq=1, event_type=1, category="go_to_place", description='"a"', id=8)
@@ -399,3 +401,39 @@ def test_a_plain_one_shot_client_drives_a_whole_run(graph: Graph, robot: Robot) 
     wait_for(lambda: robot.server.state.phase == 0, "INACTIVE")
     after, _ = one_shot("after", event_type=1, category="go_to_place", description='"x"')
     assert not after.wait_response()
+
+
+# --------------------------------------------------------------------------- two processes: docs/ros.md
+
+
+@pytest.mark.spec("R6.4", "R7.1", "R8.2", "R11.1", "R15.1")
+def test_the_documented_adapter_serves_a_client_in_another_process(graph: Graph) -> None:
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    example = Path(__file__).resolve().parents[2] / "docs" / "examples" / "ros_adapter.py"
+    process = subprocess.Popen(
+        [sys.executable, str(example), "--robot", ROBOT, "--robot", "tinyRobot2", "--seconds", "60"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=os.environ.copy(),
+    )
+    try:
+        client = _client(graph)
+        other = DynamicEventClient(graph.node("other"), FLEET, "tinyRobot2")
+        assert other.wait_for_status(WAIT) and other.state.current_id == 2  # its own run, id 2
+        run = client.next("go_to_place", '"pantry"')
+        outcome = _outcome(run)
+        assert (outcome.kind, outcome.id) == (cl.OutcomeKind.COMPLETED, 2)
+        failed = _outcome(client.next("go_to_place", '"nowhere"'))
+        assert (failed.kind, failed.status) == (cl.OutcomeKind.FAILED, "failed")
+        refused = client.next("go_to_place", "42").wait(WAIT)  # JSON, not a place: the server refuses it
+        assert isinstance(refused, cl.Outcome) and refused.kind is cl.OutcomeKind.REJECTED
+        assert _outcome(client.finish()).kind is cl.OutcomeKind.COMPLETED
+    finally:
+        process.send_signal(2)
+        output, _ = process.communicate(timeout=WAIT)
+    assert process.returncode == 0, output
