@@ -437,3 +437,66 @@ def test_the_documented_adapter_serves_a_client_in_another_process(graph: Graph)
         process.send_signal(2)
         output, _ = process.communicate(timeout=WAIT)
     assert process.returncode == 0, output
+
+
+# --------------------------------------------------------------------------- §16: the description service
+
+
+@pytest.mark.spec("R16.1", "R16.2")
+def test_the_description_service_answers_where_its_type_exists(graph: Graph) -> None:
+    from rmf_task_msgs.srv import DescribeDynamicEvent
+
+    from dynevent.names import description_service
+
+    node = graph.node("described")
+    server = DynamicEventServer(
+        node, FLEET, ROBOT, CONFIG, Adapter(), description_service=DescribeDynamicEvent
+    )
+    asker = graph.node("asker").create_client(DescribeDynamicEvent, description_service(FLEET, ROBOT))
+    assert asker.wait_for_service(timeout_sec=WAIT)
+
+    def ask() -> Any:
+        future = asker.call_async(DescribeDynamicEvent.Request())
+        wait_for(future.done, "the description answer")
+        return future.result()
+
+    answer = ask()
+    assert (answer.running, answer.status, answer.description, answer.id) == (False, "", "", 0)
+    server.begin('{"category": "patrol"}', 7)
+    answer = ask()
+    assert (answer.running, answer.status, answer.description, answer.id) == (
+        True,
+        "standby",
+        '{"category": "patrol"}',
+        7,
+    )
+
+
+# --------------------------------------------------------------------------- converters at the edge
+
+
+@pytest.mark.spec("R1.2", "R4.15")
+def test_a_goal_the_mirrors_refuse_is_rejected_with_its_reason_not_a_traceback(graph: Graph) -> None:
+    from types import SimpleNamespace
+
+    from dynevent.errors import InvalidMessage
+    from dynevent.ros import convert
+
+    robot = Robot(graph)
+    robot.server.begin("{}", 7)
+    hostile = SimpleNamespace(
+        dynamic_event_seq=1,
+        event_type=1,
+        category="go_to_place",
+        description='"a"',
+        id=8,
+        stubborn_period=1e39,
+    )
+    with pytest.raises(InvalidMessage, match="stubborn_period"):
+        convert.goal_from_ros(hostile)
+    from rclpy.action import GoalResponse
+
+    assert robot.server._goal_callback(hostile) == GoalResponse.REJECT
+    assert convert.uuid_from_ros(list(range(16))) == bytes(range(16)).hex()
+    with pytest.raises(InvalidMessage, match="16 bytes"):
+        convert.uuid_from_ros([1, 2, 3])

@@ -38,7 +38,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rclpy.task import Future
 
 from .. import inputs as ins
-from .. import machine
+from .. import machine, names
 from .. import outputs as outs
 from ..errors import InvalidMessage
 from ..inputs import NOW_RANGE
@@ -177,7 +177,9 @@ class DynamicEventServer:
     called when the dynamic event ends and the task may move on,
     ``on_interrupt_confirmed()`` when an interruption took effect.
     ``begin_publisher`` shares one fleet-wide begin publisher between the
-    robots of a node (:meth:`fleet_begin_publisher`).  The node must be spun
+    robots of a node (:meth:`fleet_begin_publisher`).  ``description_service``
+    is a service type with the proposal's fields (R16): given one, the server
+    answers ``rmf_dynamic_event/description/<fleet>/<robot>`` with it.  The node must be spun
     by an executor (single- or multi-threaded); every method may be called
     from any thread.
     """
@@ -194,6 +196,7 @@ class DynamicEventServer:
         on_finished: Callable[[str], None] | None = None,
         on_interrupt_confirmed: Callable[[], None] | None = None,
         begin_publisher: Any | None = None,
+        description_service: Any | None = None,
         state: State | None = None,
     ) -> None:
         self._node = node
@@ -239,6 +242,14 @@ class DynamicEventServer:
             callback_group=self._group,
         )
         self._timer = node.create_timer(config.stubborn_refresh, self._refresh, callback_group=self._group)
+        self._service = None
+        if description_service is not None:
+            self._service = node.create_service(
+                description_service,
+                names.description_service(fleet, robot),
+                self._describe,
+                callback_group=self._group,
+            )
         with self._lock:  # the current status at start (the status topic keeps it for late joiners)
             self._outbox.append(outs.PublishStatus(message=machine.status_message(self._state, self.now())))
         self._wake.trigger()
@@ -319,6 +330,18 @@ class DynamicEventServer:
         self._node.destroy_publisher(self._status)
         self._node.destroy_publisher(self._begin)
         self._node.destroy_guard_condition(self._wake)
+        if self._service is not None:
+            self._node.destroy_service(self._service)
+
+    def _describe(self, request: Any, response: Any) -> Any:
+        with self._lock:  # a query: its one output is the answer, not an effect for the outbox (R16)
+            outputs = machine.step(self._state, ins.DescriptionQuery(now=self.now()), self._config).outputs
+        answer = next(output for output in outputs if isinstance(output, outs.DescriptionAnswer))
+        response.running = answer.response.running
+        response.status = answer.response.status
+        response.description = answer.response.description
+        response.id = answer.response.id
+        return response
 
     def _refresh(self) -> None:
         position = self._position
