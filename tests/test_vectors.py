@@ -191,9 +191,9 @@ def test_a_broken_implementation_fails_with_a_diff() -> None:
 
 
 def test_filter_selects_by_name_glob_and_rule() -> None:
-    result = _dynevent("--filter", "*cancel-*")
+    result = _dynevent("--filter", "stateless-*")
     assert result.returncode == 0
-    assert "26 passed, 0 failed" in result.stdout  # the names holding "cancel-", in both modes
+    assert "6 passed, 0 failed" in result.stdout  # 20-stateless.json
     result = _dynevent("--filter", "request-*-id*", "--json")
     names = [json.loads(line)["name"] for line in result.stdout.splitlines()[:-1]]
     assert names and all(re.fullmatch(r"request-.*-id.*", name) for name in names)

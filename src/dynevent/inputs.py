@@ -39,6 +39,7 @@ __all__ = [
     "GoalSubmitted",
     "Input",
     "Interrupt",
+    "Restart",
     "Resume",
     "Shutdown",
     "TaskCancel",
@@ -310,6 +311,14 @@ class Shutdown(_Input):
 
 
 @attrs.frozen(kw_only=True)
+class Restart(_Input):
+    """The state was restored after the process that served it ended: its goal handles and child with it."""
+
+    KIND: ClassVar[str] = "restart"
+    now: int = _now_field()
+
+
+@attrs.frozen(kw_only=True)
 class DescriptionQuery(_Input):
     """A request of the proposal's description service."""
 
@@ -332,6 +341,7 @@ Input: TypeAlias = (
     | TaskCancel
     | TaskKill
     | Shutdown
+    | Restart
     | DescriptionQuery
 )
 
@@ -352,6 +362,7 @@ INPUT_TYPES: dict[str, type[Input]] = {
         TaskCancel,
         TaskKill,
         Shutdown,
+        Restart,
         DescriptionQuery,
     )
 }

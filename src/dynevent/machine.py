@@ -73,6 +73,7 @@ EXECUTION_FAILURES: Mapping[str, str] = {
     "event_type": "invalid event_type",
     "parse": "Description parsing failure",
     "not_running": "cancelled while not running",
+    "restart": "server restarted",
 }
 
 # Child statuses that end a child early: its goal is not answered as succeeded (R8.2).
@@ -932,6 +933,27 @@ def _on_shutdown(state: State, event: ins.Shutdown, config: ServerConfig) -> Tra
     return _finish(state, after, outputs, event.now)
 
 
+def _on_restart(state: State, event: ins.Restart, config: ServerConfig) -> Transition:
+    failure = EXECUTION_FAILURES["restart"]
+    outputs: list[outs.Output] = []
+    running = state.running
+    if running is not None:  # R21.1: the goals of the process that ended
+        outputs.append(_failure(running.goal_uuid, failure))
+    outputs.extend(_failure(uuid, failure) for uuid in state.cancels)
+    for queued in state.queued:
+        outputs.append(outs.ExecuteGoal(goal_uuid=queued.goal_uuid))
+        outputs.append(_failure(queued.goal_uuid, failure))
+    after = _end_stubbornness(state, outputs)  # R21.2: the hold was the ended process's
+    after = _replace_state(after, running=None, queued=(), cancels=(), shutdown=False)
+    if state.active and running is not None:  # R21.2: the child ended with the process
+        if state.task_signal:
+            after = _end_dynamic_event(after, state.task_signal, outputs, task_over=True)
+        else:
+            after = _replace_state(after, status=Status.STANDBY.value)
+    outputs.append(outs.PublishStatus(message=status_message(after, event.now)))  # R21.3: always
+    return Transition(after, tuple(outputs))
+
+
 def _on_description_query(state: State, event: ins.DescriptionQuery, config: ServerConfig) -> Transition:
     if not state.active:  # R16.1
         return Transition(state, (outs.DescriptionAnswer(response=DescriptionResponse()),))
@@ -973,6 +995,7 @@ HANDLERS: Mapping[str, _Handler] = {
     ins.TaskCancel.KIND: _on_task_signal,
     ins.TaskKill.KIND: _on_task_signal,
     ins.Shutdown.KIND: _on_shutdown,
+    ins.Restart.KIND: _on_restart,
     ins.DescriptionQuery.KIND: _on_description_query,
 }
 
@@ -994,6 +1017,8 @@ TRANSITIONS: tuple[Edge, ...] = (
     Edge(_R, "task_cancel", _I, "deferred child", "R13.3"),
     Edge(_R, "task_kill", _I, "deferred child", "R13.3"),
     Edge(_R, "shutdown", _I, "", "R15.2"),
+    Edge(_R, "restart", _W, "task not cancelled", "R21.2"),
+    Edge(_R, "restart", _I, "task cancelled or killed", "R21.2"),
 )
 
 
