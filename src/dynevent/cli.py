@@ -98,6 +98,120 @@ def _add_diagram_command(commands: argparse._SubParsersAction[argparse.ArgumentP
     parser.set_defaults(run=_diagram)
 
 
+_NO_ROS = (
+    "dynevent {command} needs ROS 2 (rclpy) and the rmf_task_msgs interfaces: {problem}.  Source a "
+    "ROS 2 environment that has both (the project's tests/ros/setup-ros-env.sh builds one)."
+)
+
+
+def _say(line: str) -> None:
+    """Print one whole line at once: the live logs print from several threads."""
+    sys.stdout.write(line + "\n")
+    sys.stdout.flush()
+
+
+def _serve(args: argparse.Namespace) -> int:
+    try:
+        from .ros import serve
+    except ImportError as exc:
+        print(_NO_ROS.format(command="serve", problem=exc), file=sys.stderr)
+        return 2
+    from .errors import DyneventError
+
+    try:
+        config = serve.load_config(args)
+        return serve.run(config, args.state, args.seconds, _say)
+    except DyneventError as exc:
+        print(f"dynevent serve: {exc}", file=sys.stderr)
+        return 2
+
+
+def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    parser = commands.add_parser(
+        "serve",
+        help="a Dynamic Event server for a fleet of simulated robots, over ROS 2",
+        description="Serve the Dynamic Event protocol for every robot of a fleet on one ROS 2 node, "
+        "with simulated child events (go_to_place takes 3 s, reports each second, fails on the place "
+        "'nowhere'; perform_action takes 2 s).  Each robot begins a dynamic event at start, again "
+        "after a run ends, and when a DynamicEventDescription naming it arrives on "
+        "dynevent/serve/begin.  With --state, every robot's state is kept in a SQLite file and a "
+        "restart continues every run.  Prints a live log.  Runs until Ctrl-C.  Exit status: 0, or 2 "
+        "for a bad configuration or state file (the file is then left as it was).",
+    )
+    parser.add_argument("--fleet", help="the fleet's name (default tinyRobot)")
+    parser.add_argument(
+        "--robot",
+        action="append",
+        dest="robots",
+        metavar="ROBOT",
+        help="a robot's name; repeat for more (default tinyRobot1)",
+    )
+    parser.add_argument(
+        "--config", metavar="FILE", help="a JSON file: fleet, robots, categories, compatibility"
+    )
+    parser.add_argument("--state", metavar="FILE", help="keep every robot's state in this SQLite file")
+    parser.add_argument(
+        "--rebegin",
+        type=float,
+        metavar="SECONDS",
+        help="begin a new dynamic event this long after a run ends; 0 never (default 2)",
+    )
+    parser.add_argument("--seconds", type=float, metavar="SECONDS", help="stop after this long")
+    parser.set_defaults(run=_serve)
+
+
+def _send(args: argparse.Namespace) -> int:
+    try:
+        from .ros import send
+    except ImportError as exc:
+        print(_NO_ROS.format(command="send", problem=exc), file=sys.stderr)
+        return 2
+    from .errors import DyneventError
+
+    if not 0 < args.timeout < 1e6:
+        print(f"dynevent send: --timeout: expected positive seconds (got {args.timeout})", file=sys.stderr)
+        return 2
+    try:
+        return send.run(args, _say)
+    except DyneventError as exc:
+        print(f"dynevent send: {exc}", file=sys.stderr)
+        return 2
+
+
+def _add_send_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    parser = commands.add_parser(
+        "send",
+        help="send one Dynamic Event goal to a robot over ROS 2 and print what becomes of it",
+        description="Send one goal (NEXT, CANCEL or FINISHED) to a robot's Dynamic Event server, with "
+        "the seq and id its status implies; print the feedback as it arrives and the outcome; explain "
+        "a refusal.  Exit status: 0 when the goal succeeded, 1 when it did not, 2 on bad usage or "
+        "when no server answered within the timeout.",
+    )
+    parser.add_argument("--fleet", default="tinyRobot")
+    parser.add_argument("--robot", default="tinyRobot1")
+    parser.add_argument("--place", nargs="+", metavar="PLACE", help='NEXT go_to_place {"one_of": [PLACE...]}')
+    parser.add_argument("--cancel", action="store_true", help="CANCEL the running event")
+    parser.add_argument("--end", action="store_true", help="FINISHED: the dynamic event is over")
+    parser.add_argument(
+        "--file", metavar="FILE", help='NEXT from a JSON file {"category": ..., "description": ...}'
+    )
+    parser.add_argument(
+        "--stubbornness",
+        type=float,
+        default=0.0,
+        metavar="SECONDS",
+        help="stubborn period after a NEXT's event (default 0: none)",
+    )
+    parser.add_argument(
+        "--timeout",
+        type=float,
+        default=60.0,
+        metavar="SECONDS",
+        help="bound on the whole exchange (default 60)",
+    )
+    parser.set_defaults(run=_send)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``dynevent`` command; return its exit code."""
     parser = argparse.ArgumentParser(prog="dynevent", description=__doc__, epilog=_EPILOG)
@@ -108,8 +222,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     explain.add_command(commands)
     _add_diagram_command(commands)
     _add_vectors_command(commands)
+    _add_serve_command(commands)
+    _add_send_command(commands)
     args = parser.parse_args(argv)
     if args.command is None:
         args = parser.parse_args(["demo"])
-    result: int = args.run(args)
+    try:
+        result: int = args.run(args)
+    except KeyboardInterrupt:
+        return 130  # Ctrl-C: the command stops, without a traceback
     return result

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import os
 import sqlite3
+import threading
 from pathlib import Path
 
 from . import snapshot
@@ -47,10 +48,11 @@ class InvalidStore(DyneventError):
 
 
 class StateStore:
-    """One SQLite file holding the state of every robot of a server; use it from one thread at a time."""
+    """One SQLite file holding the state of every robot of a server; safe to share between threads."""
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = str(path)
+        self._lock = threading.Lock()
         existed = Path(self.path).exists() and Path(self.path).stat().st_size > 0
         try:
             self._db = sqlite3.connect(self.path, timeout=5.0, isolation_level=None, check_same_thread=False)
@@ -98,9 +100,10 @@ class StateStore:
         """Every robot's stored state, by (fleet, robot); each snapshot validated."""
         states: dict[tuple[str, str], State] = {}
         try:
-            rows = self._db.execute(
-                "SELECT fleet, robot, snapshot FROM robots ORDER BY fleet, robot"
-            ).fetchall()
+            with self._lock:
+                rows = self._db.execute(
+                    "SELECT fleet, robot, snapshot FROM robots ORDER BY fleet, robot"
+                ).fetchall()
         except sqlite3.DatabaseError as exc:
             raise InvalidStore(self.path, f"cannot be read ({exc})") from None
         for fleet, robot, text in rows:
@@ -118,7 +121,7 @@ class StateStore:
     def save(self, state: State) -> None:
         """Write one robot's state, in one transaction (durable once this returns)."""
         text = snapshot.dumps(state)
-        with self._transaction():
+        with self._lock, self._transaction():
             self._db.execute(
                 "INSERT INTO robots (fleet, robot, snapshot) VALUES (?, ?, ?) "
                 "ON CONFLICT (fleet, robot) DO UPDATE SET snapshot = excluded.snapshot",

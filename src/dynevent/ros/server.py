@@ -179,7 +179,11 @@ class DynamicEventServer:
     ``begin_publisher`` shares one fleet-wide begin publisher between the
     robots of a node (:meth:`fleet_begin_publisher`).  ``description_service``
     is a service type with the proposal's fields (R16): given one, the server
-    answers ``rmf_dynamic_event/description/<fleet>/<robot>`` with it.  The node must be spun
+    answers ``rmf_dynamic_event/description/<fleet>/<robot>`` with it.
+    ``state`` starts the server from a restored state (then call
+    :meth:`restart`); ``on_state(state)`` is called, under the server's lock,
+    after every step that changed the state (to store it); ``observer`` sees
+    every output as it is carried out and every refusal of a goal request.  The node must be spun
     by an executor (single- or multi-threaded); every method may be called
     from any thread.
     """
@@ -198,6 +202,8 @@ class DynamicEventServer:
         begin_publisher: Any | None = None,
         description_service: Any | None = None,
         state: State | None = None,
+        on_state: Callable[[State], None] | None = None,
+        observer: Callable[[outs.Output | outs.Rejected], None] | None = None,
     ) -> None:
         self._node = node
         self._config = config
@@ -205,6 +211,8 @@ class DynamicEventServer:
         self._stubbornness = stubbornness
         self._on_finished = on_finished
         self._on_interrupt_confirmed = on_interrupt_confirmed
+        self._on_state = on_state
+        self._observer = observer
         self._state = state if state is not None else State.new(fleet, robot)
         if (self._state.fleet, self._state.robot) != (fleet, robot):
             raise InvalidMessage(
@@ -286,9 +294,15 @@ class DynamicEventServer:
 
     def _step(self, event: ins.Input) -> tuple[outs.Output, ...]:
         transition = machine.step(self._state, event, self._config)
-        self._state = transition.state
+        self._keep(transition.state)
         self._outbox.extend(transition.outputs)
         return transition.outputs
+
+    def _keep(self, state: State) -> None:
+        changed = state is not self._state
+        self._state = state
+        if changed and self._on_state is not None:
+            self._on_state(state)
 
     # ---------------------------------------------------------------- the adapter's inputs
 
@@ -318,6 +332,10 @@ class DynamicEventServer:
         """Where the robot is; stubbornness refreshes from the last position given (R12.3)."""
         self._position = (map_name, x, y)
         self.step(ins.Tick(now=self.now(), map_name=map_name, x=x, y=y))
+
+    def restart(self) -> None:
+        """The state was restored after the process that served it ended (R21)."""
+        self.step(ins.Restart(now=self.now()))
 
     def shutdown(self) -> None:
         """Answer every open goal ``shutting down`` and refuse later requests (R15)."""
@@ -360,6 +378,8 @@ class DynamicEventServer:
             decision = machine.accept(self._state, goal, self._config)
         if isinstance(decision, outs.Rejected):
             self._log.info(f"goal refused: {decision.reason.value}: {decision.text}")
+            if self._observer is not None:
+                self._observer(decision)
             return GoalResponse.REJECT
         return GoalResponse.ACCEPT
 
@@ -375,7 +395,7 @@ class DynamicEventServer:
                 self._log.error(f"goal {uuid}: {first.why}; aborted")
                 goal_handle.execute(_abort_at_once(first.why))
                 return
-            self._state = transition.state
+            self._keep(transition.state)
             self._answers[uuid] = Future()
             self._handles[uuid] = goal_handle
             goal_handle.execute()  # ExecuteGoal, R5.1: from EXECUTING every answer is legal
@@ -415,6 +435,8 @@ class DynamicEventServer:
             self._carry_out(output)
 
     def _carry_out(self, output: outs.Output) -> None:
+        if self._observer is not None:
+            self._observer(output)
         if isinstance(output, outs.PublishStatus):
             self._status.publish(convert.status_to_ros(output.message))
         elif isinstance(output, outs.PublishFeedback):

@@ -1,0 +1,147 @@
+"""``dynevent send``: one goal to one robot, over the binding's client, with its feedback and outcome.
+
+It prints the robot's status as first seen, every feedback as it arrives,
+and the typed outcome; for a goal the robot refused (a ROS refusal carries
+no reason) it explains, from the status, why the robot most likely refused
+it and what to send instead (:mod:`dynevent.explain`).  Everything is bounded
+by ``--timeout``.  Exit status: 0 when the goal succeeded (a NEXT whose event
+completed, a CANCEL or FINISHED that was carried out), 1 when it did not
+(refused, failed, cancelled, aborted, timed out), 2 on bad usage or input, or
+when no server or status was found within the timeout.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import rclpy
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+
+from .. import client as cl
+from .. import explain
+from ..errors import DyneventError
+from ..messages import DynamicEventStatus
+from ..vocab import EventType, GoalStatus
+from .client import DynamicEventClient, GoalWaitTimeout
+
+__all__ = ["SendError", "goal_request", "run"]
+
+
+class SendError(DyneventError):
+    """A bad ``dynevent send`` request: the message names the flag and the value."""
+
+
+def goal_request(args: argparse.Namespace) -> tuple[EventType, str, str]:
+    """The goal the flags ask for: (event type, category, description)."""
+    chosen = [name for name in ("place", "cancel", "end", "file") if getattr(args, name)]
+    if len(chosen) != 1:
+        raise SendError("give exactly one of --place, --cancel, --end, --file")
+    if args.place:
+        return EventType.NEXT, "go_to_place", json.dumps({"one_of": list(args.place)})
+    if args.cancel:
+        return EventType.CANCEL, "", ""
+    if args.end:
+        return EventType.FINISHED, "", ""
+    try:
+        data = json.loads(Path(args.file).read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise SendError(f"--file {args.file}: {exc}") from None
+    if not isinstance(data, dict) or not isinstance(data.get("category"), str) or "description" not in data:
+        raise SendError(f'--file {args.file}: expected {{"category": "...", "description": ...}}')
+    description = data["description"]
+    return (
+        EventType.NEXT,
+        data["category"],
+        description if isinstance(description, str) else json.dumps(description),
+    )
+
+
+def _succeeded(event_type: EventType, outcome: cl.Outcome) -> bool:
+    if outcome.goal_status is not GoalStatus.SUCCEEDED:
+        return False
+    return event_type != EventType.NEXT or outcome.kind is cl.OutcomeKind.COMPLETED
+
+
+def _progress_line(progress: cl.Progress) -> list[str]:
+    lines = [f"[id {progress.id}] {progress.status}"]
+    lines.extend(f"[id {progress.id}]   {entry.tier}: {entry.text}" for entry in progress.logs)
+    return lines
+
+
+def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
+    """Send the goal; 0, 1 or 2 as the module docs say."""
+    event_type, category, description = goal_request(args)
+    timeout = float(args.timeout)
+    started = time.monotonic()
+
+    def left() -> float:
+        return max(timeout - (time.monotonic() - started), 0.0)
+
+    rclpy.init()
+    node = rclpy.create_node("dynevent_send")
+    client = DynamicEventClient(node, args.fleet, args.robot)
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    spinner = threading.Thread(target=_spin, args=(executor,), daemon=True)
+    spinner.start()
+    try:
+        if not client.wait_for_server(left()):
+            say(f"no Dynamic Event server for {args.fleet}/{args.robot} within {timeout:g} s")
+            return 2
+        if not client.wait_for_status(left()):
+            say(f"no status from {args.fleet}/{args.robot} within {timeout:g} s")
+            return 2
+        status = _status(client)
+        say(f"{args.fleet}/{args.robot}: {explain.status_text(status)}")
+
+        def report(progress: cl.Progress) -> None:
+            for line in _progress_line(progress):
+                say(line)
+
+        if event_type == EventType.NEXT:
+            goal_run = client.next(
+                category, description, stubborn_period=args.stubbornness, on_progress=report
+            )
+        elif event_type == EventType.CANCEL:
+            goal_run = client.cancel(on_progress=report)
+        else:
+            goal_run = client.finish()
+        try:
+            result = goal_run.wait(left())
+        except GoalWaitTimeout:
+            say(f"no answer within {timeout:g} s")
+            return 1
+        if isinstance(result, cl.Refused):
+            rejection = result.rejection
+            say(f"not sent: the robot would refuse it: {rejection.reason.value}: {rejection.text}")
+            return 1
+        say(f"outcome: {result.kind.value}: {result.text}")
+        if result.kind is cl.OutcomeKind.REJECTED:
+            explanation = explain.explain(status, result.goal)
+            say(explain.format_explanation(explanation).rstrip("\n"))
+        return 0 if _succeeded(event_type, result) else 1
+    finally:
+        executor.shutdown(timeout_sec=2)
+        spinner.join(timeout=5)
+        client.destroy()
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+def _status(client: DynamicEventClient) -> DynamicEventStatus:
+    state = client.state
+    return DynamicEventStatus(
+        dynamic_event_seq=state.seq, dynamic_state=state.phase, status=state.status, id=state.current_id
+    )
+
+
+def _spin(executor: Any) -> None:
+    with contextlib.suppress(ExternalShutdownException):
+        executor.spin()

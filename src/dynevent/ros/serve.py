@@ -1,0 +1,343 @@
+"""``dynevent serve``: a Dynamic Event server for a whole fleet, with simulated child events.
+
+A stand-in for a fleet adapter that client authors can run in a minute: one
+ROS 2 node hosting :class:`~dynevent.ros.server.DynamicEventServer` for each
+robot, whose children are simulated (per category: a duration, a progress
+report with a log line every so often, places on which a ``go_to_place``
+fails).  Every robot begins a dynamic event at start, again some seconds
+after a run ends (``--rebegin``), and whenever a
+``rmf_task_msgs/DynamicEventDescription`` naming it arrives on
+``dynevent/serve/begin``.  With ``--state FILE`` every robot's state is kept
+in a SQLite store (:mod:`dynevent.store`); a restart on the same file
+continues every run (R21).  A readable live log of goals and answers goes to
+standard output.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import signal
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import attrs
+import rclpy
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.logging import LoggingSeverity
+
+from .. import outputs as outs
+from ..errors import DyneventError, InvalidConfig, InvalidName
+from ..machine import ServerConfig, State
+from ..names import validate_token
+from ..store import StateStore
+from ..vocab import Compatibility, IdPolicy, Status
+from .convert import RosDescription
+from .server import ChildExecution, DynamicEventServer, latched
+
+__all__ = ["BEGIN_COMMAND_TOPIC", "CategorySpec", "ServeConfig", "ServeError", "load_config", "run"]
+
+#: Publish a DynamicEventDescription naming a robot here to begin a dynamic event for it.
+BEGIN_COMMAND_TOPIC = "dynevent/serve/begin"
+DEFAULT_DESCRIPTION = '{"category": "dynevent_serve", "detail": "a simulated dynamic event"}'
+
+
+@attrs.frozen
+class CategorySpec:
+    """How a simulated child of one category behaves."""
+
+    duration: float = 3.0
+    report_every: float = 1.0
+    fail_on: tuple[str, ...] = ()
+    needs_place: bool = False
+
+
+DEFAULT_CATEGORIES = {
+    "go_to_place": CategorySpec(duration=3.0, report_every=1.0, fail_on=("nowhere",), needs_place=True),
+    "perform_action": CategorySpec(duration=2.0, report_every=1.0),
+}
+
+
+@attrs.frozen
+class ServeConfig:
+    """What ``dynevent serve`` runs: the fleet, its robots, the categories and the options."""
+
+    fleet: str = "tinyRobot"
+    robots: tuple[str, ...] = ("tinyRobot1",)
+    categories: dict[str, CategorySpec] = attrs.field(factory=lambda: dict(DEFAULT_CATEGORIES))
+    compatibility: str = "standard"
+    rebegin: float = 2.0
+
+
+class ServeError(DyneventError):
+    """A bad ``dynevent serve`` configuration."""
+
+
+def place_of(description: Any) -> str | None:
+    """The place a ``go_to_place`` description names: a string, ``{"place": P}`` or ``{"one_of": [P...]}``."""
+    if isinstance(description, str) and description:
+        return description
+    if isinstance(description, dict):
+        if isinstance(description.get("place"), str):
+            return str(description["place"])
+        choices = description.get("one_of")
+        if isinstance(choices, list) and choices:
+            first = choices[0]
+            if isinstance(first, str):
+                return first
+            if isinstance(first, dict) and isinstance(first.get("waypoint"), str):
+                return str(first["waypoint"])
+    return None
+
+
+def _validator(spec: CategorySpec) -> Callable[[str, Any], list[str]]:
+    def validate(category: str, description: Any) -> list[str]:
+        if spec.needs_place and place_of(description) is None:
+            return ['expected a place: "P", {"place": "P"} or {"one_of": ["P", ...]}']
+        return []
+
+    return validate
+
+
+class SimulatedChildren:
+    """Children that run on the node's timers, as the categories say."""
+
+    def __init__(self, node: Any, categories: dict[str, CategorySpec], say: Callable[[str], None]) -> None:
+        self._node = node
+        self._categories = categories
+        self._say = say
+        self._timers: dict[int, Any] = {}
+        self._lock = threading.Lock()
+
+    def start(self, execution: ChildExecution) -> None:
+        spec = self._categories.get(execution.category, CategorySpec())
+        place = place_of(execution.parsed)
+        began = time.monotonic()
+        label = f"{execution.category} {place}" if place else execution.category
+
+        def report() -> None:
+            if execution.done:
+                return self._forget(execution)
+            if execution.stopping is not None:
+                execution.finished()
+            elif place is not None and place in spec.fail_on:
+                execution.error(f"{place}: no such place")
+                execution.finished(Status.FAILED)
+            elif time.monotonic() - began + 1e-3 >= spec.duration:
+                execution.finished()
+            else:
+                execution.underway(f"{label}: {time.monotonic() - began:.0f} of {spec.duration:g} s")
+            if execution.done:
+                self._forget(execution)
+
+        with self._lock:
+            self._timers[execution.id] = self._node.create_timer(
+                min(spec.report_every, spec.duration), report
+            )
+
+    def _forget(self, execution: ChildExecution) -> None:
+        with self._lock:
+            timer = self._timers.pop(execution.id, None)
+        if timer is not None:
+            self._node.destroy_timer(timer)
+
+    def cancel(self, execution: ChildExecution) -> None:
+        """The child stops at its next report."""
+
+    def kill(self, execution: ChildExecution) -> None:
+        """The child stops at its next report."""
+
+    def interrupt(self, execution: ChildExecution) -> None:
+        """Simulated children do not pause."""
+
+    def resume(self, execution: ChildExecution) -> None:
+        """Simulated children do not pause."""
+
+
+def _describe(output: outs.Output | outs.Rejected) -> str | None:
+    """One line of the live log, or None for outputs not worth a line."""
+    if isinstance(output, outs.Rejected):
+        return f"refused: {output.reason.value}: {output.text}"
+    if isinstance(output, outs.PublishBegin):
+        return f"begin: run {output.message.dynamic_event_seq}"
+    if isinstance(output, outs.PublishStatus):
+        message = output.message
+        phase = ("INACTIVE", "WAITING", "RUNNING")[message.dynamic_state]
+        return f"status: {phase} seq={message.dynamic_event_seq} id={message.id} {message.status}"
+    if isinstance(output, outs.StartChild):
+        return f"start: child {output.id} {output.category} {output.description}"
+    if isinstance(output, (outs.CancelChild, outs.KillChild)):
+        return f"{'kill' if isinstance(output, outs.KillChild) else 'cancel'}: child {output.id}"
+    if isinstance(output, outs.AnswerGoal):
+        result = output.result
+        detail = repr(result.execution_failure.split("\n")[0]) if result.execution_failure else result.status
+        return f"answer: goal {output.goal_uuid[:8]} {output.status.value}: {detail} id={result.id}"
+    if isinstance(output, outs.Log):
+        return f"log: {output.entry.tier}: {output.entry.text}"
+    if isinstance(output, outs.DynamicEventFinished):
+        return f"finished: the dynamic event ended {output.status}"
+    return None
+
+
+def load_config(args: argparse.Namespace) -> ServeConfig:
+    """The configuration from ``--config FILE`` and the flags (flags win); raises :class:`ServeError`."""
+    config = ServeConfig()
+    if args.config is not None:
+        try:
+            data = json.loads(Path(args.config).read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise ServeError(f"--config {args.config}: {exc}") from None
+        config = _config_from_dict(data, args.config)
+    if args.fleet is not None:
+        config = attrs.evolve(config, fleet=args.fleet)
+    if args.robots:
+        config = attrs.evolve(config, robots=tuple(args.robots))
+    if args.rebegin is not None:
+        config = attrs.evolve(config, rebegin=args.rebegin)
+    try:
+        validate_token("fleet", config.fleet)
+        for robot in config.robots:
+            validate_token("robot", robot)
+    except InvalidName as exc:
+        raise ServeError(str(exc)) from None
+    if len(set(config.robots)) != len(config.robots):
+        raise ServeError(f"robots: a robot is named twice in {list(config.robots)}")
+    return config
+
+
+def _config_from_dict(data: Any, source: str) -> ServeConfig:
+    if not isinstance(data, dict):
+        raise ServeError(f"{source}: expected a JSON object")
+    unknown = set(data) - {"fleet", "robots", "categories", "compatibility", "rebegin"}
+    if unknown:
+        raise ServeError(f"{source}: unknown keys {sorted(unknown)}")
+    categories = dict(DEFAULT_CATEGORIES)
+    if "categories" in data:
+        categories = {}
+        for name, spec in dict(data["categories"]).items():
+            try:
+                values = dict(spec)
+                categories[name] = CategorySpec(
+                    duration=float(values.get("duration", 3.0)),
+                    report_every=float(values.get("report_every", 1.0)),
+                    fail_on=tuple(str(place) for place in values.get("fail_on", ())),
+                    needs_place=bool(values.get("needs_place", name == "go_to_place")),
+                )
+            except (TypeError, ValueError) as exc:
+                raise ServeError(f"{source}: categories.{name}: {exc}") from None
+            if not 0 < categories[name].duration < 1e6 or not 0 < categories[name].report_every < 1e6:
+                raise ServeError(
+                    f"{source}: categories.{name}: duration and report_every are positive seconds"
+                )
+    robots = data.get("robots", ["tinyRobot1"])
+    if not isinstance(robots, list) or not all(isinstance(robot, str) for robot in robots):
+        raise ServeError(f"{source}: robots: expected a list of names")
+    return ServeConfig(
+        fleet=str(data.get("fleet", "tinyRobot")),
+        robots=tuple(robots),
+        categories=categories,
+        compatibility=str(data.get("compatibility", "standard")),
+        rebegin=float(data.get("rebegin", 2.0)),
+    )
+
+
+def run(
+    config: ServeConfig, state_path: str | None, seconds: float | None, say: Callable[[str], None]
+) -> int:
+    """Serve until SIGINT or SIGTERM (or ``seconds``); 0, or 2 for a store or configuration refused."""
+    store = StateStore(state_path) if state_path is not None else None  # InvalidStore: nothing written
+    stored = store.load() if store is not None else {}
+    try:
+        machine_config = _machine_config(config)
+    except InvalidConfig as exc:
+        raise ServeError(str(exc)) from None
+    rclpy.init()
+    node = rclpy.create_node("dynevent_serve")
+    node.get_logger().set_level(LoggingSeverity.WARN)  # the live log says the rest
+    begins = DynamicEventServer.fleet_begin_publisher(node)
+    children = SimulatedChildren(node, config.categories, say)
+    servers: dict[str, DynamicEventServer] = {}
+    rebegin_timers: dict[str, Any] = {}
+
+    def observer(robot: str) -> Callable[[outs.Output | outs.Rejected], None]:
+        def observe(output: outs.Output | outs.Rejected) -> None:
+            line = _describe(output)
+            if line is not None:
+                say(f"{config.fleet}/{robot}  {line}")
+
+        return observe
+
+    def finished(robot: str) -> Callable[[str], None]:
+        def rebegin_later(status: str) -> None:
+            if config.rebegin > 0:
+                timer = node.create_timer(config.rebegin, lambda: begin_again(robot))
+                rebegin_timers[robot] = timer
+
+        return rebegin_later
+
+    def begin_again(robot: str, description: str = DEFAULT_DESCRIPTION) -> None:
+        timer = rebegin_timers.pop(robot, None)
+        if timer is not None:
+            node.destroy_timer(timer)
+        servers[robot].begin(description, 1)
+
+    for robot in config.robots:
+        restored: State | None = stored.get((config.fleet, robot))
+        servers[robot] = DynamicEventServer(
+            node,
+            config.fleet,
+            robot,
+            machine_config,
+            children,
+            begin_publisher=begins,
+            state=restored,
+            on_state=store.save if store is not None else None,
+            observer=observer(robot),
+            on_finished=finished(robot),
+        )
+        if restored is not None:
+            say(f"{config.fleet}/{robot}  restored: run {restored.seq}, last id {restored.last_id}")
+            servers[robot].restart()
+        if not servers[robot].state.active:
+            servers[robot].begin(DEFAULT_DESCRIPTION, 1)
+
+    def on_begin_command(message: Any) -> None:
+        if message.fleet == config.fleet and message.robot in servers:
+            begin_again(message.robot, message.description or DEFAULT_DESCRIPTION)
+
+    node.create_subscription(RosDescription, BEGIN_COMMAND_TOPIC, on_begin_command, latched(10))
+    executor = MultiThreadedExecutor(num_threads=2)
+    executor.add_node(node)
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
+    spinner = threading.Thread(target=_spin, args=(executor,), daemon=True)
+    spinner.start()
+    say(f"serving {len(servers)} robot(s) of fleet {config.fleet}: {', '.join(servers)}")
+    stop.wait(seconds)
+    for server in servers.values():
+        server.shutdown()
+    time.sleep(0.2)  # let the shutdown answers go out before the node goes
+    executor.shutdown(timeout_sec=5)
+    spinner.join(timeout=5)
+    node.destroy_node()
+    rclpy.try_shutdown()
+    if store is not None:
+        store.close()
+    return 0
+
+
+def _machine_config(config: ServeConfig) -> ServerConfig:
+    validators = {name: _validator(spec) for name, spec in config.categories.items()}
+    if config.compatibility == Compatibility.RMF_ROS2.value:
+        return ServerConfig.rmf_ros2(validators)
+    return ServerConfig(categories=validators, id_policy=IdPolicy.GOAL, compatibility=config.compatibility)
+
+
+def _spin(executor: Any) -> None:
+    with contextlib.suppress(ExternalShutdownException):
+        executor.spin()

@@ -1,0 +1,159 @@
+"""``dynevent serve`` and ``dynevent send`` as separate processes over DDS, with kill -9 and a restart."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+from ros_support import WAIT, Graph, wait_for
+
+from dynevent.ros import DynamicEventClient
+
+ROBOT = "serveRobot"
+
+
+class Serve:
+    """A ``dynevent serve`` process and its live log."""
+
+    def __init__(self, *args: str) -> None:
+        self.lines: list[str] = []
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", "dynevent", "serve", "--robot", ROBOT, "--rebegin", "0", *args],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            env=os.environ.copy(),
+        )
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        assert self.process.stdout is not None
+        for line in self.process.stdout:
+            self.lines.append(line.rstrip("\n"))
+
+    def saw(self, text: str) -> bool:
+        return any(text in line for line in self.lines)
+
+    def stop(self, signum: int = signal.SIGINT) -> int:
+        if self.process.poll() is None:
+            self.process.send_signal(signum)
+        code = self.process.wait(timeout=WAIT)
+        self._reader.join(timeout=WAIT)
+        return code
+
+
+def send(*args: str, timeout: float = 20.0) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "dynevent", "send", "--robot", ROBOT, "--timeout", str(timeout), *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout + 15,
+        env=os.environ.copy(),
+        check=False,
+    )
+
+
+@pytest.fixture
+def watcher(graph: Graph) -> Iterator[DynamicEventClient]:
+    client = DynamicEventClient(graph.node("watcher"), "tinyRobot", ROBOT)
+    yield client
+
+
+@pytest.mark.spec("R21.1", "R21.2", "R21.3", "R20.1")
+def test_serve_and_send_survive_kill_9_in_the_middle_of_a_child(tmp_path: Path, watcher: Any) -> None:
+    config = tmp_path / "fleet.json"
+    config.write_text(
+        json.dumps(
+            {"categories": {"go_to_place": {"duration": 1.0, "report_every": 0.25}, "slow": {"duration": 60}}}
+        ),
+        encoding="utf-8",
+    )
+    state = tmp_path / "state.db"
+    serve = Serve("--config", str(config), "--state", str(state))
+    try:
+        done = send("--place", "pantry")
+        assert done.returncode == 0, done.stdout + done.stderr
+        assert "outcome: completed" in done.stdout and "[id 2]" in done.stdout
+        assert (
+            wait_for(lambda: watcher.state.current_id == 2 and watcher.state.phase == 1, "WAITING id 2")
+            is None
+        )
+        (tmp_path / "slow.json").write_text('{"category": "slow", "description": {}}', encoding="utf-8")
+        slow = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "dynevent",
+                "send",
+                "--robot",
+                ROBOT,
+                "--timeout",
+                "6",
+                "--file",
+                str(tmp_path / "slow.json"),
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            env=os.environ.copy(),
+        )
+        wait_for(lambda: watcher.state.phase == 2 and watcher.state.current_id == 3, "child 3 running")
+        serve.process.send_signal(signal.SIGKILL)
+        assert serve.stop() == -signal.SIGKILL
+        assert slow.wait(timeout=30) == 1  # its server died: no answer within its bound
+        serve = Serve("--config", str(config), "--state", str(state))
+        wait_for(lambda: serve.saw("restored: run 1, last id 3"), "the restore")
+        wait_for(lambda: watcher.state.phase == 1 and watcher.state.current_id == 3, "WAITING id 3 again")
+        assert watcher.state.seq == 1  # the same run goes on
+        done = send("--place", "lobby")
+        assert done.returncode == 0, done.stdout + done.stderr
+        assert "[id 4]" in done.stdout  # ids continue
+        ended = send("--end")
+        assert ended.returncode == 0, ended.stdout
+    finally:
+        code = serve.stop()
+    assert code == 0, "\n".join(serve.lines)
+
+
+def test_a_foreign_state_file_is_refused_and_left_as_it_was(tmp_path: Path) -> None:
+    state = tmp_path / "state.db"
+    state.write_bytes(b"not a database" * 100)
+    serve = Serve("--state", str(state), "--seconds", "5")
+    assert serve.process.wait(timeout=WAIT) == 2
+    serve.stop()
+    assert any("is not a dynevent state store" in line for line in serve.lines), serve.lines
+    assert not any("Traceback" in line for line in serve.lines)
+    assert state.read_bytes() == b"not a database" * 100
+
+
+@pytest.mark.spec("R4.13")
+def test_send_explains_and_exits_by_the_outcome(watcher: Any) -> None:
+    serve = Serve()
+    try:
+        wait_for(lambda: watcher.state.phase == 1, "WAITING")
+        idle = send("--cancel")
+        assert idle.returncode == 1
+        assert "cancel_idle" in idle.stdout
+        usage = send("--cancel", "--end")
+        assert usage.returncode == 2 and "exactly one of" in usage.stderr
+        missing = subprocess.run(
+            [sys.executable, "-m", "dynevent", "send", "--robot", "nobody", "--end", "--timeout", "2"],
+            capture_output=True,
+            text=True,
+            timeout=30,
+            env=os.environ.copy(),
+            check=False,
+        )
+        assert missing.returncode == 2 and "no Dynamic Event server" in missing.stdout
+        assert "Traceback" not in missing.stderr
+    finally:
+        assert serve.stop() == 0
