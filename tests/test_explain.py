@@ -103,7 +103,8 @@ def test_unknown_categories_are_said_to_be_unknown() -> None:
     explanation = explain(WAITING, next_goal(category="dance"))
     assert explanation.accepted
     assert any("'dance' was taken as supported" in item for item in explanation.unknown)
-    assert any("highest id used in this run" in item for item in explanation.unknown)
+    # a status names the highest id used (R2.2): that is no longer unknown
+    assert not any("highest id used" in item for item in explanation.unknown)
 
 
 def test_accepted_goals_say_what_happens_at_their_start() -> None:

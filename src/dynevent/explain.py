@@ -374,11 +374,6 @@ def _unknowns(state: State, goal: Goal, decision: outs.Decision, categories_know
         unknown.append(
             "whether the description fits its category's schema: only its JSON was checked (R4.10)"
         )
-    if next_goal and state.active:
-        unknown.append(
-            f"the highest id used in this run: the status shows {state.current_id}, and a child that has "
-            "ended may have used a higher one (R4.12)"
-        )
     if isinstance(decision, outs.Accepted):
         unknown.append("goals accepted before this one: one that starts first makes it lose the race (R5.2)")
     running = state.running

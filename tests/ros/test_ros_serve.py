@@ -24,6 +24,9 @@ class Serve:
     """A ``dynevent serve`` process and its live log."""
 
     def __init__(self, *args: str) -> None:
+        import tempfile
+
+        self.tmp = tempfile.mkdtemp(prefix="dynevent-serve-")
         self.lines: list[str] = []
         self.process = subprocess.Popen(
             [sys.executable, "-m", "dynevent", "serve", "--robot", ROBOT, "--rebegin", "0", *args],
@@ -157,3 +160,38 @@ def test_send_explains_and_exits_by_the_outcome(watcher: Any) -> None:
         assert "Traceback" not in missing.stderr
     finally:
         assert serve.stop() == 0
+
+
+@pytest.mark.spec("R3.1", "R4.7")
+def test_serve_begins_on_command_and_send_explains_a_refusal_it_cannot_see(
+    graph: Graph, watcher: Any
+) -> None:
+    from rmf_task_msgs.msg import DynamicEventDescription
+
+    from dynevent.ros.serve import BEGIN_COMMAND_TOPIC
+    from dynevent.ros.server import latched
+
+    serve = Serve()
+    try:
+        wait_for(lambda: watcher.state.phase == 1, "WAITING")
+        assert send("--end").returncode == 0
+        wait_for(lambda: watcher.state.phase == 0, "INACTIVE: --rebegin 0 begins nothing")
+        publisher = graph.node("commander").create_publisher(
+            DynamicEventDescription, BEGIN_COMMAND_TOPIC, latched(10)
+        )
+        publisher.publish(
+            DynamicEventDescription(fleet="tinyRobot", robot=ROBOT, description='{"category": "tour"}')
+        )
+        wait_for(lambda: watcher.state.phase == 1 and watcher.state.seq == 2, "run 2 begun on command")
+        refused = send("--file", str(_write(Path(serve.tmp), '{"category": "fly", "description": {}}')))
+        assert refused.returncode == 1
+        assert "outcome: rejected" in refused.stdout
+        assert "does not support this category" in refused.stdout
+    finally:
+        assert serve.stop() == 0
+
+
+def _write(folder: Path, text: str) -> Path:
+    path = folder / "goal.json"
+    path.write_text(text, encoding="utf-8")
+    return path

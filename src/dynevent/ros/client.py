@@ -103,6 +103,7 @@ class DynamicEventClient:
         self._state = cl.ClientState.new(prefix, categories=categories)
         self._runs: dict[str, GoalRun] = {}
         self._views = threading.Condition(self._lock)
+        self._status_seen = False
         group = MutuallyExclusiveCallbackGroup()
         self._status = node.create_subscription(
             RosStatus,
@@ -139,9 +140,16 @@ class DynamicEventClient:
         return bool(self._action.wait_for_server(timeout_sec=timeout))
 
     def wait_for_status(self, timeout: float) -> bool:
-        """Wait (at most ``timeout`` seconds, from another thread than the executor's) for a status."""
+        """Wait (at most ``timeout`` seconds, from another thread than the executor's) for a status.
+
+        The status must be of the newest run the client has heard of: a begin
+        can arrive before its run's status, and a goal built from the older
+        status would only be refused.
+        """
         with self._views:
-            return self._views.wait_for(lambda: self._state.newest_seq is not None, timeout)
+            return self._views.wait_for(
+                lambda: self._status_seen and self._state.seq == self._state.newest_seq, timeout
+            )
 
     # ---------------------------------------------------------------- commands
 
@@ -256,6 +264,8 @@ class DynamicEventClient:
         except InvalidMessage as exc:
             self._node.get_logger().warning(f"status refused: {exc}")
             return
+        with self._lock:
+            self._status_seen = True
         self._step(cl.StatusReceived(message=status))
 
     def _on_begin(self, message: Any) -> None:

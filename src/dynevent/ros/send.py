@@ -26,8 +26,9 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
 from .. import client as cl
 from .. import explain
+from .. import outputs as outs
 from ..errors import DyneventError
-from ..messages import DynamicEventStatus
+from ..messages import DynamicEventStatus, Goal
 from ..vocab import EventType, GoalStatus
 from .client import DynamicEventClient, GoalWaitTimeout
 
@@ -124,8 +125,7 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
             return 1
         say(f"outcome: {result.kind.value}: {result.text}")
         if result.kind is cl.OutcomeKind.REJECTED:
-            explanation = explain.explain(status, result.goal)
-            say(explain.format_explanation(explanation).rstrip("\n"))
+            say(_why_refused(status, result.goal))
         return 0 if _succeeded(event_type, result) else 1
     finally:
         executor.shutdown(timeout_sec=2)
@@ -133,6 +133,18 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
         client.destroy()
         node.destroy_node()
         rclpy.try_shutdown()
+
+
+def _why_refused(status: DynamicEventStatus, goal: Goal) -> str:
+    """What the status tells of a refusal (a ROS refusal carries no reason)."""
+    explanation = explain.explain(status, goal)
+    if isinstance(explanation.decision, outs.Accepted):
+        unknown = "; ".join(explanation.unknown) or "what the robot supports"
+        return (
+            "why: the status does not show it: the robot most likely does not support this category "
+            f"or description (a status cannot tell: {unknown})"
+        )
+    return "why: " + explain.format_explanation(explanation).rstrip("\n")
 
 
 def _status(client: DynamicEventClient) -> DynamicEventStatus:
