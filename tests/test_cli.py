@@ -209,3 +209,40 @@ def test_cli_doc_covers_every_subcommand() -> None:
     commands = [command for pairs in _sessions(CLI_DOC.read_text(encoding="utf-8")) for command, _ in pairs]
     for sub in ("demo", "check", "explain", "diagram"):
         assert any(command.startswith(f"dynevent {sub}") for command in commands), sub
+
+
+@pytest.mark.parametrize(
+    "args",
+    [["demo"], ["diagram"], ["vectors"], ["check", "docs/examples/clean-trace.jsonl"]],
+    ids=lambda args: args[0],
+)
+def test_a_reader_that_goes_away_stops_the_command_quietly(args: list[str]) -> None:
+    """``dynevent ... | head``: a closed standard output is no traceback."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "dynevent", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        cwd=ROOT,
+        text=True,
+    )
+    assert process.stdout is not None
+    process.stdout.close()  # the reader is gone before the first line
+    _, error = process.communicate(timeout=60)
+    assert process.returncode == 141, error
+    assert "Traceback" not in error and error == ""
+
+
+def test_the_driver_stops_quietly_when_its_runner_goes_away() -> None:
+    process = subprocess.Popen(
+        [sys.executable, "-m", "dynevent.driver"],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        cwd=ROOT,
+        text=True,
+    )
+    assert process.stdin is not None and process.stdout is not None
+    process.stdout.close()
+    _, error = process.communicate('{"op": "bogus"}\n' * 50, timeout=60)
+    assert process.returncode == 141, error
+    assert "Traceback" not in error

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
 
@@ -231,4 +232,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         result: int = args.run(args)
     except KeyboardInterrupt:
         return 130  # Ctrl-C: the command stops, without a traceback
+    except BrokenPipeError:
+        return quiet_broken_pipe()
     return result
+
+
+def quiet_broken_pipe() -> int:
+    """The reader of standard output went away (``| head``): stop quietly, as a shell's tools do."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())  # the interpreter's final flush then has nowhere to fail
+    return 141

@@ -18,6 +18,7 @@ Records (inputs, outputs, configurations) are those of :mod:`dynevent.records`.
 
 from __future__ import annotations
 
+import os
 import sys
 from typing import IO, Any
 
@@ -121,7 +122,14 @@ def serve(reader: IO[str], writer: IO[str]) -> None:
 
 def main() -> int:
     """Entry point of ``python -m dynevent.driver``."""
-    serve(sys.stdin, sys.stdout)
+    try:
+        serve(sys.stdin, sys.stdout)
+    except KeyboardInterrupt:
+        return 130
+    except BrokenPipeError:  # the runner went away
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141
     return 0
 
 
