@@ -114,13 +114,34 @@ def _kwargs(field: str, value: Any) -> dict[str, Any]:
 _BAD_NUMBERS = [0, 0.0, -1, -0.5, True, False, math.nan, math.inf, -math.inf, "2", None]
 
 
-@pytest.mark.parametrize("field", ["stubborn_minimum", "stubborn_refresh", "stubborn_move_threshold"])
-@pytest.mark.parametrize("value", _BAD_NUMBERS, ids=repr)
-def test_stubborn_settings_must_be_positive_finite_numbers(field: str, value: Any) -> None:
+_BOUNDS = {
+    "stubborn_minimum": "expected a number of seconds from 0.001 to 86400",
+    "stubborn_refresh": "expected a number of seconds from 0.001 to 86400",
+    "stubborn_move_threshold": "expected a number of metres from 0.01 to 1e+06",
+}
+
+
+@pytest.mark.spec("R0.1")
+@pytest.mark.parametrize("field", sorted(_BOUNDS))
+@pytest.mark.parametrize("value", [*_BAD_NUMBERS, 10**400, -(10**400), 1e300], ids=repr)
+def test_stubborn_settings_must_be_numbers_the_machine_can_run(field: str, value: Any) -> None:
     with pytest.raises(InvalidConfig) as caught:
         ServerConfig(**_kwargs(field, value))
     assert isinstance(caught.value, ValueError)
-    assert str(caught.value) == f"ServerConfig.{field}: expected a positive finite number (got {value!r})"
+    assert str(caught.value).startswith(f"ServerConfig.{field}: {_BOUNDS[field]} (got ")
+
+
+@pytest.mark.spec("R0.1", "R19.7")
+@pytest.mark.parametrize("refresh", [0.001, 86_400.0])
+def test_the_extreme_refresh_periods_run(refresh: float) -> None:
+    config = ServerConfig(
+        categories={"go_to_place": accept_any}, stubborn_refresh=refresh, stubborn_minimum=86_400
+    )
+    run = running(config=config, stubborn=1.0)
+    run.child_end()
+    assert run.state.stubborn is not None and run.state.stubborn.period == 86_400
+    for step in (0, 1, 10**6, 10**15):
+        run.tick(now=run.now + step)
 
 
 @pytest.mark.parametrize(
@@ -150,7 +171,7 @@ def test_move_threshold_is_at_least_a_centimetre(value: float, kept: float) -> N
 
 
 @pytest.mark.parametrize("field", ["stubborn_minimum", "stubborn_refresh"])
-@pytest.mark.parametrize("value", [1e-9, 1, 2.5])
+@pytest.mark.parametrize("value", [0.001, 1, 2.5, 86_400])  # the bounds of R0.1 and between
 def test_small_positive_periods_are_kept(field: str, value: float) -> None:
     assert getattr(ServerConfig(**_kwargs(field, value)), field) == value
 

@@ -117,14 +117,21 @@ def _compatibility(value: Any) -> Compatibility:
         raise InvalidConfig("compatibility", value, f"expected one of {choices}") from None
 
 
-def _positive(instance: Any, attribute: attrs.Attribute[Any], value: Any) -> None:
-    if (
-        isinstance(value, bool)
-        or not isinstance(value, (int, float))
-        or not math.isfinite(value)
-        or value <= 0
-    ):
-        raise InvalidConfig(attribute.name, value, "expected a positive finite number")
+#: The bounds of the configuration's numbers (R0.1): what the machine can run without overflow.
+SECONDS_RANGE = (0.001, 86_400.0)
+METRES_RANGE = (0.01, 1_000_000.0)
+
+
+def _within(bounds: tuple[float, float], unit: str) -> Callable[[Any, attrs.Attribute[Any], Any], None]:
+    low, high = bounds
+
+    def check(instance: Any, attribute: attrs.Attribute[Any], value: Any) -> None:
+        # comparisons, not float(): an integer of any size is judged exactly, and NaN fails both
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
+            problem = f"expected a number of {unit} from {low:g} to {high:g}"
+            raise InvalidConfig(attribute.name, value, problem)
+
+    return check
 
 
 def _description_limit(instance: Any, attribute: attrs.Attribute[Any], value: Any) -> None:
@@ -134,9 +141,15 @@ def _description_limit(instance: Any, attribute: attrs.Attribute[Any], value: An
         )
 
 
+def _seconds_value(value: Any) -> Any:
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value <= SECONDS_RANGE[1]:
+        return float(value)
+    return value  # the validator names the fault
+
+
 def _at_least_a_centimetre(value: Any) -> Any:
-    if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0:
-        return max(float(value), 0.01)
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value <= METRES_RANGE[1]:
+        return max(float(value), METRES_RANGE[0])
     return value  # the validator names the fault
 
 
@@ -155,11 +168,15 @@ class ServerConfig:
     categories: Mapping[str, Validator] = attrs.field(factory=dict, converter=_categories)
     id_policy: IdPolicy = attrs.field(default=IdPolicy.GOAL, converter=_id_policy)
     compatibility: Compatibility = attrs.field(default=Compatibility.STANDARD, converter=_compatibility)
-    stubborn_minimum: float = attrs.field(default=2.0, validator=_positive)
-    stubborn_refresh: float = attrs.field(default=1.0, validator=_positive)
+    stubborn_minimum: float = attrs.field(
+        default=2.0, validator=_within(SECONDS_RANGE, "seconds"), converter=_seconds_value
+    )
+    stubborn_refresh: float = attrs.field(
+        default=1.0, validator=_within(SECONDS_RANGE, "seconds"), converter=_seconds_value
+    )
     stubborn_move_threshold: float = attrs.field(
         default=0.1,
-        validator=_positive,
+        validator=_within(METRES_RANGE, "metres"),
         converter=_at_least_a_centimetre,
     )
     max_description_length: int = attrs.field(default=MAX_DESCRIPTION_BYTES, validator=_description_limit)
