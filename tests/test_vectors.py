@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import json
 import re
+import shlex
 import subprocess
 import sys
+import time
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -323,3 +325,38 @@ def test_every_divergence_has_a_vector() -> None:
     covered = {item for vector in vectors.load_vectors() for item in vector.divergences}
     assert sections - covered == set(), f"divergences without a vector: {sorted(sections - covered)}"
     assert covered - sections == set(), f"vectors name unknown divergences: {sorted(covered - sections)}"
+
+
+STALL = "import sys, time; sys.stdout.write('{\"ok'); sys.stdout.flush(); time.sleep(60)"
+
+
+@pytest.mark.parametrize(
+    ("impl", "extra", "problem"),
+    [
+        ("", [], "the implementation's command is empty"),
+        ("'unclosed", [], "No closing quotation"),
+        (f"{sys.executable} -c pass", [], "ended (exit code 0)"),
+        (
+            f"{sys.executable} -c \"import sys; sys.stdout.buffer.write(b'\\xff\\n'); sys.stdout.flush()\"",
+            [],
+            "not UTF-8",
+        ),
+        (
+            f"{sys.executable} -c {shlex.quote(STALL)}",
+            ["--timeout", "1"],
+            "did not answer within 1 s",
+        ),
+        (f"{sys.executable} -m dynevent.driver", ["--timeout", "nan"], "timeout: expected seconds"),
+        (f"{sys.executable} -m dynevent.driver", ["--timeout", "-1"], "timeout: expected seconds"),
+    ],
+    ids=["empty", "bad-quoting", "exits", "not-utf8", "half-line-stall", "nan-timeout", "negative-timeout"],
+)
+def test_a_broken_implementation_is_a_clear_error_within_the_timeout(
+    impl: str, extra: list[str], problem: str
+) -> None:
+    started = time.monotonic()
+    result = _dynevent("--impl", impl, *extra)
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert problem in result.stderr, result.stderr
+    assert "Traceback" not in result.stderr
+    assert time.monotonic() - started < 30  # the stalled one is cut at its 1 s timeout, not after 60 s

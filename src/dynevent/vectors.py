@@ -21,6 +21,7 @@ import re
 import select
 import shlex
 import subprocess
+import time
 from collections.abc import Iterable, Iterator, Sequence
 from importlib import resources
 from typing import Any, Protocol
@@ -56,6 +57,10 @@ __all__ = [
 
 #: In an expected output, matches any string.
 WILDCARD = "*"
+#: The longest an external implementation may take to answer one request, in seconds.
+MAX_TIMEOUT = 3600.0
+#: The longest answer line an external implementation may write, in bytes.
+MAX_ANSWER_BYTES = 64 * 1024 * 1024
 
 
 class InvalidVector(DyneventError):
@@ -149,16 +154,20 @@ class ExternalImplementation:
 
     def __init__(self, command: str, timeout: float = 10.0) -> None:
         self.command = command
-        self.timeout = timeout
-        try:
-            self._process = subprocess.Popen(
-                shlex.split(command),
-                stdin=subprocess.PIPE,
-                stdout=subprocess.PIPE,
-                text=True,
-                encoding="utf-8",
-                bufsize=1,
+        if not (isinstance(timeout, (int, float)) and 0 < timeout <= MAX_TIMEOUT):
+            raise ImplementationError(
+                f"timeout: expected seconds from 0 to {MAX_TIMEOUT:g} (got {timeout!r})"
             )
+        self.timeout = float(timeout)
+        self._pending = b""
+        try:
+            words = shlex.split(command)
+        except ValueError as exc:
+            raise ImplementationError(f"cannot start {command!r}: {exc}") from None
+        if not words:
+            raise ImplementationError("the implementation's command is empty")
+        try:
+            self._process = subprocess.Popen(words, stdin=subprocess.PIPE, stdout=subprocess.PIPE)
         except (OSError, ValueError) as exc:
             raise ImplementationError(f"cannot start {command!r}: {exc}") from None
         try:
@@ -171,21 +180,23 @@ class ExternalImplementation:
         self.name = str(hello.get("implementation", command))
 
     def _request(self, request: Any) -> dict[str, Any]:
-        stdin, stdout = self._process.stdin, self._process.stdout
-        assert stdin is not None and stdout is not None
+        stdin = self._process.stdin
+        assert stdin is not None
         try:
-            stdin.write(_json.dumps(request) + "\n")
+            stdin.write((_json.dumps(request) + "\n").encode("utf-8"))
             stdin.flush()
         except (BrokenPipeError, OSError):
             raise ImplementationError(
                 f"{self.command!r} closed its input (exit code {self._process.poll()})"
             ) from None
-        ready, _, _ = select.select([stdout], [], [], self.timeout)
-        if not ready:
-            raise ImplementationError(f"{self.command!r} did not answer within {self.timeout} s")
-        line = stdout.readline()
-        if not line:
-            raise ImplementationError(f"{self.command!r} ended (exit code {self._process.wait()})")
+        raw = self._read_line()
+        try:
+            line = raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise ImplementationError(
+                f"{self.command!r} answered with bytes that are not UTF-8 ({exc.reason} "
+                f"at byte {exc.start}): {raw[:200]!r}"
+            ) from None
         try:
             answer = _json.parse(line)
         except _json.JsonProblem as exc:
@@ -193,6 +204,25 @@ class ExternalImplementation:
         if not isinstance(answer, dict):
             raise _fail(answer)
         return answer
+
+    def _read_line(self) -> bytes:
+        """One answer line, within the timeout however the program writes it (a half line and a stall too)."""
+        stdout = self._process.stdout
+        assert stdout is not None
+        deadline = time.monotonic() + self.timeout
+        while b"\n" not in self._pending:
+            left = deadline - time.monotonic()
+            ready, _, _ = select.select([stdout], [], [], max(left, 0.0))
+            if not ready:
+                raise ImplementationError(f"{self.command!r} did not answer within {self.timeout:g} s")
+            chunk = os.read(stdout.fileno(), 65536)
+            if not chunk:
+                raise ImplementationError(f"{self.command!r} ended (exit code {self._process.wait()})")
+            self._pending += chunk
+            if len(self._pending) > MAX_ANSWER_BYTES:
+                raise ImplementationError(f"{self.command!r} answered a line above {MAX_ANSWER_BYTES} bytes")
+        line, _, self._pending = self._pending.partition(b"\n")
+        return line
 
     def reset(self, fleet: str, robot: str, config: Any, state: Any) -> None:
         """Start a new server."""
