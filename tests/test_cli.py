@@ -246,3 +246,14 @@ def test_the_driver_stops_quietly_when_its_runner_goes_away() -> None:
     _, error = process.communicate('{"op": "bogus"}\n' * 50, timeout=60)
     assert process.returncode == 141, error
     assert "Traceback" not in error
+
+
+def test_an_empty_trace_or_vector_file_says_nothing_was_checked(tmp_path: Path) -> None:
+    trace = tmp_path / "empty.jsonl"
+    trace.write_text("# only a comment\n\n", encoding="utf-8")
+    checked = dynevent("check", str(trace))
+    assert checked.returncode == 2 and "nothing to check" in checked.stderr and checked.stdout == ""
+    empty = tmp_path / "none.json"
+    empty.write_text('{"vectors": []}', encoding="utf-8")
+    ran = dynevent("vectors", str(empty))
+    assert ran.returncode == 2 and f"no vector in {empty}" in ran.stderr

@@ -1472,6 +1472,9 @@ def _run(args: argparse.Namespace) -> int:
     except TraceError as exc:
         print(f"dynevent check: {exc}", file=sys.stderr)
         return 2
+    if report.records == 0:
+        print(f"dynevent check: {report.source}: nothing to check: no record in it", file=sys.stderr)
+        return 2
     if args.json:
         for row in trace_records(report):
             print(_json.dumps(row))

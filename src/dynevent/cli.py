@@ -27,9 +27,12 @@ def _vectors(args: argparse.Namespace) -> int:
     except vectors.InvalidVector as exc:
         print(f"dynevent vectors: invalid vector file: {exc}", file=sys.stderr)
         return 2
+    if not loaded:
+        print(f"dynevent vectors: no vector in {', '.join(args.files)}", file=sys.stderr)
+        return 2
     chosen = vectors.select_vectors(loaded, args.filter)
     if not chosen:
-        print(f"dynevent vectors: no vector matches {args.filter}", file=sys.stderr)
+        print(f"dynevent vectors: no vector matches {' or '.join(args.filter)}", file=sys.stderr)
         return 2
     implementation: vectors.InProcessImplementation | vectors.ExternalImplementation
     try:
