@@ -90,7 +90,7 @@ def test_a_cancel_keeps_the_robot_running_until_the_child_ends() -> None:
     assert run.child_end("canceled") == (
         answer(u(1), ABORTED, text="canceled", id=5),
         answer(u(2), SUCCEEDED, text="canceled", id=5),
-        status(run.seq, WAITING, "standby", 1),
+        status(run.seq, WAITING, "standby", 5),  # the highest id used (R2.2)
     )
     assert run.request(u(3), next_goal(run.seq, 6)) == accepted(u(3))
 
@@ -105,7 +105,7 @@ def test_the_status_after_a_child_ends_says_waiting() -> None:
     # rmf_ros2 publishes (RUNNING, completed, 5) here and nothing after it
     assert outputs == (
         answer(u(1), SUCCEEDED, text="completed", id=5),
-        status(run.seq, WAITING, "standby", 1),
+        status(run.seq, WAITING, "standby", 5),  # WAITING, and the highest id used (R2.2)
     )
     assert run.phase is WAITING
     assert run.state.running is None
@@ -334,7 +334,7 @@ def test_a_clamped_stubborn_period_is_reported() -> None:
     assert run.child_end("completed") == (
         answer(u(1), SUCCEEDED, text="completed", id=5),
         outs.StubbornBegin(period=2.0, since=T0, map_name=None, x=0.0, y=0.0),
-        status(run.seq, WAITING, "standby", 1),
+        status(run.seq, WAITING, "standby", 5),
     )
 
 
