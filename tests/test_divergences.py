@@ -20,7 +20,7 @@ import attrs
 import pytest
 
 from dynevent import outputs as outs
-from dynevent.machine import ServerConfig, State
+from dynevent.machine import ServerConfig, State, status_message
 from dynevent.messages import DescriptionResponse
 from dynevent.vocab import Compatibility, IdPolicy, RejectReason
 from scenario import (
@@ -443,6 +443,147 @@ def test_the_description_service_answers_from_the_state() -> None:
             response=DescriptionResponse(running=True, status="underway", description=DESC, id=5)
         ),
     )
+
+
+# --------------------------------------------------------------------------- D2 (compatibility), D10, D16
+
+
+@pytest.mark.spec("R17.4", "R2.3")
+def test_rmf_ros2_mode_publishes_running_at_a_childs_end() -> None:
+    run = running(config=RMF_ROS2, uuid=u(1))  # child 2, numbered by the adapter
+    assert run.child_end("completed")[-1] == status(run.seq, RUNNING, "completed", 2)
+    assert run.phase is WAITING  # the stuck robot is not reproduced: the next NEXT is accepted
+    assert run.request(u(2), next_goal(run.seq, 0)) == accepted(u(2))
+
+
+@pytest.mark.spec("R20.1", "R2.2", "R6.2")
+def test_a_client_that_keeps_no_state_works_in_standard_mode() -> None:
+    run = waiting(event_id=7)
+    for child in (8, 9):
+        seen = status_message(run.state, T0)  # all a one-shot client knows
+        run.submit(u(child), next_goal(seen.dynamic_event_seq, seen.id + 1))
+        run.child_end("completed")
+        assert status_message(run.state, T0).id == child
+    run.submit(u(10), next_goal(run.seq, 0))  # id 0: the server numbers the child
+    assert run.state.running is not None and run.state.running.child_id == 10
+
+
+@pytest.mark.spec("R17.5", "R7.4")
+def test_rmf_ros2_mode_shows_the_childs_status_after_a_task_signal() -> None:
+    run = running(config=RMF_ROS2, uuid=u(1))
+    run.task_cancel()
+    assert run.progress("underway")[-1] == status(run.seq, RUNNING, "underway", 2)
+    assert run.state.status == "canceled"
+
+
+# --------------------------------------------------------------------------- D18, D19, D20, D21
+
+
+@pytest.mark.spec("R2.3", "R7.1", "R17.5")
+def test_a_status_message_is_published_only_when_it_changes() -> None:
+    run = running(child_id=5, uuid=u(1))
+    assert run.progress("underway") == (feedback(u(1), "underway", 5),)  # rmf_ros2 adds a status
+    compat = running(config=RMF_ROS2, uuid=u(1))
+    assert compat.progress("underway")[-1] == status(compat.seq, RUNNING, "underway", 2)
+
+
+@pytest.mark.spec("R3.3", "R17.6")
+def test_the_begin_description_is_published_as_given() -> None:
+    text = '{"estimate": {"category": "go_to_place", "description": "pantry"},  "category": "patrol"}'
+    begin = Run().begin(event_id=1, description=text)[0]
+    assert isinstance(begin, outs.PublishBegin) and begin.message.description == text
+    compat = Run(RMF_ROS2).begin(event_id=1, description=text)[0]
+    assert isinstance(compat, outs.PublishBegin)
+    assert compat.message.description == (
+        '{"category":"patrol","estimate":{"category":"go_to_place","description":"pantry"}}'
+    )
+
+
+@pytest.mark.spec("R1.4", "R2.2")
+def test_a_fresh_server_has_a_status_to_publish_and_the_topics_their_depths() -> None:
+    from dynevent.names import BEGIN_TOPIC_DEPTH, ROBOT_BEGIN_TOPIC_DEPTH, STATUS_TOPIC_DEPTH
+
+    message = status_message(State.new(FLEET, ROBOT), T0)
+    assert (message.dynamic_event_seq, message.dynamic_state, message.status, message.id) == (
+        0,
+        0,
+        "uninitialized",
+        0,
+    )
+    assert (BEGIN_TOPIC_DEPTH, ROBOT_BEGIN_TOPIC_DEPTH, STATUS_TOPIC_DEPTH) == (100, 1, 1)
+
+
+@pytest.mark.spec("R5.3", "R5.1", "R19.1")
+def test_a_lost_race_is_executed_once_then_answered() -> None:
+    from dynevent import inputs as ins
+
+    run = running(child_id=5, uuid=u(1))
+    outputs = run.step(ins.GoalSubmitted(goal_uuid=u(2), goal=next_goal(run.seq, 6), now=T0))
+    assert outputs[0] == outs.ExecuteGoal(goal_uuid=u(2))
+    assert len(outputs) == 2 and isinstance(outputs[1], outs.AnswerGoal)
+    assert outputs[1].result.execution_failure.startswith(RACE)
+
+
+# --------------------------------------------------------------------------- D22 to D25
+
+
+@pytest.mark.spec("R4.17", "R4.7")
+def test_a_dynamic_event_is_never_a_child_category() -> None:
+    from dynevent.errors import InvalidConfig
+
+    with pytest.raises(InvalidConfig):
+        ServerConfig(categories={**CATEGORIES, "dynamic_event": CATEGORIES["go_to_place"]})
+    run = waiting()
+    nested = next_goal(run.seq, 5, category="dynamic_event", description="{}")
+    assert run.request(u(1), nested)[0].rejection.reason is RejectReason.UNSUPPORTED_CATEGORY  # type: ignore[union-attr]
+
+
+@pytest.mark.spec("R13.1", "R13.3", "R13.5", "R18.7")
+def test_a_task_signal_is_told_and_a_kill_stays_a_kill() -> None:
+    run = running(child_id=5, uuid=u(1))
+    told = run.task_kill()
+    assert any(isinstance(output, outs.PublishFeedback) for output in told)  # rmf_ros2 publishes nothing
+    run.assert_ignored(run.task_cancel(), "task_cancel")  # rmf_ros2 overwrites killed with canceled
+    assert run.child_end("killed")[-2] == outs.DynamicEventFinished(status="killed")
+    deferred = waiting()
+    deferred.interrupt()
+    deferred.submit(u(2), next_goal(deferred.seq, 5))
+    assert deferred.task_cancel()[1] == answer(u(2), ABORTED, text="canceled", id=5)  # answered at once
+
+
+@pytest.mark.spec("R12.5", "R21.2")
+def test_stubbornness_always_ends_with_stubborn_end() -> None:
+    from dynevent import inputs as ins
+
+    for end in ("next", "finished", "signal", "shutdown", "restart"):
+        run = running(child_id=5, uuid=u(1), stubborn=3.0)
+        run.child_end("canceled")  # a cancelled child asked for it too: stubborn, as in rmf_ros2
+        assert run.state.stubborn is not None
+        if end == "next":
+            outputs = run.submit(u(2), next_goal(run.seq, 6))
+        elif end == "finished":
+            outputs = run.submit(u(2), finished_goal(run.seq))
+        elif end == "signal":
+            outputs = run.task_cancel()
+        elif end == "shutdown":
+            outputs = run.shutdown()
+        else:
+            outputs = run.step(ins.Restart(now=T0))
+        assert outs.StubbornEnd() in outputs, end
+        assert run.state.stubborn is None
+
+
+@pytest.mark.spec("R21.1", "R21.3")
+def test_a_restored_state_goes_on_with_its_run() -> None:
+    from dynevent import inputs as ins
+    from dynevent import snapshot
+
+    run = running(child_id=5, uuid=u(1))
+    restored = Run(CONFIG, snapshot.loads(snapshot.dumps(run.state)))
+    outputs = restored.step(ins.Restart(now=T0))
+    assert outputs[0] == aborted(u(1), "server restarted")
+    assert outputs[-1] == status(run.seq, WAITING, "standby", 5)
+    assert restored.request(u(2), next_goal(run.seq, 6)) == accepted(u(2))
 
 
 # --------------------------------------------------------------------------- the document and this file
