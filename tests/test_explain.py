@@ -185,3 +185,15 @@ def test_explain_never_raises_and_its_advice_is_accepted(
     )
     if status.dynamic_state == DynamicState.INACTIVE and not explanation.inconsistency:
         assert not explanation.accepted
+
+
+@pytest.mark.spec("R4.7")
+def test_a_json_quoted_category_is_recognised_and_unquoted() -> None:
+    """What a client's --file sends by mistake: the category written as a JSON string."""
+    explanation = explain(WAITING, next_goal(category='"go_to_place"'), categories=("go_to_place", "patrol"))
+    assert isinstance(explanation.decision, outs.Rejected)
+    assert explanation.decision.reason is RejectReason.UNSUPPORTED_CATEGORY
+    assert "JSON-quoted" in explanation.advice
+    assert explanation.instead is not None and explanation.instead.category == "go_to_place"
+    unknown = explain(WAITING, next_goal(category='"fly"'), categories=("go_to_place",))
+    assert unknown.instead is None and "JSON-quoted" not in unknown.advice
