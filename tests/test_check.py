@@ -379,9 +379,12 @@ RMF_ROS2_DEFECTS: dict[str, set[tuple[str, str]]] = {
     "D11": {("R12.2", "clamp_not_reported")},  # the stubborn clamp is silent
     "D12": {("R4.11", "accepted_non_finite_stubborn_period")},  # a NaN stubborn period is accepted
 }
-#: Defects no trace can show: interruptions and resumes are task inputs, not on the wire (a NEXT
-#: deferred after an unseen resume looks the same as one deferred by an unseen interruption).
-NOT_ON_THE_WIRE = {"D3", "D4"}
+#: Defects no trace can show: interruptions, resumes, task signals and the adapter's shutdown are
+#: task inputs, not on the wire (a NEXT deferred after an unseen resume looks the same as one deferred
+#: by an unseen interruption); an answer that never comes (D15, D21) shows only as an absence a trace
+#: cannot bound; a nested run (D22) needs a configuration no trace header may hold (R4.17); a holding
+#: itinerary (D24) travels on the traffic schedule, not on the Dynamic Event topics.
+NOT_ON_THE_WIRE = {"D3", "D4", "D14", "D15", "D21", "D22", "D23", "D24"}
 
 
 def _rmf_ros2() -> Report:

@@ -17,6 +17,7 @@ from typing import Any, Union
 
 import attrs
 
+from ._fields import string_problem
 from .errors import DyneventError
 from .messages import WireMessage
 
@@ -98,10 +99,16 @@ def decode(tp: Any, data: Any, path: str = "$") -> Any:
     if tp is float:
         if isinstance(data, bool) or not isinstance(data, (int, float)):
             raise CodecError(path, f"expected a number, got {type(data).__name__}")
-        return float(data)
+        try:
+            return float(data)
+        except OverflowError:  # an integer of any size may arrive where a float is expected
+            raise CodecError(path, "an integer out of range for a float") from None
     if tp is str:
         if type(data) is not str:
             raise CodecError(path, f"expected a string, got {type(data).__name__}")
+        problem = string_problem(data)
+        if problem is not None:
+            raise CodecError(path, problem)
         return data
     if isinstance(tp, type) and issubclass(tp, enum.Enum):
         try:

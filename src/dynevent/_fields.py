@@ -55,26 +55,27 @@ def _float32(value: Any, instance: object, field: attrs.Attribute[Any]) -> float
     return CANONICAL_NAN if math.isnan(rounded) else rounded
 
 
+def string_problem(value: str) -> str | None:
+    """Why ``value`` cannot travel as a wire string (R1.2), or None."""
+    if not value.isascii():
+        try:
+            value.encode("utf-8")
+        except UnicodeEncodeError as exc:
+            return f"not UTF-8 encodable (lone surrogate at index {exc.start})"
+    if "\x00" in value:
+        return f"NUL character at index {value.index(chr(0))}"
+    return None
+
+
 def check_string(value: Any, instance: object, field: attrs.Attribute[Any]) -> str:
     """Check ``value`` as a wire string for ``field`` of ``instance``; return it as a plain ``str``."""
     if type(value) is not str:
         if not isinstance(value, str):
             raise InvalidMessage(_owner(instance), field.name, value, "expected a string")
         value = value.value if isinstance(value, Enum) else str.__str__(value)
-    if not value.isascii():
-        try:
-            value.encode("utf-8")
-        except UnicodeEncodeError as exc:
-            raise InvalidMessage(
-                _owner(instance),
-                field.name,
-                value,
-                f"not UTF-8 encodable (lone surrogate at index {exc.start})",
-            ) from None
-    if "\x00" in value:
-        raise InvalidMessage(
-            _owner(instance), field.name, value, f"NUL character at index {value.index(chr(0))}"
-        )
+    problem = string_problem(value)
+    if problem is not None:
+        raise InvalidMessage(_owner(instance), field.name, value, problem)
     return cast(str, value)
 
 

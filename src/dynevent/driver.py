@@ -24,10 +24,11 @@ from typing import IO, Any
 
 from . import __version__, _json, machine
 from ._codec import CodecError, decode, encode
-from .errors import DyneventError
+from .errors import DyneventError, InvalidSnapshot
 from .machine import ServerConfig, State
 from .names import validate_token
 from .records import InvalidRecord, config_from_json, input_from_json, output_to_json
+from .snapshot import check_state
 
 __all__ = ["PROTOCOL_VERSION", "Driver", "main", "state_from_json", "view"]
 
@@ -48,9 +49,10 @@ def state_from_json(fleet: str, robot: str, data: object) -> State:
         state: State = decode(State, fields, "$.state")
     except CodecError as exc:
         raise InvalidRecord(exc.path, exc.problem) from None
-    validate_token("fleet", state.fleet)
-    validate_token("robot", state.robot)
-    return state
+    try:
+        return check_state(state)  # R19.8, as a snapshot's restore checks it
+    except InvalidSnapshot as exc:
+        raise InvalidRecord(exc.path, exc.problem) from None
 
 
 def view(state: State) -> dict[str, Any]:

@@ -116,7 +116,7 @@ def _check_rule(rule: object, path: str) -> None:
     if not isinstance(rule, dict):
         raise InvalidRecord(path, "expected a description rule object or a list of them")
     accept = rule.get("accept")
-    if accept != "any" and accept not in _JSON_TYPES:
+    if not isinstance(accept, str) or (accept != "any" and accept not in _JSON_TYPES):
         raise InvalidRecord(f"{path}.accept", f"expected one of {['any', *_JSON_TYPES]}, got {accept!r}")
     required = rule.get("required", [])
     if not isinstance(required, list) or not all(isinstance(key, str) for key in required):

@@ -14,14 +14,21 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import attrs
+
 from . import _json
 from ._codec import CodecError, decode, encode
+from .description import EventDescription
 from .errors import DyneventError, InvalidSnapshot
-from .machine import State
-from .names import validate_token
-from .vocab import Status
+from .inputs import NOW_RANGE
+from .machine import SECONDS_RANGE, State
+from .names import NameKind, build_name, validate_token
+from .vocab import EventType, Status
 
-__all__ = ["FORMAT", "VERSION", "dumps", "loads", "restore", "snapshot"]
+#: A day in nanoseconds: a refresh instant may lie up to one refresh period past the last ``now``.
+SECONDS_NS = 86_400 * 1_000_000_000
+
+__all__ = ["FORMAT", "VERSION", "check_state", "dumps", "loads", "restore", "snapshot", "state_problems"]
 
 FORMAT = "dynevent.state"
 #: The snapshot format version this release writes and reads.
@@ -42,14 +49,25 @@ def dumps(state: State) -> str:
     return _json.dumps(snapshot(state))
 
 
-def _problems(state: State) -> list[tuple[str, str]]:
-    """Every way ``state`` breaks what the machine relies on, as (path, problem)."""
+def state_problems(state: State) -> list[tuple[str, str]]:
+    """Every way ``state`` breaks the state invariants of docs/spec.md (R19.8), as (path, problem).
+
+    Empty for every state the machine can reach; the one check of snapshot
+    restore, fleet restore and the conformance driver's reset.
+    """
     found: list[tuple[str, str]] = []
     for field in ("fleet", "robot"):
         try:
             validate_token(field, getattr(state, field))
         except DyneventError as exc:
             found.append((f"$.state.{field}", str(exc)))
+    if not found:
+        try:
+            for kind in NameKind:
+                build_name(kind, state.fleet, state.robot)
+        except DyneventError as exc:
+            found.append(("$.state", str(exc)))
+    found.extend(_phase_problems(state))
     for field, high in (("seq", _U32), ("log_seq", _U32), ("event_id", _U64), ("last_id", _U64)):
         if not 0 <= getattr(state, field) <= high:
             found.append((f"$.state.{field}", f"out of range [0, {high}]"))
@@ -77,8 +95,6 @@ def _problems(state: State) -> list[tuple[str, str]]:
     if len(set(uuids)) != len(uuids):
         found.append(("$.state", "a goal uuid appears twice"))
     stubborn = state.stubborn
-    if stubborn is not None and not (math.isfinite(stubborn.period) and stubborn.period > 0):
-        found.append(("$.state.stubborn.period", "expected a positive finite number of seconds"))
     anchor = None if stubborn is None else stubborn.anchor
     for position, where in ((state.position, "position"), (anchor, "stubborn.anchor")):
         if position is not None and not (math.isfinite(position.x) and math.isfinite(position.y)):
@@ -104,10 +120,71 @@ def restore(data: object) -> State:
         state: State = decode(State, data.get("state"), "$.state")
     except CodecError as exc:
         raise InvalidSnapshot(exc.path, exc.problem) from None
-    problems = _problems(state)
+    fields = data.get("state")
+    missing = sorted(set(attrs.fields_dict(State)) - set(fields)) if isinstance(fields, dict) else []
+    if missing:
+        raise InvalidSnapshot(
+            "$.state", f"missing fields {missing}: a snapshot holds exactly the state's fields"
+        )
+    check_state(state)
+    return state
+
+
+def check_state(state: State) -> State:
+    """``state`` if it keeps the state invariants (R19.8); else :class:`InvalidSnapshot` (the first fault)."""
+    problems = state_problems(state)
     if problems:
         raise InvalidSnapshot(*problems[0])
     return state
+
+
+def _phase_problems(state: State) -> list[tuple[str, str]]:
+    """The invariants that tie the fields together (R19.8)."""
+    found: list[tuple[str, str]] = []
+    running, stubborn = state.running, state.stubborn
+    if state.description:
+        try:
+            EventDescription.from_json(state.description)
+        except DyneventError as exc:
+            found.append(("$.state.description", str(exc)))
+    if state.shutdown and (state.active or state.queued or stubborn is not None):
+        found.append(
+            ("$.state.shutdown", "a server shutting down has no active run, queued goal or hold (R15.2)")
+        )
+    if running is not None:
+        if running.goal.event_type != EventType.NEXT:
+            found.append(("$.state.running.goal", "only a NEXT goal holds the running slot (R2.1)"))
+        if running.child_id != state.last_id:
+            found.append(
+                (
+                    "$.state.last_id",
+                    f"is {state.last_id}, not the running child's id {running.child_id} (R6.2)",
+                )
+            )
+        if not math.isfinite(running.goal.stubborn_period):
+            found.append(
+                ("$.state.running.goal.stubborn_period", "not finite: such a NEXT is refused (R4.11)")
+            )
+        if not running.started and not state.interrupted:
+            found.append(
+                ("$.state.running.started", "a child's start is deferred only while interrupted (R6.3)")
+            )
+    if state.cancels and (running is None or not running.started):
+        found.append(("$.state.cancels", "CANCEL goals wait only for a started child (R9.3, R9.4)"))
+    if stubborn is not None:
+        if not state.active or (running is not None and running.started):
+            found.append(("$.state.stubborn", "a hold lasts only between children of an active run (R12.5)"))
+        low, high = NOW_RANGE
+        for field in ("hold_since", "next_refresh"):
+            if not low <= getattr(stubborn, field) <= high + SECONDS_NS:
+                found.append((f"$.state.stubborn.{field}", "outside the range of builtin_interfaces/Time"))
+        if stubborn.next_refresh < stubborn.hold_since:
+            found.append(("$.state.stubborn.next_refresh", "before the hold began (R12.3)"))
+        if not (math.isfinite(stubborn.period) and stubborn.period >= SECONDS_RANGE[0]):
+            found.append(
+                ("$.state.stubborn.period", f"expected at least {SECONDS_RANGE[0]:g} s (R0.1, R19.4)")
+            )
+    return found
 
 
 def loads(text: str | bytes | bytearray) -> State:
