@@ -1,0 +1,186 @@
+"""A goal's round trip through dynevent's ROS binding, against a bare rclpy action server.
+
+Two servers, each in a process of its own, serve the same action type
+(``rmf_task_msgs/action/DynamicEvent``) for one robot:
+
+- ``dynevent``: :class:`dynevent.ros.DynamicEventServer`, whose adapter reports
+  the child ``underway`` once and finishes it at once (the binding and the
+  machine, without ``dynevent serve``'s simulation timers);
+- ``peer``: a bare rclpy ``ActionServer`` that accepts, executes, publishes one
+  feedback and succeeds: the least a server doing the same exchange does.
+
+One client (a plain rclpy ``ActionClient``, the same for both) sends NEXT
+goals one after another and times each from the send to the result, with the
+feedback in between.  The two servers are measured in alternating batches in
+one run, so that they share the machine's noise.  Reported: the median and
+p90 of each, and dynevent's cost on top of rclpy's as a fraction of the bare
+round trip.  Needs a ROS 2 environment with ``rmf_task_msgs``.
+
+    python bench/ros_roundtrip.py [--goals N] [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import random
+import statistics
+import subprocess
+import sys
+import threading
+import time
+from typing import Any
+
+SERVER = r"""
+import sys, threading, signal
+import rclpy
+from rclpy.action import ActionServer, GoalResponse, CancelResponse
+from rclpy.executors import MultiThreadedExecutor
+from rmf_task_msgs.action import DynamicEvent
+
+kind, fleet, robot = sys.argv[1:4]
+rclpy.init()
+node = rclpy.create_node("bench_server_" + kind)
+if kind == "dynevent":
+    from dynevent.machine import ServerConfig, accept_any
+    from dynevent.ros import DynamicEventServer
+
+    class Children:
+        def start(self, execution):
+            execution.underway()
+            execution.finished()
+        def cancel(self, execution): execution.finished()
+        def kill(self, execution): execution.finished()
+        def interrupt(self, execution): pass
+        def resume(self, execution): pass
+
+    config = ServerConfig(categories={"go_to_place": accept_any})
+    server = DynamicEventServer(node, fleet, robot, config, Children())
+    server.begin("{}", 0)
+else:
+    def execute(handle):
+        handle.publish_feedback(DynamicEvent.Feedback(status="underway", id=handle.request.id))
+        handle.succeed()
+        return DynamicEvent.Result(status="completed", id=handle.request.id)
+    ActionServer(
+        node, DynamicEvent, f"rmf/dynamic_event/command/{fleet}/{robot}", execute_callback=execute,
+        goal_callback=lambda goal: GoalResponse.ACCEPT, cancel_callback=lambda handle: CancelResponse.ACCEPT,
+    )
+executor = MultiThreadedExecutor(num_threads=2)
+executor.add_node(node)
+print("ready", flush=True)
+stop = threading.Event()
+signal.signal(signal.SIGTERM, lambda *_: stop.set())
+threading.Thread(target=executor.spin, daemon=True).start()
+stop.wait(600)
+"""
+
+
+class Client:
+    """A plain rclpy action client for one robot; times goals from send to result."""
+
+    def __init__(self, node: Any, fleet: str, robot: str) -> None:
+        from rclpy.action import ActionClient
+        from rmf_task_msgs.action import DynamicEvent
+
+        self.goal_type = DynamicEvent.Goal
+        self.action = ActionClient(node, DynamicEvent, f"rmf/dynamic_event/command/{fleet}/{robot}")
+        if not self.action.wait_for_server(timeout_sec=20):
+            raise SystemExit(f"no server for {fleet}/{robot}")
+
+    def round_trip(self, goal_id: int, timeout: float = 10.0) -> tuple[float, int, str]:
+        """Seconds from send to result, the feedback count, the result's status."""
+        done = threading.Event()
+        feedback: list[Any] = []
+        result: list[Any] = []
+
+        def on_result(future: Any) -> None:
+            result.append(future.result())
+            done.set()
+
+        def on_response(future: Any) -> None:
+            handle = future.result()
+            if not handle.accepted:
+                done.set()
+                return
+            handle.get_result_async().add_done_callback(on_result)
+
+        goal = self.goal_type(
+            dynamic_event_seq=1, event_type=1, category="go_to_place", description='"a"', id=0
+        )
+        started = time.perf_counter()
+        self.action.send_goal_async(goal, feedback_callback=feedback.append).add_done_callback(on_response)
+        if not done.wait(timeout):
+            raise SystemExit(f"goal {goal_id}: no result within {timeout} s")
+        elapsed = time.perf_counter() - started
+        status = result[0].result.status if result else "rejected"
+        return elapsed, len(feedback), status
+
+
+def _percentile(values: list[float], fraction: float) -> float:
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, int(fraction * len(ordered)))]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--goals", type=int, default=400, help="goals per server (default 400)")
+    parser.add_argument("--batch", type=int, default=50, help="goals per batch, alternating servers")
+    parser.add_argument("--quick", action="store_true", help="40 goals each: a smoke run")
+    args = parser.parse_args(argv)
+    goals = 40 if args.quick else args.goals
+    os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 200)))
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+
+    import rclpy
+    from rclpy.executors import MultiThreadedExecutor
+
+    servers = {}
+    for kind in ("dynevent", "peer"):
+        process = subprocess.Popen(
+            [sys.executable, "-c", SERVER, kind, "bench", kind], stdout=subprocess.PIPE, text=True
+        )
+        assert process.stdout is not None
+        if process.stdout.readline().strip() != "ready":
+            raise SystemExit(f"the {kind} server did not start")
+        servers[kind] = process
+    rclpy.init()
+    node = rclpy.create_node("bench_client")
+    executor = MultiThreadedExecutor(num_threads=2)
+    executor.add_node(node)
+    threading.Thread(target=executor.spin, daemon=True).start()
+    try:
+        clients = {kind: Client(node, "bench", kind) for kind in servers}
+        times: dict[str, list[float]] = {kind: [] for kind in servers}
+        for client in clients.values():  # warm-up
+            for index in range(10):
+                client.round_trip(index)
+        sent = 0
+        while sent < goals:
+            batch = min(args.batch, goals - sent)
+            for kind, client in clients.items():
+                for index in range(batch):
+                    elapsed, feedback, status = client.round_trip(sent + index)
+                    if status != "completed" or feedback < 1:
+                        raise SystemExit(f"{kind}: goal ended {status!r} with {feedback} feedback")
+                    times[kind].append(elapsed)
+            sent += batch
+    finally:
+        for process in servers.values():
+            process.terminate()
+            process.wait(timeout=10)
+        executor.shutdown(timeout_sec=2)
+        rclpy.try_shutdown()
+    medians = {kind: statistics.median(values) for kind, values in times.items()}
+    for kind, values in times.items():
+        print(
+            f"{kind:9} n={len(values)}  median {medians[kind] * 1e3:.3f} ms  "
+            f"p90 {_percentile(values, 0.9) * 1e3:.3f} ms"
+        )
+    extra = (medians["dynevent"] - medians["peer"]) / medians["peer"]
+    print(f"dynevent's cost on top of the bare round trip: {extra:+.1%} of it (target: under +10%)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
