@@ -110,7 +110,7 @@ class SimulatedChildren:
         self._node = node
         self._categories = categories
         self._say = say
-        self._timers: dict[int, Any] = {}
+        self._timers: dict[ChildExecution, Any] = {}  # by execution: the robots share child ids
         self._lock = threading.Lock()
 
     def start(self, execution: ChildExecution) -> None:
@@ -135,13 +135,13 @@ class SimulatedChildren:
                 self._forget(execution)
 
         with self._lock:
-            self._timers[execution.id] = self._node.create_timer(
+            self._timers[execution] = self._node.create_timer(
                 min(spec.report_every, spec.duration), report
             )
 
     def _forget(self, execution: ChildExecution) -> None:
         with self._lock:
-            timer = self._timers.pop(execution.id, None)
+            timer = self._timers.pop(execution, None)
         if timer is not None:
             self._node.destroy_timer(timer)
 
