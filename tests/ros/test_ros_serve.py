@@ -195,3 +195,53 @@ def _write(folder: Path, text: str) -> Path:
     path = folder / "goal.json"
     path.write_text(text, encoding="utf-8")
     return path
+
+
+@pytest.mark.spec("R6.2", "R8.2")
+def test_serve_runs_children_of_several_robots_at_once(graph: Graph) -> None:
+    """Robots number their children alike (each run's ids start at its own id): one robot's child
+    must never stop another's."""
+    robots = ("twinA", "twinB", "twinC")
+    process = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "dynevent",
+            "serve",
+            "--rebegin",
+            "0",
+            *[f"--robot={robot}" for robot in robots],
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env=os.environ.copy(),
+    )
+    try:
+        sends = [
+            subprocess.Popen(
+                [
+                    sys.executable,
+                    "-m",
+                    "dynevent",
+                    "send",
+                    "--robot",
+                    robot,
+                    "--place",
+                    "pantry",
+                    "--timeout",
+                    "30",
+                ],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT,
+                text=True,
+                env=os.environ.copy(),
+            )
+            for robot in robots
+        ]
+        for send_process in sends:
+            output, _ = send_process.communicate(timeout=60)
+            assert send_process.returncode == 0, output
+            assert "outcome: completed" in output
+    finally:
+        process.send_signal(signal.SIGINT)
+        assert process.wait(timeout=WAIT) == 0
