@@ -8,7 +8,9 @@ import os
 import random
 import threading
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeVar
+
+T = TypeVar("T")
 
 ROS = all(importlib.util.find_spec(name) is not None for name in ("rclpy", "rmf_task_msgs"))
 WHY = (
@@ -51,22 +53,33 @@ class Graph:
         rclpy.init(context=self.context)
         self.executor = MultiThreadedExecutor(num_threads=4, context=self.context)
         self.nodes: list[Any] = []
+        self.died: BaseException | None = None
         self._thread = threading.Thread(target=self._spin, daemon=True)
         self._thread.start()
 
     def _spin(self) -> None:
         from rclpy.executors import ExternalShutdownException
 
-        with contextlib.suppress(ExternalShutdownException):
-            self.executor.spin()
+        try:
+            with contextlib.suppress(ExternalShutdownException):
+                self.executor.spin()
+        except BaseException as error:  # the test that owns the graph fails with it, at close
+            self.died = error
+            raise
 
-    def node(self, name: str) -> Any:
+    def node(self, name: str, build: Callable[[Any], T] | None = None) -> Any:
+        """A new node, spun once ``build(node)`` (if given) has made its entities; returns what it built.
+
+        Entities are made before the node joins the spinning executor: rclpy's ``ActionClient`` is
+        added to its node before its lock exists, and an executor that meets it half made dies.
+        """
         import rclpy
 
         node = rclpy.create_node(name, context=self.context)
+        built = build(node) if build is not None else node
         self.nodes.append(node)
         self.executor.add_node(node)
-        return node
+        return built
 
     def close(self) -> None:
         import rclpy
@@ -76,3 +89,5 @@ class Graph:
             node.destroy_node()
         rclpy.shutdown(context=self.context)
         self._thread.join(timeout=5)
+        if self.died is not None:
+            raise AssertionError(f"the executor thread died: {self.died!r}") from self.died

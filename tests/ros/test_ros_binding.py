@@ -76,15 +76,20 @@ class Robot:
 
     def __init__(self, graph: Graph, config: ServerConfig = CONFIG, name: str = "server") -> None:
         self.adapter = Adapter()
-        self.node = graph.node(name)
-        self.server = DynamicEventServer(
-            self.node,
-            FLEET,
-            ROBOT,
-            config,
-            self.adapter,
-            stubbornness=self.adapter,
-            on_finished=self.adapter.finished.append,
+        self.node, self.server = graph.node(
+            name,
+            lambda node: (
+                node,
+                DynamicEventServer(
+                    node,
+                    FLEET,
+                    ROBOT,
+                    config,
+                    self.adapter,
+                    stubbornness=self.adapter,
+                    on_finished=self.adapter.finished.append,
+                ),
+            ),
         )
 
 
@@ -115,12 +120,15 @@ class RawClient:
     """A plain rclpy client, written as the public one-shot client is: the first status decides."""
 
     def __init__(self, graph: Graph, name: str) -> None:
-        self.node = graph.node(name)
-        self.action = ActionClient(self.node, DynamicEvent, action_name(FLEET, ROBOT))
         self.statuses: list[Any] = []
-        self.node.create_subscription(
-            DynamicEventStatus, status_topic(FLEET, ROBOT), self.statuses.append, latched(1)
-        )
+
+        def build(node: Any) -> Any:
+            node.create_subscription(
+                DynamicEventStatus, status_topic(FLEET, ROBOT), self.statuses.append, latched(1)
+            )
+            return node, ActionClient(node, DynamicEvent, action_name(FLEET, ROBOT))
+
+        self.node, self.action = graph.node(name, build)
         assert self.action.wait_for_server(timeout_sec=WAIT)
         wait_for(lambda: bool(self.statuses), "the first status message")
         wait_for(lambda: self.node.count_publishers(status_topic(FLEET, ROBOT)) > 0, "the status publisher")
@@ -151,7 +159,7 @@ class RawClient:
 
 
 def _client(graph: Graph, name: str = "client") -> DynamicEventClient:
-    made = DynamicEventClient(graph.node(name), FLEET, ROBOT)
+    made: DynamicEventClient = graph.node(name, lambda node: DynamicEventClient(node, FLEET, ROBOT))
     assert made.wait_for_server(WAIT)
     assert made.wait_for_status(WAIT)
     return made
@@ -423,7 +431,9 @@ def test_the_documented_adapter_serves_a_client_in_another_process(graph: Graph)
     )
     try:
         client = _client(graph)
-        other = DynamicEventClient(graph.node("other"), FLEET, "tinyRobot2")
+        other: DynamicEventClient = graph.node(
+            "other", lambda node: DynamicEventClient(node, FLEET, "tinyRobot2")
+        )
         assert other.wait_for_status(WAIT) and other.state.current_id == 2  # its own run, id 2
         run = client.next("go_to_place", '"pantry"')
         outcome = _outcome(run)
@@ -448,11 +458,15 @@ def test_the_description_service_answers_where_its_type_exists(graph: Graph) -> 
 
     from dynevent.names import description_service
 
-    node = graph.node("described")
-    server = DynamicEventServer(
-        node, FLEET, ROBOT, CONFIG, Adapter(), description_service=DescribeDynamicEvent
+    server = graph.node(
+        "described",
+        lambda node: DynamicEventServer(
+            node, FLEET, ROBOT, CONFIG, Adapter(), description_service=DescribeDynamicEvent
+        ),
     )
-    asker = graph.node("asker").create_client(DescribeDynamicEvent, description_service(FLEET, ROBOT))
+    asker = graph.node(
+        "asker", lambda node: node.create_client(DescribeDynamicEvent, description_service(FLEET, ROBOT))
+    )
     assert asker.wait_for_service(timeout_sec=WAIT)
 
     def ask() -> Any:

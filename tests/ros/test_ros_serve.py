@@ -67,7 +67,9 @@ def send(*args: str, timeout: float = 20.0) -> subprocess.CompletedProcess[str]:
 
 @pytest.fixture
 def watcher(graph: Graph) -> Iterator[DynamicEventClient]:
-    client = DynamicEventClient(graph.node("watcher"), "tinyRobot", ROBOT)
+    client: DynamicEventClient = graph.node(
+        "watcher", lambda node: DynamicEventClient(node, "tinyRobot", ROBOT)
+    )
     yield client
 
 
@@ -176,8 +178,9 @@ def test_serve_begins_on_command_and_send_explains_a_refusal_it_cannot_see(
         wait_for(lambda: watcher.state.phase == 1, "WAITING")
         assert send("--end").returncode == 0
         wait_for(lambda: watcher.state.phase == 0, "INACTIVE: --rebegin 0 begins nothing")
-        publisher = graph.node("commander").create_publisher(
-            DynamicEventDescription, BEGIN_COMMAND_TOPIC, latched(10)
+        publisher = graph.node(
+            "commander",
+            lambda node: node.create_publisher(DynamicEventDescription, BEGIN_COMMAND_TOPIC, latched(10)),
         )
         publisher.publish(
             DynamicEventDescription(fleet="tinyRobot", robot=ROBOT, description='{"category": "tour"}')
