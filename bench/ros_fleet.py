@@ -9,7 +9,9 @@ goal sent got exactly one result and that no goal failed, and reports the
 round trips (send to result, the child's simulated duration included) at the
 median and p99, goals per second, and the serve process's CPU time.
 
-    python bench/ros_fleet.py [--robots 100] [--seconds 60] [--duration 0.2]
+    python bench/ros_fleet.py [--robots 100] [--seconds 60] [--duration 0.2] [--write]
+
+``--write`` records the result as the ``ros-fleet`` section of bench/results.md.
 """
 
 from __future__ import annotations
@@ -27,6 +29,12 @@ import time
 from pathlib import Path
 from typing import Any
 
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:  # run as a script: make `bench` importable
+    sys.path.insert(0, str(ROOT))
+
+from bench import results as recorded  # noqa: E402
+
 TICKS = os.sysconf("SC_CLK_TCK")
 
 
@@ -40,6 +48,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--robots", type=int, default=100)
     parser.add_argument("--seconds", type=float, default=60.0)
     parser.add_argument("--duration", type=float, default=0.2, help="a child's simulated duration (s)")
+    parser.add_argument("--write", action="store_true", help="record the result in bench/results.md")
     args = parser.parse_args(argv)
     os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 200)))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
@@ -132,16 +141,26 @@ def main(argv: list[str] | None = None) -> int:
     executor.shutdown(timeout_sec=2)
     rclpy.try_shutdown()
     twice = [key for key, count in results.items() if count > 1]
-    ordered = sorted(trips)
-    print(f"robots {args.robots}, {args.seconds:g} s, child {args.duration:g} s: {len(trips)} goals answered")
-    print(
-        f"  goals/s {len(trips) / wall:.1f}; round trip median {statistics.median(ordered) * 1e3:.1f} ms, "
-        f"p99 {ordered[int(0.99 * (len(ordered) - 1))] * 1e3:.1f} ms"
-    )
-    print(f"  serve CPU {cpu:.1f} s in {wall:.1f} s: {100 * cpu / wall:.0f}% of one core")
-    print(f"  answered twice: {len(twice)}; problems (lost, refused, failed): {len(problems)}")
-    for problem in problems[:10]:
-        print("   ", problem)
+    ordered = sorted(trips) or [float("nan")]
+    lines = [
+        "## ROS 2: a simulated fleet in one `dynevent serve` (bench/ros_fleet.py)",
+        "",
+        f"{args.robots} robots, each sent one NEXT a second for {args.seconds:g} s by a plain rclpy client;",
+        f"a child takes {args.duration:g} s (included in the round trip) with one progress report.",
+        "",
+        *recorded.machine_description(("dynevent", "rclpy")),
+        "",
+        f"- goals answered: {len(trips)} ({len(trips) / wall:.1f} per second)",
+        f"- round trip, send to result: median {statistics.median(ordered) * 1e3:.1f} ms, "
+        f"p99 {ordered[int(0.99 * (len(ordered) - 1))] * 1e3:.1f} ms",
+        f"- serve's CPU: {cpu:.1f} s in {wall:.1f} s, {100 * cpu / wall:.0f}% of one core",
+        f"- answered twice: {len(twice)}; lost, refused or failed: {len(problems)}",
+        *(f"  - {problem}" for problem in problems[:10]),
+    ]
+    print("\n".join(lines))
+    if args.write and not (twice or problems):
+        recorded.write_section("ros-fleet", lines)
+        print(f"wrote {recorded.RESULTS}", file=sys.stderr)
     return 1 if twice or problems else 0
 
 

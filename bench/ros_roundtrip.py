@@ -16,7 +16,9 @@ one run, so that they share the machine's noise.  Reported: the median and
 p90 of each, and dynevent's cost on top of rclpy's as a fraction of the bare
 round trip.  Needs a ROS 2 environment with ``rmf_task_msgs``.
 
-    python bench/ros_roundtrip.py [--goals N] [--quick]
+    python bench/ros_roundtrip.py [--goals N] [--quick] [--write]
+
+``--write`` records the result as the ``ros-roundtrip`` section of bench/results.md.
 """
 
 from __future__ import annotations
@@ -29,7 +31,14 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:  # run as a script: make `bench` importable
+    sys.path.insert(0, str(ROOT))
+
+from bench import results  # noqa: E402
 
 SERVER = r"""
 import sys, threading, signal
@@ -127,6 +136,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--goals", type=int, default=400, help="goals per server (default 400)")
     parser.add_argument("--batch", type=int, default=50, help="goals per batch, alternating servers")
     parser.add_argument("--quick", action="store_true", help="40 goals each: a smoke run")
+    parser.add_argument("--write", action="store_true", help="record the result in bench/results.md")
     args = parser.parse_args(argv)
     goals = 40 if args.quick else args.goals
     os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 200)))
@@ -172,13 +182,30 @@ def main(argv: list[str] | None = None) -> int:
         executor.shutdown(timeout_sec=2)
         rclpy.try_shutdown()
     medians = {kind: statistics.median(values) for kind, values in times.items()}
-    for kind, values in times.items():
-        print(
-            f"{kind:9} n={len(values)}  median {medians[kind] * 1e3:.3f} ms  "
-            f"p90 {_percentile(values, 0.9) * 1e3:.3f} ms"
-        )
     extra = (medians["dynevent"] - medians["peer"]) / medians["peer"]
-    print(f"dynevent's cost on top of the bare round trip: {extra:+.1%} of it (target: under +10%)")
+    rows = [
+        f"| {kind} | {len(values)} | {medians[kind] * 1e3:.2f} ms | {_percentile(values, 0.9) * 1e3:.2f} ms |"
+        for kind, values in times.items()
+    ]
+    lines = [
+        "## ROS 2: a goal's round trip (bench/ros_roundtrip.py)",
+        "",
+        "NEXT sent -> accepted -> one feedback -> result, one goal at a time, through dynevent's",
+        "ROS binding and through a bare rclpy action server doing the same exchange, in alternating",
+        f"batches of {args.batch} in one run{' (quick mode)' if args.quick else ''}.",
+        "",
+        *results.machine_description(("dynevent", "rclpy")),
+        "",
+        "| server | goals | median | p90 |",
+        "|---|---|---|---|",
+        *rows,
+        "",
+        f"dynevent's cost on top of the bare round trip: **{extra:+.1%}** of it (target: under +10%).",
+    ]
+    print("\n".join(lines))
+    if args.write:
+        results.write_section("ros-roundtrip", lines)
+        print(f"wrote {results.RESULTS}", file=sys.stderr)
     return 0
 
 

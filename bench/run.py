@@ -23,14 +23,11 @@ from __future__ import annotations
 
 import argparse
 import cProfile
-import datetime
 import gc
 import importlib
 import importlib.metadata
 import io
 import json
-import os
-import platform
 import pstats
 import random
 import statistics
@@ -48,6 +45,7 @@ if str(ROOT) not in sys.path:  # run as a script: make `bench` importable
 
 import attrs  # noqa: E402
 
+from bench import results  # noqa: E402
 from bench.peers.script import (  # noqa: E402
     CATEGORIES,
     DESCRIPTION,
@@ -684,31 +682,7 @@ def targets(rows: list[Workload], mem: dict[str, dict[str, tuple[float, int]]], 
 
 
 def machine_description() -> list[str]:
-    cpu = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    versions = []
-    for package in ("dynevent", "attrs", "transitions", "python-statemachine"):
-        try:
-            versions.append(f"{package} {importlib.metadata.version(package)}")
-        except importlib.metadata.PackageNotFoundError:
-            versions.append(f"{package} (not installed)")
-    try:
-        load = "load average (1, 5, 15 min) at the end: " + ", ".join(f"{x:.2f}" for x in os.getloadavg())
-    except OSError:
-        load = "load average: unknown"
-    return [
-        f"- date: {datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%d %H:%M UTC')}",
-        f"- {load} (other work on the machine inflates medians and spreads)",
-        f"- machine: {cpu}, {os.cpu_count()} logical CPUs, {platform.platform()}",
-        f"- Python: {platform.python_implementation()} {platform.python_version()}",
-        f"- packages: {', '.join(versions)}",
-    ]
+    return results.machine_description(("dynevent", "attrs", "transitions", "python-statemachine"))
 
 
 def report(rows: list[Workload], mem: dict[str, Any], impls: Sequence[str], sizes: Sizes, mode: str) -> str:
@@ -797,7 +771,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     text = report(rows, mem, impls, sizes, "quick" if args.quick else "full")
     print(text)
     if not args.no_write:
-        args.output.write_text(text, encoding="utf-8")
+        args.output.write_text(results.keep_sections(text, args.output), encoding="utf-8")
         print(f"wrote {args.output}", file=sys.stderr)
     return 0
 

@@ -124,3 +124,17 @@ def test_peer_snapshots_round_trip(name: str) -> None:
 def test_the_floor_is_plain() -> None:
     server = floor.FloorServer("fleet", "robot", script.CATEGORIES)
     assert not hasattr(server, "__dict__")
+
+
+def test_results_sections_are_replaced_in_place_and_kept_by_a_rewrite(tmp_path: Path) -> None:
+    results = importlib.import_module("bench.results")
+    path = tmp_path / "results.md"
+    path.write_text("# tables\n", encoding="utf-8")
+    results.write_section("ros-fleet", ["## fleet", "first"], path)
+    results.write_section("ros-roundtrip", ["## trip", "one"], path)
+    results.write_section("ros-fleet", ["## fleet", "second"], path)
+    text = path.read_text(encoding="utf-8")
+    assert "first" not in text and text.index("second") < text.index("one")
+    rewritten = results.keep_sections("# new tables\n", path)
+    assert rewritten.startswith("# new tables\n")
+    assert results.sections(rewritten) == results.sections(text)

@@ -370,12 +370,35 @@ def test_a_late_joining_status_subscriber_gets_the_current_status(graph: Graph, 
     assert (first.dynamic_event_seq, first.dynamic_state, first.status, first.id) == (1, 1, "standby", 8)
 
 
+@pytest.mark.spec("R2.3")
+def test_a_server_begun_before_it_spins_says_waiting_first(graph: Graph) -> None:
+    """A client that acts on the first status it sees must never see a passing INACTIVE."""
+    seen: list[Any] = []
+    graph.node(
+        "watching",
+        lambda node: node.create_subscription(
+            DynamicEventStatus, status_topic(FLEET, ROBOT), seen.append, latched(10)
+        ),
+    )
+
+    def build(node: Any) -> DynamicEventServer:
+        server = DynamicEventServer(node, FLEET, ROBOT, CONFIG, Adapter())
+        server.begin('{"category": "patrol"}', 7)
+        wait_for(lambda: node.count_subscribers(status_topic(FLEET, ROBOT)) > 0, "the watcher")
+        return server
+
+    graph.node("begun", build)
+    wait_for(lambda: bool(seen), "the first status")
+    assert (seen[0].dynamic_event_seq, seen[0].dynamic_state, seen[0].status) == (1, 1, "standby")
+
+
 # --------------------------------------------------------------------------- R20.1: the public client's way
 
 
 @pytest.mark.spec("R20.1", "R4.13", "R4.3")
 def test_a_plain_one_shot_client_drives_a_whole_run(graph: Graph, robot: Robot) -> None:
     """Each goal from a fresh client whose first status decides seq and id, as rmf_demos' client does."""
+    watcher = _client(graph, "watcher")  # the status on the wire, which the next one-shot client meets
 
     def one_shot(name: str, **fields: Any) -> tuple[RawGoal, Any]:
         raw = RawClient(graph, name)
@@ -392,7 +415,10 @@ def test_a_plain_one_shot_client_drives_a_whole_run(graph: Graph, robot: Robot) 
         robot.adapter.child(index).finished()
         status, result = goal.wait_result()
         assert (status, result.id) == (SUCCEEDED, 8 + index)
-        wait_for(lambda: robot.server.state.phase == 1, "WAITING")
+        wait_for(
+            lambda last=8 + index: (watcher.state.phase, watcher.state.current_id) == (1, last),
+            "WAITING on the wire",
+        )
     goal, _ = one_shot("place2", event_type=1, category="go_to_place", description='"dock"')
     assert goal.wait_response()
     robot.adapter.child(2)
@@ -400,13 +426,13 @@ def test_a_plain_one_shot_client_drives_a_whole_run(graph: Graph, robot: Robot) 
     assert seen.dynamic_state == 2 and cancel.wait_response()
     robot.adapter.child(2).finished()
     assert cancel.wait_result()[0] == SUCCEEDED
-    wait_for(lambda: robot.server.state.phase == 1, "WAITING")
+    wait_for(lambda: (watcher.state.phase, watcher.state.current_id) == (1, 10), "WAITING on the wire")
     idle_cancel, _ = one_shot("idle", event_type=2)
     assert not idle_cancel.wait_response()
     finished, _ = one_shot("end", event_type=3, id=0)
     assert finished.wait_response()
     assert finished.wait_result()[0] == SUCCEEDED
-    wait_for(lambda: robot.server.state.phase == 0, "INACTIVE")
+    wait_for(lambda: watcher.state.phase == 0, "INACTIVE on the wire")
     after, _ = one_shot("after", event_type=1, category="go_to_place", description='"x"')
     assert not after.wait_response()
 

@@ -258,8 +258,7 @@ class DynamicEventServer:
                 self._describe,
                 callback_group=self._group,
             )
-        with self._lock:  # the current status at start (the status topic keeps it for late joiners)
-            self._outbox.append(outs.PublishStatus(message=machine.status_message(self._state, self.now())))
+        self._announce = True  # the status at the first drain, unless a step already queued one
         self._wake.trigger()
 
     # ---------------------------------------------------------------- plumbing
@@ -429,6 +428,13 @@ class DynamicEventServer:
         # that the adapter takes from inside a callback join the outbox and are carried out here too
         while True:
             with self._lock:
+                if self._announce:
+                    # the current status at start (the topic keeps it for late joiners); a server begun
+                    # before it spins says WAITING first, never a passing INACTIVE a client would act on
+                    self._announce = False
+                    if not any(isinstance(output, outs.PublishStatus) for output in self._outbox):
+                        status = machine.status_message(self._state, self.now())
+                        self._outbox.appendleft(outs.PublishStatus(message=status))
                 if not self._outbox:
                     return
                 output = self._outbox.popleft()
