@@ -503,3 +503,36 @@ def test_mutated_records_give_findings_or_the_trace_error(mutations: list[tuple[
             target[key or "time"] = value
     with contextlib.suppress(TraceError):
         check_trace([_json.dumps(row) for row in rows], "fuzz")
+
+
+def test_check_reads_a_trace_as_a_stream_holding_a_few_records(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Memory stays flat: the observer never has more than LOOKAHEAD records read ahead of it."""
+    import sys
+    from pathlib import Path
+
+    from dynevent import check
+
+    root = str(Path(__file__).resolve().parents[1])
+    if root not in sys.path:
+        sys.path.insert(0, root)
+    from bench.traces import cycle_lines
+
+    produced = 0
+    ahead: list[int] = []
+
+    def lines() -> Any:
+        nonlocal produced
+        for line in cycle_lines(300):
+            produced += 1
+            yield line
+
+    feed = check._Observer.feed
+
+    def counting_feed(self: Any, record: Any) -> None:
+        ahead.append(produced - record.line)
+        feed(self, record)
+
+    monkeypatch.setattr(check._Observer, "feed", counting_feed)
+    report = check_trace(lines(), "long")
+    assert report.clean and report.records == len(ahead) == 2102
+    assert max(ahead) == check.LOOKAHEAD

@@ -57,11 +57,11 @@ def test_help_lists_the_subcommands_and_exit_codes() -> None:
     assert "2 usage or input errors" in " ".join(done.stdout.split())
 
 
-def test_no_arguments_run_the_demo() -> None:
-    plain, demo = dynevent(), dynevent("demo")
-    assert plain.returncode == demo.returncode == 0
-    assert plain.stdout == demo.stdout
-    assert "race condition" in plain.stdout
+def test_no_arguments_print_the_help() -> None:
+    plain, helped = dynevent(), dynevent("--help")
+    assert plain.returncode == helped.returncode == 0
+    assert plain.stdout == helped.stdout and plain.stderr == ""
+    assert "race condition" not in plain.stdout  # the demo did not run
 
 
 def test_demo_is_byte_identical_for_a_seed_and_json_lines() -> None:
@@ -131,6 +131,28 @@ def test_explain_exit_codes() -> None:
     )
     assert refused.returncode == 1
     assert json.loads(refused.stdout)["reason"] == "busy"
+
+
+def test_explain_reads_json_from_a_file_or_standard_input(tmp_path: Path) -> None:
+    goal = '{"dynamic_event_seq": 3, "event_type": 2, "id": 8}'
+    inline = dynevent("explain", "--status", RUNNING, "--goal", goal)
+    (tmp_path / "status.json").write_text(RUNNING, encoding="utf-8")
+    from_file = dynevent("explain", "--status", f"@{tmp_path / 'status.json'}", "--goal", "-", stdin=goal)
+    assert (
+        (from_file.returncode, from_file.stdout) == (inline.returncode, inline.stdout) == (0, inline.stdout)
+    )
+    both = dynevent("explain", "--status", "-", "--goal", "-", stdin=RUNNING)
+    assert both.returncode == 2 and "--goal: standard input is already read for --status" in both.stderr
+    missing = dynevent("explain", "--status", f"@{tmp_path / 'nothing.json'}", "--goal", goal)
+    assert (
+        missing.returncode == 2
+        and "--status: cannot read" in missing.stderr
+        and "nothing.json" in missing.stderr
+    )
+    (tmp_path / "latin.json").write_bytes(b'{"status": "caf\xe9"}')
+    latin = dynevent("explain", "--status", f"@{tmp_path / 'latin.json'}", "--goal", goal)
+    assert latin.returncode == 2 and "is not UTF-8 (byte 15)" in latin.stderr
+    assert "Traceback" not in missing.stderr + latin.stderr + both.stderr
 
 
 def test_diagram_prints_what_the_spec_embeds() -> None:
@@ -257,3 +279,16 @@ def test_an_empty_trace_or_vector_file_says_nothing_was_checked(tmp_path: Path) 
     empty.write_text('{"vectors": []}', encoding="utf-8")
     ran = dynevent("vectors", str(empty))
     assert ran.returncode == 2 and f"no vector in {empty}" in ran.stderr
+
+
+def test_the_testing_kit_without_hypothesis_names_the_extra() -> None:
+    blocked = (
+        "import sys; sys.modules['hypothesis'] = None\n"
+        "try:\n    import dynevent.testing\n"
+        "except ModuleNotFoundError as exc:\n    print(exc)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", blocked], capture_output=True, text=True, cwd=ROOT, timeout=60, check=False
+    )
+    assert done.returncode == 0, done.stderr
+    assert "pip install 'dynevent[testing]'" in done.stdout

@@ -36,16 +36,20 @@ condition.
 from __future__ import annotations
 
 import argparse
+import collections
+import itertools
 import math
+import os
 import sys
 from collections.abc import Iterable, Iterator
 from typing import Any
 
 import attrs
 
-from . import _json, machine
+from . import DOCS, _json, machine
 from . import inputs as ins
 from . import outputs as outs
+from ._progress import Progress
 from .errors import DyneventError, InvalidMessage
 from .explain import REASON_RULES, UNKNOWN_GOAL, goal_text, state_from_status, status_text
 from .machine import QueuedGoal, RunningGoal, ServerConfig, State
@@ -302,9 +306,27 @@ def read_trace(lines: Iterable[str], source: str = "<trace>") -> tuple[_Header, 
     Blank lines and lines starting with ``#`` are skipped.  Raises
     :class:`TraceError` naming ``source``, the line and the field.
     """
-    header = _Header()
-    records: list[Record] = []
-    seen_any = False
+    header, records = stream_trace(lines, source)
+    return header, list(records)
+
+
+def stream_trace(lines: Iterable[str], source: str = "<trace>") -> tuple[_Header, Iterator[Record]]:
+    """Like :func:`read_trace`, but the observations come one at a time, as ``lines`` are read.
+
+    The config record, if any, is read at once; each later line is parsed when
+    the iterator reaches it (and a :class:`TraceError` raised from there).
+    """
+    parsed = _parsed_lines(lines, source)
+    first = next(parsed, None)
+    if first is None:
+        return _Header(), iter(())
+    number, item = first
+    if isinstance(item, dict):
+        return _header(item, source, number), _observations(parsed, source)
+    return _Header(), _observations(itertools.chain([first], parsed), source)
+
+
+def _parsed_lines(lines: Iterable[str], source: str) -> Iterator[tuple[int, Record | dict[str, Any]]]:
     for number, raw in enumerate(lines, start=1):
         text = raw.strip()
         if not text or text.startswith("#"):
@@ -313,15 +335,14 @@ def read_trace(lines: Iterable[str], source: str = "<trace>") -> tuple[_Header, 
             data = _json.parse(text)
         except _json.JsonProblem as exc:
             raise TraceError(source, number, "$", str(exc)) from None
-        parsed = _record(data, source, number)
-        if isinstance(parsed, dict):
-            if seen_any:
-                raise TraceError(source, number, "type", "a 'config' record must come before every other")
-            header = _header(parsed, source, number)
-        else:
-            records.append(parsed)
-        seen_any = True
-    return header, records
+        yield number, _record(data, source, number)
+
+
+def _observations(parsed: Iterable[tuple[int, Record | dict[str, Any]]], source: str) -> Iterator[Record]:
+    for number, item in parsed:
+        if isinstance(item, dict):
+            raise TraceError(source, number, "type", "a 'config' record must come before every other")
+        yield item
 
 
 def _seconds(now: int) -> int | float:
@@ -564,8 +585,7 @@ class _Observer:
         self.last_end: tuple[int, Result] | None = None
         self.partial = False  # the trace begins mid-way: goals it never showed may be open
         self.upcoming: Record | None = None  # the record after the one being judged
-        self.records: list[Record] = []  # the whole trace, and the index of the record being judged
-        self.index = 0
+        self.lookahead: tuple[Record, ...] = ()  # the LOOKAHEAD records after it
         self.event_id_unknown = False  # the run began before the trace: its own id is not known
         self.start_uncertain = False  # a RUNNING "queued" status: a deferred child, or one reporting queued
 
@@ -758,13 +778,12 @@ class _Observer:
         running = self.st.running
         if self.start_uncertain and running is not None and running.goal_uuid == record.goal_uuid:
             # a deferred child is cancelled at once (R10.4); a started one ends later (R10.3)
-            answer = self.ahead(record.goal_uuid)
+            answer = self.ahead(record.goal_uuid)  # at once: within the next two records
             deferred = (
                 answer is not None
                 and answer.kind == "result"
                 and answer.status == GoalStatus.CANCELED.value
                 and answer.message.status == Status.CANCELED.value
-                and self.records.index(answer) <= self.index + 2
             )
             if not deferred:
                 self.state = attrs.evolve(self.st, running=attrs.evolve(running, started=True))
@@ -1037,8 +1056,8 @@ class _Observer:
         return found
 
     def ahead(self, uuid: str) -> Record | None:
-        """The next record about this goal."""
-        for record in self.records[self.index + 1 :]:
+        """The next feedback or answer of this goal among the records the observer sees ahead."""
+        for record in self.lookahead:
             if record.goal_uuid == uuid and record.kind in ("feedback", "result"):
                 return record
         return None
@@ -1400,19 +1419,30 @@ class _Unreadable(Exception):
         super().__init__(problem)
 
 
+#: How many records after the one being judged the observer looks at: a trace is checked in one pass
+#: with this many records held, whatever its length.
+LOOKAHEAD = 2
+
+
 def check_records(header: _Header, records: Iterable[Record], source: str = "<trace>") -> Report:
     """Replay parsed records in observer mode; see :func:`check_trace`."""
     observer = _Observer(header)
-    listed = list(records)
-    observer.records = listed
-    for index, record in enumerate(listed):
-        observer.index = index
-        observer.upcoming = listed[index + 1] if index + 1 < len(listed) else None
+    pending = iter(records)
+    window = collections.deque(itertools.islice(pending, LOOKAHEAD))
+    count = 0
+    while True:
+        window.extend(itertools.islice(pending, 1))
+        if not window:
+            break
+        record = window.popleft()
+        observer.lookahead = tuple(window)
+        observer.upcoming = window[0] if window else None
         try:
             observer.feed(record)
         except _Unreadable as exc:
             raise TraceError(source, record.line, exc.field, exc.problem) from None
-    return Report(source=source, records=len(listed), findings=tuple(observer.findings))
+        count += 1
+    return Report(source=source, records=count, findings=tuple(observer.findings))
 
 
 def check_trace(text: str | Iterable[str], source: str = "<trace>") -> Report:
@@ -1422,7 +1452,7 @@ def check_trace(text: str | Iterable[str], source: str = "<trace>") -> Report:
     when the trace cannot be read.
     """
     lines = text.splitlines() if isinstance(text, str) else text
-    header, records = read_trace(lines, source)
+    header, records = stream_trace(lines, source)
     return check_records(header, records, source)
 
 
@@ -1459,15 +1489,12 @@ def _run(args: argparse.Namespace) -> int:
     source = args.trace
     try:
         if source == "-":
-            report = check_trace(sys.stdin.read(), "<stdin>")
+            report = _check_stream(sys.stdin.buffer, "<stdin>")
         else:
-            with open(source, encoding="utf-8") as stream:
-                report = check_trace(stream.read(), source)
+            with open(source, "rb") as stream:
+                report = _check_stream(stream, source)
     except OSError as exc:
         print(f"dynevent check: {source}: cannot read: {exc.strerror or exc}", file=sys.stderr)
-        return 2
-    except UnicodeDecodeError as exc:
-        print(f"dynevent check: {source}: not UTF-8 text (byte {exc.start})", file=sys.stderr)
         return 2
     except TraceError as exc:
         print(f"dynevent check: {exc}", file=sys.stderr)
@@ -1483,14 +1510,38 @@ def _run(args: argparse.Namespace) -> int:
     return 0 if report.clean else 1
 
 
+def _check_stream(stream: Any, source: str) -> Report:
+    """Check a trace read line by line from a binary stream, with a progress line on a terminal."""
+    try:
+        size: int | None = os.fstat(stream.fileno()).st_size or None
+    except (OSError, ValueError, AttributeError):
+        size = None
+    progress = Progress(f"dynevent check: {source}", size)
+    try:
+        return check_trace(_text_lines(stream, source, progress), source)
+    finally:
+        progress.close()
+
+
+def _text_lines(stream: Any, source: str, progress: Progress) -> Iterator[str]:
+    done = 0
+    for number, raw in enumerate(stream, start=1):
+        done += len(raw)
+        progress.update(done, f"(line {number:,})")
+        try:
+            yield raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise TraceError(source, number, "$", f"not UTF-8 text (byte {exc.start} of the line)") from None
+
+
 def add_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Register ``dynevent check``."""
     parser = commands.add_parser(
         "check",
         help="check an observed trace of one robot against the protocol rules",
         description="Replay TRACE, a JSON-lines record of what was observed on the wire for one robot "
-        "(docs/trace-format.md), against the server machine in observer mode, and report every "
-        "protocol violation with its line, its docs/spec.md rule and what was expected.  Exit status: "
+        f"({DOCS}/trace-format.md), against the server machine in observer mode, and report every "
+        "protocol violation with its line, its spec rule and what was expected.  Exit status: "
         "0 when the trace is clean, 1 when it holds violations, 2 on a usage error or unreadable input "
         "(the message names the file, the line and the field).",
     )

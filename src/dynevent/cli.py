@@ -7,14 +7,19 @@ import os
 import sys
 from collections.abc import Sequence
 
-from . import __version__, check, demo, explain
+from . import DOCS, __version__, check, demo, explain
+from ._progress import Progress
 from .diagram import FORMATS, render
 
 __all__ = ["main"]
 
 _EPILOG = (
-    "Without a command, runs the demo.  Exit status: 0 ok, 1 findings or failures (check: violations; "
-    "explain: the goal is refused; vectors: a vector fails), 2 usage or input errors.  See docs/cli.md."
+    "Exit status: 0 ok, 1 findings or failures (check: violations; explain: the goal is refused; "
+    f"vectors: a vector fails), 2 usage or input errors.  Documentation: {DOCS}/cli.md"
+)
+_DESCRIPTION = (
+    "dynevent: the reference implementation of the Open-RMF Dynamic Event protocol.  Start with "
+    "`dynevent demo`, a scripted session between a client and a robot's server."
 )
 
 
@@ -43,9 +48,14 @@ def _vectors(args: argparse.Namespace) -> int:
     except vectors.ImplementationError as exc:
         print(f"dynevent vectors: {exc}", file=sys.stderr)
         return 2
+    progress = Progress("dynevent vectors", len(chosen))
+    outcomes: list[vectors.Outcome] = []
     try:
-        outcomes = list(vectors.run_vectors(chosen, implementation))
+        for outcome in vectors.run_vectors(chosen, implementation):
+            outcomes.append(outcome)
+            progress.update(len(outcomes), f"({len(outcomes)} of {len(chosen)}: {outcome.vector.name})")
     finally:
+        progress.close()
         implementation.close()
     if args.json:
         for outcome in outcomes:
@@ -61,7 +71,7 @@ def _add_vectors_command(commands: argparse._SubParsersAction[argparse.ArgumentP
         "vectors",
         help="run the conformance vectors against an implementation",
         description="Run conformance vectors (the shipped ones, or FILEs) against dynevent in process "
-        "or against COMMAND, a program speaking the driver protocol of docs/conformance.md.  Exit status: "
+        f"or against COMMAND, a program speaking the driver protocol of {DOCS}/conformance.md.  Exit status: "
         "0 when every vector passes, 1 when one fails, 2 on a usage or vector-file error.",
     )
     parser.add_argument(
@@ -94,7 +104,7 @@ def _add_diagram_command(commands: argparse._SubParsersAction[argparse.ArgumentP
         "diagram",
         help="print the server's phase diagram",
         description="Print the server machine's phase diagram, drawn from dynevent.machine.TRANSITIONS "
-        "(the Mermaid form is the one docs/spec.md embeds).  Exit status: 0.",
+        f"(the Mermaid form is the one {DOCS}/spec.md embeds).  Exit status: 0.",
     )
     parser.add_argument(
         "--format", choices=FORMATS, default="mermaid", help="mermaid (the default) or dot (Graphviz)"
@@ -218,7 +228,7 @@ def _add_send_command(commands: argparse._SubParsersAction[argparse.ArgumentPars
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``dynevent`` command; return its exit code."""
-    parser = argparse.ArgumentParser(prog="dynevent", description=__doc__, epilog=_EPILOG)
+    parser = argparse.ArgumentParser(prog="dynevent", description=_DESCRIPTION, epilog=_EPILOG)
     parser.add_argument("--version", action="version", version=f"dynevent {__version__}")
     commands = parser.add_subparsers(dest="command")
     demo.add_command(commands)
@@ -229,8 +239,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     _add_serve_command(commands)
     _add_send_command(commands)
     args = parser.parse_args(argv)
-    if args.command is None:
-        args = parser.parse_args(["demo"])
+    if args.command is None:  # bare `dynevent`: what it can do, not a run of one of its commands
+        parser.print_help()
+        return 0
     try:
         result: int = args.run(args)
     except KeyboardInterrupt:

@@ -17,13 +17,17 @@ The session walks through the protocol's main paths, in order:
 8. a goal after the end is rejected as ``inactive`` (R4.3).
 
 Every random draw (message delays, which goal of the race starts first) comes
-from the seed, so the same seed prints byte-identical output.
+from the seed, so the same seed prints byte-identical output.  The timeline
+fits 100 columns, explains its notation first and ends with what the session
+showed; ``--mermaid`` renders the same session as a Mermaid sequence diagram.
 """
 
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
+import collections
+import textwrap
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import attrs
@@ -31,12 +35,12 @@ import attrs
 from . import _json, machine
 from . import client as cl
 from . import inputs as ins
-from .loopback import Adapter, ChildScript, Loopback, Options, TimelineEvent, format_timeline
+from .loopback import Adapter, ChildScript, Loopback, Options, TimelineEvent
 from .messages import Goal
 from .records import rule_validator
 from .vocab import EventType, Status
 
-__all__ = ["STEPS", "add_command", "run_demo", "session_events"]
+__all__ = ["STEPS", "WIDTH", "add_command", "mermaid", "run_demo", "session_events", "summary"]
 
 _MS = 1_000_000
 _SECOND = cl.SECOND
@@ -69,13 +73,89 @@ def _adapter() -> Adapter:
     return Adapter(scripts=(progress, short, endless), default=short)
 
 
+#: The widest line of the text timeline.
+WIDTH = 100
+
+#: Who an event's ``direction`` names, in the text timeline's second column.
+_WHO = {"client": "C", "client->server": "C->S", "server->client": "S->C", "adapter": "A"}
+
+_LEGEND = (
+    "How to read it:",
+    "  time   simulated seconds since the start; messages take 1 to 4 ms on the loopback",
+    "  C      an event of the client machine",
+    "  A      an event between the robot's server machine and its fleet adapter",
+    "  C->S   a goal from the client to the robot's server; S->C a message back",
+    "  =>     what the receiver made of it",
+    "  0123..0000  a goal's UUID: its first and last four hex digits",
+    "  at L1 (4, 2)  the robot's position as the adapter reports it: map L1, x = 4 m, y = 2 m",
+    "  stubborn  a stubborn period: once its child ends, the robot holds its place that long",
+)
+
+
 def _readable(event: TimelineEvent) -> TimelineEvent:
     """Name the position a tick reports (the loopback's summary of a tick is empty)."""
     if event.kind == "tick" and not event.summary:
         record = event.record
-        summary = f"{record['map_name']} ({record['x']:g}, {record['y']:g})"
+        summary = f"at {record['map_name']} ({record['x']:g}, {record['y']:g})"
         return attrs.evolve(event, summary=summary)
     return event
+
+
+def _text_lines(event: TimelineEvent) -> list[str]:
+    """One event in at most :data:`WIDTH` columns: on one line if it fits, else wrapped under itself."""
+    head = f"{event.time / _SECOND:7.3f}  {_WHO.get(event.direction, event.direction):<4}  {event.kind:<16}  "
+    decision = f"=> {event.decision}" if event.decision else ""
+    whole = (
+        f"{head}{event.summary}  {decision}"
+        if event.summary and decision
+        else head + event.summary + decision
+    )
+    if len(whole) <= WIDTH:
+        return [whole.rstrip()]
+    indent = " " * len(head)
+    width = WIDTH - len(head)
+    lines = [head + line for line in _wrap(event.summary, width)[:1]]
+    lines += [indent + line for line in _wrap(event.summary, width)[1:]]
+    if not lines:
+        lines = [head.rstrip()]
+    lines += [indent + line for line in _wrap(decision, width, "   ")]
+    return [line.rstrip() for line in lines]
+
+
+def _wrap(text: str, width: int, indent: str = "") -> list[str]:
+    return textwrap.wrap(text, width, subsequent_indent=indent, break_on_hyphens=False) if text else []
+
+
+def summary(tagged: Sequence[tuple[int, TimelineEvent]]) -> list[str]:
+    """What the session showed, counted from its events."""
+    events = [event for _, event in tagged]
+    sent = [event for event in events if event.direction == "client" and event.decision.startswith("send ")]
+    raw = sum(1 for event in sent if event.kind == "send_foreign")
+    refused = [event.decision.split(" ", 2)[1] for event in events if event.decision.startswith("refused: ")]
+    requested = [event.decision for event in events if event.kind == "goal_requested"]
+    accepted = sum(1 for decision in requested if decision == "accepted")
+    rejected = [decision.split(" ", 2)[1] for decision in requested if decision.startswith("rejected: ")]
+    outcomes = collections.Counter(str(e.record.get("kind")) for e in events if e.kind == "outcome")
+    races = sum(1 for event in events if event.kind == "goal_started" and "race condition" in event.decision)
+    clamps = [e.record for e in events if e.kind == "stubborn_clamped"]
+    holds = sum(1 for event in events if event.kind in ("stubborn_begin", "stubborn_hold"))
+    delays = sum(1 for event in events if event.kind == "stubborn_delay")
+    lines = [
+        f"What the session showed, in {events[-1].time / _SECOND:.3f} s of simulated time:",
+        f"  - the client sent {len(sent)} goals ({raw} of them raw, past its own checks)"
+        + (f" and refused {len(refused)} itself ({', '.join(refused)})" if refused else ""),
+        f"  - the server accepted {accepted} and rejected {len(rejected)}"
+        + (f" ({', '.join(rejected)})" if rejected else ""),
+        "  - the client's outcomes: "
+        + ", ".join(f"{count} {kind}" for kind, count in sorted(outcomes.items())),
+        f"  - {races} accepted goal(s) beaten at start by a rival (race condition)",
+    ]
+    for clamp in clamps:
+        lines.append(
+            f"  - a stubborn period of {clamp['requested']:g} s clamped to {clamp['applied']:g} s: "
+            f"held {holds} time(s), re-checked after a delay {delays} time(s)"
+        )
+    return lines
 
 
 def session_events(seed: int) -> list[tuple[int, TimelineEvent]]:
@@ -162,18 +242,68 @@ def run_demo(seed: int = 0, *, json_lines: bool = False) -> str:
             record = {"step": index + 1, **event.to_dict()}
             lines.append(_json.dumps(record) + "\n")
         return "".join(lines)
-    parts: list[str] = []
-    header = f"{'time (s)':>9}  {'direction':<14}  {'message':<20}  summary  -> decision"
-    parts.append(f"dynevent demo: tinyRobot/tinyRobot1 over the loopback, seed {seed}\n\n{header}\n")
+    parts = [
+        f"dynevent demo: robot tinyRobot/tinyRobot1, a client machine and a server machine over an\n"
+        f"in-process loopback (seed {seed})\n\n",
+        "\n".join(_LEGEND) + "\n\n",
+        f"{'time':>7}  {'who':<4}  {'event':<16}  what  => decision\n",
+    ]
     for index, caption in enumerate(STEPS):
-        events = [event for step, event in tagged if step == index]
         parts.append(f"\n-- {index + 1}. {caption}\n")
-        parts.append(format_timeline(events))
+        for step, event in tagged:
+            if step == index:
+                parts.extend(line + "\n" for line in _text_lines(event))
+    parts.append("\n" + "\n".join(summary(tagged)) + "\n")
     return "".join(parts)
 
 
+#: Inputs the adapter gives the server (arrows to the server); every other adapter event is an output.
+_ADAPTER_INPUTS = frozenset(ins.INPUT_TYPES)
+
+
+def mermaid(seed: int = 0) -> str:
+    """The session of ``seed`` as a Mermaid sequence diagram (GitHub and most doc sites draw it)."""
+    lines = [
+        "sequenceDiagram",
+        "    participant C as Client",
+        "    participant S as Server (tinyRobot1)",
+        "    participant A as Fleet adapter",
+    ]
+    tagged = session_events(seed)
+    step = -1
+    for index, event in tagged:
+        if index != step:
+            step = index
+            lines.append(f"    Note over C,A: {index + 1}. {_mermaid_text(STEPS[index])}")
+        text = _mermaid_text(f"{event.kind} {event.summary}".strip())
+        decision = _mermaid_text(event.decision)
+        if event.direction == "client->server":
+            lines.append(f"    C->>S: {text}")
+            if decision.startswith("rejected"):
+                lines.append(f"    S--xC: {decision}")
+        elif event.direction == "server->client":
+            lines.append(f"    S-->>C: {text}")
+        elif event.direction == "adapter":
+            lines.append(f"    A->>S: {text}" if event.kind in _ADAPTER_INPUTS else f"    S->>A: {text}")
+            if "aborted: race condition" in decision:
+                lines.append(f"    Note over S: {decision}")
+        elif decision.startswith(("outcome", "refused")):
+            lines.append(f"    Note over C: {decision}")
+    return "\n".join(lines) + "\n"
+
+
+def _mermaid_text(text: str) -> str:
+    """A message text Mermaid takes literally: no statement separators, comments or entity codes."""
+    for bad, good in ((";", ","), ("#", "no."), ("%%", "%"), ("\n", " ")):
+        text = text.replace(bad, good)
+    return text if len(text) <= 90 else text[:87] + "..."
+
+
 def _run(args: argparse.Namespace) -> int:
-    print(run_demo(args.seed, json_lines=args.json), end="")
+    if args.mermaid:
+        print(mermaid(args.seed), end="")
+    else:
+        print(run_demo(args.seed, json_lines=args.json), end="")
     return 0
 
 
@@ -188,7 +318,11 @@ def add_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -
         "two racing NEXT goals, FINISHED, and a goal after the end.  The same seed prints the same "
         "output.  Exit status: 0.",
     )
-    parser.add_argument("--json", action="store_true", help="print one JSON object per timeline event")
+    shape = parser.add_mutually_exclusive_group()
+    shape.add_argument("--json", action="store_true", help="print one JSON object per timeline event")
+    shape.add_argument(
+        "--mermaid", action="store_true", help="print the session as a Mermaid sequence diagram"
+    )
     parser.add_argument(
         "--seed", type=int, default=0, metavar="N", help="seed of the message delays and the race (0)"
     )

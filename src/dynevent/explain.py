@@ -510,6 +510,36 @@ class _ArgumentError(DyneventError):
         super().__init__(f"{argument}: {problem}")
 
 
+#: The most JSON ``explain`` reads from a file or standard input (a status or a goal is far smaller).
+MAX_INPUT_BYTES = 4_000_000
+
+
+def _json_text(argument: str, value: str, stdin_taken: list[str]) -> str:
+    """The JSON text an argument names: inline, ``-`` for standard input, or ``@FILE``."""
+    if value == "-":
+        if stdin_taken:
+            raise _ArgumentError(argument, f"standard input is already read for {stdin_taken[0]}")
+        stdin_taken.append(argument)
+        return _bounded(argument, "standard input", sys.stdin.buffer.read(MAX_INPUT_BYTES + 1))
+    if value.startswith("@"):
+        path = value[1:]
+        try:
+            with open(path, "rb") as file:
+                return _bounded(argument, path, file.read(MAX_INPUT_BYTES + 1))
+        except OSError as exc:
+            raise _ArgumentError(argument, f"cannot read {path!r}: {exc.strerror or exc}") from None
+    return value
+
+
+def _bounded(argument: str, source: str, data: bytes) -> str:
+    if len(data) > MAX_INPUT_BYTES:
+        raise _ArgumentError(argument, f"{source} holds more than {MAX_INPUT_BYTES:,} bytes")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise _ArgumentError(argument, f"{source} is not UTF-8 (byte {exc.start})") from None
+
+
 def _parse_message(argument: str, cls: type[Any], text: str) -> Any:
     try:
         return cls.from_json(text)
@@ -528,8 +558,11 @@ def _parse_categories(text: str | None) -> tuple[str, ...] | None:
 
 def _run(args: argparse.Namespace) -> int:
     try:
-        status = _parse_message("--status", DynamicEventStatus, args.status)
-        goal = _parse_message("--goal", Goal, args.goal)
+        stdin_taken: list[str] = []
+        status = _parse_message(
+            "--status", DynamicEventStatus, _json_text("--status", args.status, stdin_taken)
+        )
+        goal = _parse_message("--goal", Goal, _json_text("--goal", args.goal, stdin_taken))
         categories = _parse_categories(args.categories)
     except _ArgumentError as exc:
         print(f"dynevent explain: {exc}", file=sys.stderr)
@@ -548,7 +581,7 @@ def add_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -
         "explain",
         help="would a robot in this state accept this goal? if not, why, and what to send instead",
         description="Rebuild the server state a DynamicEventStatus message describes and say whether "
-        "the goal would be accepted; if not, the reason code, its docs/spec.md rule, the values, and "
+        "the goal would be accepted; if not, the reason code, its spec rule, the values, and "
         "the goal to send instead.  Also says what a status message cannot tell.  Exit status: 0 "
         "when the goal is accepted and begins, 1 when it is rejected or aborted at its start, 2 on a "
         "usage error or bad JSON (the message names the argument and the field).",
@@ -558,14 +591,15 @@ def add_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -
         required=True,
         metavar="STATUS_JSON",
         help="the robot's DynamicEventStatus as JSON, e.g. '{\"dynamic_event_seq\": 3, "
-        '"dynamic_state": 2, "status": "underway", "id": 8}\'',
+        '"dynamic_state": 2, "status": "underway", "id": 8}\'; @FILE reads it from FILE, - from '
+        "standard input",
     )
     parser.add_argument(
         "--goal",
         required=True,
         metavar="GOAL_JSON",
         help='the DynamicEvent goal as JSON (ROS field names), e.g. \'{"dynamic_event_seq": 3, '
-        '"event_type": 2, "id": 8}\'',
+        '"event_type": 2, "id": 8}\'; @FILE reads it from FILE, - from standard input',
     )
     parser.add_argument(
         "--categories",

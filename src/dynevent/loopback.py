@@ -285,7 +285,8 @@ def _client_text(output: ClientOutput) -> str:
         return f"refused: {output.rejection.reason.value} ({output.rejection.text})"
     if isinstance(output, cl.Outcome):
         detail = output.reason.value if output.reason is not None else output.status
-        return f"outcome {output.kind.value}" + (f" ({detail})" if detail else "")
+        shown = detail and detail != output.kind.value
+        return f"outcome {output.kind.value}" + (f" ({detail})" if shown else "")
     if isinstance(output, cl.Progress):
         return f"progress {output.status} id={output.id}"
     if isinstance(output, cl.RunBegan):

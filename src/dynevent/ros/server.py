@@ -399,7 +399,9 @@ class DynamicEventServer:
             self._handles[uuid] = goal_handle
             goal_handle.execute()  # ExecuteGoal, R5.1: from EXECUTING every answer is legal
             self._outbox.extend(transition.outputs[1:])
-        self._wake.trigger()
+        # carried out here, in the group's own callback, not one executor wake-up later: the goal is
+        # EXECUTING already, and no other drain can run beside this one (the group is exclusive)
+        self._drain()
 
     def _cancel_callback(self, goal_handle: Any) -> CancelResponse:
         uuid = convert.uuid_from_ros(goal_handle.goal_id)

@@ -6,6 +6,15 @@ pulls in hypothesis.  Nothing in the core imports this package.
 
 from __future__ import annotations
 
+try:
+    import hypothesis  # noqa: F401
+except ModuleNotFoundError as exc:  # the extra is not installed: say which one
+    raise ModuleNotFoundError(
+        "dynevent.testing needs hypothesis, which the 'testing' extra installs: "
+        "pip install 'dynevent[testing]'",
+        name=exc.name,
+    ) from exc
+
 from .stateful import (
     DEFAULT_CONFIG,
     DyneventServer,
