@@ -8,6 +8,8 @@ cores; ``deep`` runs many more and longer examples.  Choose with the
 from __future__ import annotations
 
 import os
+import sys
+from pathlib import Path
 
 from hypothesis import HealthCheck, settings
 
@@ -28,3 +30,17 @@ settings.register_profile(
 )
 settings.register_profile("dev", max_examples=20, deadline=None)
 settings.load_profile(os.environ.get("DYNEVENT_HYPOTHESIS_PROFILE", "ci"))
+
+
+def pytest_report_header() -> str:
+    """Whether the ROS 2 tests run here, and if not, why (they are then not collected)."""
+    folder = str(Path(__file__).resolve().parent / "ros")
+    if folder not in sys.path:
+        sys.path.insert(0, folder)
+    from ros_support import ROS, WHY
+
+    if not ROS:
+        return f"ros: the ROS 2 tests are not collected: {WHY}"
+    import rclpy
+
+    return f"ros: the ROS 2 tests run over DDS on loopback (rclpy from {Path(rclpy.__file__).parent})"

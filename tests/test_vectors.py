@@ -186,8 +186,8 @@ def test_a_broken_implementation_fails_with_a_diff() -> None:
     block = result.stdout.split("FAIL cancel-keeps-the-robot-running (conformance/09-cancel.json)", 1)[1]
     assert "step 5: outputs differ" in block
     assert '"type":"goal_started"' in block
-    assert "! expected: (nothing)" in block
-    assert '! got:      {"type":"answer_goal"' in block
+    assert '  + {"type":"answer_goal"' in block  # the one output too many, marked alone
+    assert "  - " not in block.split("FAIL", 1)[0]
     passed, failed = (int(number) for number in SUMMARY_LINE.findall(result.stdout)[0])
     assert passed > 0 and failed > 0
 
@@ -360,3 +360,21 @@ def test_a_broken_implementation_is_a_clear_error_within_the_timeout(
     assert problem in result.stderr, result.stderr
     assert "Traceback" not in result.stderr
     assert time.monotonic() - started < 30  # the stalled one is cut at its 1 s timeout, not after 60 s
+
+
+def test_a_sequence_diff_marks_one_extra_output_alone() -> None:
+    expected = [{"type": "a"}, {"type": "b"}, {"type": "c", "uuid": "*"}, {"type": "d"}]
+    got = [{"type": "a"}, {"type": "x"}, {"type": "b"}, {"type": "c", "uuid": "12ab"}, {"type": "e"}]
+    assert vectors.align(expected, got) == [
+        ("=", {"type": "a"}),
+        ("+", {"type": "x"}),
+        ("=", {"type": "b"}),
+        ("=", {"type": "c", "uuid": "12ab"}),  # "*" matches any string
+        ("-", {"type": "d"}),
+        ("+", {"type": "e"}),
+    ]
+    assert vectors.align([{"type": "a"}, {"type": "b"}], [{"type": "b"}]) == [
+        ("-", {"type": "a"}),
+        ("=", {"type": "b"}),
+    ]
+    assert vectors.align([], []) == []

@@ -5,9 +5,9 @@ the same defaults (a default-initialized ROS message equals ``Cls()``).  Values
 are checked when a message is built, so a message that exists can be put on the
 wire as it is:
 
-==============  ==========================================================
-wire type       accepted Python value
-==============  ==========================================================
+===============  ==========================================================
+wire type        accepted Python value
+===============  ==========================================================
 ``uint8/32/64``  ``int`` (not ``bool``) in ``[0, 2**N - 1]``
 ``int32/64``     ``int`` (not ``bool``) in ``[-2**(N-1), 2**(N-1) - 1]``
 ``float32``      ``int`` or ``float`` (not ``bool``); stored rounded to the
@@ -18,7 +18,7 @@ wire type       accepted Python value
                  can be UTF-8 encoded) and holds no NUL character
 ``bool``         ``bool``
 ``T[]``          any iterable of ``T``, stored as a tuple
-==============  ==========================================================
+===============  ==========================================================
 
 Enum members (:class:`~dynevent.vocab.EventType`, :class:`~dynevent.vocab.Tier`,
 ...) are accepted and stored as their plain ``int``/``str`` value.  A value

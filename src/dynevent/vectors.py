@@ -44,6 +44,7 @@ __all__ = [
     "RuleTally",
     "Step",
     "Vector",
+    "align",
     "format_report",
     "load_vectors",
     "matches",
@@ -369,17 +370,48 @@ class Failure:
     problem: str
 
     def diff(self) -> str:
-        """A readable account: the step, its input, expected and got, line by line."""
-        lines = [f"step {self.step}: {self.problem}", f"  input:    {_json.dumps(self.input)}"]
+        """A readable account: the step, its input, then expected and got as a sequence diff.
+
+        Outputs are aligned by the longest run of matching ones, so one extra or
+        missing output marks that output alone: ``=`` both sides match, ``-``
+        expected but not given, ``+`` given but not expected.
+        """
+        lines = [
+            f"step {self.step}: {self.problem}",
+            f"  input:    {_json.dumps(self.input)}",
+            "  (= as expected, - expected but missing, + not expected)",
+        ]
         expected = list(self.expected) if isinstance(self.expected, (list, tuple)) else [self.expected]
         got = list(self.got) if isinstance(self.got, (list, tuple)) else [self.got]
-        for index in range(max(len(expected), len(got))):
-            want = expected[index] if index < len(expected) else None
-            have = got[index] if index < len(got) else None
-            mark = " " if index < len(expected) and index < len(got) and matches(want, have) else "!"
-            lines.append(f"  {mark} expected: {_json.dumps(want) if index < len(expected) else '(nothing)'}")
-            lines.append(f"  {mark} got:      {_json.dumps(have) if index < len(got) else '(nothing)'}")
+        for mark, value in align(expected, got):
+            lines.append(f"  {mark} {_json.dumps(value)}")
         return "\n".join(lines)
+
+
+def align(expected: Sequence[Any], got: Sequence[Any]) -> list[tuple[str, Any]]:
+    """The two output lists as one sequence diff under :func:`matches`: ``("=", got)``,
+    ``("-", expected)`` and ``("+", got)`` entries, along a longest common subsequence."""
+    rows, cols = len(expected), len(got)
+    best = [[0] * (cols + 1) for _ in range(rows + 1)]
+    for i in range(rows - 1, -1, -1):
+        for j in range(cols - 1, -1, -1):
+            if matches(expected[i], got[j]):
+                best[i][j] = best[i + 1][j + 1] + 1
+            else:
+                best[i][j] = max(best[i + 1][j], best[i][j + 1])
+    entries: list[tuple[str, Any]] = []
+    i = j = 0
+    while i < rows or j < cols:
+        if i < rows and j < cols and matches(expected[i], got[j]) and best[i][j] == best[i + 1][j + 1] + 1:
+            entries.append(("=", got[j]))
+            i, j = i + 1, j + 1
+        elif i < rows and (j == cols or best[i + 1][j] >= best[i][j + 1]):
+            entries.append(("-", expected[i]))
+            i += 1
+        else:
+            entries.append(("+", got[j]))
+            j += 1
+    return entries
 
 
 @attrs.frozen

@@ -2,10 +2,10 @@
 
 They need ROS 2 and the ``rmf_task_msgs`` interfaces importable (source
 ``build/ros/env.sh``, made by ``tests/ros/setup-ros-env.sh``).  Without them
-the ROS tests are not collected and ``test_environment.py`` shows the skip
-and its reason, except under ``CI=true``, where the run fails instead: CI
-must run them.  Every test has a deadline (faulthandler ends a hung process)
-and every wait in them a bound.
+the ROS tests are not collected and the run's header says why (see
+tests/conftest.py), except under ``CI=true``, where the run fails instead: CI
+must run them.  Every test has a deadline (faulthandler ends a hung
+process) and every wait in them a bound.
 """
 
 from __future__ import annotations

@@ -1,19 +1,6 @@
-"""Stands for the ROS tests where ROS 2 is absent, so that their skip shows, with its reason."""
+"""What holds with or without ROS 2: the core never imports rclpy."""
 
 from __future__ import annotations
-
-import pytest
-from ros_support import ROS, WHY
-
-
-def test_ros_2_and_the_interfaces_are_importable() -> None:
-    if not ROS:
-        pytest.skip(WHY)
-    import rclpy
-    from rmf_task_msgs.action import DynamicEvent
-
-    assert rclpy.ok is not None
-    assert DynamicEvent.Goal.EVENT_TYPE_NEXT == 1
 
 
 def test_no_core_module_imports_rclpy() -> None:

@@ -71,6 +71,13 @@ class Adapter:
         return self.started[index]
 
 
+def test_ros_2_and_the_interfaces_are_importable() -> None:
+    import rclpy
+
+    assert rclpy.ok is not None
+    assert DynamicEvent.Goal.EVENT_TYPE_NEXT == 1
+
+
 class Robot:
     """A server for one robot on its own node, and its adapter."""
 
