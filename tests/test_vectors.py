@@ -268,13 +268,14 @@ def test_a_wrong_expectation_in_a_given_file_fails(tmp_path: Path) -> None:
         ('{"vectors": {}}', "$.vectors"),
         ('{"vectors": [{"name": "x"}]}', "$.vectors[0]"),
         (
-            '{"vectors": [{"name": "x", "rules": ["R3.1"], "fleet": "f", "robot": "r", "config": {},'
-            ' "steps": [{"input": {"type": "begin"}, "expect": []}, {"input": {}}]}]}',
+            '{"vectors": [{"name": "x", "summary": "s", "rules": ["R3.1"], "fleet": "f", "robot": "r",'
+            ' "config": {}, "steps": [{"input": {"type": "begin"}, "expect": []}, {"input": {}}]}]}',
             "$.vectors[0].steps[1]",
         ),
         (
-            '{"vectors": [{"name": "x", "rules": [], "fleet": "f", "robot": "r", "config": {},'
-            ' "steps": []}]}',
+            '{"vectors": [{"name": "x", "summary": "s", "rules": [], "fleet": "f", "robot": "r",'
+            ' "config": {}, "steps": [{"input": {"type": "begin", "description": "{}", "event_id": 1,'
+            ' "now": 0, "interrupted": false}, "expect": []}]}]}',
             "$.vectors[0].rules",
         ),
     ],
@@ -287,6 +288,35 @@ def test_a_malformed_vector_file_is_a_located_usage_error(tmp_path: Path, conten
     assert f": {where}" in result.stderr
     assert "Traceback" not in result.stderr
     assert result.stdout == ""
+
+
+def _with_a_typo_in_an_expectation(tmp_path: Path) -> Path:
+    example = json.loads((CONFORMANCE / "03-begin.json").read_text(encoding="utf-8"))
+    example["vectors"] = example["vectors"][:1]
+    example["vectors"][0]["steps"][0]["expect"][0]["type"] = "publish_stauts"
+    return _write(tmp_path, "typo.json", json.dumps(example))
+
+
+def test_a_typo_in_an_expectation_is_a_vector_file_error_not_a_failure(tmp_path: Path) -> None:
+    """The schema (a real validator) finds it: exit 2 naming the file, the vector and the path."""
+    path = _with_a_typo_in_an_expectation(tmp_path)
+    name = json.loads(path.read_text(encoding="utf-8"))["vectors"][0]["name"]
+    result = _dynevent(str(path))
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert f"{path}: $.vectors[0].steps[0].expect[0]" in result.stderr
+    assert f"(vector {name!r})" in result.stderr and "(the vector file schema)" in result.stderr
+    assert result.stdout == ""
+
+
+def test_without_jsonschema_the_reader_alone_checks_and_says_so(tmp_path: Path) -> None:
+    path = _with_a_typo_in_an_expectation(tmp_path)
+    blocked = "import sys; sys.modules['jsonschema'] = None; from dynevent.cli import main; sys.exit(main())"
+    result = subprocess.run(
+        [PYTHON, "-c", blocked, "vectors", str(path)], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert "pip install 'dynevent[vectors]'" in result.stderr
+    assert result.returncode == 1  # the typo reaches the run: the implementation is blamed
+    assert "Traceback" not in result.stderr
 
 
 def test_a_missing_vector_file_is_a_usage_error(tmp_path: Path) -> None:

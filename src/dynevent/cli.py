@@ -27,6 +27,12 @@ def _vectors(args: argparse.Namespace) -> int:
     """``dynevent vectors``: run the conformance vectors; 0 all pass, 1 any fails, 2 bad input."""
     from . import _json, vectors
 
+    if args.files and not vectors.schema_validation_available():
+        print(
+            "dynevent vectors: note: jsonschema is not installed, so the files are checked by dynevent's "
+            "own reader only; pip install 'dynevent[vectors]' to validate them against the schema",
+            file=sys.stderr,
+        )
     try:
         loaded = vectors.load_vectors(args.files)
     except vectors.InvalidVector as exc:

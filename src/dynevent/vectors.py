@@ -33,6 +33,7 @@ from .driver import Driver
 from .errors import DyneventError
 
 __all__ = [
+    "SCHEMA_FILE",
     "WILDCARD",
     "ExternalImplementation",
     "Failure",
@@ -52,6 +53,8 @@ __all__ = [
     "rule_table",
     "run_vector",
     "run_vectors",
+    "schema_problem",
+    "schema_validation_available",
     "select_vectors",
     "summary_record",
 ]
@@ -62,6 +65,10 @@ WILDCARD = "*"
 MAX_TIMEOUT = 3600.0
 #: The longest answer line an external implementation may write, in bytes.
 MAX_ANSWER_BYTES = 64 * 1024 * 1024
+
+
+#: The JSON Schema of a vector file, shipped beside the vectors.
+SCHEMA_FILE = "vector.schema.json"
 
 
 class InvalidVector(DyneventError):
@@ -305,18 +312,69 @@ def _vector(source: str, path: str, data: Any) -> Vector:
     )
 
 
-def parse_vector_file(source: str, text: str | bytes) -> list[Vector]:
-    """The vectors of one file's text; raises :class:`InvalidVector` naming ``source``."""
+def parse_vector_file(source: str, text: str | bytes, *, schema: bool = False) -> list[Vector]:
+    """The vectors of one file's text; raises :class:`InvalidVector` naming ``source``.
+
+    With ``schema``, the file is first validated against the shipped JSON Schema
+    (``conformance/vector.schema.json``) by the ``jsonschema`` package, when it
+    is installed (the ``vectors`` extra): a typo in an ``expect`` is then a
+    vector-file error naming the vector and the path, not a failure of the
+    implementation under test.
+    """
     try:
         data = _json.parse(text)
     except _json.JsonProblem as exc:
         raise InvalidVector(source, "$", str(exc)) from None
+    if schema:
+        problem = schema_problem(data)
+        if problem is not None:
+            raise InvalidVector(source, *problem)
     vectors = _require(source, "$", data, "vectors", list)
     return [_vector(source, f"$.vectors[{index}]", item) for index, item in enumerate(vectors)]
 
 
+def schema_validation_available() -> bool:
+    """Whether :func:`schema_problem` can validate (the ``jsonschema`` package is installed)."""
+    try:
+        import jsonschema  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def schema_problem(data: Any) -> tuple[str, str] | None:
+    """The most relevant way ``data`` breaks the vector file schema, as (JSON path, problem).
+
+    None when it conforms, or when ``jsonschema`` is not installed.  The path
+    names the vector by its ``name`` where the file gives one.
+    """
+    try:
+        import jsonschema
+    except ImportError:
+        return None
+    schema = _json.parse((resources.files("dynevent") / "conformance" / SCHEMA_FILE).read_bytes())
+    error = jsonschema.exceptions.best_match(jsonschema.Draft202012Validator(schema).iter_errors(data))
+    if error is None:
+        return None
+    path = error.json_path
+    where = list(error.absolute_path)
+    if len(where) >= 2 and where[0] == "vectors" and isinstance(data, dict):
+        try:
+            name = data["vectors"][where[1]]["name"]
+        except (KeyError, IndexError, TypeError):
+            name = None
+        if isinstance(name, str):
+            path = f"{path} (vector {name!r})"
+    message = error.message if len(error.message) <= 300 else error.message[:297] + "..."
+    return path, f"{message} (the vector file schema)"
+
+
 def load_vectors(paths: Iterable[str | os.PathLike[str]] = ()) -> list[Vector]:
-    """The vectors of the given files, or the shipped ones when none are given."""
+    """The vectors of the given files, or the shipped ones when none are given.
+
+    Given files are validated against the shipped JSON Schema first, where
+    ``jsonschema`` is installed (see :func:`parse_vector_file`).
+    """
     found: list[Vector] = []
     chosen = [os.fspath(path) for path in paths]
     if chosen:
@@ -326,7 +384,7 @@ def load_vectors(paths: Iterable[str | os.PathLike[str]] = ()) -> list[Vector]:
                     text = handle.read()
             except OSError as exc:
                 raise InvalidVector(path, "$", f"cannot read: {exc.strerror}") from None
-            found.extend(parse_vector_file(path, text))
+            found.extend(parse_vector_file(path, text, schema=True))
     else:
         folder = resources.files("dynevent") / "conformance"
         for entry in sorted(folder.iterdir(), key=lambda item: item.name):
