@@ -194,3 +194,35 @@ def test_parsing_memory_stays_bounded(parse: Callable[[str], object], text: str)
     finally:
         tracemalloc.stop()
     assert peak < 10 * len(text) + 1_000_000
+
+
+# --------------------------------------------------------------------------- what the fuzzer found
+
+
+@pytest.mark.parametrize("status", [{"a": 1}, ["completed"], None, 3])
+@pytest.mark.parametrize("cls", [ins.ChildProgress, ins.ChildFinished])
+def test_a_child_status_of_the_wrong_json_type_is_refused_not_unhashable(cls: Any, status: Any) -> None:
+    with pytest.raises(InvalidMessage) as caught:
+        cls(status=status, now=0)
+    assert caught.value.field == "status"
+
+
+def test_a_store_whose_schema_text_is_not_utf8_is_refused(tmp_path: Any) -> None:
+    """A store file the fuzzer corrupted: its schema's text is not UTF-8 (Python's sqlite3 raises
+    UnicodeDecodeError reading it, not a DatabaseError)."""
+    import shutil
+    from pathlib import Path
+
+    from dynevent.store import InvalidStore, StateStore
+
+    path = tmp_path / "state.db"
+    shutil.copy(Path(__file__).parent / "data" / "store-non-utf8-schema.db", path)
+    with pytest.raises(InvalidStore, match="is not a dynevent state store"):
+        StateStore(path)
+
+
+def test_a_trace_time_of_a_huge_integer_is_a_located_error() -> None:
+    from dynevent.check import TraceError, check_trace
+
+    with pytest.raises(TraceError, match="time"):
+        check_trace('{"type": "status", "time": ' + "9" * 400 + ', "message": {}}')

@@ -188,7 +188,7 @@ def _time(value: Any, source: str, line: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise TraceError(source, line, "time", f"expected a number of seconds, got {_json.dumps(value)}")
     nanoseconds = None
-    if math.isfinite(value) and abs(value) < 2**32:
+    if (isinstance(value, int) or math.isfinite(value)) and abs(value) < 2**32:  # no float() of a huge int
         nanoseconds = value * _NS if isinstance(value, int) else round(value * _NS)
     if nanoseconds is None or not ins.NOW_RANGE[0] <= nanoseconds <= ins.NOW_RANGE[1]:
         raise TraceError(source, line, "time", f"{value!r} is outside the range of builtin_interfaces/Time")

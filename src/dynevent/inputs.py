@@ -105,7 +105,7 @@ def _now(value: Any, instance: object, field: attrs.Attribute[Any]) -> int:
 def _one_of(allowed: frozenset[str], what: str) -> attrs.Converter[Any, Any]:
     def convert(value: Any, instance: object, field: attrs.Attribute[Any]) -> str:
         plain = value.value if isinstance(value, (Status, Tier)) else value
-        if plain not in allowed or type(plain) is not str:
+        if type(plain) is not str or plain not in allowed:  # the type first: a dict is unhashable
             raise InvalidMessage(
                 type(instance).__name__, field.name, value, f"expected one of the {what}: {sorted(allowed)}"
             )

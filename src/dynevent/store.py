@@ -63,7 +63,7 @@ class StateStore:
                 self._check()
             else:
                 self._create()
-        except sqlite3.DatabaseError as exc:
+        except (sqlite3.DatabaseError, UnicodeDecodeError) as exc:  # text that is not UTF-8: not ours
             self._db.close()
             raise InvalidStore(self.path, f"is not a dynevent state store ({exc})") from None
         except InvalidStore:
@@ -104,7 +104,7 @@ class StateStore:
                 rows = self._db.execute(
                     "SELECT fleet, robot, snapshot FROM robots ORDER BY fleet, robot"
                 ).fetchall()
-        except sqlite3.DatabaseError as exc:
+        except (sqlite3.DatabaseError, UnicodeDecodeError) as exc:
             raise InvalidStore(self.path, f"cannot be read ({exc})") from None
         for fleet, robot, text in rows:
             try:

@@ -227,7 +227,7 @@ def _config_from_dict(data: Any, source: str) -> ServeConfig:
                     fail_on=tuple(str(place) for place in values.get("fail_on", ())),
                     needs_place=bool(values.get("needs_place", name == "go_to_place")),
                 )
-            except (TypeError, ValueError) as exc:
+            except (TypeError, ValueError, OverflowError) as exc:  # OverflowError: float(10**400)
                 raise ServeError(f"{source}: categories.{name}: {exc}") from None
             if not 0 < categories[name].duration < 1e6 or not 0 < categories[name].report_every < 1e6:
                 raise ServeError(

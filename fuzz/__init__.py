@@ -1,0 +1,1 @@
+"""A structure-aware fuzzer of every dynevent entry point that parses, restores or takes outside input."""

@@ -1,0 +1,478 @@
+"""The entry points the fuzzer drives, each with valid seed documents and how to call it.
+
+An entry point is any public function or constructor that takes outside
+input: message mirrors (from dicts, JSON and keyword arguments), the
+machine's inputs and configuration, records, snapshots of a robot and of a
+fleet, the event description, protocol names, traces, vector files, the
+driver protocol, the SQLite state store, the client machine's requests, and
+each command line's arguments and files.  Each may raise only dynevent's
+own errors (:class:`dynevent.errors.DyneventError`); a command line may
+only exit 0, 1 or 2, and never print a traceback.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import io
+import os
+import sqlite3
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import attrs
+
+from dynevent import cli, driver, machine, snapshot, vectors
+from dynevent import client as cl
+from dynevent import inputs as ins
+from dynevent.check import check_trace
+from dynevent.description import EventDescription, EventSpec
+from dynevent.fleet import Fleet
+from dynevent.messages import MESSAGE_TYPES
+from dynevent.names import action_name, parse_name, validate_token
+from dynevent.records import config_from_json, input_from_json, output_from_json, rule_validator
+from dynevent.store import StateStore
+
+from . import mutate
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@attrs.frozen
+class Target:
+    """One entry point: ``call`` takes a mutated seed; ``text`` seeds are mutated as text as well."""
+
+    name: str
+    seeds: tuple[Any, ...]
+    call: Callable[[Any], object]
+    text: bool = False
+    cli: bool = False
+    kwargs: bool = False  # the seed is keyword arguments: only their values are mutated
+
+
+# --------------------------------------------------------------------------- seeds
+
+
+@functools.cache
+def material() -> dict[str, Any]:
+    """Valid documents of every kind, taken from the shipped conformance vectors run through the machine."""
+    found: dict[str, Any] = {"inputs": [], "outputs": [], "configs": [], "snapshots": [], "requests": []}
+    for vector in vectors.load_vectors():
+        found["configs"].append(vector.config)
+        config = config_from_json(vector.config, "$.config")
+        state = driver.state_from_json(vector.fleet, vector.robot, vector.state)
+        found["requests"].append(
+            {"op": "reset", "fleet": vector.fleet, "robot": vector.robot, "config": vector.config}
+        )
+        for step in vector.steps:
+            found["inputs"].append(step.input)
+            found["outputs"].extend(step.expect)
+            found["requests"].append({"op": "apply", "input": step.input})
+            try:
+                state = machine.step(state, input_from_json(step.input, "$"), config).state
+            except ValueError:  # a vector of a refused input
+                continue
+            found["snapshots"].append(snapshot.snapshot(state))
+    found["snapshots"] = found["snapshots"][::7]
+    fleet = Fleet(machine.ServerConfig())
+    for index, data in enumerate(found["snapshots"][:6]):
+        state = snapshot.restore(data)
+        with contextlib.suppress(ValueError):
+            fleet.add(
+                state.fleet, f"{state.robot}{index}", state=attrs.evolve(state, robot=f"{state.robot}{index}")
+            )
+    found["fleet"] = fleet.snapshot()
+    return found
+
+
+def _of_type(kind: str) -> list[dict[str, Any]]:
+    return [dict(record) for record in material()["inputs"] if record.get("type") == kind][:8]
+
+
+def _kwargs(cls: type, value: Any) -> dict[str, Any]:
+    """Only the keyword arguments ``cls`` takes (the values are the fuzzed part, not the names)."""
+    names = {field.name for field in attrs.fields(cls)}
+    return {key: item for key, item in value.items() if key in names} if isinstance(value, dict) else {}
+
+
+def _messages() -> list[Target]:
+    made = []
+    for cls in MESSAGE_TYPES:
+        seeds = (cls().to_dict(),)
+        made.append(Target(f"{cls.__name__}.from_dict", seeds, cls.from_dict))
+        made.append(
+            Target(
+                f"{cls.__name__}.from_json", tuple(mutate.dumps(s) for s in seeds), cls.from_json, text=True
+            )
+        )
+        made.append(_keyword_target(f"{cls.__name__}(**fields)", cls, seeds))
+    return made
+
+
+def _keyword_target(name: str, cls: type, seeds: tuple[Any, ...]) -> Target:
+    """``cls(**arguments)``: the arguments' values are mutated, never their names."""
+    return Target(name, seeds, lambda value: cls(**_kwargs(cls, value)), kwargs=True)
+
+
+def _inputs() -> list[Target]:
+    made = []
+    for kind, cls in ins.INPUT_TYPES.items():
+        seeds = tuple({k: v for k, v in record.items() if k != "type"} for record in _of_type(kind)) or (
+            {"now": 0},
+        )
+        made.append(_keyword_target(f"inputs.{cls.__name__}(**fields)", cls, seeds))
+    return made
+
+
+#: ServerConfig's plain fields (its categories are validators, given by the target itself).
+_CONFIG_FIELDS = tuple(
+    field.name for field in attrs.fields(machine.ServerConfig) if field.name != "categories"
+)
+
+
+def _server_config(value: Any) -> object:
+    kwargs = {key: item for key, item in value.items() if key in _CONFIG_FIELDS}
+    kwargs["categories"] = {"go_to_place": machine.accept_any}
+    return _run(machine.ServerConfig(**kwargs))
+
+
+def _run(config: machine.ServerConfig) -> machine.State:
+    """An accepted configuration must run: a robot's whole life steps without raising."""
+    state = machine.State.new("f", "r")
+    for record in material()["inputs"][:: max(1, len(material()["inputs"]) // 60)]:
+        with contextlib.suppress(ValueError):
+            state = machine.step(state, input_from_json(record, "$"), config).state
+    return state
+
+
+def _run_config(value: Any) -> object:
+    return _run(config_from_json(value, "$"))
+
+
+def _restore_and_run(value: Any) -> object:
+    """A snapshot that restores must run: every kind of input steps from it without raising."""
+    state = snapshot.restore(value)
+    config = machine.ServerConfig()
+    for record in material()["inputs"][:: max(1, len(material()["inputs"]) // 40)]:
+        with contextlib.suppress(ValueError):
+            machine.step(state, input_from_json(record, "$"), config)
+    return snapshot.loads(snapshot.dumps(state))  # its own snapshot loads again
+
+
+def _driver_session(value: Any) -> object:
+    requests = value if isinstance(value, list) else [value]
+    lines = "".join(
+        (request if isinstance(request, str) else mutate.dumps(request)) + "\n" for request in requests
+    )
+    out = io.StringIO()
+    driver.serve(io.StringIO(lines), out)
+    return out.getvalue()
+
+
+def _driver_seeds() -> tuple[Any, ...]:
+    requests = material()["requests"]
+    sessions = []
+    for index, request in enumerate(requests):
+        if request["op"] == "reset":
+            sessions.append([{"op": "hello"}, request, *requests[index + 1 : index + 6]])
+    return tuple(sessions[::5])
+
+
+def _store_file(value: Any) -> object:
+    """Open a store whose rows were written by someone else: refused cleanly, or loaded and usable."""
+    folder = tempfile.mkdtemp(prefix="dynevent-fuzz-")
+    path = os.path.join(folder, "state.db")
+    try:
+        db = sqlite3.connect(path)
+        db.executescript(
+            "CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT);"
+            "CREATE TABLE robots (fleet TEXT, robot TEXT, snapshot TEXT, PRIMARY KEY (fleet, robot));"
+        )
+        meta = value.get("meta") if isinstance(value, dict) else None
+        rows = value.get("robots") if isinstance(value, dict) else None
+        for key, item in meta.items() if isinstance(meta, dict) else ():
+            db.execute("INSERT INTO meta VALUES (?, ?)", (_sql_text(str(key)), _sql_text(item)))
+        for row in rows if isinstance(rows, list) else ():
+            if isinstance(row, list) and len(row) == 3:
+                db.execute(
+                    "INSERT OR REPLACE INTO robots VALUES (?, ?, ?)", tuple(_sql_text(cell) for cell in row)
+                )
+        db.commit()
+        db.close()
+        store = StateStore(path)
+        try:
+            states = store.load()
+            for state in states.values():
+                store.save(state)
+        finally:
+            store.close()
+        return states
+    finally:
+        for name in os.listdir(folder):
+            os.unlink(os.path.join(folder, name))
+        os.rmdir(folder)
+
+
+def _sql_text(cell: Any) -> Any:
+    if isinstance(cell, str):
+        return cell.encode("utf-8", "surrogatepass").decode("utf-8", "replace")
+    if isinstance(cell, (dict, list)):
+        return mutate.dumps(cell)
+    return cell if not isinstance(cell, int) or abs(cell) < 2**63 else str(cell)
+
+
+def _store_bytes(value: Any) -> object:
+    folder = tempfile.mkdtemp(prefix="dynevent-fuzz-")
+    path = os.path.join(folder, "state.db")
+    try:
+        Path(path).write_bytes(
+            value if isinstance(value, bytes) else str(value).encode("utf-8", "surrogatepass")
+        )
+        store = StateStore(path)
+        try:
+            return store.load()
+        finally:
+            store.close()
+    finally:
+        for name in os.listdir(folder):
+            os.unlink(os.path.join(folder, name))
+        os.rmdir(folder)
+
+
+@functools.cache
+def _store_seed() -> bytes:
+    folder = tempfile.mkdtemp(prefix="dynevent-fuzz-")
+    path = os.path.join(folder, "state.db")
+    store = StateStore(path)
+    store.save(snapshot.restore(material()["snapshots"][1]))
+    store.close()
+    data = Path(path).read_bytes()
+    for name in os.listdir(folder):
+        os.unlink(os.path.join(folder, name))
+    os.rmdir(folder)
+    return data
+
+
+def _cli(argv: list[str], stdin: str = "") -> object:
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = cli.main(argv)
+        except SystemExit as exc:  # argparse's usage errors
+            code = exc.code if isinstance(exc.code, int) else 2
+    if code not in (0, 1, 2) or "Traceback" in out.getvalue() + err.getvalue():
+        raise AssertionError(f"exit {code}: {err.getvalue()[-300:]}")
+    return code
+
+
+def _cli_with_file(command: str, value: Any, *extra: str) -> object:
+    folder = tempfile.mkdtemp(prefix="dynevent-fuzz-")
+    path = os.path.join(folder, "input")
+    try:
+        data = value if isinstance(value, bytes) else str(value).encode("utf-8", "surrogatepass")
+        Path(path).write_bytes(data)
+        return _cli([command, *extra, path])
+    finally:
+        os.unlink(path)
+        os.rmdir(folder)
+
+
+def _trace_seeds() -> tuple[str, ...]:
+    return tuple(
+        (ROOT / "docs" / "examples" / name).read_text(encoding="utf-8")
+        for name in ("clean-trace.jsonl", "rmf_ros2-trace.jsonl")
+    )
+
+
+def _vector_file_seeds() -> tuple[str, ...]:
+    folder = ROOT / "src" / "dynevent" / "conformance"
+    seeds = []
+    for path in sorted(folder.glob("[0-9]*.json"))[::3]:
+        data = mutate.json.loads(path.read_text(encoding="utf-8"))
+        seeds.append(mutate.dumps({"vectors": data["vectors"][:1]}))
+    return tuple(seeds)
+
+
+def _text(value: str | bytes) -> str:
+    """The str a str-only entry point is given: bytes that are not UTF-8 become U+FFFD."""
+    return value.decode("utf-8", "replace") if isinstance(value, bytes) else value
+
+
+def _explain(value: Any) -> object:
+    status, goal = ([*value, None, None])[:2] if isinstance(value, list) else (value, None)
+    return _cli(
+        [
+            "explain",
+            "--status",
+            status if isinstance(status, str) else mutate.dumps(status),
+            "--goal",
+            goal if isinstance(goal, str) else mutate.dumps(goal),
+        ]
+    )
+
+
+def _client_request(value: Any) -> object:
+    state = cl.ClientState.new("0123456789abcdef", categories=["go_to_place"])
+    state = cl.step(state, cl.StatusReceived(message=_status(value.get("status")))).state
+    return cl.request_next(
+        state,
+        value.get("category"),
+        value.get("description"),
+        stubborn_period=value.get("stubborn_period", 0.0),
+        timeout=value.get("timeout"),
+        now=value.get("now", 0),
+    )
+
+
+def _status(data: Any) -> Any:
+    from dynevent.messages import DynamicEventStatus
+
+    return DynamicEventStatus.from_dict(data)
+
+
+def targets() -> list[Target]:
+    """Every entry point the fuzzer drives."""
+    mat = material()
+    by_type = {record["type"]: record for record in mat["inputs"]}
+    rules = [rule for config in mat["configs"] for rule in (config.get("categories") or {}).values()][:10]
+    status = {
+        "dynamic_event_seq": 3,
+        "dynamic_state": 2,
+        "status": "underway",
+        "id": 8,
+        "time": {"sec": 1, "nanosec": 0},
+    }
+    goal = {
+        "dynamic_event_seq": 3,
+        "event_type": 2,
+        "category": "",
+        "description": "",
+        "id": 8,
+        "stubborn_period": 0.0,
+    }
+    description = {
+        "category": "patrol",
+        "detail": "rounds",
+        "estimate": {"category": "go_to_place", "description": {"place": "lobby"}},
+        "required": [{"category": "perform_action", "description": {"action": "wait"}}],
+        "parameters": {"x": [1, 2.5, None, True]},
+    }
+    made = [
+        *_messages(),
+        *_inputs(),
+        Target("records.input_from_json", tuple(mat["inputs"][::9]), lambda v: input_from_json(v, "$")),
+        Target(
+            "records.output_from_json",
+            tuple(o for o in mat["outputs"][::9] if "*" not in mutate.dumps(o)),
+            lambda v: output_from_json(v, "$"),
+        ),
+        Target("records.config_from_json, then run", tuple(mat["configs"][::5]), _run_config),
+        Target("records.rule_validator", tuple(rules) or ([{"accept": "string"}],), rule_validator),
+        Target(
+            "machine.ServerConfig(**fields), then run",
+            (
+                {
+                    "id_policy": "goal",
+                    "compatibility": "standard",
+                    "stubborn_minimum": 2.0,
+                    "stubborn_refresh": 1.0,
+                    "stubborn_move_threshold": 0.1,
+                    "max_description_length": 1000,
+                },
+            ),
+            _server_config,
+            kwargs=True,
+        ),
+        Target("snapshot.restore, then run", tuple(mat["snapshots"][:40]), _restore_and_run),
+        Target(
+            "snapshot.loads", tuple(mutate.dumps(s) for s in mat["snapshots"][:20]), snapshot.loads, text=True
+        ),
+        Target("Fleet.restore", (mat["fleet"],), Fleet.restore),
+        Target("Fleet.loads", (mutate.dumps(mat["fleet"]),), Fleet.loads, text=True),
+        Target("EventDescription.from_dict", (description,), EventDescription.from_dict),
+        Target(
+            "EventDescription.from_json", (mutate.dumps(description),), EventDescription.from_json, text=True
+        ),
+        Target("EventSpec.from_dict", (description["estimate"],), EventSpec.from_dict),
+        Target(
+            "names.parse_name",
+            (
+                "rmf/dynamic_event/command/tinyRobot/tinyRobot1",
+                "rmf/dynamic_event/status/f/r",
+                "rmf/dynamic_event/begin",
+            ),
+            lambda v: parse_name(_text(v)),
+            text=True,
+        ),
+        Target("names.validate_token", ("tinyRobot1",), lambda v: validate_token("robot", v)),
+        Target(
+            "names.action_name",
+            (["tinyRobot", "tinyRobot1"],),
+            lambda v: action_name(*([*v, "", ""])[:2]) if isinstance(v, list) else action_name(v, v),
+        ),
+        Target("check.check_trace", _trace_seeds(), lambda v: check_trace(_text(v)), text=True),
+        Target(
+            "vectors.parse_vector_file (schema)",
+            _vector_file_seeds(),
+            lambda v: vectors.parse_vector_file("fuzz.json", v, schema=True),
+            text=True,
+        ),
+        Target("driver protocol session", _driver_seeds(), _driver_session),
+        Target(
+            "StateStore rows",
+            (
+                {
+                    "meta": {"format": "dynevent-store", "version": "1"},
+                    "robots": [["tinyRobot", "tinyRobot1", mat["snapshots"][1]]],
+                },
+            ),
+            _store_file,
+        ),
+        Target("StateStore file bytes", (_store_seed(),), _store_bytes),
+        Target(
+            "client.request_next",
+            (
+                {
+                    "status": status,
+                    "category": "go_to_place",
+                    "description": '"a"',
+                    "stubborn_period": 0.5,
+                    "timeout": 10**9,
+                    "now": 5,
+                },
+            ),
+            _client_request,
+            kwargs=True,
+        ),
+        Target(
+            "cli: dynevent check FILE",
+            _trace_seeds(),
+            lambda v: _cli_with_file("check", v),
+            text=True,
+            cli=True,
+        ),
+        Target("cli: dynevent explain", ([status, goal],), _explain, cli=True),
+        Target(
+            "cli: dynevent vectors FILE",
+            _vector_file_seeds()[:2],
+            lambda v: _cli_with_file("vectors", v),
+            text=True,
+            cli=True,
+        ),
+        Target(
+            "cli: dynevent demo --seed",
+            (["demo", "--seed", "3"], ["demo", "--json", "--seed", "1"]),
+            lambda v: _cli([str(x) for x in v] if isinstance(v, list) else [str(v)]),
+            cli=True,
+        ),
+        Target(
+            "cli: dynevent diagram --format",
+            (["diagram", "--format", "dot"],),
+            lambda v: _cli([str(x) for x in v] if isinstance(v, list) else [str(v)]),
+            cli=True,
+        ),
+    ]
+    assert by_type  # every input type has seeds from the vectors
+    return made
