@@ -376,8 +376,8 @@ STALL = "import sys, time; sys.stdout.write('{\"ok'); sys.stdout.flush(); time.s
             ["--timeout", "1"],
             "did not answer within 1 s",
         ),
-        (f"{sys.executable} -m dynevent.driver", ["--timeout", "nan"], "timeout: expected seconds"),
-        (f"{sys.executable} -m dynevent.driver", ["--timeout", "-1"], "timeout: expected seconds"),
+        (f"{sys.executable} -m dynevent.driver", ["--timeout", "nan"], "--timeout: expected seconds"),
+        (f"{sys.executable} -m dynevent.driver", ["--timeout", "-1"], "--timeout: expected seconds"),
     ],
     ids=["empty", "bad-quoting", "exits", "not-utf8", "half-line-stall", "nan-timeout", "negative-timeout"],
 )
@@ -390,6 +390,12 @@ def test_a_broken_implementation_is_a_clear_error_within_the_timeout(
     assert problem in result.stderr, result.stderr
     assert "Traceback" not in result.stderr
     assert time.monotonic() - started < 30  # the stalled one is cut at its 1 s timeout, not after 60 s
+
+
+@pytest.mark.parametrize("timeout", ["nan", "-1", "0", "inf", "1e9", "soon"])
+def test_a_bad_timeout_is_a_usage_error_even_in_process(timeout: str) -> None:
+    result = _dynevent("--timeout", timeout)
+    assert result.returncode == 2 and "--timeout: expected" in result.stderr and result.stdout == ""
 
 
 def test_a_sequence_diff_marks_one_extra_output_alone() -> None:

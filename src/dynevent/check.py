@@ -432,6 +432,10 @@ class _GoalSeen:
     owed: bool = False  # dropped from the state on resynchronisation: its answers are not judged
 
 
+#: The goal an answered goal's record keeps: nothing after its answer reads the request itself.
+_ANSWERED = Goal()
+
+
 @attrs.frozen
 class _Owed:
     """An output of an inferred step that has not been observed yet."""
@@ -648,6 +652,10 @@ class _Observer:
             return
         handler = getattr(self, f"on_{record.kind}")
         handler(record)
+        if record.kind == "result":
+            seen = self.goals.get(record.goal_uuid)
+            if seen is not None and seen.answered is not None:
+                seen.goal = _ANSWERED  # what is judged after its answer is the line: memory stays flat
 
     def sync(self, record: Record) -> bool:
         """Set the starting state from the first record; True when the record is used up."""

@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from . import DOCS, __version__, check, demo, explain
 from ._progress import Progress
 from .diagram import FORMATS, render
+from .vectors import MAX_TIMEOUT
 
 __all__ = ["main"]
 
@@ -72,6 +73,17 @@ def _vectors(args: argparse.Namespace) -> int:
     return 0 if all(outcome.passed for outcome in outcomes) else 1
 
 
+def _timeout(text: str) -> float:
+    """``--timeout``: a finite number of seconds above 0, at most the vectors' bound."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not 0 < value <= MAX_TIMEOUT:  # NaN fails both comparisons
+        raise argparse.ArgumentTypeError(f"expected seconds above 0 and at most {MAX_TIMEOUT:g}, got {text}")
+    return value
+
+
 def _add_vectors_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = commands.add_parser(
         "vectors",
@@ -95,7 +107,11 @@ def _add_vectors_command(commands: argparse._SubParsersAction[argparse.ArgumentP
         "--json", action="store_true", help="one JSON object per vector, then a summary object"
     )
     parser.add_argument(
-        "--timeout", type=float, default=10.0, metavar="SECONDS", help="longest wait for one answer (10)"
+        "--timeout",
+        type=_timeout,
+        default=10.0,
+        metavar="SECONDS",
+        help=f"longest wait for one answer, above 0 and at most {MAX_TIMEOUT:g} (10)",
     )
     parser.set_defaults(run=_vectors)
 
