@@ -216,10 +216,11 @@ def _store_file(value: Any) -> object:
 
 
 def _sql_text(cell: Any) -> Any:
+    """A value sqlite3 can store (it cannot encode lone surrogates): the store's reader gets the rest."""
+    if isinstance(cell, (dict, list)):
+        cell = mutate.dumps(cell)
     if isinstance(cell, str):
         return cell.encode("utf-8", "surrogatepass").decode("utf-8", "replace")
-    if isinstance(cell, (dict, list)):
-        return mutate.dumps(cell)
     return cell if not isinstance(cell, int) or abs(cell) < 2**63 else str(cell)
 
 

@@ -292,3 +292,18 @@ def test_the_testing_kit_without_hypothesis_names_the_extra() -> None:
     )
     assert done.returncode == 0, done.stderr
     assert "pip install 'dynevent[testing]'" in done.stdout
+
+
+def test_help_imports_no_protocol_module() -> None:
+    """``dynevent --help`` stays quick: the command line imports a command's module only to run it."""
+    probe = (
+        "import sys; from dynevent import cli\n"
+        "try:\n    cli.main(['--help'])\nexcept SystemExit:\n    pass\n"
+        "heavy = sorted(m for m in sys.modules if m.split('.')[:2] in (['dynevent', 'machine'], "
+        "['dynevent', 'check'], ['dynevent', 'vectors'], ['dynevent', 'explain'], ['dynevent', 'demo']))\n"
+        "print('HEAVY', heavy, 'attrs' in sys.modules)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert done.stdout.strip().endswith("HEAVY [] False"), done.stdout[-300:] + done.stderr

@@ -226,3 +226,18 @@ def test_a_trace_time_of_a_huge_integer_is_a_located_error() -> None:
 
     with pytest.raises(TraceError, match="time"):
         check_trace('{"type": "status", "time": ' + "9" * 400 + ', "message": {}}')
+
+
+@pytest.mark.parametrize("status", ['{"a": 1}', '["succeeded"]'])
+def test_a_result_record_status_of_the_wrong_json_type_is_a_located_error(status: str) -> None:
+    from dynevent.check import TraceError, check_trace
+
+    line = (
+        '{"type": "result", "time": 1, "goal_uuid": "'
+        + "0" * 32
+        + '", "status": '
+        + status
+        + ', "result": {}}'
+    )
+    with pytest.raises(TraceError, match="status"):
+        check_trace(line)

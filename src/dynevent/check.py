@@ -46,7 +46,7 @@ from typing import Any
 
 import attrs
 
-from . import DOCS, _json, machine
+from . import _json, machine
 from . import inputs as ins
 from . import outputs as outs
 from ._progress import Progress
@@ -63,7 +63,6 @@ __all__ = [
     "Record",
     "Report",
     "TraceError",
-    "add_command",
     "check_records",
     "check_trace",
     "format_report",
@@ -264,7 +263,7 @@ def _record(data: Any, source: str, line: int) -> Record | dict[str, Any]:
         return Record(line=line, kind=kind, time=time, goal_uuid=uuid, message=feedback)
     if kind == "result":
         status = data["status"]
-        if status not in _TERMINAL:
+        if not isinstance(status, str) or status not in _TERMINAL:  # the type first: a dict is unhashable
             raise TraceError(
                 source, line, "status", f"expected one of {sorted(_TERMINAL)}, got {_json.dumps(status)}"
             )
@@ -1540,19 +1539,3 @@ def _text_lines(stream: Any, source: str, progress: Progress) -> Iterator[str]:
             yield raw.decode("utf-8")
         except UnicodeDecodeError as exc:
             raise TraceError(source, number, "$", f"not UTF-8 text (byte {exc.start} of the line)") from None
-
-
-def add_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """Register ``dynevent check``."""
-    parser = commands.add_parser(
-        "check",
-        help="check an observed trace of one robot against the protocol rules",
-        description="Replay TRACE, a JSON-lines record of what was observed on the wire for one robot "
-        f"({DOCS}/trace-format.md), against the server machine in observer mode, and report every "
-        "protocol violation with its line, its spec rule and what was expected.  Exit status: "
-        "0 when the trace is clean, 1 when it holds violations, 2 on a usage error or unreadable input "
-        "(the message names the file, the line and the field).",
-    )
-    parser.add_argument("trace", metavar="TRACE", help="the trace file, or - for standard input")
-    parser.add_argument("--json", action="store_true", help="one JSON object per violation, then a summary")
-    parser.set_defaults(run=_run)

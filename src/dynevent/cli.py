@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
-from . import DOCS, __version__, check, demo, explain
-from ._progress import Progress
-from .diagram import FORMATS, render
-from .vectors import MAX_TIMEOUT
+from . import DOCS, __version__
+from .diagram import FORMATS
+from .vocab import Compatibility
 
 __all__ = ["main"]
 
@@ -24,9 +24,97 @@ _DESCRIPTION = (
 )
 
 
+def _lazy(module: str) -> Callable[[argparse.Namespace], int]:
+    """The ``_run`` of ``dynevent.<module>``, imported when the command runs: ``--help`` stays quick."""
+
+    def run(args: argparse.Namespace) -> int:
+        code: int = importlib.import_module(f"dynevent.{module}")._run(args)
+        return code
+
+    return run
+
+
+def _add_demo_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    parser = commands.add_parser(
+        "demo",
+        help="run a scripted client/server session for one robot and print its timeline",
+        description="Run a scripted session between a client machine and a server machine for one "
+        "robot, over the in-process loopback: begin, a NEXT with progress and logs, a clamped "
+        "stubborn period held over ticks, a wrong CANCEL rejected by the server, a right CANCEL, "
+        "two racing NEXT goals, FINISHED, and a goal after the end.  The same seed prints the same "
+        "output.  Exit status: 0.",
+    )
+    shape = parser.add_mutually_exclusive_group()
+    shape.add_argument("--json", action="store_true", help="print one JSON object per timeline event")
+    shape.add_argument(
+        "--mermaid", action="store_true", help="print the session as a Mermaid sequence diagram"
+    )
+    parser.add_argument(
+        "--seed", type=int, default=0, metavar="N", help="seed of the message delays and the race (0)"
+    )
+    parser.set_defaults(run=_lazy("demo"))
+
+
+def _add_check_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    parser = commands.add_parser(
+        "check",
+        help="check an observed trace of one robot against the protocol rules",
+        description="Replay TRACE, a JSON-lines record of what was observed on the wire for one robot "
+        f"({DOCS}/trace-format.md), against the server machine in observer mode, and report every "
+        "protocol violation with its line, its spec rule and what was expected.  Exit status: "
+        "0 when the trace is clean, 1 when it holds violations, 2 on a usage error or unreadable input "
+        "(the message names the file, the line and the field).",
+    )
+    parser.add_argument("trace", metavar="TRACE", help="the trace file, or - for standard input")
+    parser.add_argument("--json", action="store_true", help="one JSON object per violation, then a summary")
+    parser.set_defaults(run=_lazy("check"))
+
+
+def _add_explain_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    parser = commands.add_parser(
+        "explain",
+        help="would a robot in this state accept this goal? if not, why, and what to send instead",
+        description="Rebuild the server state a DynamicEventStatus message describes and say whether "
+        "the goal would be accepted; if not, the reason code, its spec rule, the values, and "
+        "the goal to send instead.  Also says what a status message cannot tell.  Exit status: 0 "
+        "when the goal is accepted and begins, 1 when it is rejected or aborted at its start, 2 on a "
+        "usage error or bad JSON (the message names the argument and the field).",
+    )
+    parser.add_argument(
+        "--status",
+        required=True,
+        metavar="STATUS_JSON",
+        help="the robot's DynamicEventStatus as JSON, e.g. '{\"dynamic_event_seq\": 3, "
+        '"dynamic_state": 2, "status": "underway", "id": 8}\'; @FILE reads it from FILE, - from '
+        "standard input",
+    )
+    parser.add_argument(
+        "--goal",
+        required=True,
+        metavar="GOAL_JSON",
+        help='the DynamicEvent goal as JSON (ROS field names), e.g. \'{"dynamic_event_seq": 3, '
+        '"event_type": 2, "id": 8}\'; @FILE reads it from FILE, - from standard input',
+    )
+    parser.add_argument(
+        "--categories",
+        metavar="A,B",
+        help="the robot's supported categories, comma-separated (default: unknown; the goal's own "
+        "category is taken as supported)",
+    )
+    parser.add_argument(
+        "--compat",
+        choices=[mode.value for mode in Compatibility],
+        default=Compatibility.STANDARD.value,
+        help="judge as the spec says (standard, the default) or as rmf_ros2 does (accept, then abort)",
+    )
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.set_defaults(run=_lazy("explain"))
+
+
 def _vectors(args: argparse.Namespace) -> int:
     """``dynevent vectors``: run the conformance vectors; 0 all pass, 1 any fails, 2 bad input."""
     from . import _json, vectors
+    from ._progress import Progress
 
     if args.files and not vectors.schema_validation_available():
         print(
@@ -75,6 +163,8 @@ def _vectors(args: argparse.Namespace) -> int:
 
 def _timeout(text: str) -> float:
     """``--timeout``: a finite number of seconds above 0, at most the vectors' bound."""
+    from .vectors import MAX_TIMEOUT
+
     try:
         value = float(text)
     except ValueError:
@@ -111,12 +201,14 @@ def _add_vectors_command(commands: argparse._SubParsersAction[argparse.ArgumentP
         type=_timeout,
         default=10.0,
         metavar="SECONDS",
-        help=f"longest wait for one answer, above 0 and at most {MAX_TIMEOUT:g} (10)",
+        help="longest wait for one answer, in seconds (10)",
     )
     parser.set_defaults(run=_vectors)
 
 
 def _diagram(args: argparse.Namespace) -> int:
+    from .diagram import render
+
     print(render(args.format), end="")
     return 0
 
@@ -253,9 +345,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="dynevent", description=_DESCRIPTION, epilog=_EPILOG)
     parser.add_argument("--version", action="version", version=f"dynevent {__version__}")
     commands = parser.add_subparsers(dest="command")
-    demo.add_command(commands)
-    check.add_command(commands)
-    explain.add_command(commands)
+    _add_demo_command(commands)
+    _add_check_command(commands)
+    _add_explain_command(commands)
     _add_diagram_command(commands)
     _add_vectors_command(commands)
     _add_serve_command(commands)

@@ -40,7 +40,7 @@ from .messages import Goal
 from .records import rule_validator
 from .vocab import EventType, Status
 
-__all__ = ["STEPS", "WIDTH", "add_command", "mermaid", "run_demo", "session_events", "summary"]
+__all__ = ["STEPS", "WIDTH", "mermaid", "run_demo", "session_events", "summary"]
 
 _MS = 1_000_000
 _SECOND = cl.SECOND
@@ -305,25 +305,3 @@ def _run(args: argparse.Namespace) -> int:
     else:
         print(run_demo(args.seed, json_lines=args.json), end="")
     return 0
-
-
-def add_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """Register ``dynevent demo``."""
-    parser = commands.add_parser(
-        "demo",
-        help="run a scripted client/server session for one robot and print its timeline",
-        description="Run a scripted session between a client machine and a server machine for one "
-        "robot, over the in-process loopback: begin, a NEXT with progress and logs, a clamped "
-        "stubborn period held over ticks, a wrong CANCEL rejected by the server, a right CANCEL, "
-        "two racing NEXT goals, FINISHED, and a goal after the end.  The same seed prints the same "
-        "output.  Exit status: 0.",
-    )
-    shape = parser.add_mutually_exclusive_group()
-    shape.add_argument("--json", action="store_true", help="print one JSON object per timeline event")
-    shape.add_argument(
-        "--mermaid", action="store_true", help="print the session as a Mermaid sequence diagram"
-    )
-    parser.add_argument(
-        "--seed", type=int, default=0, metavar="N", help="seed of the message delays and the race (0)"
-    )
-    parser.set_defaults(run=_run)

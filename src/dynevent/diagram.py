@@ -5,8 +5,6 @@ docs/spec.md embeds the Mermaid form; the test suite checks it is up to date.
 
 from __future__ import annotations
 
-from .machine import TRANSITIONS
-
 __all__ = ["FORMATS", "render"]
 
 #: The diagram formats :func:`render` can write.
@@ -19,6 +17,8 @@ def _label(input_kind: str, guard: str, rule: str) -> str:
 
 
 def _mermaid() -> str:
+    from .machine import TRANSITIONS  # here, not at import: the command line's help stays quick
+
     lines = ["stateDiagram-v2", "    [*] --> INACTIVE"]
     for edge in TRANSITIONS:
         lines.append(
@@ -28,6 +28,8 @@ def _mermaid() -> str:
 
 
 def _dot() -> str:
+    from .machine import TRANSITIONS
+
     lines = [
         "digraph dynamic_event {",
         "    rankdir=LR;",

@@ -35,7 +35,6 @@ __all__ = [
     "REASON_RULES",
     "UNKNOWN_GOAL",
     "Explanation",
-    "add_command",
     "explain",
     "format_explanation",
     "state_from_status",
@@ -573,45 +572,3 @@ def _run(args: argparse.Namespace) -> int:
     else:
         print(format_explanation(explanation), end="")
     return 0 if explanation.accepted else 1
-
-
-def add_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """Register ``dynevent explain``."""
-    parser = commands.add_parser(
-        "explain",
-        help="would a robot in this state accept this goal? if not, why, and what to send instead",
-        description="Rebuild the server state a DynamicEventStatus message describes and say whether "
-        "the goal would be accepted; if not, the reason code, its spec rule, the values, and "
-        "the goal to send instead.  Also says what a status message cannot tell.  Exit status: 0 "
-        "when the goal is accepted and begins, 1 when it is rejected or aborted at its start, 2 on a "
-        "usage error or bad JSON (the message names the argument and the field).",
-    )
-    parser.add_argument(
-        "--status",
-        required=True,
-        metavar="STATUS_JSON",
-        help="the robot's DynamicEventStatus as JSON, e.g. '{\"dynamic_event_seq\": 3, "
-        '"dynamic_state": 2, "status": "underway", "id": 8}\'; @FILE reads it from FILE, - from '
-        "standard input",
-    )
-    parser.add_argument(
-        "--goal",
-        required=True,
-        metavar="GOAL_JSON",
-        help='the DynamicEvent goal as JSON (ROS field names), e.g. \'{"dynamic_event_seq": 3, '
-        '"event_type": 2, "id": 8}\'; @FILE reads it from FILE, - from standard input',
-    )
-    parser.add_argument(
-        "--categories",
-        metavar="A,B",
-        help="the robot's supported categories, comma-separated (default: unknown; the goal's own "
-        "category is taken as supported)",
-    )
-    parser.add_argument(
-        "--compat",
-        choices=[mode.value for mode in Compatibility],
-        default=Compatibility.STANDARD.value,
-        help="judge as the spec says (standard, the default) or as rmf_ros2 does (accept, then abort)",
-    )
-    parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.set_defaults(run=_run)
