@@ -31,6 +31,10 @@ def _pairs(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     return result
 
 
+#: One decoder for every parse (``json.loads`` with a hook builds a new one each call).
+_DECODER = json.JSONDecoder(object_pairs_hook=_pairs)
+
+
 def _depth_ok(text: str) -> bool:
     """Cheap scan: is the bracket nesting (outside strings) within MAX_DEPTH?"""
     depth = 0
@@ -73,7 +77,7 @@ def parse(text: str | bytes | bytearray) -> Any:
     ):  # scan only when it could be deep
         raise JsonProblem(f"nested deeper than {MAX_DEPTH} levels")
     try:
-        return json.loads(text, object_pairs_hook=_pairs)
+        return _DECODER.decode(text)
     except JsonProblem:
         raise
     except json.JSONDecodeError as exc:
