@@ -197,3 +197,18 @@ def test_a_json_quoted_category_is_recognised_and_unquoted() -> None:
     assert explanation.instead is not None and explanation.instead.category == "go_to_place"
     unknown = explain(WAITING, next_goal(category='"fly"'), categories=("go_to_place",))
     assert unknown.instead is None and "JSON-quoted" not in unknown.advice
+
+
+@pytest.mark.parametrize("state", [DynamicState.WAITING, DynamicState.RUNNING])
+def test_the_highest_id_never_suggests_an_id_past_the_wire(state: DynamicState) -> None:
+    """A status id of 2**64 - 1 once made explain suggest 2**64 (and raise building that goal)."""
+    top = 2**64 - 1
+    status = DynamicEventStatus(dynamic_event_seq=3, dynamic_state=state, status="standby", id=top)
+    goal = Goal(
+        dynamic_event_seq=3, event_type=EventType.NEXT, category="go_to_place", description='"a"', id=5
+    )
+    explanation = explain(status, goal)
+    text = format_explanation(explanation)
+    assert str(2**64) not in text
+    if explanation.instead is not None:
+        assert 0 <= explanation.instead.id <= top
