@@ -368,3 +368,29 @@ def test_any_text_is_a_name_or_invalid_name(text: str) -> None:
         assert error.field in ("name", "fleet", "robot")
     else:
         assert build_name(parsed.kind, parsed.fleet, parsed.robot) == text.removeprefix("/")
+
+
+@given(
+    st.integers(min_value=1, max_value=260),
+    st.integers(min_value=1, max_value=260),
+    st.sampled_from(["a", "_", "9", "é", ""]),
+)
+def test_validate_robot_refuses_exactly_what_building_every_name_refuses(
+    fleet_length: int, robot_length: int, odd: str
+) -> None:
+    from dynevent.names import NameKind, build_name, validate_robot
+
+    fleet, robot = "f" * fleet_length, "r" * (robot_length - 1) + odd
+
+    def outcome(check: Callable[[], object]) -> str:
+        try:
+            check()
+        except InvalidName as exc:
+            return str(exc)
+        return "ok"
+
+    built = next(
+        (text for kind in NameKind if (text := outcome(lambda k=kind: build_name(k, fleet, robot))) != "ok"),
+        "ok",
+    )
+    assert outcome(lambda: validate_robot(fleet, robot)) == built

@@ -52,93 +52,172 @@ def encode(value: Any) -> Any:
     raise TypeError(f"cannot encode {type(value).__name__}")
 
 
-@functools.cache
-def _hints(cls: type) -> dict[str, Any]:
-    return typing.get_type_hints(cls)
-
-
 def _describe(tp: Any) -> str:
     return getattr(tp, "__name__", None) or str(tp)
 
 
+#: Where a value sits: the root's name, then object keys and array indexes (made text only on error).
+_Where = tuple[str | int, ...]
+_Decoder = typing.Callable[[Any, _Where], Any]
+
+
+def _text(where: _Where) -> str:
+    parts = [str(where[0])]
+    parts.extend(f"[{part}]" if isinstance(part, int) else f".{part}" for part in where[1:])
+    return "".join(parts)
+
+
 def decode(tp: Any, data: Any, path: str = "$") -> Any:
     """A value of type ``tp`` built from the plain JSON ``data``."""
+    return _decoder(tp)(data, (path,))
+
+
+@functools.cache
+def _decoder(tp: Any) -> _Decoder:
+    """The decoder of one type, built once: a fleet restore decodes thousands of states alike."""
     origin = typing.get_origin(tp)
     if tp is Any:
-        return data
+        return lambda data, where: data
     if origin in (Union, types.UnionType):
-        options = typing.get_args(tp)
-        if data is None and type(None) in options:
+        return _union(tp)
+    if origin is tuple:
+        return _tuple(typing.get_args(tp)[0])
+    if tp is type(None):
+        return _none
+    if tp is bool:
+        return _bool
+    if tp is int:
+        return _int
+    if tp is float:
+        return _float
+    if tp is str:
+        return _str
+    if isinstance(tp, type) and issubclass(tp, enum.Enum):
+        return _enum(tp)
+    if isinstance(tp, type) and issubclass(tp, WireMessage):
+        return _message(tp)
+    if isinstance(tp, type) and attrs.has(tp):
+        return _attrs(tp)
+
+    def cannot(data: Any, where: _Where) -> Any:
+        raise CodecError(_text(where), f"cannot decode {_describe(tp)}")
+
+    return cannot
+
+
+def _union(tp: Any) -> _Decoder:
+    optional = type(None) in typing.get_args(tp)
+    options = [_decoder(option) for option in typing.get_args(tp) if option is not type(None)]
+
+    def decode_union(data: Any, where: _Where) -> Any:
+        if data is None and optional:
             return None
         errors = []
         for option in options:
-            if option is type(None):
-                continue
             try:
-                return decode(option, data, path)
+                return option(data, where)
             except CodecError as exc:
                 errors.append(exc)
-        raise errors[0] if len(errors) == 1 else CodecError(path, f"expected {_describe(tp)}")
-    if origin is tuple:
+        raise errors[0] if len(errors) == 1 else CodecError(_text(where), f"expected {_describe(tp)}")
+
+    return decode_union
+
+
+def _tuple(item_type: Any) -> _Decoder:
+    item = _decoder(item_type)
+
+    def decode_tuple(data: Any, where: _Where) -> Any:
         if not isinstance(data, list):
-            raise CodecError(path, f"expected an array, got {type(data).__name__}")
-        item_type = typing.get_args(tp)[0]
-        return tuple(decode(item_type, item, f"{path}[{index}]") for index, item in enumerate(data))
-    if tp is type(None):
-        if data is not None:
-            raise CodecError(path, "expected null")
-        return None
-    if tp is bool:
-        if type(data) is not bool:
-            raise CodecError(path, f"expected a boolean, got {type(data).__name__}")
-        return data
-    if tp is int:
-        if type(data) is not int:
-            raise CodecError(path, f"expected an integer, got {type(data).__name__}")
-        return data
-    if tp is float:
-        if isinstance(data, bool) or not isinstance(data, (int, float)):
-            raise CodecError(path, f"expected a number, got {type(data).__name__}")
-        try:
-            return float(data)
-        except OverflowError:  # an integer of any size may arrive where a float is expected
-            raise CodecError(path, "an integer out of range for a float") from None
-    if tp is str:
-        if type(data) is not str:
-            raise CodecError(path, f"expected a string, got {type(data).__name__}")
-        problem = string_problem(data)
-        if problem is not None:
-            raise CodecError(path, problem)
-        return data
-    if isinstance(tp, type) and issubclass(tp, enum.Enum):
+            raise CodecError(_text(where), f"expected an array, got {type(data).__name__}")
+        return tuple(item(value, (*where, index)) for index, value in enumerate(data))
+
+    return decode_tuple
+
+
+def _none(data: Any, where: _Where) -> None:
+    if data is not None:
+        raise CodecError(_text(where), "expected null")
+
+
+def _bool(data: Any, where: _Where) -> bool:
+    if type(data) is not bool:
+        raise CodecError(_text(where), f"expected a boolean, got {type(data).__name__}")
+    return data
+
+
+def _int(data: Any, where: _Where) -> int:
+    if type(data) is not int:
+        raise CodecError(_text(where), f"expected an integer, got {type(data).__name__}")
+    return data
+
+
+def _float(data: Any, where: _Where) -> float:
+    if isinstance(data, bool) or not isinstance(data, (int, float)):
+        raise CodecError(_text(where), f"expected a number, got {type(data).__name__}")
+    try:
+        return float(data)
+    except OverflowError:  # an integer of any size may arrive where a float is expected
+        raise CodecError(_text(where), "an integer out of range for a float") from None
+
+
+def _str(data: Any, where: _Where) -> str:
+    if type(data) is not str:
+        raise CodecError(_text(where), f"expected a string, got {type(data).__name__}")
+    problem = string_problem(data)
+    if problem is not None:
+        raise CodecError(_text(where), problem)
+    return data
+
+
+def _enum(tp: type[enum.Enum]) -> _Decoder:
+    def decode_enum(data: Any, where: _Where) -> Any:
         try:
             return tp(data)
         except (ValueError, TypeError):
-            raise CodecError(path, f"expected one of {[member.value for member in tp]}") from None
-    if isinstance(tp, type) and issubclass(tp, WireMessage):
+            raise CodecError(_text(where), f"expected one of {[member.value for member in tp]}") from None
+
+    return decode_enum
+
+
+def _message(tp: type[WireMessage]) -> _Decoder:
+    def decode_message(data: Any, where: _Where) -> Any:
         try:
             return tp.from_dict(data)
         except DyneventError as exc:
-            raise CodecError(path, str(exc)) from None
-    if isinstance(tp, type) and attrs.has(tp):
-        return _decode_attrs(tp, data, path)
-    raise CodecError(path, f"cannot decode {_describe(tp)}")
+            raise CodecError(_text(where), str(exc)) from None
+
+    return decode_message
 
 
-def _decode_attrs(cls: type, data: Any, path: str) -> Any:
-    if not isinstance(data, dict):
-        raise CodecError(path, f"expected an object for {cls.__name__}, got {type(data).__name__}")
+def _attrs(cls: type) -> _Decoder:
     fields = attrs.fields_dict(cls)
-    hints = _hints(cls)
-    values: dict[str, Any] = {}
-    for key, raw in data.items():
-        if key not in fields:
-            raise CodecError(f"{path}.{key}", f"unknown field of {cls.__name__}")
-        values[key] = decode(hints[key], raw, f"{path}.{key}")
-    for name, field in fields.items():
-        if name not in values and field.default is attrs.NOTHING:
-            raise CodecError(f"{path}.{name}", f"missing field of {cls.__name__}")
-    try:
-        return cls(**values)
-    except DyneventError as exc:
-        raise CodecError(path, str(exc)) from None
+    hints = typing.get_type_hints(cls)
+    required = [name for name, field in fields.items() if field.default is attrs.NOTHING]
+    decoders: dict[str, _Decoder] = {}
+
+    def field_decoder(name: str) -> _Decoder:
+        # built at first use: a class may hold itself (through an Optional), decoded lazily
+        found = decoders.get(name)
+        if found is None:
+            found = decoders[name] = _decoder(hints[name])
+        return found
+
+    def decode_attrs(data: Any, where: _Where) -> Any:
+        if not isinstance(data, dict):
+            raise CodecError(
+                _text(where), f"expected an object for {cls.__name__}, got {type(data).__name__}"
+            )
+        values: dict[str, Any] = {}
+        for key, raw in data.items():
+            if key not in fields:
+                raise CodecError(_text((*where, key)), f"unknown field of {cls.__name__}")
+            values[key] = field_decoder(key)(raw, (*where, key))
+        for name in required:
+            if name not in values:
+                raise CodecError(_text((*where, name)), f"missing field of {cls.__name__}")
+        try:
+            return cls(**values)
+        except DyneventError as exc:
+            raise CodecError(_text(where), str(exc)) from None
+
+    return decode_attrs

@@ -35,27 +35,15 @@ def _pairs(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
 _DECODER = json.JSONDecoder(object_pairs_hook=_pairs)
 
 
-def _depth_ok(text: str) -> bool:
-    """Cheap scan: is the bracket nesting (outside strings) within MAX_DEPTH?"""
-    depth = 0
-    in_string = False
-    escaped = False
-    for ch in text:
-        if in_string:
-            if escaped:
-                escaped = False
-            elif ch == "\\":
-                escaped = True
-            elif ch == '"':
-                in_string = False
-        elif ch == '"':
-            in_string = True
-        elif ch in "[{":
-            depth += 1
-            if depth > MAX_DEPTH:
-                return False
-        elif ch in "]}":
-            depth -= 1
+def _depth_ok(value: Any) -> bool:
+    """Is the nesting of arrays and objects in ``value`` within MAX_DEPTH?  (Iterative: containers only.)"""
+    pending: list[tuple[Any, int]] = [(value, 1)] if isinstance(value, (dict, list)) else []
+    while pending:
+        container, depth = pending.pop()
+        if depth > MAX_DEPTH:
+            return False
+        items = container.values() if isinstance(container, dict) else container
+        pending.extend((item, depth + 1) for item in items if isinstance(item, (dict, list)))
     return True
 
 
@@ -72,18 +60,20 @@ def parse(text: str | bytes | bytearray) -> Any:
             raise JsonProblem(f"not UTF-8 text (byte {exc.start})") from None
     if not isinstance(text, str):
         raise JsonProblem(f"expected JSON text, got {type(text).__name__}")
-    if text.count("[") + text.count("{") > MAX_DEPTH and not _depth_ok(
-        text
-    ):  # scan only when it could be deep
-        raise JsonProblem(f"nested deeper than {MAX_DEPTH} levels")
     try:
-        return _DECODER.decode(text)
+        value = _DECODER.decode(text)
     except JsonProblem:
         raise
     except json.JSONDecodeError as exc:
         raise JsonProblem(f"not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}") from None
-    except (ValueError, RecursionError) as exc:
+    except RecursionError:  # far deeper than the limit: the decoder gave up first
+        raise JsonProblem(f"nested deeper than {MAX_DEPTH} levels") from None
+    except ValueError as exc:
         raise JsonProblem(f"not valid JSON: {exc}") from None
+    # only a text with more brackets than the limit can be too deep; then walk the parsed containers
+    if text.count("[") + text.count("{") > MAX_DEPTH and not _depth_ok(value):
+        raise JsonProblem(f"nested deeper than {MAX_DEPTH} levels")
+    return value
 
 
 def utf8_size(text: str) -> int:

@@ -40,7 +40,7 @@ from . import inputs as ins
 from .errors import DyneventError, InvalidSnapshot
 from .machine import ServerConfig, State
 from .messages import DynamicEventStatus, Goal
-from .names import NameKind, build_name, parse_name, validate_token
+from .names import NameKind, build_name, parse_name, validate_robot, validate_token
 from .outputs import Decision, Output
 
 __all__ = [
@@ -172,9 +172,7 @@ class Fleet:
         or make a protocol name too long, :class:`DuplicateRobot` if the robot
         is already here.
         """
-        for kind in NameKind:  # every name of the robot must exist
-            build_name(kind, fleet, robot)
-        key = RobotKey(validate_token("fleet", fleet), validate_token("robot", robot))
+        key = RobotKey(*validate_robot(fleet, robot))  # every name of the robot must exist
         if key in self._seats:
             raise DuplicateRobot(*key)
         chosen = self.default_config(key.fleet) if config is None else _config(config, "config")

@@ -36,6 +36,7 @@ and the length check here cannot know that namespace.
 from __future__ import annotations
 
 import enum
+import re
 from typing import NamedTuple
 
 from dynevent.errors import InvalidName
@@ -54,6 +55,7 @@ __all__ = [
     "description_service",
     "parse_name",
     "status_topic",
+    "validate_robot",
     "validate_token",
 ]
 
@@ -113,6 +115,10 @@ _DESCRIBED = {
 }
 
 
+#: A valid token at a glance (the repeated underscore is checked beside it).
+_VALID_TOKEN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
 def validate_token(field: str, value: object) -> str:
     """Return ``value`` as a plain ``str`` if it is a valid ROS 2 name token.
 
@@ -122,6 +128,8 @@ def validate_token(field: str, value: object) -> str:
     leading digit, or a repeated underscore.  The length of the whole name is
     checked by the functions that build one.
     """
+    if type(value) is str and _VALID_TOKEN.fullmatch(value) is not None and "__" not in value:
+        return value  # the common case, at C speed; anything else gets the exact reason below
     if not isinstance(value, str):
         raise InvalidName(field, value, f"is not a str but {type(value).__name__}")
     # a str subclass (a str enum, say) may override __str__; keep the characters
@@ -164,6 +172,22 @@ def build_name(kind: NameKind, fleet: object, robot: object) -> str:
             f"{derived}, above the rmw limit of {MAX_NAME_LENGTH}",
         )
     return name
+
+
+def validate_robot(fleet: object, robot: object) -> tuple[str, str]:
+    """The two tokens, if every protocol name of ``robot`` in ``fleet`` can be built.
+
+    Raises :class:`~dynevent.errors.InvalidName` as :func:`build_name` does for
+    the first name that cannot; checks each token once and builds no name.
+    """
+    fleet_token = validate_token("fleet", fleet)
+    robot_token = validate_token("robot", robot)
+    for kind, prefix in _PREFIX.items():
+        if 3 + len(prefix) + len(fleet_token) + len(robot_token) + len(_DERIVED_SUFFIX.get(kind, "")) > (
+            MAX_NAME_LENGTH
+        ):
+            build_name(kind, fleet_token, robot_token)  # raises, saying which name and why
+    return fleet_token, robot_token
 
 
 def action_name(fleet: object, robot: object) -> str:

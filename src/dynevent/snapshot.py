@@ -11,6 +11,7 @@ half-restored state.
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -22,7 +23,7 @@ from .description import EventDescription
 from .errors import DyneventError, InvalidSnapshot
 from .inputs import NOW_RANGE
 from .machine import SECONDS_RANGE, State
-from .names import NameKind, build_name, validate_token
+from .names import validate_robot, validate_token
 from .vocab import EventType, Status
 
 #: A day in nanoseconds: a refresh instant may lie up to one refresh period past the last ``now``.
@@ -63,8 +64,7 @@ def state_problems(state: State) -> list[tuple[str, str]]:
             found.append((f"$.state.{field}", str(exc)))
     if not found:
         try:
-            for kind in NameKind:
-                build_name(kind, state.fleet, state.robot)
+            validate_robot(state.fleet, state.robot)  # every protocol name of the robot can be built
         except DyneventError as exc:
             found.append(("$.state", str(exc)))
     found.extend(_phase_problems(state))
@@ -138,15 +138,24 @@ def check_state(state: State) -> State:
     return state
 
 
+@functools.lru_cache(maxsize=256)
+def _description_problem(text: str) -> str | None:
+    """Why a begin description cannot be parsed, or None (cached: a fleet's robots share a few)."""
+    try:
+        EventDescription.from_json(text)
+    except DyneventError as exc:
+        return str(exc)
+    return None
+
+
 def _phase_problems(state: State) -> list[tuple[str, str]]:
     """The invariants that tie the fields together (R19.8)."""
     found: list[tuple[str, str]] = []
     running, stubborn = state.running, state.stubborn
     if state.description:
-        try:
-            EventDescription.from_json(state.description)
-        except DyneventError as exc:
-            found.append(("$.state.description", str(exc)))
+        problem = _description_problem(state.description)
+        if problem is not None:
+            found.append(("$.state.description", problem))
     if state.shutdown and (state.active or state.queued or stubborn is not None):
         found.append(
             ("$.state.shutdown", "a server shutting down has no active run, queued goal or hold (R15.2)")
