@@ -50,7 +50,10 @@ from . import _json, machine
 from . import inputs as ins
 from . import outputs as outs
 from ._progress import Progress
-from .errors import DyneventError, InvalidMessage
+from .errors import (
+    InvalidMessage,
+    TraceError,  # defined there with every error; importable here too
+)
 from .explain import REASON_RULES, UNKNOWN_GOAL, goal_text, state_from_status, status_text
 from .machine import QueuedGoal, RunningGoal, ServerConfig, State
 from .messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
@@ -111,17 +114,6 @@ _SIGNAL_LOGS: dict[str, type[ins.TaskCancel] | type[ins.TaskKill]] = {
 # Reasons that depend on the configuration, which a trace without a config record does not give.
 _CONFIG_REASONS = frozenset({RejectReason.UNSUPPORTED_CATEGORY, RejectReason.DESCRIPTION_INVALID})
 _REASON_ORDER = {reason: index for index, reason in enumerate(REASON_RULES)}
-
-
-class TraceError(DyneventError):
-    """A trace could not be read: ``source``, ``line`` (from 1) and ``field`` say where."""
-
-    def __init__(self, source: str, line: int, field: str, problem: str) -> None:
-        self.source = source
-        self.line = line
-        self.field = field
-        self.problem = problem
-        super().__init__(f"{source}:{line}: {field}: {problem}")
 
 
 @attrs.frozen(kw_only=True)

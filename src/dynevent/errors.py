@@ -12,12 +12,22 @@ keeps working for callers who do not know dynevent.
 from __future__ import annotations
 
 __all__ = [
+    "DuplicateRobot",
     "DyneventError",
+    "GoalWaitTimeout",
+    "ImplementationError",
     "InvalidConfig",
     "InvalidDescription",
     "InvalidMessage",
     "InvalidName",
+    "InvalidRecord",
     "InvalidSnapshot",
+    "InvalidStore",
+    "InvalidVector",
+    "SendError",
+    "ServeError",
+    "TraceError",
+    "UnknownRobot",
 ]
 
 _VALUE_REPR_LIMIT = 80
@@ -105,3 +115,80 @@ class InvalidSnapshot(DyneventError):
         self.path = path
         self.problem = problem
         super().__init__(f"snapshot at {path}: {problem}")
+
+
+class TraceError(DyneventError):
+    """A trace could not be read: ``source``, ``line`` (from 1) and ``field`` say where."""
+
+    def __init__(self, source: str, line: int, field: str, problem: str) -> None:
+        self.source = source
+        self.line = line
+        self.field = field
+        self.problem = problem
+        super().__init__(f"{source}:{line}: {field}: {problem}")
+
+
+class InvalidRecord(DyneventError):
+    """A JSON record is not a valid input, output or configuration; ``path`` says where."""
+
+    def __init__(self, path: str, problem: str) -> None:
+        self.path = path
+        self.problem = problem
+        super().__init__(f"{path}: {problem}")
+
+
+class InvalidStore(DyneventError):
+    """A state store that cannot be used: not SQLite, not dynevent's, or holding a bad snapshot."""
+
+    def __init__(self, path: str, problem: str) -> None:
+        self.path = path
+        self.problem = problem
+        super().__init__(f"state store {path}: {problem}")
+
+
+class InvalidVector(DyneventError):
+    """A vector file is malformed; the message names the file and the JSON path."""
+
+    def __init__(self, source: str, path: str, problem: str) -> None:
+        self.source = source
+        self.path = path
+        self.problem = problem
+        super().__init__(f"{source}: {path}: {problem}")
+
+
+class ImplementationError(DyneventError):
+    """The implementation under test broke the driver protocol (crashed, timed out, answered garbage)."""
+
+
+class UnknownRobot(DyneventError, KeyError):
+    """No robot of that fleet and name is in the :class:`~dynevent.fleet.Fleet` (a ``KeyError`` too)."""
+
+    def __init__(self, fleet: str, robot: str) -> None:
+        self.fleet = fleet
+        self.robot = robot
+        super().__init__(f"robot {robot!r} of fleet {fleet!r} is not in this fleet")
+
+    def __str__(self) -> str:
+        # KeyError would print the repr of the message
+        return str(self.args[0])
+
+
+class DuplicateRobot(DyneventError):
+    """A robot was added to a :class:`~dynevent.fleet.Fleet` that already holds it."""
+
+    def __init__(self, fleet: str, robot: str) -> None:
+        self.fleet = fleet
+        self.robot = robot
+        super().__init__(f"robot {robot!r} of fleet {fleet!r} is already in this fleet")
+
+
+class GoalWaitTimeout(DyneventError, TimeoutError):
+    """:meth:`dynevent.ros.GoalRun.wait` reached its bound before the goal was over."""
+
+
+class SendError(DyneventError):
+    """A bad ``dynevent send`` request: the message names the flag and the value."""
+
+
+class ServeError(DyneventError):
+    """A bad ``dynevent serve`` configuration."""

@@ -37,7 +37,12 @@ from typing import Any, NamedTuple, TypeAlias
 
 from . import _json, machine, snapshot
 from . import inputs as ins
-from .errors import DyneventError, InvalidSnapshot
+from .errors import (  # defined there with every error; importable here too
+    DuplicateRobot,
+    DyneventError,
+    InvalidSnapshot,
+    UnknownRobot,
+)
 from .machine import ServerConfig, State
 from .messages import DynamicEventStatus, Goal
 from .names import NameKind, build_name, parse_name, validate_robot, validate_token
@@ -58,28 +63,6 @@ __all__ = [
 FORMAT = "dynevent.fleet"
 #: The fleet snapshot version this release writes and reads.
 VERSION = 1
-
-
-class UnknownRobot(DyneventError, KeyError):
-    """No robot of that fleet and name is in the :class:`Fleet` (a ``KeyError`` too)."""
-
-    def __init__(self, fleet: str, robot: str) -> None:
-        self.fleet = fleet
-        self.robot = robot
-        super().__init__(f"robot {robot!r} of fleet {fleet!r} is not in this fleet")
-
-    def __str__(self) -> str:
-        # KeyError would print the repr of the message
-        return str(self.args[0])
-
-
-class DuplicateRobot(DyneventError):
-    """A robot was added to a :class:`Fleet` that already holds it."""
-
-    def __init__(self, fleet: str, robot: str) -> None:
-        self.fleet = fleet
-        self.robot = robot
-        super().__init__(f"robot {robot!r} of fleet {fleet!r} is already in this fleet")
 
 
 class RobotKey(NamedTuple):

@@ -33,7 +33,9 @@ from typing import Any
 from . import inputs as ins
 from . import outputs as outs
 from ._codec import CodecError, decode, encode
-from .errors import DyneventError
+from .errors import (
+    InvalidRecord,  # defined there with every error; importable here too
+)
 from .machine import ServerConfig, Validator
 
 __all__ = [
@@ -45,15 +47,6 @@ __all__ = [
     "output_to_json",
     "rule_validator",
 ]
-
-
-class InvalidRecord(DyneventError):
-    """A JSON record is not a valid input, output or configuration; ``path`` says where."""
-
-    def __init__(self, path: str, problem: str) -> None:
-        self.path = path
-        self.problem = problem
-        super().__init__(f"{path}: {problem}")
 
 
 def _typed(kind: str, value: Any) -> dict[str, Any]:

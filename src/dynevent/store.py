@@ -21,7 +21,10 @@ import threading
 from pathlib import Path
 
 from . import snapshot
-from .errors import DyneventError, InvalidSnapshot
+from .errors import (
+    InvalidSnapshot,
+    InvalidStore,  # defined there with every error; importable here too
+)
 from .machine import State
 
 __all__ = ["FORMAT", "VERSION", "InvalidStore", "StateStore"]
@@ -36,15 +39,6 @@ _SCHEMA = (
     "CREATE TABLE robots (fleet TEXT NOT NULL, robot TEXT NOT NULL, snapshot TEXT NOT NULL, "
     "PRIMARY KEY (fleet, robot))",
 )
-
-
-class InvalidStore(DyneventError):
-    """A state store that cannot be used: not SQLite, not dynevent's, or holding a bad snapshot."""
-
-    def __init__(self, path: str, problem: str) -> None:
-        self.path = path
-        self.problem = problem
-        super().__init__(f"state store {path}: {problem}")
 
 
 class StateStore:

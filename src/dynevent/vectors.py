@@ -30,7 +30,11 @@ import attrs
 
 from . import __version__, _json
 from .driver import Driver
-from .errors import DyneventError
+from .errors import (  # defined there with every error; importable here too
+    DyneventError,
+    ImplementationError,
+    InvalidVector,
+)
 
 __all__ = [
     "SCHEMA_FILE",
@@ -69,20 +73,6 @@ MAX_ANSWER_BYTES = 64 * 1024 * 1024
 
 #: The JSON Schema of a vector file, shipped beside the vectors.
 SCHEMA_FILE = "vector.schema.json"
-
-
-class InvalidVector(DyneventError):
-    """A vector file is malformed; the message names the file and the JSON path."""
-
-    def __init__(self, source: str, path: str, problem: str) -> None:
-        self.source = source
-        self.path = path
-        self.problem = problem
-        super().__init__(f"{source}: {path}: {problem}")
-
-
-class ImplementationError(DyneventError):
-    """The implementation under test broke the driver protocol (crashed, timed out, answered garbage)."""
 
 
 @attrs.frozen

@@ -25,7 +25,10 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.task import Future
 
 from .. import client as cl
-from ..errors import DyneventError, InvalidMessage
+from ..errors import (
+    GoalWaitTimeout,  # defined there with every error; importable here too
+    InvalidMessage,
+)
 from ..inputs import NOW_RANGE
 from ..names import ROBOT_BEGIN_TOPIC_DEPTH, STATUS_TOPIC_DEPTH, action_name, begin_topic, status_topic
 from ..vocab import GoalStatus
@@ -43,10 +46,6 @@ _TERMINAL = {
 
 #: How often the client machine's clock advances (its NEXT timeouts are checked then), in seconds.
 TICK_PERIOD = 0.1
-
-
-class GoalWaitTimeout(DyneventError, TimeoutError):
-    """:meth:`GoalRun.wait` reached its bound before the goal was over."""
 
 
 class GoalRun:

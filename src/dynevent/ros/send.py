@@ -27,16 +27,14 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from .. import client as cl
 from .. import explain
 from .. import outputs as outs
-from ..errors import DyneventError
+from ..errors import (
+    SendError,  # defined there with every error; importable here too
+)
 from ..messages import DynamicEventStatus, Goal
 from ..vocab import EventType, GoalStatus
 from .client import DynamicEventClient, GoalWaitTimeout
 
 __all__ = ["SendError", "goal_request", "run"]
-
-
-class SendError(DyneventError):
-    """A bad ``dynevent send`` request: the message names the flag and the value."""
 
 
 def goal_request(args: argparse.Namespace) -> tuple[EventType, str, str]:

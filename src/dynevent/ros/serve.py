@@ -31,7 +31,11 @@ from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.logging import LoggingSeverity
 
 from .. import outputs as outs
-from ..errors import DyneventError, InvalidConfig, InvalidName
+from ..errors import (
+    InvalidConfig,
+    InvalidName,
+    ServeError,  # defined there with every error; importable here too
+)
 from ..machine import ServerConfig, State
 from ..names import validate_token
 from ..store import StateStore
@@ -71,10 +75,6 @@ class ServeConfig:
     categories: dict[str, CategorySpec] = attrs.field(factory=lambda: dict(DEFAULT_CATEGORIES))
     compatibility: str = "standard"
     rebegin: float = 2.0
-
-
-class ServeError(DyneventError):
-    """A bad ``dynevent serve`` configuration."""
 
 
 def place_of(description: Any) -> str | None:
