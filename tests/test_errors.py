@@ -58,3 +58,28 @@ def test_every_error_in_errors_is_listed_and_is_a_value_error() -> None:
 def test_the_old_import_paths_still_work(module: str, names: list[str]) -> None:
     for name in names:
         assert getattr(importlib.import_module(module), name) is getattr(errors, name)
+
+
+def test_the_public_face_names_each_public_name_once_and_imports_it_on_first_use() -> None:
+    import subprocess
+    import sys
+
+    assert sorted(dynevent.__all__, key=str) == sorted(
+        {*dynevent._HOMES, *dynevent._MODULES, "DOCS", "HOME", "__version__"}, key=str
+    )
+    for name in dynevent.__all__:
+        value = getattr(dynevent, name)
+        if name in dynevent._HOMES:
+            home = importlib.import_module(f"dynevent.{dynevent._HOMES[name]}")
+            assert value is getattr(home, name)
+            assert name in home.__all__, f"{name} is not public in dynevent.{dynevent._HOMES[name]}"
+    assert set(dir(dynevent)) >= set(dynevent.__all__)
+    with pytest.raises(AttributeError, match="no attribute 'nothing'"):
+        dynevent.nothing  # noqa: B018
+    probe = (
+        "import sys, dynevent; print(sorted(m for m in sys.modules if m.startswith(('dynevent.', 'attr'))))"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, check=True
+    )
+    assert done.stdout.strip() == "[]"  # `import dynevent` imports none of it
