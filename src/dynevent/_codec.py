@@ -17,7 +17,7 @@ from typing import Any, Union
 
 import attrs
 
-from ._fields import string_problem
+from ._fields import ANNOTATION, string_problem
 from .errors import DyneventError
 from .messages import WireMessage
 
@@ -44,12 +44,25 @@ def encode(value: Any) -> Any:
     if isinstance(value, WireMessage):
         return value.to_dict()
     if attrs.has(type(value)):
-        return {field.name: encode(getattr(value, field.name)) for field in attrs.fields(type(value))}
+        return {name: encode(getattr(value, name)) for name in _encoded(type(value))}
     if isinstance(value, (tuple, list)):
         return [encode(item) for item in value]
     if isinstance(value, dict):
         return {str(key): encode(item) for key, item in value.items()}
     raise TypeError(f"cannot encode {type(value).__name__}")
+
+
+_ENCODED: dict[type, tuple[str, ...]] = {}
+
+
+def _encoded(cls: type) -> tuple[str, ...]:
+    """The fields of an attrs class that encoding writes: all but the annotations (e.g. an output's rule)."""
+    names = _ENCODED.get(cls)
+    if names is None:
+        names = _ENCODED[cls] = tuple(
+            field.name for field in attrs.fields(cls) if not field.metadata.get(ANNOTATION)
+        )
+    return names
 
 
 def _describe(tp: Any) -> str:

@@ -18,6 +18,10 @@ import attrs
 
 from .errors import InvalidMessage
 
+#: Field metadata key of an annotation: a field that is not part of the value
+#: (no equality, not encoded), such as the rule an output carries.
+ANNOTATION = "dynevent.annotation"
+
 #: The one NaN every float32 field stores (NaN payloads are not kept).
 CANONICAL_NAN = float("nan")
 _F32 = struct.Struct("<f")

@@ -54,11 +54,11 @@ from .errors import (
     InvalidMessage,
     TraceError,  # defined there with every error; importable here too
 )
-from .explain import REASON_RULES, UNKNOWN_GOAL, goal_text, state_from_status, status_text
+from .explain import UNKNOWN_GOAL, goal_text, state_from_status, status_text
 from .machine import QueuedGoal, RunningGoal, ServerConfig, State
 from .messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
 from .records import InvalidRecord, config_from_json
-from .vocab import DynamicState, EventType, GoalStatus, IdPolicy, RejectReason, Status, Tier
+from .vocab import DynamicState, EventType, Failure, GoalStatus, IdPolicy, RejectReason, Status, Tier
 
 __all__ = [
     "RECORD_TYPES",
@@ -106,14 +106,13 @@ _TIERS = frozenset(tier.value for tier in Tier)
 _TERMINAL = {
     status.value: status for status in (GoalStatus.SUCCEEDED, GoalStatus.ABORTED, GoalStatus.CANCELED)
 }
-_FAILURES = machine.EXECUTION_FAILURES
 _SIGNAL_LOGS: dict[str, type[ins.TaskCancel] | type[ins.TaskKill]] = {
     "Received signal to cancel": ins.TaskCancel,
     "Received signal to kill": ins.TaskKill,
 }
 # Reasons that depend on the configuration, which a trace without a config record does not give.
 _CONFIG_REASONS = frozenset({RejectReason.UNSUPPORTED_CATEGORY, RejectReason.DESCRIPTION_INVALID})
-_REASON_ORDER = {reason: index for index, reason in enumerate(REASON_RULES)}
+_REASON_ORDER = {reason: index for index, reason in enumerate(RejectReason)}
 
 
 @attrs.frozen(kw_only=True)
@@ -450,53 +449,6 @@ def _first_line(text: str) -> str:
     return text.split("\n", 1)[0]
 
 
-def _answer_rule(event: ins.Input, output: outs.AnswerGoal, before: State) -> str:
-    failure = _first_line(output.result.execution_failure)
-    by_failure = {
-        _FAILURES["race"]: "R5.2",
-        _FAILURES["shutdown"]: "R15.1",
-        _FAILURES["idle_cancel"]: "R9.1",
-        _FAILURES["cancel_id"]: "R9.2",
-        _FAILURES["event_type"]: "R17.2",
-        _FAILURES["parse"]: "R6.1",
-        _FAILURES["not_running"]: "R10.1",
-    }
-    if failure in by_failure:
-        return by_failure[failure]
-    if isinstance(event, ins.ChildFinished):
-        running = before.running
-        return "R8.2" if running is not None and running.goal_uuid == output.goal_uuid else "R8.3"
-    if isinstance(event, ins.GoalStarted):
-        return "R9.4" if before.running is not None else "R11.1"
-    if isinstance(event, ins.CancelRequested):
-        return "R10.4"
-    return "R13.3"
-
-
-def _rule(event: ins.Input, output: outs.Output, before: State) -> str:
-    if isinstance(output, outs.PublishStatus):
-        return "R2.2"
-    if isinstance(output, outs.AnswerGoal):
-        return _answer_rule(event, output, before)
-    if isinstance(output, outs.PublishFeedback):
-        if isinstance(event, ins.ChildProgress):
-            return "R7.1"
-        if isinstance(event, (ins.TaskCancel, ins.TaskKill)):
-            return "R13.1"
-        return "R6.3" if output.feedback.status == Status.QUEUED.value else "R6.4"
-    if isinstance(output, outs.CancelResponse):
-        uuid = output.goal_uuid
-        if any(queued.goal_uuid == uuid for queued in before.queued):
-            return "R10.1"
-        if uuid in before.cancels:
-            return "R10.2"
-        running = before.running
-        if running is not None and running.goal_uuid == uuid:
-            return "R10.3" if running.started else "R10.4"
-        return "R10.5"
-    return "R2.3"
-
-
 def _newer(seq: int, than: int) -> bool:
     """Serial-number order of uint32 seqs: is ``seq`` after ``than``?"""
     return 0 < ((seq - than) & _U32) < 2**31
@@ -549,16 +501,6 @@ def _answer_text(status: str, result: Result) -> str:
     if result.execution_failure:
         detail = repr(detail)
     return f"{status}: {detail}"
-
-
-def _race_why(state: State, goal: Goal) -> str:
-    if goal.dynamic_event_seq != state.seq:
-        return f"its seq {goal.dynamic_event_seq} is no longer the run's seq {state.seq}"
-    if not state.active:
-        return "no dynamic event is active any more"
-    if state.running is not None:
-        return f"event {state.running.child_id} holds the running slot"
-    return f"its id {goal.id} is no longer above {state.last_id}, the highest id used"
 
 
 class _Observer:
@@ -615,7 +557,7 @@ class _Observer:
             for output in transition.outputs:
                 channel = _channel(output)
                 if channel is not None:
-                    owed.append(_Owed(channel, output, _rule(event, output, state)))
+                    owed.append(_Owed(channel, output, output.rule))
             state = transition.state
         return state, owed
 
@@ -704,7 +646,7 @@ class _Observer:
         if isinstance(decision, outs.Accepted) == record.accepted:
             if isinstance(decision, outs.Rejected) and not self.same_reason(decision, record):
                 self.flag(
-                    REASON_RULES[decision.reason],
+                    decision.rule,
                     "wrong_reason",
                     f"{goal_text(goal)} rejected as {record.reason}",
                     f"rejected as {decision.reason.value}, the first check that fails: {decision.text}",
@@ -715,7 +657,7 @@ class _Observer:
             return
         if isinstance(decision, outs.Rejected):  # accepted, but the rules refuse it
             self.flag(
-                REASON_RULES[decision.reason],
+                decision.rule,
                 f"accepted_{decision.reason.value}",
                 f"{goal_text(goal)} accepted",
                 f"rejected: {decision.reason.value} ({decision.text})",
@@ -800,7 +742,7 @@ class _Observer:
                     upcoming is not None
                     and upcoming.kind == "result"
                     and upcoming.goal_uuid == record.goal_uuid
-                    and _first_line(upcoming.message.execution_failure) == _FAILURES["not_running"]
+                    and _first_line(upcoming.message.execution_failure) == Failure.NOT_RUNNING.value
                 )
                 self.bind_unknown(record.goal_uuid, running_goal=not queued)
                 if queued:
@@ -1168,11 +1110,12 @@ class _Observer:
             _, owed = self.simulate([ins.GoalStarted(goal_uuid=uuid, now=self.now)])
             answer = next((item for item in owed if isinstance(item.output, outs.AnswerGoal)), None)
             if answer is not None and answer.rule == "R5.2":
+                race = machine.race_lost(state, goal, self.config_for(goal))
                 self.flag(
                     "R5.2",
                     "race_not_lost",
                     f"{label}: its NEXT ({goal_text(goal)}) started a child",
-                    f"aborted: 'race condition', as {_race_why(state, goal)}",
+                    f"aborted: {Failure.RACE.value!r}, as {race}",
                 )
             elif answer is not None and isinstance(answer.output, outs.AnswerGoal):
                 expected = _answer_text(answer.output.status.value, answer.output.result)
@@ -1229,7 +1172,7 @@ class _Observer:
         uuid = record.goal_uuid
         # the running goal is answered at its child's end, or at shutdown
         failure = _first_line(result.execution_failure)
-        seen = self.bind_unknown(uuid, failure in ("", _FAILURES["shutdown"]))
+        seen = self.bind_unknown(uuid, failure in ("", Failure.SHUTDOWN.value))
         label = f"answer {_answer_text(record.status, result)} for goal {uuid}"
         if seen is None or not seen.accepted:
             what = "never requested in this trace" if seen is None else "rejected"
@@ -1393,7 +1336,7 @@ class _Observer:
                         yield [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now)]
                 yield [ins.TaskCancel(now=now)]
                 yield [ins.TaskKill(now=now)]
-            if _first_line(result.execution_failure) == _FAILURES["shutdown"]:
+            if _first_line(result.execution_failure) == Failure.SHUTDOWN.value:
                 yield [ins.Shutdown(now=now)]
             return
         message: DynamicEventStatus = record.message

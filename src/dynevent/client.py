@@ -66,10 +66,9 @@ import attrs
 from . import _json
 from .errors import InvalidMessage
 from .inputs import NOW_RANGE, goal_uuid
-from .machine import EXECUTION_FAILURES
 from .messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, LogEntry, Result
 from .outputs import Rejected
-from .vocab import DynamicState, EventType, GoalStatus, RejectReason, Status
+from .vocab import DynamicState, EventType, Failure, GoalStatus, RejectReason, Status
 
 __all__ = [
     "SECOND",
@@ -151,17 +150,6 @@ _BY_FINAL_STATUS: dict[str, OutcomeKind] = {
     Status.FAILED.value: OutcomeKind.FAILED,
     Status.ERROR.value: OutcomeKind.ERROR,
 }
-
-# The server's execution-failure strings (first line), by the reason they report.
-_FAILURE_REASONS: dict[str, RejectReason] = {
-    EXECUTION_FAILURES["race"]: RejectReason.RACE,
-    EXECUTION_FAILURES["shutdown"]: RejectReason.SHUTTING_DOWN,
-    EXECUTION_FAILURES["idle_cancel"]: RejectReason.CANCEL_IDLE,
-    EXECUTION_FAILURES["cancel_id"]: RejectReason.CANCEL_ID_MISMATCH,
-    EXECUTION_FAILURES["event_type"]: RejectReason.UNKNOWN_EVENT_TYPE,
-    EXECUTION_FAILURES["parse"]: RejectReason.DESCRIPTION_INVALID,
-}
-
 
 # --------------------------------------------------------------------------- checks at the edge
 
@@ -719,7 +707,7 @@ def request_cancel(state: ClientState, *, now: int) -> ClientTransition:
         refusal = _refuse(
             RejectReason.CANCEL_IDLE,
             "no event is running to cancel",
-            execution_failure=EXECUTION_FAILURES["idle_cancel"],
+            execution_failure=Failure.IDLE_CANCEL.value,
         )
     if refusal is not None:
         return _refused(state, EventType.CANCEL, refusal, goal)
@@ -881,7 +869,8 @@ def _classify(state: ClientState, goal: OpenGoal, event: ResultReceived) -> Outc
     reason: RejectReason | None = None
     seq = goal.goal.dynamic_event_seq
     if failure:
-        reason = _FAILURE_REASONS.get(failure.split("\n", 1)[0])
+        known = Failure.of(failure)
+        reason = None if known is None else known.reason
         if event.status is GoalStatus.CANCELED:
             kind, text = OutcomeKind.CANCELED, f"cancelled before it began: {failure}"
         elif _run_over(state, seq):

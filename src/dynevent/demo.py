@@ -38,7 +38,7 @@ from . import inputs as ins
 from .loopback import Adapter, ChildScript, Loopback, Options, TimelineEvent
 from .messages import Goal
 from .records import rule_validator
-from .vocab import EventType, Status
+from .vocab import EventType, Failure, Status
 
 __all__ = ["STEPS", "WIDTH", "mermaid", "run_demo", "session_events", "summary"]
 
@@ -136,7 +136,9 @@ def summary(tagged: Sequence[tuple[int, TimelineEvent]]) -> list[str]:
     accepted = sum(1 for decision in requested if decision == "accepted")
     rejected = [decision.split(" ", 2)[1] for decision in requested if decision.startswith("rejected: ")]
     outcomes = collections.Counter(str(e.record.get("kind")) for e in events if e.kind == "outcome")
-    races = sum(1 for event in events if event.kind == "goal_started" and "race condition" in event.decision)
+    races = sum(
+        1 for event in events if event.kind == "goal_started" and Failure.RACE.value in event.decision
+    )
     clamps = [e.record for e in events if e.kind == "stubborn_clamped"]
     holds = sum(1 for event in events if event.kind in ("stubborn_begin", "stubborn_hold"))
     delays = sum(1 for event in events if event.kind == "stubborn_delay")
@@ -285,7 +287,7 @@ def mermaid(seed: int = 0) -> str:
             lines.append(f"    S-->>C: {text}")
         elif event.direction == "adapter":
             lines.append(f"    A->>S: {text}" if event.kind in _ADAPTER_INPUTS else f"    S->>A: {text}")
-            if "aborted: race condition" in decision:
+            if f"aborted: {Failure.RACE.value}" in decision:
                 lines.append(f"    Note over S: {decision}")
         elif decision.startswith(("outcome", "refused")):
             lines.append(f"    Note over C: {decision}")

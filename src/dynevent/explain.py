@@ -29,10 +29,9 @@ from . import outputs as outs
 from .errors import DyneventError, InvalidMessage
 from .machine import RunningGoal, ServerConfig, State
 from .messages import DynamicEventStatus, Goal
-from .vocab import Compatibility, DynamicState, EventType, GoalStatus, RejectReason, Status
+from .vocab import Compatibility, DynamicState, EventType, Failure, GoalStatus, RejectReason, Status
 
 __all__ = [
-    "REASON_RULES",
     "UNKNOWN_GOAL",
     "Explanation",
     "explain",
@@ -42,24 +41,6 @@ __all__ = [
 
 #: The goal UUID of a running goal known only from a status message.
 UNKNOWN_GOAL = "0" * 32
-
-#: The docs/spec.md rule of each reject reason.
-REASON_RULES: dict[RejectReason, str] = {
-    RejectReason.SHUTTING_DOWN: "R4.1",
-    RejectReason.SEQ_MISMATCH: "R4.2",
-    RejectReason.INACTIVE: "R4.3",
-    RejectReason.UNINITIALIZED_EVENT_TYPE: "R4.4",
-    RejectReason.UNKNOWN_EVENT_TYPE: "R4.5",
-    RejectReason.BUSY: "R4.6",
-    RejectReason.UNSUPPORTED_CATEGORY: "R4.7",
-    RejectReason.DESCRIPTION_NOT_JSON: "R4.9",
-    RejectReason.DESCRIPTION_INVALID: "R4.10",
-    RejectReason.NON_FINITE_STUBBORN_PERIOD: "R4.11",
-    RejectReason.STALE_ID: "R4.12",
-    RejectReason.CANCEL_IDLE: "R4.13",
-    RejectReason.CANCEL_ID_MISMATCH: "R4.14",
-    RejectReason.RACE: "R5.2",
-}
 
 _CANDIDATE = "0" * 31 + "1"  # the goal under examination, in the simulated server
 _STATUSES = frozenset(status.value for status in Status)
@@ -185,8 +166,7 @@ class Explanation:
             "execution_failure": decision.execution_failure if isinstance(decision, outs.Rejected) else "",
             "at_start": self.at_start,
             "then": [
-                {"reason": later.reason.value, "rule": REASON_RULES[later.reason], "text": later.text}
-                for later in self.then
+                {"reason": later.reason.value, "rule": later.rule, "text": later.text} for later in self.then
             ],
             "instead": None if self.instead is None else self.instead.to_dict(),
             "advice": self.advice,
@@ -232,19 +212,16 @@ def _start(state: State, goal: Goal, config: ServerConfig) -> tuple[str, bool]:
             result = output.result
             if output.status is GoalStatus.ABORTED:
                 failure = result.execution_failure.split("\n", 1)[0]
-                return (
-                    f"it is aborted when it starts: {failure!r} ({_abort_rule(result.execution_failure)})",
-                    True,
-                )
+                return f"it is aborted when it starts: {failure!r} ({output.rule})", True
             if goal.event_type == EventType.CANCEL:
                 return (
                     f"the deferred child {result.id} is cancelled at once; the goal succeeds with status "
-                    f"{result.status!r} (R9.4)",
+                    f"{result.status!r} ({output.rule})",
                     False,
                 )
             return (
                 f"the dynamic event ends: the goal succeeds with status {result.status!r} and id "
-                f"{result.id} (R11.1)",
+                f"{result.id} ({output.rule})",
                 False,
             )
     clamp = ""
@@ -252,33 +229,25 @@ def _start(state: State, goal: Goal, config: ServerConfig) -> tuple[str, bool]:
         if isinstance(output, outs.StubbornClamped):
             clamp = (
                 f"; its stubborn period of {output.requested:g} s will be raised to "
-                f"{output.applied:g} s, with a warning (R12.2)"
+                f"{output.applied:g} s, with a warning ({output.rule})"
             )
     for output in started.outputs:
         if isinstance(output, outs.StartChild):
-            return f"child {output.id} starts (R6.4){clamp}", False
+            return f"child {output.id} starts ({output.rule}){clamp}", False
         if isinstance(output, outs.PublishFeedback) and output.feedback.status == Status.QUEUED.value:
-            return f"child {output.feedback.id} is deferred until the task resumes (R6.3){clamp}", False
+            return (
+                f"child {output.feedback.id} is deferred until the task resumes ({output.rule}){clamp}",
+                False,
+            )
         if isinstance(output, outs.CancelChild):
             return (
-                f"child {output.id} is told to cancel; the goal is answered when the child ends (R9.3)",
+                f"child {output.id} is told to cancel; "
+                f"the goal is answered when the child ends ({output.rule})",
                 False,
             )
     if goal.event_type == EventType.CANCEL:
         return "the child is already stopping; the goal is answered when it ends (R9.3)", False
     return "", False
-
-
-def _abort_rule(failure: str) -> str:
-    first = failure.split("\n", 1)[0]
-    rules = {
-        machine.EXECUTION_FAILURES["idle_cancel"]: "R9.1",
-        machine.EXECUTION_FAILURES["cancel_id"]: "R9.2",
-        machine.EXECUTION_FAILURES["event_type"]: "R17.2",
-        machine.EXECUTION_FAILURES["parse"]: "R6.1",
-        machine.EXECUTION_FAILURES["race"]: "R5.2",
-    }
-    return rules.get(first, "R5.2")
 
 
 def _fix(state: State, goal: Goal, rejection: outs.Rejected) -> tuple[Goal | None, str, bool]:
@@ -384,7 +353,7 @@ def _unknowns(state: State, goal: Goal, decision: outs.Decision, categories_know
     if goal.event_type == EventType.CANCEL and state.running is not None:
         unknown.append(
             "whether the child ends before the CANCEL starts: it is then aborted with "
-            f"{machine.EXECUTION_FAILURES['idle_cancel']!r} (R9.1)"
+            f"{Failure.IDLE_CANCEL.value!r} (R9.1)"
         )
     return unknown
 
@@ -459,7 +428,7 @@ def explain(
         status=status,
         goal=goal,
         decision=decision,
-        rule=REASON_RULES[decision.reason],
+        rule=decision.rule,
         at_start="",
         aborted_at_start=False,
         then=tuple(then),
@@ -486,7 +455,7 @@ def format_explanation(explanation: Explanation) -> str:
             first = decision.execution_failure.split("\n", 1)[0]
             lines.append(f"rmf_ros2: {first!r}")
         for later in explanation.then:
-            lines.append(f"then:     {later.reason.value} ({REASON_RULES[later.reason]}): {later.text}")
+            lines.append(f"then:     {later.reason.value} ({later.rule}): {later.text}")
     elif explanation.aborted_at_start:
         lines.append(f"verdict:  accepted ({explanation.rule}), then aborted")
         lines.append(f"start:    {explanation.at_start}")

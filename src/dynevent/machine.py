@@ -37,7 +37,7 @@ from .messages import (
     Time,
 )
 from .names import validate_token
-from .vocab import Compatibility, DynamicState, EventType, GoalStatus, IdPolicy, RejectReason, Status
+from .vocab import Compatibility, DynamicState, EventType, Failure, GoalStatus, IdPolicy, RejectReason, Status
 
 __all__ = [
     "EXECUTION_FAILURES",
@@ -53,6 +53,7 @@ __all__ = [
     "Validator",
     "accept",
     "accept_any",
+    "race_lost",
     "status_message",
     "step",
 ]
@@ -64,17 +65,9 @@ _NS = 1_000_000_000
 #: A description validator: ``(category, parsed description) -> list of errors`` (empty when valid).
 Validator: TypeAlias = Callable[[str, Any], Sequence[str]]
 
-#: rmf_ros2's execution-failure strings, by the fault they report.
-EXECUTION_FAILURES: Mapping[str, str] = {
-    "race": "race condition",
-    "shutdown": "shutting down",
-    "idle_cancel": "an idle dynamic event cannot be cancelled",
-    "cancel_id": "ID for cancel request does not match current event",
-    "event_type": "invalid event_type",
-    "parse": "Description parsing failure",
-    "not_running": "cancelled while not running",
-    "restart": "server restarted",
-}
+#: rmf_ros2's execution-failure strings by a short name (``"race"``, ``"idle_cancel"``, ...): the
+#: values of :class:`~dynevent.vocab.Failure`, kept for code written before it.
+EXECUTION_FAILURES: Mapping[str, str] = {failure.name.lower(): failure.value for failure in Failure}
 
 # Child statuses that end a child early: its goal is not answered as succeeded (R8.2).
 _EARLY_END = frozenset({Status.CANCELED.value, Status.KILLED.value, Status.SKIPPED.value})
@@ -349,29 +342,30 @@ def _status_key(state: State) -> tuple[int, bool, bool, str, int]:
 # --------------------------------------------------------------------------- accept
 
 
-def _reject(reason: RejectReason, text: str, failure: str = "", **values: Any) -> outs.Rejected:
-    return outs.Rejected(reason=reason, text=text, execution_failure=failure, **values)
+def _reject(rule: str, reason: RejectReason, text: str, failure: str = "", **values: Any) -> outs.Rejected:
+    return outs.Rejected(reason=reason, text=text, execution_failure=failure, rule=rule, **values)
 
 
 def _check_description(goal: Goal, config: ServerConfig) -> tuple[Any, outs.Rejected | None]:
     """Check a NEXT goal's category, then parse and validate its description (R4.7 to R4.10)."""
-    failure = EXECUTION_FAILURES["parse"]
+    failure = Failure.PARSE.value
     validator = config.categories.get(goal.category)
-    if validator is None:  # R4.7
+    if validator is None:
         supported = tuple(sorted(config.categories))
         problem = f"category {goal.category!r} is not supported; supported: {', '.join(supported) or 'none'}"
-        return None, _reject(RejectReason.UNSUPPORTED_CATEGORY, problem, categories=supported)
+        return None, _reject("R4.7", RejectReason.UNSUPPORTED_CATEGORY, problem, categories=supported)
     text = goal.description
     size = _json.utf8_size(text)
     if size > config.max_description_length:
         problem = f"description is {size} bytes, above the limit of {config.max_description_length}"
         return None, _reject(
-            RejectReason.DESCRIPTION_INVALID, problem, f"{failure}\n -- {problem}", errors=(problem,)
+            "R4.8", RejectReason.DESCRIPTION_INVALID, problem, f"{failure}\n -- {problem}", errors=(problem,)
         )
     try:
         parsed = _json.parse(text)
     except _json.JsonProblem as exc:
         return None, _reject(
+            "R4.9",
             RejectReason.DESCRIPTION_NOT_JSON,
             f"the description of the {goal.category!r} event is {exc}",
             f"{failure}\n -- {exc}",
@@ -383,6 +377,7 @@ def _check_description(goal: Goal, config: ServerConfig) -> tuple[Any, outs.Reje
         errors = (f"the validator raised {type(exc).__name__}: {exc}",)
     if errors:
         return None, _reject(
+            "R4.10",
             RejectReason.DESCRIPTION_INVALID,
             f"the description does not fit the {goal.category!r} category: " + "; ".join(errors),
             failure + "".join(f"\n -- {error}" for error in errors),
@@ -397,36 +392,40 @@ def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
     The checks run in the order of docs/spec.md section 4 and the first that
     fails decides.  Usable as it is in a ROS ``handle_goal`` callback.
     """
-    if state.shutdown:  # R4.1
+    if state.shutdown:
         return _reject(
-            RejectReason.SHUTTING_DOWN, "the server is shutting down", EXECUTION_FAILURES["shutdown"]
+            "R4.1", RejectReason.SHUTTING_DOWN, "the server is shutting down", Failure.SHUTDOWN.value
         )
-    if goal.dynamic_event_seq != state.seq:  # R4.2
+    if goal.dynamic_event_seq != state.seq:
         return _reject(
+            "R4.2",
             RejectReason.SEQ_MISMATCH,
             f"Expected {state.seq}, received {goal.dynamic_event_seq}",
             expected_seq=state.seq,
             received_seq=goal.dynamic_event_seq,
         )
-    if not state.active:  # R4.3
-        return _reject(RejectReason.INACTIVE, "no dynamic event is active for this robot")
+    if not state.active:
+        return _reject("R4.3", RejectReason.INACTIVE, "no dynamic event is active for this robot")
     event_type = goal.event_type
     standard = config.compatibility is Compatibility.STANDARD
-    if standard and event_type == EventType.UNINITIALIZED:  # R4.4
+    if standard and event_type == EventType.UNINITIALIZED:
         return _reject(
+            "R4.4",
             RejectReason.UNINITIALIZED_EVENT_TYPE,
             "event_type is 0 (UNINITIALIZED): the goal was default-initialized",
-            EXECUTION_FAILURES["event_type"],
+            Failure.EVENT_TYPE.value,
         )
-    if standard and event_type > EventType.FINISHED:  # R4.5
+    if standard and event_type > EventType.FINISHED:
         return _reject(
+            "R4.5",
             RejectReason.UNKNOWN_EVENT_TYPE,
             f"event_type {event_type} is none of NEXT (1), CANCEL (2), FINISHED (3)",
-            EXECUTION_FAILURES["event_type"],
+            Failure.EVENT_TYPE.value,
         )
     running = state.running
-    if running is not None and event_type != EventType.CANCEL:  # R4.6
+    if running is not None and event_type != EventType.CANCEL:
         return _reject(
+            "R4.6",
             RejectReason.BUSY,
             f"event {running.child_id} is running: only a CANCEL with its id is accepted",
             current_id=running.child_id,
@@ -435,31 +434,35 @@ def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
         _, problem = _check_description(goal, config)  # R4.7 to R4.10
         if problem is not None:
             return problem
-        if not math.isfinite(goal.stubborn_period):  # R4.11
+        if not math.isfinite(goal.stubborn_period):
             return _reject(
+                "R4.11",
                 RejectReason.NON_FINITE_STUBBORN_PERIOD,
                 f"stubborn_period {goal.stubborn_period} is not a finite number",
             )
-        if _stale(state, goal, config):  # R4.12
+        if _stale(state, goal, config):
             if goal.id == 0:
                 text = f"id 0 asks the server for the next id, and none is left above {state.last_id}"
             else:
                 text = f"id {goal.id} is not greater than {state.last_id}, the highest id used in this run"
-            return _reject(RejectReason.STALE_ID, text, current_id=state.last_id, requested_id=goal.id)
-    elif event_type == EventType.CANCEL and standard:
-        if running is None:  # R4.13
             return _reject(
-                RejectReason.CANCEL_IDLE, "no event is running to cancel", EXECUTION_FAILURES["idle_cancel"]
+                "R4.12", RejectReason.STALE_ID, text, current_id=state.last_id, requested_id=goal.id
             )
-        if goal.id != running.child_id:  # R4.14
+    elif event_type == EventType.CANCEL and standard:
+        if running is None:
             return _reject(
+                "R4.13", RejectReason.CANCEL_IDLE, "no event is running to cancel", Failure.IDLE_CANCEL.value
+            )
+        if goal.id != running.child_id:
+            return _reject(
+                "R4.14",
                 RejectReason.CANCEL_ID_MISMATCH,
                 f"the running event is {running.child_id}, the CANCEL names {goal.id}",
-                EXECUTION_FAILURES["cancel_id"],
+                Failure.CANCEL_ID.value,
                 current_id=running.child_id,
                 requested_id=goal.id,
             )
-    return outs.Accepted(event_type=event_type)
+    return outs.Accepted(event_type=event_type)  # R4.16
 
 
 def _stale(state: State, goal: Goal, config: ServerConfig) -> bool:
@@ -493,29 +496,35 @@ def _feedback(status: str, event_id: int, logs: tuple[LogEntry, ...]) -> Feedbac
     return _make_feedback(status=status, id=event_id, logs=logs)
 
 
-def _failure(goal_uuid: str, failure: str) -> outs.AnswerGoal:
-    return outs.AnswerGoal(goal_uuid=goal_uuid, status=GoalStatus.ABORTED, result=_result(failure, "", 0))
+def _failure(rule: str, goal_uuid: str, failure: Failure, detail: str = "") -> outs.AnswerGoal:
+    """The goal is aborted with ``failure`` (and a ``\n -- detail`` line when there is one)."""
+    text = f"{failure.value}\n -- {detail}" if detail else failure.value
+    return outs.AnswerGoal(
+        goal_uuid=goal_uuid, status=GoalStatus.ABORTED, result=_result(text, "", 0), rule=rule
+    )
 
 
 def _finish(before: State, after: State, outputs: list[outs.Output], now: int) -> Transition:
     """Close a step: append the status message when the status changed (R2.3)."""
     if _status_key(before) != _status_key(after):
-        outputs.append(outs.PublishStatus(message=status_message(after, now)))
+        outputs.append(outs.PublishStatus(message=status_message(after, now), rule="R2.3"))
     return Transition(after, tuple(outputs))
 
 
-def _ignored(state: State, kind: str, why: str) -> Transition:
-    return Transition(state, (outs.Ignored(input=kind, why=why),))
+def _ignored(rule: str, state: State, kind: str, why: str) -> Transition:
+    return Transition(state, (outs.Ignored(input=kind, why=why, rule=rule),))
 
 
-def _end_stubbornness(state: State, outputs: list[outs.Output]) -> State:
+def _end_stubbornness(state: State, outputs: list[outs.Output], rule: str = "R12.5") -> State:
+    """End an active stubbornness (R12.5; a restart's own rule is R21.2)."""
     if state.stubborn is None:
         return state
-    outputs.append(outs.StubbornEnd())
+    outputs.append(outs.StubbornEnd(rule=rule))
     return _replace_state(state, stubborn=None)
 
 
 def _start_child(
+    rule: str,
     state: State,
     running: RunningGoal,
     outputs: list[outs.Output],
@@ -526,7 +535,7 @@ def _start_child(
 
     ``parsed`` is the description already parsed by R6.1; a deferred start (R14.5) parses it again.
     """
-    state = _end_stubbornness(state, outputs)  # R12.5
+    state = _end_stubbornness(state, outputs)
     goal = running.goal
     if parsed is None:
         try:
@@ -535,29 +544,41 @@ def _start_child(
             parsed = None
     outputs.append(
         outs.StartChild(
-            category=goal.category, description=goal.description, id=running.child_id, parsed=parsed
+            category=goal.category,
+            description=goal.description,
+            id=running.child_id,
+            parsed=parsed,
+            rule=rule,
         )
     )
     underway = Status.UNDERWAY.value
     running = _replace_running(running, started=True, child_status=underway)
     outputs.append(
         outs.PublishFeedback(
-            goal_uuid=running.goal_uuid, feedback=_feedback(underway, running.child_id, logs)
+            goal_uuid=running.goal_uuid, feedback=_feedback(underway, running.child_id, logs), rule=rule
         )
     )
     return _replace_state(state, running=running, status=underway)
 
 
-def _answers_at_child_end(state: State, running: RunningGoal, final: str) -> list[outs.Output]:
-    """The running goal's and every waiting CANCEL goal's answers when the child ends (R8.2, R8.3)."""
+def _answers_at_child_end(
+    state: State, running: RunningGoal, final: str, rule: str = "R8.2", cancels_rule: str = "R8.3"
+) -> list[outs.Output]:
+    """The running goal's and every waiting CANCEL goal's answers when the child ends (R8.2, R8.3).
+
+    ``rule`` and ``cancels_rule`` name the rules that end it, when not a child's end (R9.4, R10.4, R13.3).
+    """
     result = _result("", final, running.child_id)
     if final in _EARLY_END:
         status = GoalStatus.CANCELED if running.cancel_requested else GoalStatus.ABORTED
     else:
         status = GoalStatus.SUCCEEDED
-    answers: list[outs.Output] = [outs.AnswerGoal(goal_uuid=running.goal_uuid, status=status, result=result)]
+    answers: list[outs.Output] = [
+        outs.AnswerGoal(goal_uuid=running.goal_uuid, status=status, result=result, rule=rule)
+    ]
     answers.extend(
-        outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.SUCCEEDED, result=result) for uuid in state.cancels
+        outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.SUCCEEDED, result=result, rule=cancels_rule)
+        for uuid in state.cancels
     )
     return answers
 
@@ -569,7 +590,7 @@ def _end_dynamic_event(
 
     When a task signal ends it, the task itself is over and its interruption with it (R13.6).
     """
-    outputs.append(outs.DynamicEventFinished(status=final))
+    outputs.append(outs.DynamicEventFinished(status=final, rule="R11.2"))
     interrupted = False if task_over else state.interrupted
     return _replace_state(
         state, active=False, status=final, running=None, cancels=(), interrupted=interrupted
@@ -580,14 +601,14 @@ def _end_dynamic_event(
 
 
 def _on_begin(state: State, event: ins.Begin, config: ServerConfig) -> Transition:
-    if state.shutdown:  # R18.1
-        return _ignored(state, event.KIND, "the server is shutting down")
-    if state.active:  # R3.4
-        return _ignored(state, event.KIND, "a dynamic event is already active")
+    if state.shutdown:
+        return _ignored("R18.1", state, event.KIND, "the server is shutting down")
+    if state.active:
+        return _ignored("R3.4", state, event.KIND, "a dynamic event is already active")
     outputs: list[outs.Output] = []
     seq = (state.seq + 1) & _U32  # R3.1
-    if seq == 0:  # R3.2
-        outputs.append(outs.SeqWrapped(previous=state.seq, seq=seq))
+    if seq == 0:
+        outputs.append(outs.SeqWrapped(previous=state.seq, seq=seq, rule="R3.2"))
     description = event.description
     if config.compatibility is Compatibility.RMF_ROS2:  # R17.6: re-serialised, compact, keys sorted
         try:
@@ -605,7 +626,7 @@ def _on_begin(state: State, event: ins.Begin, config: ServerConfig) -> Transitio
         task_signal="",
         interrupted=event.interrupted,
     )
-    outputs.append(  # R3.3
+    outputs.append(
         outs.PublishBegin(
             message=DynamicEventDescription(
                 fleet=state.fleet,
@@ -613,7 +634,8 @@ def _on_begin(state: State, event: ins.Begin, config: ServerConfig) -> Transitio
                 dynamic_event_seq=seq,
                 description=description,
                 start_time=_time(event.now),
-            )
+            ),
+            rule="R3.3",
         )
     )
     return _finish(state, after, outputs, event.now)
@@ -628,39 +650,53 @@ def _known_goal(state: State, uuid: str) -> bool:
 
 
 def _on_goal_requested(state: State, event: ins.GoalRequested, config: ServerConfig) -> Transition:
-    if _known_goal(state, event.goal_uuid):  # R18.2
-        return _ignored(state, event.KIND, "a goal with this uuid is already open")
+    if _known_goal(state, event.goal_uuid):
+        return _ignored("R18.2", state, event.KIND, "a goal with this uuid is already open")
     decision = accept(state, event.goal, config)
-    if isinstance(decision, outs.Rejected):  # R4.15
-        return Transition(state, (outs.GoalRejected(goal_uuid=event.goal_uuid, rejection=decision),))
-    queued = (*state.queued, QueuedGoal(goal_uuid=event.goal_uuid, goal=event.goal))  # R4.16
-    return Transition(_replace_state(state, queued=queued), (outs.GoalAccepted(goal_uuid=event.goal_uuid),))
+    if isinstance(decision, outs.Rejected):
+        rejected = outs.GoalRejected(goal_uuid=event.goal_uuid, rejection=decision, rule="R4.15")
+        return Transition(state, (rejected,))
+    queued = (*state.queued, QueuedGoal(goal_uuid=event.goal_uuid, goal=event.goal))
+    accepted = outs.GoalAccepted(goal_uuid=event.goal_uuid, rule="R4.16")
+    return Transition(_replace_state(state, queued=queued), (accepted,))
 
 
 def _on_goal_submitted(state: State, event: ins.GoalSubmitted, config: ServerConfig) -> Transition:
     uuid = event.goal_uuid
-    if _known_goal(state, uuid):  # R18.2
-        return _ignored(state, event.KIND, "a goal with this uuid is already open")
+    if _known_goal(state, uuid):
+        return _ignored("R18.2", state, event.KIND, "a goal with this uuid is already open")
     decision = accept(state, event.goal, config)
-    if isinstance(decision, outs.Rejected):  # R5.3: the transport accepted it; it lost a race since
-        failure = f"{EXECUTION_FAILURES['race']}\n -- {decision.text}"
-        return Transition(state, (outs.ExecuteGoal(goal_uuid=uuid), _failure(uuid, failure)))
+    if isinstance(decision, outs.Rejected):  # the transport accepted it; it lost a race since
+        outputs = (
+            outs.ExecuteGoal(goal_uuid=uuid, rule="R5.3"),
+            _failure("R5.3", uuid, Failure.RACE, decision.text),
+        )
+        return Transition(state, outputs)
     queued = (*state.queued, QueuedGoal(goal_uuid=uuid, goal=event.goal))
     return _start_goal(state, _replace_state(state, queued=queued), uuid, event.now, config)
 
 
-def _race_lost(state: State, goal: Goal, config: ServerConfig) -> bool:
-    """R5.2: the world changed between the goal's acceptance and its start."""
-    if goal.dynamic_event_seq != state.seq or not state.active:
-        return True
+def race_lost(state: State, goal: Goal, config: ServerConfig) -> str:
+    """How an accepted ``goal`` that starts in ``state`` lost the race, in words; ``""`` if it did not (R5.2).
+
+    The world may change between a goal's acceptance and its start: another
+    run began, the dynamic event ended, another goal took the running slot, or
+    (id policy ``goal``) another NEXT used its id.
+    """
+    if goal.dynamic_event_seq != state.seq:
+        return f"its seq {goal.dynamic_event_seq} is no longer the run's seq {state.seq}"
+    if not state.active:
+        return "no dynamic event is active any more"
     if state.running is not None and goal.event_type != EventType.CANCEL:
-        return True
-    return goal.event_type == EventType.NEXT and _stale(state, goal, config)
+        return f"event {state.running.child_id} holds the running slot"
+    if goal.event_type == EventType.NEXT and _stale(state, goal, config):
+        return f"its id {goal.id} is no longer above {state.last_id}, the highest id used"
+    return ""
 
 
 def _on_goal_started(state: State, event: ins.GoalStarted, config: ServerConfig) -> Transition:
-    if not any(queued.goal_uuid == event.goal_uuid for queued in state.queued):  # R18.3
-        return _ignored(state, event.KIND, "no accepted goal with this uuid is waiting to start")
+    if not any(queued.goal_uuid == event.goal_uuid for queued in state.queued):
+        return _ignored("R18.3", state, event.KIND, "no accepted goal with this uuid is waiting to start")
     return _start_goal(state, state, event.goal_uuid, event.now, config)
 
 
@@ -669,113 +705,121 @@ def _start_goal(before: State, state: State, uuid: str, now: int, config: Server
     found = next(queued for queued in state.queued if queued.goal_uuid == uuid)
     goal = found.goal
     state = _replace_state(state, queued=tuple(queued for queued in state.queued if queued is not found))
-    outputs: list[outs.Output] = [outs.ExecuteGoal(goal_uuid=uuid)]  # R5.1
-    if _race_lost(state, goal, config):  # R5.2
-        outputs.append(_failure(uuid, EXECUTION_FAILURES["race"]))
+    outputs: list[outs.Output] = [outs.ExecuteGoal(goal_uuid=uuid, rule="R5.1")]
+    if race_lost(state, goal, config):
+        outputs.append(_failure("R5.2", uuid, Failure.RACE))
         return _finish(before, state, outputs, now)
     if goal.event_type == EventType.NEXT:
         state = _start_next(state, uuid, goal, config, outputs, now)
     elif goal.event_type == EventType.CANCEL:
         state = _start_cancel(state, uuid, goal, outputs, now)
-    elif goal.event_type == EventType.FINISHED:  # R11.1
+    elif goal.event_type == EventType.FINISHED:
         state = _end_stubbornness(state, outputs)
         result = _result("", Status.COMPLETED.value, state.event_id)
-        outputs.append(outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.SUCCEEDED, result=result))
+        outputs.append(
+            outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.SUCCEEDED, result=result, rule="R11.1")
+        )
         state = _end_dynamic_event(state, Status.COMPLETED.value, outputs)
-    else:  # R17.2: only reachable in rmf_ros2 compatibility
-        outputs.append(_failure(uuid, EXECUTION_FAILURES["event_type"]))
+    else:  # only reachable in rmf_ros2 compatibility
+        outputs.append(_failure("R17.2", uuid, Failure.EVENT_TYPE))
     return _finish(before, state, outputs, now)
 
 
 def _start_next(
     state: State, uuid: str, goal: Goal, config: ServerConfig, outputs: list[outs.Output], now: int
 ) -> State:
-    parsed, problem = _check_description(goal, config)  # R6.1
+    parsed, problem = _check_description(goal, config)
     if problem is not None:  # rmf_ros2 has no string for R4.7: it never re-checks the category
-        failure = problem.execution_failure or f"{EXECUTION_FAILURES['parse']}\n -- {problem.text}"
-        outputs.append(_failure(uuid, failure))
+        failure = problem.execution_failure or f"{Failure.PARSE.value}\n -- {problem.text}"
+        outputs.append(
+            outs.AnswerGoal(
+                goal_uuid=uuid, status=GoalStatus.ABORTED, result=_result(failure, "", 0), rule="R6.1"
+            )
+        )
         return state
-    child_id = _child_id(state, goal, config)  # R6.2
+    child_id = _child_id(state, goal, config)
     logs: tuple[LogEntry, ...] = ()
     period = goal.stubborn_period
-    if 0.0 < period < config.stubborn_minimum:  # R12.2
-        outputs.append(outs.StubbornClamped(requested=period, applied=config.stubborn_minimum))
+    if 0.0 < period < config.stubborn_minimum:
+        outputs.append(outs.StubbornClamped(requested=period, applied=config.stubborn_minimum, rule="R12.2"))
         text = (
             f"stubborn_period {period:g} s is below the minimum of {config.stubborn_minimum:g} s; "
             f"{config.stubborn_minimum:g} s will be used"
         )
         state, entry = _log(state, text, "warning", now)
-        outputs.append(outs.Log(entry=entry))
+        outputs.append(outs.Log(entry=entry, rule="R12.2"))
         logs = (entry,)
     state = _replace_state(state, last_id=child_id)
-    if state.interrupted:  # R6.3
+    if state.interrupted:  # the child's start is deferred
         queued_status = Status.QUEUED.value
         running = RunningGoal(
             goal_uuid=uuid, goal=goal, child_id=child_id, child_status=queued_status, started=False
         )
         outputs.append(
-            outs.PublishFeedback(goal_uuid=uuid, feedback=_feedback(queued_status, child_id, logs))
+            outs.PublishFeedback(
+                goal_uuid=uuid, feedback=_feedback(queued_status, child_id, logs), rule="R6.3"
+            )
         )
         return _replace_state(state, running=running, status=queued_status)
     running = RunningGoal(goal_uuid=uuid, goal=goal, child_id=child_id, child_status="", started=False)
-    return _start_child(state, running, outputs, logs, parsed)  # R6.4
+    return _start_child("R6.4", state, running, outputs, logs, parsed)
 
 
 def _start_cancel(state: State, uuid: str, goal: Goal, outputs: list[outs.Output], now: int) -> State:
     running = state.running
-    if running is None:  # R9.1
-        outputs.append(_failure(uuid, EXECUTION_FAILURES["idle_cancel"]))
+    if running is None:
+        outputs.append(_failure("R9.1", uuid, Failure.IDLE_CANCEL))
         return state
-    if goal.id != running.child_id:  # R9.2
-        outputs.append(_failure(uuid, EXECUTION_FAILURES["cancel_id"]))
+    if goal.id != running.child_id:
+        outputs.append(_failure("R9.2", uuid, Failure.CANCEL_ID))
         return state
-    if not running.started:  # R9.4: the child never started; it is cancelled at once
+    if not running.started:  # the child never started; it is cancelled at once
         state = _replace_state(state, cancels=(*state.cancels, uuid))
-        outputs.extend(_answers_at_child_end(state, running, Status.CANCELED.value))
+        outputs.extend(_answers_at_child_end(state, running, Status.CANCELED.value, "R9.4", "R9.4"))
         return _replace_state(state, running=None, cancels=(), status=Status.STANDBY.value)
-    if not running.canceling:  # R9.3
-        outputs.append(outs.CancelChild(id=running.child_id))
+    if not running.canceling:
+        outputs.append(outs.CancelChild(id=running.child_id, rule="R9.3"))
         running = _replace_running(running, canceling=True)
     return _replace_state(state, running=running, cancels=(*state.cancels, uuid))
 
 
 def _on_cancel_requested(state: State, event: ins.CancelRequested, config: ServerConfig) -> Transition:
     uuid = event.goal_uuid
-    accepted = outs.CancelResponse(goal_uuid=uuid, accepted=True)
-    not_running = _result(EXECUTION_FAILURES["not_running"], "", 0)
-    if any(queued.goal_uuid == uuid for queued in state.queued):  # R10.1
+    not_running = _result(Failure.NOT_RUNNING.value, "", 0)
+    if any(queued.goal_uuid == uuid for queued in state.queued):
         after = _replace_state(
             state, queued=tuple(queued for queued in state.queued if queued.goal_uuid != uuid)
         )
-        answer = outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.CANCELED, result=not_running)
-        return Transition(after, (accepted, answer))
-    if uuid in state.cancels:  # R10.2
+        answer = outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.CANCELED, result=not_running, rule="R10.1")
+        return Transition(after, (outs.CancelResponse(goal_uuid=uuid, accepted=True, rule="R10.1"), answer))
+    if uuid in state.cancels:
         after = _replace_state(state, cancels=tuple(other for other in state.cancels if other != uuid))
-        answer = outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.CANCELED, result=not_running)
-        return Transition(after, (accepted, answer))
+        answer = outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.CANCELED, result=not_running, rule="R10.2")
+        return Transition(after, (outs.CancelResponse(goal_uuid=uuid, accepted=True, rule="R10.2"), answer))
     running = state.running
-    if running is None or running.goal_uuid != uuid:  # R10.5
-        return Transition(state, (outs.CancelResponse(goal_uuid=uuid, accepted=False),))
-    outputs: list[outs.Output] = [accepted]
+    if running is None or running.goal_uuid != uuid:
+        return Transition(state, (outs.CancelResponse(goal_uuid=uuid, accepted=False, rule="R10.5"),))
     running = _replace_running(running, cancel_requested=True)
-    if not running.started:  # R10.4
-        outputs.extend(_answers_at_child_end(state, running, Status.CANCELED.value))
+    if not running.started:
+        outputs: list[outs.Output] = [outs.CancelResponse(goal_uuid=uuid, accepted=True, rule="R10.4")]
+        outputs.extend(_answers_at_child_end(state, running, Status.CANCELED.value, "R10.4", "R10.4"))
         after = _replace_state(state, running=None, cancels=(), status=Status.STANDBY.value)
         return _finish(state, after, outputs, event.now)
-    if not running.canceling:  # R10.3
-        outputs.append(outs.CancelChild(id=running.child_id))
+    outputs = [outs.CancelResponse(goal_uuid=uuid, accepted=True, rule="R10.3")]
+    if not running.canceling:
+        outputs.append(outs.CancelChild(id=running.child_id, rule="R10.3"))
         running = _replace_running(running, canceling=True)
     return Transition(_replace_state(state, running=running), tuple(outputs))
 
 
 def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerConfig) -> Transition:
     running = state.running
-    if running is None or not running.started:  # R18.4
-        return _ignored(state, event.KIND, "no child event is running")
+    if running is None or not running.started:
+        return _ignored("R18.4", state, event.KIND, "no child event is running")
     outputs: list[outs.Output] = []
     logs: tuple[LogEntry, ...] = ()
     log_seq = state.log_seq
-    if event.log_text is not None:  # R7.2, R7.3
+    if event.log_text is not None:  # the log_seq wraps (R7.3)
         entry = _make_log_entry(
             seq=log_seq,
             tier=event.tier,
@@ -783,11 +827,13 @@ def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerCon
             text=event.log_text,
         )
         log_seq = (log_seq + 1) & _U32
-        outputs.append(outs.Log(entry=entry))
+        outputs.append(outs.Log(entry=entry, rule="R7.2"))
         logs = (entry,)
     status = event.status
-    outputs.append(  # R7.1
-        outs.PublishFeedback(goal_uuid=running.goal_uuid, feedback=_feedback(status, running.child_id, logs))
+    outputs.append(
+        outs.PublishFeedback(
+            goal_uuid=running.goal_uuid, feedback=_feedback(status, running.child_id, logs), rule="R7.1"
+        )
     )
     if running.child_status != status:
         running = _replace_running(running, child_status=status)
@@ -797,25 +843,25 @@ def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerCon
         status=state.status if state.task_signal else status,  # R7.4
         log_seq=log_seq,
     )
-    if config.compatibility is Compatibility.RMF_ROS2:  # R17.5: every report, the child's own status
+    if config.compatibility is Compatibility.RMF_ROS2:  # every report, the child's own status
         wire = _running_status(after, status, running.child_id, event.now)
-        outputs.append(outs.PublishStatus(message=wire))
+        outputs.append(outs.PublishStatus(message=wire, rule="R17.5"))
         return Transition(after, tuple(outputs))
     return _finish(state, after, outputs, event.now)
 
 
 def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerConfig) -> Transition:
     running = state.running
-    if running is None or not running.started:  # R18.4
-        return _ignored(state, event.KIND, "no child event is running")
-    outputs = _answers_at_child_end(state, running, event.status)  # R8.1 to R8.3
+    if running is None or not running.started:
+        return _ignored("R18.4", state, event.KIND, "no child event is running")
+    outputs = _answers_at_child_end(state, running, event.status)
     after = _replace_state(state, running=None, cancels=())
-    if state.task_signal:  # R13.4
+    if state.task_signal:  # the dynamic event ends with the signal (R13.4)
         after = _end_dynamic_event(after, state.task_signal, outputs, task_over=True)
         return _finish(state, after, outputs, event.now)
     after = _replace_state(after, status=Status.STANDBY.value)  # R8.4
     period = running.goal.stubborn_period
-    if period > 0.0:  # R12.1
+    if period > 0.0:
         applied = max(period, config.stubborn_minimum)
         anchor = state.position
         outputs.append(
@@ -825,6 +871,7 @@ def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerCon
                 map_name=None if anchor is None else anchor.map_name,
                 x=0.0 if anchor is None else anchor.x,
                 y=0.0 if anchor is None else anchor.y,
+                rule="R12.1",
             )
         )
         stubborn = Stubbornness(
@@ -834,9 +881,9 @@ def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerCon
             anchor=anchor,
         )
         after = _replace_state(after, stubborn=stubborn)
-    if config.compatibility is Compatibility.RMF_ROS2:  # R17.4: published while the slot is still held
+    if config.compatibility is Compatibility.RMF_ROS2:  # published while the slot is still held
         stale = _running_status(after, event.status, running.child_id, event.now)
-        outputs.append(outs.PublishStatus(message=stale))
+        outputs.append(outs.PublishStatus(message=stale, rule="R17.4"))
         return Transition(after, tuple(outputs))
     return _finish(state, after, outputs, event.now)
 
@@ -848,7 +895,7 @@ def _seconds(value: float) -> int:
 def _on_tick(state: State, event: ins.Tick, config: ServerConfig) -> Transition:
     position = Position(map_name=event.map_name, x=event.x, y=event.y)
     stubborn = state.stubborn
-    if stubborn is None or event.now < stubborn.next_refresh:  # R12.3
+    if stubborn is None or event.now < stubborn.next_refresh:  # no refresh is due (R12.3)
         return Transition(_replace_state(state, position=position), ())
     refresh = _seconds(config.stubborn_refresh)
     missed = (event.now - stubborn.next_refresh) // refresh + 1
@@ -860,57 +907,60 @@ def _on_tick(state: State, event: ins.Tick, config: ServerConfig) -> Transition:
         or math.hypot(position.x - anchor.x, position.y - anchor.y) > config.stubborn_move_threshold
     )
     output: outs.Output
-    if moved:  # R12.4
+    if moved:
         output = outs.StubbornHold(
-            period=stubborn.period, since=event.now, map_name=position.map_name, x=position.x, y=position.y
+            period=stubborn.period,
+            since=event.now,
+            map_name=position.map_name,
+            x=position.x,
+            y=position.y,
+            rule="R12.4",
         )
         stubborn = Stubbornness(
             period=stubborn.period, hold_since=event.now, next_refresh=next_refresh, anchor=position
         )
     else:
-        output = outs.StubbornDelay(delay=(event.now - stubborn.hold_since) / _NS)
+        output = outs.StubbornDelay(delay=(event.now - stubborn.hold_since) / _NS, rule="R12.4")
         stubborn = _replace_stubborn(stubborn, next_refresh=next_refresh)
     return Transition(_replace_state(state, position=position, stubborn=stubborn), (output,))
 
 
 def _on_interrupt(state: State, event: ins.Interrupt, config: ServerConfig) -> Transition:
-    if not state.active:  # R18.5
-        return _ignored(state, event.KIND, "no dynamic event is active")
-    if state.interrupted:  # R18.6
-        return _ignored(state, event.KIND, "the task is already interrupted")
+    if not state.active:
+        return _ignored("R18.5", state, event.KIND, "no dynamic event is active")
+    if state.interrupted:
+        return _ignored("R18.6", state, event.KIND, "the task is already interrupted")
     after = _replace_state(state, interrupted=True)
     running = state.running
-    if running is not None and running.started:  # R14.1
-        return Transition(after, (outs.InterruptChild(id=running.child_id),))
-    return Transition(after, (outs.InterruptConfirmed(),))  # R14.2
+    if running is not None and running.started:
+        return Transition(after, (outs.InterruptChild(id=running.child_id, rule="R14.1"),))
+    return Transition(after, (outs.InterruptConfirmed(rule="R14.2"),))
 
 
 def _on_resume(state: State, event: ins.Resume, config: ServerConfig) -> Transition:
-    if not state.interrupted:  # R18.6
-        return _ignored(state, event.KIND, "the task is not interrupted")
+    if not state.interrupted:
+        return _ignored("R18.6", state, event.KIND, "the task is not interrupted")
     after = _replace_state(state, interrupted=False)  # R14.3
     running = state.running
     if running is None or not after.active:
         return Transition(after, ())
-    if running.started:  # R14.4
-        return Transition(after, (outs.ResumeChild(id=running.child_id),))
+    if running.started:
+        return Transition(after, (outs.ResumeChild(id=running.child_id, rule="R14.4"),))
     outputs: list[outs.Output] = []
-    after = _start_child(after, running, outputs, ())  # R14.5
+    after = _start_child("R14.5", after, running, outputs, ())
     return _finish(state, after, outputs, event.now)
 
 
 def _on_task_signal(state: State, event: ins.TaskCancel | ins.TaskKill, config: ServerConfig) -> Transition:
     kill = isinstance(event, ins.TaskKill)
     signal = Status.KILLED.value if kill else Status.CANCELED.value
-    if not state.active:  # R18.5
-        return _ignored(state, event.KIND, "no dynamic event is active")
-    if state.task_signal in (Status.KILLED.value, signal):  # R18.7
-        return _ignored(state, event.KIND, f"the task was already {state.task_signal}")
+    if not state.active:
+        return _ignored("R18.5", state, event.KIND, "no dynamic event is active")
+    if state.task_signal in (Status.KILLED.value, signal):
+        return _ignored("R18.7", state, event.KIND, f"the task was already {state.task_signal}")
     outputs: list[outs.Output] = []
-    after, entry = _log(
-        state, f"Received signal to {'kill' if kill else 'cancel'}", "info", event.now
-    )  # R13.1
-    outputs.append(outs.Log(entry=entry))
+    after, entry = _log(state, f"Received signal to {'kill' if kill else 'cancel'}", "info", event.now)
+    outputs.append(outs.Log(entry=entry, rule="R13.1"))
     after = _replace_state(after, task_signal=signal, status=signal)
     running = after.running
     if running is not None and running.started:
@@ -918,66 +968,65 @@ def _on_task_signal(state: State, event: ins.TaskCancel | ins.TaskKill, config: 
             outs.PublishFeedback(
                 goal_uuid=running.goal_uuid,
                 feedback=_feedback(running.child_status, running.child_id, (entry,)),
+                rule="R13.1",
             )
         )
-    after = _end_stubbornness(after, outputs)  # R12.5
-    if running is not None and running.started:  # R13.2
+    after = _end_stubbornness(after, outputs)
+    if running is not None and running.started:
         if kill:
-            outputs.append(outs.KillChild(id=running.child_id))
+            outputs.append(outs.KillChild(id=running.child_id, rule="R13.2"))
         elif not running.canceling:
-            outputs.append(outs.CancelChild(id=running.child_id))
+            outputs.append(outs.CancelChild(id=running.child_id, rule="R13.2"))
         after = _replace_state(after, running=_replace_running(running, canceling=True))
         return _finish(state, after, outputs, event.now)
-    if running is not None:  # R13.3: a deferred child ends before it starts
-        outputs.extend(_answers_at_child_end(after, running, signal))
+    if running is not None:  # a deferred child ends before it starts
+        outputs.extend(_answers_at_child_end(after, running, signal, "R13.3", "R13.3"))
     after = _end_dynamic_event(after, signal, outputs, task_over=True)
     return _finish(state, after, outputs, event.now)
 
 
-def _on_shutdown(state: State, event: ins.Shutdown, config: ServerConfig) -> Transition:
-    if state.shutdown:  # R18.1
-        return _ignored(state, event.KIND, "the server is already shutting down")
-    failure = EXECUTION_FAILURES["shutdown"]
+def _abort_open_goals(rule: str, state: State, failure: Failure) -> list[outs.Output]:
+    """Every goal the state holds open, aborted: the running goal, the waiting CANCELs, the queued goals."""
     outputs: list[outs.Output] = []
-    if state.running is not None:  # R15.1
-        outputs.append(_failure(state.running.goal_uuid, failure))
-    outputs.extend(_failure(uuid, failure) for uuid in state.cancels)
+    if state.running is not None:
+        outputs.append(_failure(rule, state.running.goal_uuid, failure))
+    outputs.extend(_failure(rule, uuid, failure) for uuid in state.cancels)
     for queued in state.queued:
-        outputs.append(outs.ExecuteGoal(goal_uuid=queued.goal_uuid))
-        outputs.append(_failure(queued.goal_uuid, failure))
-    after = _end_stubbornness(state, outputs)  # R12.5
-    after = _replace_state(after, shutdown=True, active=False, running=None, queued=(), cancels=())  # R15.2
+        outputs.append(outs.ExecuteGoal(goal_uuid=queued.goal_uuid, rule=rule))
+        outputs.append(_failure(rule, queued.goal_uuid, failure))
+    return outputs
+
+
+def _on_shutdown(state: State, event: ins.Shutdown, config: ServerConfig) -> Transition:
+    if state.shutdown:
+        return _ignored("R18.1", state, event.KIND, "the server is already shutting down")
+    outputs = _abort_open_goals("R15.1", state, Failure.SHUTDOWN)
+    after = _end_stubbornness(state, outputs)
+    after = _replace_state(after, shutdown=True, active=False, running=None, queued=(), cancels=())
     return _finish(state, after, outputs, event.now)
 
 
 def _on_restart(state: State, event: ins.Restart, config: ServerConfig) -> Transition:
-    failure = EXECUTION_FAILURES["restart"]
-    outputs: list[outs.Output] = []
+    outputs = _abort_open_goals("R21.1", state, Failure.RESTART)  # the goals of the process that ended
     running = state.running
-    if running is not None:  # R21.1: the goals of the process that ended
-        outputs.append(_failure(running.goal_uuid, failure))
-    outputs.extend(_failure(uuid, failure) for uuid in state.cancels)
-    for queued in state.queued:
-        outputs.append(outs.ExecuteGoal(goal_uuid=queued.goal_uuid))
-        outputs.append(_failure(queued.goal_uuid, failure))
-    after = _end_stubbornness(state, outputs)  # R21.2: the hold was the ended process's
+    after = _end_stubbornness(state, outputs, "R21.2")  # the hold was the ended process's
     after = _replace_state(after, running=None, queued=(), cancels=(), shutdown=False)
     if state.active and running is not None:  # R21.2: the child ended with the process
         if state.task_signal:
             after = _end_dynamic_event(after, state.task_signal, outputs, task_over=True)
         else:
             after = _replace_state(after, status=Status.STANDBY.value)
-    outputs.append(outs.PublishStatus(message=status_message(after, event.now)))  # R21.3: always
+    outputs.append(outs.PublishStatus(message=status_message(after, event.now), rule="R21.3"))  # always
     return Transition(after, tuple(outputs))
 
 
 def _on_description_query(state: State, event: ins.DescriptionQuery, config: ServerConfig) -> Transition:
-    if not state.active:  # R16.1
-        return Transition(state, (outs.DescriptionAnswer(response=DescriptionResponse()),))
-    response = DescriptionResponse(  # R16.2
+    if not state.active:
+        return Transition(state, (outs.DescriptionAnswer(response=DescriptionResponse(), rule="R16.1"),))
+    response = DescriptionResponse(
         running=True, status=state.status, description=state.description, id=state.current_id
     )
-    return Transition(state, (outs.DescriptionAnswer(response=response),))
+    return Transition(state, (outs.DescriptionAnswer(response=response, rule="R16.2"),))
 
 
 # --------------------------------------------------------------------------- the transition table

@@ -16,6 +16,13 @@ Three families:
   :class:`DescriptionAnswer`;
 - notices: :class:`SeqWrapped`, :class:`StubbornClamped`, :class:`Log`,
   :class:`Ignored`.
+
+Every output, and every :class:`Rejected`, carries ``rule``: the number of
+the docs/spec.md rule that produced it (``"R8.2"``).  The rule says *why*,
+not *what*: it takes no part in equality or hashing and is not written to
+traces or conformance vectors, so two outputs that ask the adapter for the
+same thing are equal whichever rule asked.  Tools (``check``, ``explain``,
+the client, the test kit) read it instead of working the rule out again.
 """
 
 from __future__ import annotations
@@ -24,6 +31,7 @@ from typing import Any, ClassVar, TypeAlias
 
 import attrs
 
+from ._fields import ANNOTATION
 from .messages import (
     DescriptionResponse,
     DynamicEventDescription,
@@ -67,11 +75,17 @@ __all__ = [
 ]
 
 
-class _Output:
-    __slots__ = ()
+def _rule() -> Any:
+    return attrs.field(default="", eq=False, metadata={ANNOTATION: True})
 
+
+@attrs.frozen(kw_only=True)
+class _Output:
     #: The name of this output in traces and vectors.
     KIND: ClassVar[str] = ""
+
+    #: The docs/spec.md rule that produced this output (an annotation: see the module docs).
+    rule: str = _rule()
 
 
 @attrs.frozen(kw_only=True)
@@ -91,7 +105,8 @@ class Rejected:
     and the requested id, the supported categories, the parse or validation
     errors.  ``execution_failure`` is the exact failure string rmf_ros2 uses
     for the same fault, where it has one, so a ROS binding can log or return
-    it verbatim.
+    it verbatim.  ``rule`` is the docs/spec.md rule that refused it (an
+    annotation, as on every output).
     """
 
     reason: RejectReason
@@ -103,6 +118,7 @@ class Rejected:
     categories: tuple[str, ...] = ()
     errors: tuple[str, ...] = ()
     execution_failure: str = ""
+    rule: str = _rule()
 
 
 #: What :func:`~dynevent.machine.accept` returns.

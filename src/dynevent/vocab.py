@@ -15,6 +15,7 @@ __all__ = [
     "Compatibility",
     "DynamicState",
     "EventType",
+    "Failure",
     "GoalStatus",
     "IdPolicy",
     "RejectReason",
@@ -128,6 +129,51 @@ class RejectReason(str, enum.Enum):
 
     def __str__(self) -> str:
         return self.value
+
+
+class Failure(str, enum.Enum):
+    """Why a goal that was accepted is aborted: rmf_ros2's execution-failure strings.
+
+    The value is the exact first line of ``Result.execution_failure`` (the
+    machine may add ``\n -- <detail>`` lines after it).  :attr:`reason` is
+    the refusal the failure reports, where it is one a request could have
+    met; :meth:`of` reads a failure back from a result's text.
+    """
+
+    RACE = "race condition"
+    SHUTDOWN = "shutting down"
+    IDLE_CANCEL = "an idle dynamic event cannot be cancelled"
+    CANCEL_ID = "ID for cancel request does not match current event"
+    EVENT_TYPE = "invalid event_type"
+    PARSE = "Description parsing failure"
+    NOT_RUNNING = "cancelled while not running"
+    RESTART = "server restarted"
+
+    def __str__(self) -> str:
+        return self.value
+
+    @property
+    def reason(self) -> RejectReason | None:
+        """The reject reason this failure reports, or ``None`` when no request check matches it."""
+        return _FAILURE_REASONS[self]
+
+    @classmethod
+    def of(cls, execution_failure: str) -> Failure | None:
+        """The failure a ``Result.execution_failure`` text starts with, if it is one of these."""
+        return _FAILURES_BY_TEXT.get(execution_failure.split("\n", 1)[0])
+
+
+_FAILURE_REASONS: dict[Failure, RejectReason | None] = {
+    Failure.RACE: RejectReason.RACE,
+    Failure.SHUTDOWN: RejectReason.SHUTTING_DOWN,
+    Failure.IDLE_CANCEL: RejectReason.CANCEL_IDLE,
+    Failure.CANCEL_ID: RejectReason.CANCEL_ID_MISMATCH,
+    Failure.EVENT_TYPE: RejectReason.UNKNOWN_EVENT_TYPE,
+    Failure.PARSE: RejectReason.DESCRIPTION_INVALID,
+    Failure.NOT_RUNNING: None,
+    Failure.RESTART: None,
+}
+_FAILURES_BY_TEXT: dict[str, Failure] = {failure.value: failure for failure in Failure}
 
 
 class IdPolicy(str, enum.Enum):
