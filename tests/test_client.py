@@ -830,3 +830,67 @@ def test_every_status_has_an_outcome_kind() -> None:
         state, uuid = running()
         _, outputs = feed(state, answer(uuid, GoalStatus.SUCCEEDED, status_.value, 6))
         assert isinstance(only_outcome(outputs).kind, OutcomeKind)
+
+
+# --------------------------------------------------------------------------- one projection
+
+
+@pytest.mark.spec("R4.8", "R20.1")
+def test_a_description_past_the_servers_limit_is_refused_locally() -> None:
+    rejection = refused(client.request_next(waiting(), "go_to_place", '"' + "a" * 1_000_000 + '"', now=0))
+    assert rejection.rejection.reason is RejectReason.DESCRIPTION_INVALID
+    assert rejection.rejection.rule == "R4.8"
+
+
+@pytest.mark.spec("R20.1")
+def test_a_local_refusal_names_the_servers_rule() -> None:
+    fresh = ClientState.new(PREFIX)
+    assert refused(client.request_finish(fresh, now=0)).rejection.rule == "R4.3"
+    state, _ = running()
+    assert refused(client.request_finish(state, now=0)).rejection.rule == "R4.6"
+    assert refused(client.request_cancel(waiting(), now=0)).rejection.rule == "R4.13"
+
+
+@pytest.mark.spec("R20.1")
+def test_dynamic_event_is_never_a_category_the_client_sends() -> None:
+    rejection = refused(client.request_next(waiting(), "dynamic_event", "{}", now=0)).rejection
+    assert rejection.reason is RejectReason.UNSUPPORTED_CATEGORY and rejection.categories == ()
+
+
+@pytest.mark.spec("R2.2", "R20.1")
+@given(
+    st.sampled_from([INACTIVE, WAITING, RUNNING]),
+    st.integers(1, 2**32 - 1),
+    st.integers(0, 2**64 - 1),
+    st.sampled_from(["standby", "underway", "queued", "completed"]),
+    st.sampled_from([EventType.NEXT, EventType.CANCEL, EventType.FINISHED]),
+    st.sampled_from(['"x"', "{", '"' + "a" * 1_000_001 + '"']),
+    st.sampled_from([0.0, math.nan]),
+)
+def test_a_clients_refusal_is_the_servers_on_the_state_its_status_implies(
+    phase: DynamicState,
+    seq: int,
+    event_id: int,
+    text: str,
+    event_type: EventType,
+    description: str,
+    period: float,
+) -> None:
+    """A client that knows only one status message refuses exactly what the server in that state would."""
+    message = status(seq, phase, event_id, text)
+    state, _ = feed(ClientState.new(PREFIX), message)
+    if event_type == EventType.NEXT:
+        transition = client.request_next(state, "go_to_place", description, stubborn_period=period, now=0)
+    elif event_type == EventType.CANCEL:
+        transition = client.request_cancel(state, now=0)
+    else:
+        transition = client.request_finish(state, now=0)
+    (output,) = transition.outputs
+    goal = output.goal
+    server = machine.state_from_status(message.message)
+    decision = machine.accept(server, goal, CONFIG)
+    if isinstance(output, Refused):
+        assert isinstance(decision, outs.Rejected), (output, decision)
+        assert (decision.reason, decision.rule) == (output.rejection.reason, output.rejection.rule)
+    else:
+        assert isinstance(decision, outs.Accepted), decision

@@ -54,8 +54,8 @@ from .errors import (
     InvalidMessage,
     TraceError,  # defined there with every error; importable here too
 )
-from .explain import UNKNOWN_GOAL, goal_text, state_from_status, status_text
-from .machine import QueuedGoal, RunningGoal, ServerConfig, State
+from .explain import goal_text, status_text
+from .machine import UNKNOWN_GOAL, QueuedGoal, RunningGoal, ServerConfig, State, state_from_status
 from .messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
 from .records import InvalidRecord, config_from_json
 from .vocab import DynamicState, EventType, Failure, GoalStatus, IdPolicy, RejectReason, Status, Tier

@@ -38,13 +38,17 @@ seen in the run, so it is unique in the run and passes the server's id rule
 (R4.12).  A CANCEL names the running child.  When the server, in the state
 the client knows of, would refuse the goal, the command returns
 :class:`Refused` instead, carrying a :class:`~dynevent.outputs.Rejected` with
-the reason the server would give, in the order the server checks (R4):
-``seq_mismatch`` (a newer run has begun and its status has not arrived),
-``inactive``, ``busy`` (an event is running, or a NEXT or FINISHED goal of
-this client is still open: a second one would only race it),
-``unsupported_category`` (when the client was told the robot's categories),
+the reason the server would give.  The checks are the server's own:
+:func:`dynevent.machine.accept` runs on the server state the client's view
+implies (:func:`dynevent.machine.state_from_status`, with the ids and the
+child ends the client knows of), so the reasons come in the server's order
+(R4): ``inactive``, ``busy``, ``unsupported_category`` (when the client was
+told the robot's categories), ``description_invalid`` (too long),
 ``description_not_json``, ``non_finite_stubborn_period``, ``stale_id`` (no
-id above the highest one seen is left) and ``cancel_idle``.
+id above the highest one seen is left) and ``cancel_idle``.  The client adds
+what only it knows: ``seq_mismatch`` when a newer run has begun and its
+status has not arrived, and ``busy`` while a NEXT or FINISHED goal of its own
+is still open (a second one would only race it).
 
 *Outcomes.*  Every goal the client sends ends in exactly one :class:`Outcome`
 whose :class:`OutcomeKind` says what became of it, in the spirit of
@@ -57,15 +61,16 @@ is known to run) and reported ``timeout`` when it ends.
 from __future__ import annotations
 
 import enum
-import math
 from collections.abc import Iterable
 from typing import Any, ClassVar, TypeAlias
 
 import attrs
 
-from . import _json
+from . import machine
+from .description import DEFAULT_CATEGORY
 from .errors import InvalidMessage
 from .inputs import NOW_RANGE, goal_uuid
+from .machine import ServerConfig, State
 from .messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, LogEntry, Result
 from .outputs import Rejected
 from .vocab import DynamicState, EventType, Failure, GoalStatus, RejectReason, Status
@@ -563,40 +568,73 @@ def _cancel_open(state: ClientState, seq: int, child_id: int) -> bool:
 # --------------------------------------------------------------------------- commands
 
 
-def _refuse(reason: RejectReason, text: str, **values: Any) -> Rejected:
-    return Rejected(reason=reason, text=text, **values)
+def _projection(state: ClientState, event_type: int) -> State:
+    """The server state the client's view implies (:func:`~dynevent.machine.state_from_status`).
+
+    Besides its last status message the client knows the ids it has seen in
+    the run, that its own FINISHED ended the run, that a child it was told
+    of has ended, and (for a CANCEL) the child its own NEXT started.
+    """
+    if state.phase is DynamicState.INACTIVE or state.finished:
+        view = DynamicEventStatus(dynamic_event_seq=state.seq)
+        return machine.state_from_status(view)
+    if event_type == EventType.CANCEL:
+        child = _running_child(state)
+    elif state.phase is DynamicState.RUNNING and not _ended(state, state.current_id):
+        child = state.current_id
+    else:
+        child = None
+    view = DynamicEventStatus(
+        dynamic_event_seq=state.seq,
+        dynamic_state=DynamicState.WAITING if child is None else DynamicState.RUNNING,
+        status=state.status,
+        id=state.current_id if child is None else child,
+    )
+    server = machine.state_from_status(view)
+    return attrs.evolve(server, last_id=max(server.last_id, state.last_id))
 
 
-def _common_refusal(state: ClientState, event_type: EventType) -> Rejected | None:
-    """The refusals every goal type shares, in the server's order (R4.2, R4.3, R4.6)."""
-    if state.newest_seq is not None and state.newest_seq != state.seq:  # R4.2
-        return _refuse(
-            RejectReason.SEQ_MISMATCH,
-            f"run {state.newest_seq} has begun and its status has not arrived; "
+def _config(state: ClientState, category: str) -> ServerConfig:
+    """The configuration a local check assumes: the robot's categories if known, else the goal's own."""
+    names = state.categories if state.categories is not None else (category,)
+    return ServerConfig(categories={name: machine.accept_any for name in names if name != DEFAULT_CATEGORY})
+
+
+def _refusal(state: ClientState, goal: Goal) -> Rejected | None:
+    """What the server would refuse ``goal`` for, as far as the client knows (R20.1), or ``None``.
+
+    The server's own checks run on the state the client's view implies
+    (:func:`_projection`); the client adds what only it knows: a run whose
+    begin arrived before its status, and its own open NEXT or FINISHED goal.
+    """
+    if state.newest_seq is not None and state.newest_seq != state.seq:
+        return Rejected(
+            reason=RejectReason.SEQ_MISMATCH,
+            text=f"run {state.newest_seq} has begun and its status has not arrived; "
             f"a goal for run {state.seq} would be refused",
             expected_seq=state.newest_seq,
             received_seq=state.seq,
+            rule="R4.2",
         )
-    if state.phase is DynamicState.INACTIVE or state.finished:  # R4.3
-        return _refuse(RejectReason.INACTIVE, "no dynamic event is active for this robot")
-    if event_type == EventType.CANCEL:
+    decision = machine.accept(_projection(state, goal.event_type), goal, _config(state, goal.category))
+    if isinstance(decision, Rejected):
+        if decision.reason is RejectReason.STALE_ID:  # the client picks ids above those seen: none is left
+            text = f"no id above {state.last_id}, the highest id seen in this run, is left"
+            return attrs.evolve(decision, text=text)
+        return decision
+    if goal.event_type == EventType.CANCEL:
         return None
-    if state.phase is DynamicState.RUNNING and not _ended(state, state.current_id):  # R4.6
-        return _refuse(
-            RejectReason.BUSY,
-            f"event {state.current_id} is running: only a CANCEL with its id is accepted",
-            current_id=state.current_id,
-        )
-    for goal in state.goals:
-        if goal.goal.dynamic_event_seq == state.seq and goal.goal.event_type in (
+    for opened in state.goals:
+        if opened.goal.dynamic_event_seq == state.seq and opened.goal.event_type in (
             EventType.NEXT,
             EventType.FINISHED,
         ):
-            kind = EventType(goal.goal.event_type).name
-            return _refuse(
-                RejectReason.BUSY,
-                f"this client's {kind} goal {goal.goal_uuid} is still open; another would race it",
-                current_id=goal.child_id,
+            kind = EventType(opened.goal.event_type).name
+            return Rejected(
+                reason=RejectReason.BUSY,
+                text=f"this client's {kind} goal {opened.goal_uuid} is still open; another would race it",
+                current_id=opened.child_id,
+                rule="R4.6",
             )
     return None
 
@@ -654,35 +692,7 @@ def request_next(
         id=state.last_id + 1 if spare else state.last_id,
         stubborn_period=stubborn_period,
     )
-    refusal = _common_refusal(state, EventType.NEXT)
-    if refusal is None and state.categories is not None and category not in state.categories:  # R4.7
-        supported = tuple(sorted(state.categories))
-        refusal = _refuse(
-            RejectReason.UNSUPPORTED_CATEGORY,
-            f"category {category!r} is not supported; supported: {', '.join(supported) or 'none'}",
-            categories=supported,
-        )
-    if refusal is None:  # R4.9
-        try:
-            _json.parse(description)
-        except _json.JsonProblem as exc:
-            refusal = _refuse(
-                RejectReason.DESCRIPTION_NOT_JSON,
-                f"the description of the {category!r} event is {exc}",
-                errors=(str(exc),),
-            )
-    if refusal is None and not math.isfinite(goal.stubborn_period):  # R4.11
-        refusal = _refuse(
-            RejectReason.NON_FINITE_STUBBORN_PERIOD,
-            f"stubborn_period {goal.stubborn_period} is not a finite number",
-        )
-    if refusal is None and not spare:  # R4.12
-        refusal = _refuse(
-            RejectReason.STALE_ID,
-            f"no id above {state.last_id}, the highest id seen in this run, is left",
-            current_id=state.last_id,
-            requested_id=goal.id,
-        )
+    refusal = _refusal(state, goal)
     if refusal is not None:
         return _refused(state, EventType.NEXT, refusal, goal)
     return _send(state, goal, None if timeout is None else now + timeout)
@@ -702,13 +712,7 @@ def request_cancel(state: ClientState, *, now: int) -> ClientTransition:
         event_type=EventType.CANCEL,
         id=state.current_id if target is None else target,
     )
-    refusal = _common_refusal(state, EventType.CANCEL)
-    if refusal is None and target is None:  # R4.13
-        refusal = _refuse(
-            RejectReason.CANCEL_IDLE,
-            "no event is running to cancel",
-            execution_failure=Failure.IDLE_CANCEL.value,
-        )
+    refusal = _refusal(state, goal)
     if refusal is not None:
         return _refused(state, EventType.CANCEL, refusal, goal)
     return _send(state, goal)
@@ -718,7 +722,7 @@ def request_finish(state: ClientState, *, now: int) -> ClientTransition:
     """Tell the robot the dynamic event is finished: a FINISHED goal, or a local refusal."""
     now = _check_now("request_finish", now)
     goal = Goal(dynamic_event_seq=state.seq, event_type=EventType.FINISHED)
-    refusal = _common_refusal(state, EventType.FINISHED)
+    refusal = _refusal(state, goal)
     if refusal is not None:
         return _refused(state, EventType.FINISHED, refusal, goal)
     return _send(state, goal)

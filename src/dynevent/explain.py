@@ -27,7 +27,7 @@ from . import _json, machine
 from . import inputs as ins
 from . import outputs as outs
 from .errors import DyneventError, InvalidMessage
-from .machine import RunningGoal, ServerConfig, State
+from .machine import UNKNOWN_GOAL, ServerConfig, State, state_from_status
 from .messages import DynamicEventStatus, Goal
 from .vocab import Compatibility, DynamicState, EventType, Failure, GoalStatus, RejectReason, Status
 
@@ -39,58 +39,8 @@ __all__ = [
     "state_from_status",
 ]
 
-#: The goal UUID of a running goal known only from a status message.
-UNKNOWN_GOAL = "0" * 32
-
 _CANDIDATE = "0" * 31 + "1"  # the goal under examination, in the simulated server
 _STATUSES = frozenset(status.value for status in Status)
-
-
-def state_from_status(message: DynamicEventStatus, fleet: str = "fleet", robot: str = "robot") -> State:
-    """The server state a status message describes, as far as it can (R2.2).
-
-    INACTIVE gives an inactive state of that seq.  WAITING gives an active
-    run whose highest id used is the message's id (R2.2); the dynamic event's
-    own id is taken to be that id too, which holds until its first child.
-    RUNNING gives a run whose running goal is unknown (:data:`UNKNOWN_GOAL`),
-    with a child of the message's id, started unless the status is ``queued``
-    (a start deferred by an interruption, R6.3).  Raises
-    ``ValueError`` for a ``dynamic_state`` that is none of 0, 1, 2.
-    """
-    base = State.new(fleet, robot)
-    seq, phase = message.dynamic_event_seq, message.dynamic_state
-    if phase == DynamicState.INACTIVE:
-        return attrs.evolve(base, seq=seq)
-    if phase == DynamicState.WAITING:
-        return attrs.evolve(
-            base,
-            seq=seq,
-            active=True,
-            event_id=message.id,
-            description="{}",
-            status=message.status,
-            last_id=message.id,
-        )
-    if phase == DynamicState.RUNNING:
-        goal = Goal(dynamic_event_seq=seq, event_type=EventType.NEXT, id=message.id)
-        running = RunningGoal(
-            goal_uuid=UNKNOWN_GOAL,
-            goal=goal,
-            child_id=message.id,
-            child_status=message.status,
-            started=message.status != Status.QUEUED.value,
-        )
-        return attrs.evolve(
-            base,
-            seq=seq,
-            active=True,
-            description="{}",
-            status=message.status,
-            last_id=message.id,
-            running=running,
-            interrupted=not running.started,  # only an interruption defers a child's start (R6.3)
-        )
-    raise ValueError(f"dynamic_state {phase} is none of INACTIVE (0), WAITING (1), RUNNING (2)")
 
 
 def status_text(message: DynamicEventStatus) -> str:
