@@ -18,6 +18,24 @@ import attrs
 
 from .errors import InvalidMessage
 
+#: The largest uint32: run seqs and log seqs wrap from it to 0.
+U32_MAX = 2**32 - 1
+#: The largest uint64: event ids wrap from it to 0 (an adapter's ids).
+U64_MAX = 2**64 - 1
+#: Nanoseconds in a second: every instant (``now``) is integer nanoseconds since the Unix epoch.
+SECOND = 1_000_000_000
+
+
+def seq_after(seq: int, than: int) -> bool:
+    """Serial-number order of uint32 seqs (RFC 1982): is run ``seq`` after run ``than``?"""
+    return 0 < ((seq - than) & U32_MAX) < 2**31
+
+
+def id_not_after(first: int, second: int) -> bool:
+    """Is id ``first`` at or before ``second``?  Ids rise in a run, modulo 2**64 (an adapter's ids wrap)."""
+    return (second - first) & U64_MAX < 2**63
+
+
 #: Field metadata key of an annotation: a field that is not part of the value
 #: (no equality, not encoded), such as the rule an output carries.
 ANNOTATION = "dynevent.annotation"
@@ -123,8 +141,8 @@ def _wrap(function: Callable[[Any, object, attrs.Attribute[Any]], Any]) -> attrs
 WIRE_KEY = "dynevent.wire"
 _CONVERTERS: dict[str, attrs.Converter[Any, Any]] = {
     "uint8": _integer(0, 2**8 - 1, "uint8"),
-    "uint32": _integer(0, 2**32 - 1, "uint32"),
-    "uint64": _integer(0, 2**64 - 1, "uint64"),
+    "uint32": _integer(0, U32_MAX, "uint32"),
+    "uint64": _integer(0, U64_MAX, "uint64"),
     "int32": _integer(-(2**31), 2**31 - 1, "int32"),
     "int64": _integer(-(2**63), 2**63 - 1, "int64"),
     "float32": _wrap(_float32),

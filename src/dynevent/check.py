@@ -49,6 +49,7 @@ import attrs
 from . import _json, machine
 from . import inputs as ins
 from . import outputs as outs
+from ._fields import SECOND, U32_MAX, seq_after
 from ._progress import Progress
 from .errors import (
     InvalidMessage,
@@ -99,8 +100,6 @@ _REQUIRED: dict[str, frozenset[str]] = {
     "cancel_response": frozenset({"goal_uuid", "accepted"}),
 }
 
-_U32 = 2**32 - 1
-_NS = 1_000_000_000
 _STATUSES = frozenset(status.value for status in Status)
 _TIERS = frozenset(tier.value for tier in Tier)
 _TERMINAL = {
@@ -179,7 +178,7 @@ def _time(value: Any, source: str, line: int) -> int:
         raise TraceError(source, line, "time", f"expected a number of seconds, got {_json.dumps(value)}")
     nanoseconds = None
     if (isinstance(value, int) or math.isfinite(value)) and abs(value) < 2**32:  # no float() of a huge int
-        nanoseconds = value * _NS if isinstance(value, int) else round(value * _NS)
+        nanoseconds = value * SECOND if isinstance(value, int) else round(value * SECOND)
     if nanoseconds is None or not ins.NOW_RANGE[0] <= nanoseconds <= ins.NOW_RANGE[1]:
         raise TraceError(source, line, "time", f"{value!r} is outside the range of builtin_interfaces/Time")
     return nanoseconds
@@ -336,7 +335,7 @@ def _observations(parsed: Iterable[tuple[int, Record | dict[str, Any]]], source:
 
 
 def _seconds(now: int) -> int | float:
-    return now // _NS if now % _NS == 0 else now / _NS
+    return now // SECOND if now % SECOND == 0 else now / SECOND
 
 
 def step_records(event: ins.Input, outputs: Iterable[outs.Output]) -> list[dict[str, Any]]:
@@ -448,10 +447,6 @@ def _channel(output: outs.Output) -> str | None:
 def _first_line(text: str) -> str:
     return text.split("\n", 1)[0]
 
-
-def _newer(seq: int, than: int) -> bool:
-    """Serial-number order of uint32 seqs: is ``seq`` after ``than``?"""
-    return 0 < ((seq - than) & _U32) < 2**31
 
 
 def _same_status(a: DynamicEventStatus, b: DynamicEventStatus) -> bool:
@@ -610,7 +605,7 @@ class _Observer:
                 )
             return True
         if record.kind == "begin":
-            self.state = attrs.evolve(base, seq=(record.message.dynamic_event_seq - 1) & _U32)
+            self.state = attrs.evolve(base, seq=(record.message.dynamic_event_seq - 1) & U32_MAX)
             return False
         self.state = base  # a trace from the server's start
         return False
@@ -790,7 +785,7 @@ class _Observer:
                 open_goals.append(state.running.goal_uuid)
             self.displace(open_goals)
             state = attrs.evolve(state, active=False, running=None, queued=(), cancels=(), stubborn=None)
-        expected = (state.seq + 1) & _U32
+        expected = (state.seq + 1) & U32_MAX
         if message.dynamic_event_seq != expected:
             self.flag(
                 "R3.1",
@@ -798,7 +793,7 @@ class _Observer:
                 f"begin of run {message.dynamic_event_seq}",
                 f"seq {expected}, one above the previous run's {state.seq}",
             )
-            state = attrs.evolve(state, seq=(message.dynamic_event_seq - 1) & _U32)
+            state = attrs.evolve(state, seq=(message.dynamic_event_seq - 1) & U32_MAX)
         try:
             event = ins.Begin(description=message.description, event_id=0, now=self.now)
         except InvalidMessage as exc:
@@ -918,7 +913,7 @@ class _Observer:
     def check_logs(self, feedback: Feedback) -> None:
         for entry in feedback.logs:
             last = self.log_seq
-            if last is not None and not _newer(entry.seq, last):
+            if last is not None and not seq_after(entry.seq, last):
                 how = "repeats" if entry.seq == last else "goes backwards"
                 self.flag(
                     "R7.3",

@@ -67,6 +67,8 @@ from typing import Any, ClassVar, TypeAlias
 import attrs
 
 from . import machine
+from ._fields import SECOND as _SECOND_NS
+from ._fields import U64_MAX, id_not_after, seq_after
 from .description import DEFAULT_CATEGORY
 from .errors import InvalidMessage
 from .inputs import NOW_RANGE, goal_uuid
@@ -105,11 +107,8 @@ __all__ = [
 ]
 
 #: One second in the client's unit of time (integer nanoseconds), e.g. ``timeout=30 * SECOND``.
-SECOND = 1_000_000_000
+SECOND = _SECOND_NS
 
-_U32 = 2**32 - 1
-_U64 = 2**64 - 1
-_HALF_U32 = 2**31
 _HEX = frozenset("0123456789abcdefABCDEF")
 
 
@@ -493,10 +492,6 @@ class ClientTransition:
 # --------------------------------------------------------------------------- knowledge
 
 
-def _newer(seq: int, than: int) -> bool:
-    """Is run ``seq`` after run ``than``?  uint32 serial-number order (RFC 1982)."""
-    return 0 < ((seq - than) & _U32) < _HALF_U32
-
 
 def _run_over(state: ClientState, seq: int) -> bool:
     """Does the client know that run ``seq`` has ended?"""
@@ -507,14 +502,10 @@ def _run_over(state: ClientState, seq: int) -> bool:
     return state.finished or (state.phase is DynamicState.INACTIVE and state.seq == seq)
 
 
-def _not_after(first: int, second: int) -> bool:
-    """Is id ``first`` at or before ``second``?  Ids rise in a run, modulo 2**64 (an adapter's ids wrap)."""
-    return (second - first) & _U64 < 2**63
-
 
 def _ended(state: ClientState, child_id: int) -> bool:
     """Does the client know that child ``child_id`` of the newest run has ended?"""
-    return state.ended_id is not None and _not_after(child_id, state.ended_id)
+    return state.ended_id is not None and id_not_after(child_id, state.ended_id)
 
 
 def _new_run(state: ClientState, seq: int) -> ClientState:
@@ -530,7 +521,7 @@ def _seen_id(state: ClientState, seq: int, value: int) -> ClientState:
 
 def _take_uuid(state: ClientState) -> tuple[str, ClientState]:
     uuid = f"{state.uuid_prefix}{state.counter:016x}"
-    return uuid, attrs.evolve(state, counter=(state.counter + 1) & _U64)
+    return uuid, attrs.evolve(state, counter=(state.counter + 1) & U64_MAX)
 
 
 def _running_child(state: ClientState) -> int | None:
@@ -683,7 +674,7 @@ def request_next(
     """
     now = _check_now("request_next", now)
     timeout = _check_timeout(timeout)
-    spare = state.last_id < _U64
+    spare = state.last_id < U64_MAX
     goal = Goal(
         dynamic_event_seq=state.seq,
         event_type=EventType.NEXT,
@@ -770,7 +761,7 @@ def _timeout_cancel(state: ClientState, goal: OpenGoal) -> tuple[ClientState, tu
 def _on_begin(state: ClientState, event: BeginReceived) -> ClientTransition:
     message = event.message
     seq = message.dynamic_event_seq
-    if state.newest_seq is not None and seq != state.newest_seq and not _newer(seq, state.newest_seq):
+    if state.newest_seq is not None and seq != state.newest_seq and not seq_after(seq, state.newest_seq):
         return ClientTransition(
             state, (Ignored(input=event.KIND, why=f"begin of run {seq}, older than run {state.newest_seq}"),)
         )
@@ -785,7 +776,7 @@ def _on_begin(state: ClientState, event: BeginReceived) -> ClientTransition:
 def _on_status(state: ClientState, event: StatusReceived) -> ClientTransition:
     message = event.message
     seq = message.dynamic_event_seq
-    if state.newest_seq is not None and seq != state.newest_seq and not _newer(seq, state.newest_seq):
+    if state.newest_seq is not None and seq != state.newest_seq and not seq_after(seq, state.newest_seq):
         why = f"status of run {seq}, older than run {state.newest_seq}"
         return ClientTransition(state, (Ignored(input=event.KIND, why=why),))
     try:
@@ -918,7 +909,7 @@ def _on_result(state: ClientState, event: ResultReceived) -> ClientTransition:
             state = attrs.evolve(state, finished=True)
         elif goal.goal.event_type in (EventType.NEXT, EventType.CANCEL):
             state = _seen_id(state, seq, result.id)
-            if state.ended_id is None or not _not_after(result.id, state.ended_id):
+            if state.ended_id is None or not id_not_after(result.id, state.ended_id):
                 state = attrs.evolve(state, ended_id=result.id)
     return ClientTransition(state, (outcome,))
 

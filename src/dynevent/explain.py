@@ -26,6 +26,7 @@ import attrs
 from . import _json, machine
 from . import inputs as ins
 from . import outputs as outs
+from ._fields import U32_MAX, U64_MAX
 from .errors import DyneventError, InvalidMessage
 from .machine import UNKNOWN_GOAL, ServerConfig, State, state_from_status
 from .messages import DynamicEventStatus, Goal
@@ -240,7 +241,7 @@ def _fix(state: State, goal: Goal, rejection: outs.Rejected) -> tuple[Goal | Non
     if reason is RejectReason.NON_FINITE_STUBBORN_PERIOD:
         return attrs.evolve(goal, stubborn_period=0.0), "give a finite stubborn_period (0 for none)", True
     if reason is RejectReason.STALE_ID:
-        if state.last_id >= 2**64 - 1:
+        if state.last_id >= U64_MAX:
             return None, f"no id is left above {state.last_id} in this run: FINISH it, begin another", False
         fresh = state.last_id + 1
         return (
@@ -275,8 +276,8 @@ def _no_run(state: State) -> str:
     if state.active:
         return f"the run's seq is {state.seq}"
     return (
-        f"no dynamic event is active: wait for the next begin (it will carry seq {(state.seq + 1) % 2**32}) "
-        "and its WAITING status"
+        "no dynamic event is active: wait for the next begin "
+        f"(it will carry seq {(state.seq + 1) & U32_MAX}) and its WAITING status"
     )
 
 

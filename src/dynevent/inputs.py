@@ -20,7 +20,7 @@ from typing import Any, ClassVar, TypeAlias
 import attrs
 
 from . import _fields
-from ._fields import boolean_field, string, u64
+from ._fields import SECOND, boolean_field, string, u64
 from .description import EventDescription
 from .errors import DyneventError, InvalidMessage
 from .messages import Goal
@@ -52,7 +52,7 @@ __all__ = [
 MAX_LOG_TEXT_LENGTH = 16_384
 
 #: Inclusive range of ``now`` (nanoseconds): what ``builtin_interfaces/Time`` can carry.
-NOW_RANGE = (-(2**31) * 1_000_000_000, 2**31 * 1_000_000_000 - 1)
+NOW_RANGE = (-(2**31) * SECOND, 2**31 * SECOND - 1)
 
 _STATUSES = frozenset(status.value for status in Status)
 _TIERS = frozenset(tier.value for tier in Tier)

@@ -23,7 +23,7 @@ import attrs
 from . import _json
 from . import inputs as ins
 from . import outputs as outs
-from ._fields import maker, replacer
+from ._fields import SECOND, U32_MAX, U64_MAX, maker, replacer
 from .description import DEFAULT_CATEGORY, MAX_DESCRIPTION_BYTES
 from .errors import InvalidConfig
 from .messages import (
@@ -60,9 +60,6 @@ __all__ = [
     "step",
 ]
 
-_U32 = 2**32 - 1
-_U64 = 2**64 - 1
-_NS = 1_000_000_000
 
 #: A description validator: ``(category, parsed description) -> list of errors`` (empty when valid).
 Validator: TypeAlias = Callable[[str, Any], Sequence[str]]
@@ -296,7 +293,7 @@ class Transition:
 
 
 def _time(now: int) -> Time:
-    sec, nanosec = divmod(now, _NS)
+    sec, nanosec = divmod(now, SECOND)
     return _make_time(sec=sec, nanosec=nanosec)
 
 
@@ -522,14 +519,14 @@ def _stale(state: State, goal: Goal, config: ServerConfig) -> bool:
     """R4.12: under id policy ``goal`` a NEXT names a fresh id, or 0 while one is left to assign."""
     if config.id_policy is not IdPolicy.GOAL:
         return False
-    return state.last_id == _U64 if goal.id == 0 else goal.id <= state.last_id
+    return state.last_id == U64_MAX if goal.id == 0 else goal.id <= state.last_id
 
 
 def _child_id(state: State, goal: Goal, config: ServerConfig) -> int:
     """R6.2: the goal's id names the child, unless it is 0 or the adapter numbers children."""
     if config.id_policy is IdPolicy.GOAL and goal.id != 0:
         return goal.id
-    return (state.last_id + 1) & _U64
+    return (state.last_id + 1) & U64_MAX
 
 
 # --------------------------------------------------------------------------- step helpers
@@ -538,7 +535,7 @@ def _child_id(state: State, goal: Goal, config: ServerConfig) -> int:
 def _log(state: State, text: str, tier: str, now: int) -> tuple[State, LogEntry]:
     """A new log entry with the robot's next LogEntry.seq, which wraps at 2**32 (R7.3)."""
     entry = _make_log_entry(seq=state.log_seq, tier=tier, unix_millis_time=now // 1_000_000, text=text)
-    return _replace_state(state, log_seq=(state.log_seq + 1) & _U32), entry
+    return _replace_state(state, log_seq=(state.log_seq + 1) & U32_MAX), entry
 
 
 def _result(failure: str, status: str, event_id: int) -> Result:
@@ -659,7 +656,7 @@ def _on_begin(state: State, event: ins.Begin, config: ServerConfig) -> Transitio
     if state.active:
         return _ignored("R3.4", state, event.KIND, "a dynamic event is already active")
     outputs: list[outs.Output] = []
-    seq = (state.seq + 1) & _U32  # R3.1
+    seq = (state.seq + 1) & U32_MAX  # R3.1
     if seq == 0:
         outputs.append(outs.SeqWrapped(previous=state.seq, seq=seq, rule="R3.2"))
     description = event.description
@@ -879,7 +876,7 @@ def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerCon
             unix_millis_time=event.now // 1_000_000,
             text=event.log_text,
         )
-        log_seq = (log_seq + 1) & _U32
+        log_seq = (log_seq + 1) & U32_MAX
         outputs.append(outs.Log(entry=entry, rule="R7.2"))
         logs = (entry,)
     status = event.status
@@ -942,7 +939,7 @@ def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerCon
 
 
 def _seconds(value: float) -> int:
-    return round(value * _NS)
+    return round(value * SECOND)
 
 
 def _on_tick(state: State, event: ins.Tick, config: ServerConfig) -> Transition:
@@ -973,7 +970,7 @@ def _on_tick(state: State, event: ins.Tick, config: ServerConfig) -> Transition:
             period=stubborn.period, hold_since=event.now, next_refresh=next_refresh, anchor=position
         )
     else:
-        output = outs.StubbornDelay(delay=(event.now - stubborn.hold_since) / _NS, rule="R12.4")
+        output = outs.StubbornDelay(delay=(event.now - stubborn.hold_since) / SECOND, rule="R12.4")
         stubborn = _replace_stubborn(stubborn, next_refresh=next_refresh)
     return Transition(_replace_state(state, position=position, stubborn=stubborn), (output,))
 

@@ -37,6 +37,7 @@ import attrs
 
 from . import _json
 from ._fields import (
+    SECOND,
     WIRE_KEY,
     boolean_field,
     f32,
@@ -172,13 +173,13 @@ class Time(WireMessage):
     @classmethod
     def from_nanoseconds(cls, nanoseconds: int) -> Time:
         """Split a count of nanoseconds since the epoch into ``sec`` and ``nanosec``."""
-        sec, nanosec = divmod(nanoseconds, 1_000_000_000)
+        sec, nanosec = divmod(nanoseconds, SECOND)
         return cls(sec=sec, nanosec=nanosec)
 
     @property
     def nanoseconds(self) -> int:
         """The time as one count of nanoseconds since the epoch."""
-        return self.sec * 1_000_000_000 + self.nanosec
+        return self.sec * SECOND + self.nanosec
 
 
 @attrs.frozen(kw_only=True)

@@ -19,6 +19,7 @@ import attrs
 
 from . import _json
 from ._codec import CodecError, decode, encode
+from ._fields import SECOND, U32_MAX, U64_MAX
 from .description import EventDescription
 from .errors import DyneventError, InvalidSnapshot
 from .inputs import NOW_RANGE
@@ -27,7 +28,7 @@ from .names import validate_robot, validate_token
 from .vocab import EventType, Status
 
 #: A day in nanoseconds: a refresh instant may lie up to one refresh period past the last ``now``.
-SECONDS_NS = 86_400 * 1_000_000_000
+SECONDS_NS = 86_400 * SECOND
 
 __all__ = ["FORMAT", "VERSION", "check_state", "dumps", "loads", "restore", "snapshot", "state_problems"]
 
@@ -36,8 +37,6 @@ FORMAT = "dynevent.state"
 VERSION = 1
 
 _STATUSES = frozenset(status.value for status in Status)
-_U32 = 2**32 - 1
-_U64 = 2**64 - 1
 
 
 def snapshot(state: State) -> dict[str, Any]:
@@ -68,7 +67,7 @@ def state_problems(state: State) -> list[tuple[str, str]]:
         except DyneventError as exc:
             found.append(("$.state", str(exc)))
     found.extend(_phase_problems(state))
-    for field, high in (("seq", _U32), ("log_seq", _U32), ("event_id", _U64), ("last_id", _U64)):
+    for field, high in (("seq", U32_MAX), ("log_seq", U32_MAX), ("event_id", U64_MAX), ("last_id", U64_MAX)):
         if not 0 <= getattr(state, field) <= high:
             found.append((f"$.state.{field}", f"out of range [0, {high}]"))
     if state.status not in _STATUSES:
@@ -81,7 +80,7 @@ def state_problems(state: State) -> list[tuple[str, str]]:
     running = state.running
     if running is not None:
         uuids.append(running.goal_uuid)
-        if not 0 <= running.child_id <= _U64:
+        if not 0 <= running.child_id <= U64_MAX:
             found.append(("$.state.running.child_id", "out of range for uint64"))
         if running.child_status not in _STATUSES and running.child_status != "":
             found.append(("$.state.running.child_status", f"unknown status {running.child_status!r}"))

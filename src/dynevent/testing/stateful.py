@@ -67,6 +67,7 @@ from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, 
 from .. import _json, machine
 from .. import inputs as ins
 from .. import outputs as outs
+from .._fields import SECOND, U32_MAX, U64_MAX
 from .._json import dumps_sorted, parse
 from ..machine import ServerConfig, State
 from ..messages import DynamicEventStatus, Goal, Time
@@ -88,9 +89,6 @@ __all__ = [
     "server_state_machine",
 ]
 
-_U32 = 2**32 - 1
-_U64 = 2**64 - 1
-_SECOND = 1_000_000_000
 _MS = 1_000_000
 
 #: The configuration record (:func:`dynevent.records.config_from_json` form) the kit uses by default:
@@ -360,7 +358,7 @@ class Observer:
 
     def expected_status(self, now: int) -> DynamicEventStatus:
         """The status message R2.2 gives for the modelled state, with ``time`` = ``now``."""
-        sec, nanosec = divmod(now, _SECOND)
+        sec, nanosec = divmod(now, SECOND)
         active = self.active
         return DynamicEventStatus(
             dynamic_event_seq=self.seq,
@@ -461,7 +459,7 @@ class Observer:
             return None  # the run ends: R13.4 and R2.3 as in standard mode
         if not isinstance(event, (ins.ChildProgress, ins.ChildFinished)):
             return None
-        sec, nanosec = divmod(event.now, _SECOND)
+        sec, nanosec = divmod(event.now, SECOND)
         return DynamicEventStatus(
             dynamic_event_seq=self.seq,
             dynamic_state=DynamicState.RUNNING,
@@ -606,7 +604,7 @@ class Observer:
         elif isinstance(output, outs.Log):
             if output.entry.seq != self.log_seq:
                 raise self._fail("R7.3", f"LogEntry.seq {output.entry.seq}, expected {self.log_seq}")
-            self.log_seq = (self.log_seq + 1) & _U32
+            self.log_seq = (self.log_seq + 1) & U32_MAX
         elif isinstance(output, outs.DescriptionAnswer):
             response = output.response
             expected = (self.active, self.status, self.description, self.current_id)
@@ -633,7 +631,7 @@ class Observer:
             if record.goal.event_type != EventType.NEXT:
                 raise self._fail("R19.2", f"StartChild for a goal of event type {record.goal.event_type}")
             named = self.config.id_policy is IdPolicy.GOAL and record.goal.id != 0
-            expected = record.goal.id if named else (self.last_id + 1) & _U64
+            expected = record.goal.id if named else (self.last_id + 1) & U64_MAX
             if output.id != expected:
                 raise self._fail(
                     "R6.2", f"StartChild({output.id}) for goal id {record.goal.id}, expected {expected}"
@@ -647,7 +645,7 @@ class Observer:
             raise self._fail(
                 "R19.3", f"a begin message (seq {output.message.dynamic_event_seq}) without a begin"
             )
-        expected = (self.seq + 1) & _U32
+        expected = (self.seq + 1) & U32_MAX
         if output.message.dynamic_event_seq != expected:
             raise self._fail(
                 "R19.3", f"begin with seq {output.message.dynamic_event_seq}, expected {expected}"
@@ -711,7 +709,7 @@ class ServerStateMachine(RuleBasedStateMachine):
         self.server = self.make_server()
         self.server.reset(self.fleet, self.robot, self.config)
         self.model = Observer(self.fleet, self.robot, self.server_config)
-        self.now = 1_700_000_000 * _SECOND
+        self.now = 1_700_000_000 * SECOND
         self.position = ("L1", 0.0, 0.0)
         self._uuids = 0
         self._broken = False
@@ -761,7 +759,7 @@ class ServerStateMachine(RuleBasedStateMachine):
         model = self.model
         if self.server_config.id_policy is IdPolicy.GOAL:
             step = data.draw(st.integers(0, 3), label="id step")  # 0: the server assigns the id (R6.2)
-            goal_id = 0 if step == 0 else min(model.last_id + step, _U64)
+            goal_id = 0 if step == 0 else min(model.last_id + step, U64_MAX)
         else:
             goal_id = data.draw(st.integers(0, 5), label="id")
         return Goal(
@@ -809,7 +807,7 @@ class ServerStateMachine(RuleBasedStateMachine):
         elif model.running is not None:
             self.apply(ins.Resume(now=self._tick()))
         elif model.stubborn and data.draw(st.booleans(), label="tick"):
-            self._move(_SECOND, 0.0, False)
+            self._move(SECOND, 0.0, False)
         elif data.draw(st.integers(0, 7), label="finish the run") == 5:
             self._request(Goal(dynamic_event_seq=model.seq, event_type=EventType.FINISHED))
         else:
@@ -821,7 +819,7 @@ class ServerStateMachine(RuleBasedStateMachine):
         self.advance(data)
 
     @precondition(lambda self: not self.model.active and not self.model.shut_down)
-    @rule(event_id=st.one_of(st.integers(0, 20), st.just(_U64), st.integers(0, _U64)), data=st.data())
+    @rule(event_id=st.one_of(st.integers(0, 20), st.just(U64_MAX), st.integers(0, U64_MAX)), data=st.data())
     def begin(self, event_id: int, data: st.DataObject) -> None:
         """A task reaches a dynamic event phase."""
         description = data.draw(st.sampled_from(_BEGIN_DESCRIPTIONS), label="description")
@@ -869,10 +867,10 @@ class ServerStateMachine(RuleBasedStateMachine):
         goal = self._next_goal(data)
         model = self.model
         if fault == "seq":
-            shift = data.draw(st.sampled_from((1, 2, _U32)), label="seq shift")
-            goal = attrs.evolve(goal, dynamic_event_seq=(model.seq + shift) & _U32)
+            shift = data.draw(st.sampled_from((1, 2, U32_MAX)), label="seq shift")
+            goal = attrs.evolve(goal, dynamic_event_seq=(model.seq + shift) & U32_MAX)
         elif fault == "event_type":
-            event_type = data.draw(st.sampled_from((0, 4, 5, 1000, _U32)), label="event_type")
+            event_type = data.draw(st.sampled_from((0, 4, 5, 1000, U32_MAX)), label="event_type")
             goal = attrs.evolve(goal, event_type=event_type)
         elif fault == "not_json":
             goal = attrs.evolve(goal, description=data.draw(st.sampled_from(_NOT_JSON), label="text"))
@@ -894,7 +892,9 @@ class ServerStateMachine(RuleBasedStateMachine):
             goal = attrs.evolve(goal, id=max(model.last_id - data.draw(st.integers(0, 2), label="back"), 0))
         elif fault == "cancel_id":
             current = model.current_id
-            wrong = data.draw(st.sampled_from(((current + 1) & _U64, (current - 1) & _U64, 0)), label="id")
+            wrong = data.draw(
+                st.sampled_from(((current + 1) & U64_MAX, (current - 1) & U64_MAX, 0)), label="id"
+            )
             goal = Goal(dynamic_event_seq=model.seq, event_type=EventType.CANCEL, id=wrong)
         else:  # a CANCEL or FINISHED carrying NEXT's fields, and a NaN period
             event_type = data.draw(st.sampled_from((EventType.CANCEL, EventType.FINISHED)), label="type")
@@ -949,7 +949,7 @@ class ServerStateMachine(RuleBasedStateMachine):
 
     @precondition(lambda self: self.model.stubborn)
     @rule(
-        step=st.sampled_from((_MS, 500 * _MS, _SECOND, 1_500 * _MS, 3 * _SECOND)),
+        step=st.sampled_from((_MS, 500 * _MS, SECOND, 1_500 * _MS, 3 * SECOND)),
         move=st.sampled_from((0.0, 0.0, 0.05, 0.5, 5.0)),
         change_map=st.booleans(),
     )
@@ -1004,7 +1004,7 @@ class ServerStateMachine(RuleBasedStateMachine):
         elif kind == "finished":
             event = ins.ChildFinished(status=data.draw(st.sampled_from(_STATUSES), label="status"), now=now)
         elif kind == "tick":
-            step = data.draw(st.sampled_from((0, _SECOND, 3 * _SECOND)), label="step")
+            step = data.draw(st.sampled_from((0, SECOND, 3 * SECOND)), label="step")
             self._move(step, data.draw(st.sampled_from((0.0, 1.0)), label="move"), False)
             return
         else:
@@ -1093,15 +1093,15 @@ def server_inputs(
     requests and starts are drawn more often than other inputs.  With
     ``shutdown``, about one input in forty is a shutdown.
     """
-    times = now if now is not None else st.integers(0, 20 * _SECOND)
+    times = now if now is not None else st.integers(0, 20 * SECOND)
     uuid = st.sampled_from([f"{index:032x}" for index in range(1, uuids + 1)])
     goal = st.builds(
         Goal,
-        dynamic_event_seq=st.sampled_from((*(seq,) * 8, (seq + 1) & _U32, (seq - 1) & _U32, 0)),
+        dynamic_event_seq=st.sampled_from((*(seq,) * 8, (seq + 1) & U32_MAX, (seq - 1) & U32_MAX, 0)),
         event_type=st.sampled_from((1, 1, 1, 1, 2, 2, 3, 0, 4)),
         category=st.sampled_from((*categories, *categories, "unknown")),
         description=st.sampled_from((_DESCRIPTIONS[0],) * 4 + _DESCRIPTIONS + _NOT_JSON[:4]),
-        id=st.one_of(st.integers(1, 8), st.sampled_from((0, _U64))),
+        id=st.one_of(st.integers(1, 8), st.sampled_from((0, U64_MAX))),
         stubborn_period=st.sampled_from(_STUBBORN + _NON_FINITE),
     )
     status = st.sampled_from(_STATUSES)
@@ -1118,7 +1118,7 @@ def server_inputs(
     begin = st.builds(
         ins.Begin,
         description=st.sampled_from(_BEGIN_DESCRIPTIONS),
-        event_id=st.sampled_from((0, 0, 1, 4, _U64)),
+        event_id=st.sampled_from((0, 0, 1, 4, U64_MAX)),
         now=times,
     )
     kinds: dict[str, tuple[int, st.SearchStrategy[ins.Input]]] = {  # weight, strategy
@@ -1186,13 +1186,13 @@ def input_sequences(
         events.append(ins.Shutdown(now=0))
     steps = draw(
         st.lists(
-            st.sampled_from((0, _MS, 400 * _MS, _SECOND, 2 * _SECOND)),
+            st.sampled_from((0, _MS, 400 * _MS, SECOND, 2 * SECOND)),
             min_size=len(events),
             max_size=len(events),
         ),
         label="time steps",
     )
-    now = 1_700_000_000 * _SECOND
+    now = 1_700_000_000 * SECOND
     result: list[ins.Input] = []
     for event, step in zip(events, steps, strict=True):
         now += step
