@@ -54,9 +54,12 @@ __all__ = [
     "Validator",
     "accept",
     "accept_any",
+    "phase_of",
     "race_lost",
+    "reported_id",
     "state_from_status",
     "status_message",
+    "status_of",
     "step",
 ]
 
@@ -260,17 +263,30 @@ class State:
 
     @property
     def phase(self) -> DynamicState:
-        """INACTIVE without an active dynamic event, RUNNING while a goal holds the running slot."""
-        if not self.active:
-            return DynamicState.INACTIVE
-        return DynamicState.WAITING if self.running is None else DynamicState.RUNNING
+        """INACTIVE without an active dynamic event, RUNNING while a goal holds the running slot (R2.1)."""
+        return phase_of(self.active, self.running is not None)
 
     @property
     def current_id(self) -> int:
         """The id the status topic reports (R2.2): the child's while running, else the highest used."""
-        if not self.active:
-            return 0
-        return self.last_id if self.running is None else self.running.child_id
+        running = self.running
+        return reported_id(self.active, self.last_id, None if running is None else running.child_id)
+
+
+def phase_of(active: bool, running: bool) -> DynamicState:
+    """The phase of a server (R2.1): INACTIVE when no dynamic event is active, else RUNNING while a
+    goal holds the running slot, else WAITING.  :attr:`State.phase` and any other model read it."""
+    if not active:
+        return DynamicState.INACTIVE
+    return DynamicState.RUNNING if running else DynamicState.WAITING
+
+
+def reported_id(active: bool, last_id: int, child_id: int | None) -> int:
+    """The id a status message reports (R2.2): 0 when inactive, else the running child's
+    (``child_id``, ``None`` when none runs), else the highest id used in the run."""
+    if not active:
+        return 0
+    return last_id if child_id is None else child_id
 
 
 # Messages built from checked state skip their converters; copies skip __init__ (attrs.evolve re-runs it).
@@ -299,20 +315,22 @@ def _time(now: int) -> Time:
 
 def status_message(state: State, now: int) -> DynamicEventStatus:
     """The status message that describes ``state`` (R2.2)."""
-    if not state.active:
-        return _make_status(
-            dynamic_event_seq=state.seq,
-            dynamic_state=DynamicState.INACTIVE.value,
-            status=Status.UNINITIALIZED.value,
-            id=0,
-            time=_time(now),
-        )
-    phase = DynamicState.WAITING if state.running is None else DynamicState.RUNNING
+    running = state.running
+    child_id = None if running is None else running.child_id
+    return status_of(state.seq, state.active, state.status, state.last_id, child_id, now)
+
+
+def status_of(
+    seq: int, active: bool, status: str, last_id: int, child_id: int | None, now: int
+) -> DynamicEventStatus:
+    """The status message (R2.2) of a server in run ``seq`` whose dynamic event is ``active`` with
+    ``status``, highest id used ``last_id`` and running child ``child_id`` (``None`` when none runs),
+    stamped ``now``: what :func:`status_message` gives for a :class:`State`, for any model of one."""
     return _make_status(
-        dynamic_event_seq=state.seq,
-        dynamic_state=phase.value,
-        status=state.status,
-        id=state.current_id,
+        dynamic_event_seq=seq,
+        dynamic_state=phase_of(active, child_id is not None).value,
+        status=status if active else Status.UNINITIALIZED.value,
+        id=reported_id(active, last_id, child_id),
         time=_time(now),
     )
 
@@ -547,7 +565,7 @@ def _feedback(status: str, event_id: int, logs: tuple[LogEntry, ...]) -> Feedbac
 
 
 def _failure(rule: str, goal_uuid: str, failure: Failure, detail: str = "") -> outs.AnswerGoal:
-    """The goal is aborted with ``failure`` (and a ``\n -- detail`` line when there is one)."""
+    """The goal is aborted with ``failure``, and a `` -- detail`` line after it when there is one."""
     text = f"{failure.value}\n -- {detail}" if detail else failure.value
     return outs.AnswerGoal(
         goal_uuid=goal_uuid, status=GoalStatus.ABORTED, result=_result(text, "", 0), rule=rule

@@ -135,7 +135,7 @@ class Failure(str, enum.Enum):
     """Why a goal that was accepted is aborted: rmf_ros2's execution-failure strings.
 
     The value is the exact first line of ``Result.execution_failure`` (the
-    machine may add ``\n -- <detail>`` lines after it).  :attr:`reason` is
+    machine may add detail lines after it, each starting with ``" -- "``).  :attr:`reason` is
     the refusal the failure reports, where it is one a request could have
     met; :meth:`of` reads a failure back from a result's text.
     """

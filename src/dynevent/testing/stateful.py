@@ -70,7 +70,7 @@ from .. import outputs as outs
 from .._fields import SECOND, U32_MAX, U64_MAX
 from .._json import dumps_sorted, parse
 from ..machine import ServerConfig, State
-from ..messages import DynamicEventStatus, Goal, Time
+from ..messages import DynamicEventStatus, Goal
 from ..records import config_from_json, input_to_json, output_from_json
 from ..vocab import Compatibility, DynamicState, EventType, GoalStatus, IdPolicy, Status, Tier
 from .strategies import messages
@@ -330,16 +330,16 @@ class Observer:
     @property
     def phase(self) -> DynamicState:
         """The phase the outputs imply (R2.1)."""
-        if not self.active:
-            return DynamicState.INACTIVE
-        return DynamicState.WAITING if self.running is None else DynamicState.RUNNING
+        return machine.phase_of(self.active, self.running is not None)
 
     @property
     def current_id(self) -> int:
         """The id the status topic must report (R2.2): the running child's, else the highest used."""
-        if not self.active:
-            return 0
-        return self.last_id if self.running is None else self.running.child_id
+        return machine.reported_id(self.active, self.last_id, self._child_id)
+
+    @property
+    def _child_id(self) -> int | None:
+        return None if self.running is None else self.running.child_id
 
     @property
     def child_started(self) -> bool:
@@ -358,15 +358,7 @@ class Observer:
 
     def expected_status(self, now: int) -> DynamicEventStatus:
         """The status message R2.2 gives for the modelled state, with ``time`` = ``now``."""
-        sec, nanosec = divmod(now, SECOND)
-        active = self.active
-        return DynamicEventStatus(
-            dynamic_event_seq=self.seq,
-            dynamic_state=self.phase.value,
-            status=self.status if active else Status.UNINITIALIZED.value,
-            id=self.current_id,
-            time=Time(sec=sec, nanosec=nanosec),
-        )
+        return machine.status_of(self.seq, self.active, self.status, self.last_id, self._child_id, now)
 
     def _key(self) -> tuple[int, int, str, int]:
         message = self.expected_status(0)
@@ -459,14 +451,7 @@ class Observer:
             return None  # the run ends: R13.4 and R2.3 as in standard mode
         if not isinstance(event, (ins.ChildProgress, ins.ChildFinished)):
             return None
-        sec, nanosec = divmod(event.now, SECOND)
-        return DynamicEventStatus(
-            dynamic_event_seq=self.seq,
-            dynamic_state=DynamicState.RUNNING,
-            status=event.status,
-            id=running.child_id,
-            time=Time(sec=sec, nanosec=nanosec),
-        )
+        return machine.status_of(self.seq, True, event.status, self.last_id, running.child_id, event.now)
 
     def _check_race(self, record: _GoalRecord, seq: int, active: bool) -> None:
         """R5.2: a goal that starts in another run, or with no run active, loses the race."""
