@@ -51,11 +51,11 @@ from . import inputs as ins
 from . import outputs as outs
 from ._fields import SECOND, U32_MAX, seq_after
 from ._progress import Progress
+from ._text import answer_text, goal_text, status_text
 from .errors import (
     InvalidMessage,
     TraceError,  # defined there with every error; importable here too
 )
-from .explain import goal_text, status_text
 from .machine import UNKNOWN_GOAL, QueuedGoal, RunningGoal, ServerConfig, State, state_from_status
 from .messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
 from .records import InvalidRecord, config_from_json
@@ -448,7 +448,6 @@ def _first_line(text: str) -> str:
     return text.split("\n", 1)[0]
 
 
-
 def _same_status(a: DynamicEventStatus, b: DynamicEventStatus) -> bool:
     return (a.dynamic_event_seq, a.dynamic_state, a.status, a.id) == (
         b.dynamic_event_seq,
@@ -489,13 +488,6 @@ def _owes(owed: _Owed, record: Record) -> bool:
         wanted = "feedback" if isinstance(output, outs.PublishFeedback) else "result"
         return record.kind == wanted and record.goal_uuid == output.goal_uuid and _exact(output, record)
     return False
-
-
-def _answer_text(status: str, result: Result) -> str:
-    detail = _first_line(result.execution_failure) or f"{result.status} id={result.id}"
-    if result.execution_failure:
-        detail = repr(detail)
-    return f"{status}: {detail}"
 
 
 class _Observer:
@@ -1113,7 +1105,7 @@ class _Observer:
                     f"aborted: {Failure.RACE.value!r}, as {race}",
                 )
             elif answer is not None and isinstance(answer.output, outs.AnswerGoal):
-                expected = _answer_text(answer.output.status.value, answer.output.result)
+                expected = answer_text(answer.output.status.value, answer.output.result, first_line=True)
                 self.flag(answer.rule, "feedback_not_running", f"{label}: its NEXT started a child", expected)
             self.force_start(uuid, goal, feedback)
             return
@@ -1123,7 +1115,7 @@ class _Observer:
                 pending.rule,
                 "feedback_not_running",
                 f"{label}, whose event has ended",
-                _answer_text(pending.output.status.value, pending.output.result),
+                answer_text(pending.output.status.value, pending.output.result, first_line=True),
             )
             return
         kind = EventType(goal.event_type).name if goal.event_type <= 3 else f"event_type {goal.event_type}"
@@ -1168,7 +1160,7 @@ class _Observer:
         # the running goal is answered at its child's end, or at shutdown
         failure = _first_line(result.execution_failure)
         seen = self.bind_unknown(uuid, failure in ("", Failure.SHUTDOWN.value))
-        label = f"answer {_answer_text(record.status, result)} for goal {uuid}"
+        label = f"answer {answer_text(record.status, result, first_line=True)} for goal {uuid}"
         if seen is None or not seen.accepted:
             what = "never requested in this trace" if seen is None else "rejected"
             self.flag(
@@ -1232,8 +1224,8 @@ class _Observer:
         assert isinstance(output, outs.AnswerGoal)
         result: Result = record.message
         expected, observed = output.result, result
-        label = f"goal {record.goal_uuid} answered {_answer_text(record.status, result)}"
-        want = _answer_text(output.status.value, expected)
+        label = f"goal {record.goal_uuid} answered {answer_text(record.status, result, first_line=True)}"
+        want = answer_text(output.status.value, expected, first_line=True)
         seen = self.goals.get(record.goal_uuid)
         early = {record.status, output.status.value} == {GoalStatus.ABORTED.value, GoalStatus.CANCELED.value}
         if early and seen is not None and seen.line == 0:
@@ -1256,7 +1248,7 @@ class _Observer:
     def unexplained_answer(self, record: Record, seen: _GoalSeen) -> None:
         uuid = record.goal_uuid
         state = self.st
-        label = f"goal {uuid} answered {_answer_text(record.status, record.message)}"
+        label = f"goal {uuid} answered {answer_text(record.status, record.message, first_line=True)}"
         running = state.running
         queued = next((item for item in state.queued if item.goal_uuid == uuid), None)
         if uuid in state.cancels or (

@@ -27,6 +27,7 @@ from . import _json, machine
 from . import inputs as ins
 from . import outputs as outs
 from ._fields import U32_MAX, U64_MAX
+from ._text import goal_text, status_text
 from .errors import DyneventError, InvalidMessage
 from .machine import UNKNOWN_GOAL, ServerConfig, State, state_from_status
 from .messages import DynamicEventStatus, Goal
@@ -37,36 +38,13 @@ __all__ = [
     "Explanation",
     "explain",
     "format_explanation",
+    "goal_text",
     "state_from_status",
+    "status_text",
 ]
 
 _CANDIDATE = "0" * 31 + "1"  # the goal under examination, in the simulated server
 _STATUSES = frozenset(status.value for status in Status)
-
-
-def status_text(message: DynamicEventStatus) -> str:
-    """One line for a status message: ``RUNNING seq=3 id=8 underway``."""
-    try:
-        phase = DynamicState(message.dynamic_state).name
-    except ValueError:
-        phase = f"dynamic_state={message.dynamic_state}"
-    return f"{phase} seq={message.dynamic_event_seq} id={message.id} {message.status}"
-
-
-def goal_text(goal: Goal) -> str:
-    """One line for a goal: ``NEXT seq=1 id=6 go_to_place "pantry" stubborn=0.5``."""
-    try:
-        name = EventType(goal.event_type).name
-    except ValueError:
-        name = f"event_type={goal.event_type}"
-    text = f"{name} seq={goal.dynamic_event_seq}"
-    if goal.event_type != EventType.FINISHED:
-        text += f" id={goal.id}"
-    if goal.event_type == EventType.NEXT:
-        text += f" {goal.category} {goal.description}"
-        if goal.stubborn_period != 0.0:
-            text += f" stubborn={goal.stubborn_period:g}"
-    return text
 
 
 @attrs.frozen(kw_only=True)

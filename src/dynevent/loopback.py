@@ -55,10 +55,11 @@ from . import client as cl
 from . import inputs as ins
 from . import outputs as outs
 from ._codec import encode
+from ._text import answer_text, goal_text, status_text
 from .client import SECOND, ClientOutput, ClientState, ClientTransition, Outcome
 from .machine import ServerConfig, State
-from .messages import DynamicEventDescription, DynamicEventStatus, Goal, Time
-from .vocab import DynamicState, EventType, Status
+from .messages import DynamicEventDescription, Goal, Time
+from .vocab import Status
 
 __all__ = [
     "Adapter",
@@ -251,29 +252,6 @@ def _record(kind: str, value: Any) -> dict[str, Any]:
     return record
 
 
-def _goal_text(goal: Goal) -> str:
-    try:
-        name = EventType(goal.event_type).name
-    except ValueError:
-        name = f"event_type {goal.event_type}"
-    text = f"{name} seq={goal.dynamic_event_seq}"
-    if goal.event_type == EventType.NEXT:
-        text += f" id={goal.id} {goal.category} {goal.description}"
-        if goal.stubborn_period != 0.0:
-            text += f" stubborn={goal.stubborn_period:g}"
-    elif goal.event_type != EventType.FINISHED:
-        text += f" id={goal.id}"
-    return text
-
-
-def _status_text(message: DynamicEventStatus) -> str:
-    try:
-        phase = DynamicState(message.dynamic_state).name
-    except ValueError:
-        phase = str(message.dynamic_state)
-    return f"{phase} seq={message.dynamic_event_seq} id={message.id} {message.status}"
-
-
 def _short(uuid: str) -> str:
     return f"{uuid[:4]}..{uuid[-4:]}"
 
@@ -304,9 +282,7 @@ def _server_text(output: outs.Output) -> str:
     if isinstance(output, outs.GoalRejected):
         return f"rejected: {output.rejection.reason.value} ({output.rejection.text})"
     if isinstance(output, outs.AnswerGoal):
-        result = output.result
-        detail = result.execution_failure or f"{result.status} id={result.id}"
-        return f"{output.status.value}: {detail}"
+        return answer_text(output.status.value, output.result)
     if isinstance(output, outs.Ignored):
         return f"ignored: {output.why}"
     if isinstance(output, outs.StartChild):
@@ -468,10 +444,10 @@ class Loopback:
                 self._schedule(at, delivery, "goal", shuffle=True)
             if command and isinstance(output, (cl.SendGoal, cl.Refused)):
                 goal = output.goal
-                summary = "" if goal is None else _goal_text(goal)
+                summary = "" if goal is None else goal_text(goal)
                 self._record("client", command, summary, _client_text(output), _record(output.KIND, output))
             elif isinstance(output, (cl.SendGoal, cl.Outcome, cl.TimedOut)):
-                summary = _goal_text(output.goal) if isinstance(output, (cl.SendGoal, cl.Outcome)) else ""
+                summary = goal_text(output.goal) if isinstance(output, (cl.SendGoal, cl.Outcome)) else ""
                 self._record(
                     "client", output.KIND, summary, _client_text(output), _record(output.KIND, output)
                 )
@@ -520,9 +496,7 @@ class Loopback:
         two goals race (R5.2) with one client machine in the session.
         """
         uuid = f"{'f' * 16}{next(self._foreign):016x}"
-        self._record(
-            "client", "send_foreign", _goal_text(goal), f"send {_short(uuid)}", _record("goal", goal)
-        )
+        self._record("client", "send_foreign", goal_text(goal), f"send {_short(uuid)}", _record("goal", goal))
         at = self.now + self._draw(self.options.delay)
         self._schedule(at, _Delivery("goal", goal, uuid), "goal", shuffle=True)
         return uuid
@@ -578,7 +552,7 @@ class Loopback:
         if not isinstance(event, ins.GoalRequested):  # a goal request is recorded as a delivery
             self._record(direction, event.KIND, summary, decision, _record(event.KIND, event))
         else:
-            self._record(direction, event.KIND, _goal_text(event.goal), decision, _record(event.KIND, event))
+            self._record(direction, event.KIND, goal_text(event.goal), decision, _record(event.KIND, event))
         for output in transition.outputs:
             self._route(output)
         return transition.outputs
@@ -630,7 +604,7 @@ class Loopback:
         if delivery.kind == "goal":
             goal: Goal = delivery.payload
             event = ins.GoalRequested(goal_uuid=delivery.goal_uuid, goal=goal, now=self.now)
-            self._server_step(event, "client->server", _goal_text(goal))
+            self._server_step(event, "client->server", goal_text(goal))
         elif delivery.kind == "start":
             start = ins.GoalStarted(goal_uuid=delivery.payload, now=self.now)
             self._server_step(start, "adapter", _short(start.goal_uuid))
@@ -666,7 +640,7 @@ class Loopback:
         }
         kind = kinds.get(type(event), event.KIND)
         if isinstance(event, cl.StatusReceived):
-            summary = _status_text(event.message)
+            summary = status_text(event.message)
         elif isinstance(event, cl.BeginReceived):
             summary = f"seq={event.message.dynamic_event_seq} {event.message.description}"
         elif isinstance(event, cl.GoalResponse):
