@@ -6,8 +6,11 @@ import contextlib
 import importlib.util
 import os
 import random
+import signal
+import subprocess
+import sys
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
 T = TypeVar("T")
@@ -21,6 +24,9 @@ WHY = (
 TEST_DEADLINE = 120
 #: The bound of every single wait in the ROS tests, in seconds.
 WAIT = 15.0
+#: The bound on a child process's start (a Python interpreter importing rclpy, on a loaded machine):
+#: kept apart from WAIT so that a slow start is never mistaken for a discovery or protocol failure.
+START = 60.0
 
 
 def keep_dds_local() -> None:
@@ -91,3 +97,64 @@ class Graph:
         self._thread.join(timeout=5)
         if self.died is not None:
             raise AssertionError(f"the executor thread died: {self.died!r}") from self.died
+
+
+class Child:
+    """A Python process under test, with its output read live into ``lines``.
+
+    ``wait_line`` bounds the wait for a line and fails at once, with the whole output, if the process
+    has ended; ``stop`` ends it within bounds. Every failure message carries the process's output, so a
+    failed run in CI says why the other side was not there.
+    """
+
+    def __init__(self, argv: Sequence[str]) -> None:
+        self.argv = [sys.executable, *argv]
+        self.lines: list[str] = []
+        self.process = subprocess.Popen(
+            self.argv,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            env=os.environ.copy(),
+        )
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        assert self.process.stdout is not None
+        for line in self.process.stdout:
+            self.lines.append(line.rstrip("\n"))
+
+    @property
+    def output(self) -> str:
+        return "\n".join(self.lines)
+
+    def saw(self, text: str) -> bool:
+        return any(text in line for line in self.lines)
+
+    def wait_line(self, text: str, timeout: float = START) -> None:
+        """Wait until a line containing ``text`` is printed, at most ``timeout`` seconds."""
+
+        def seen_or_ended() -> bool:
+            return self.saw(text) or self.process.poll() is not None
+
+        wait_for(seen_or_ended, f"{text!r} from {' '.join(self.argv[1:])}", timeout)
+        if not self.saw(text):
+            self._reader.join(timeout=WAIT)
+            raise AssertionError(
+                f"the process ended with {self.process.returncode} before printing {text!r}:\n{self.output}"
+            )
+
+    def stop(self, signum: int = signal.SIGINT) -> int:
+        """Send ``signum`` unless the process has ended, wait for it; its exit code."""
+        if self.process.poll() is None:
+            self.process.send_signal(signum)
+        try:
+            code = self.process.wait(timeout=WAIT)
+        except subprocess.TimeoutExpired as late:
+            self.process.kill()
+            self.process.wait(timeout=WAIT)
+            ended = f"the process did not end within {WAIT:g} s of signal {signum}"
+            raise AssertionError(f"{ended}:\n{self.output}") from late
+        self._reader.join(timeout=WAIT)
+        return code

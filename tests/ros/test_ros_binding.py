@@ -16,7 +16,7 @@ import pytest
 from rclpy.action import ActionClient
 from rmf_task_msgs.action import DynamicEvent
 from rmf_task_msgs.msg import DynamicEventStatus
-from ros_support import WAIT, Graph, wait_for
+from ros_support import WAIT, Child, Graph, wait_for
 
 from dynevent import client as cl
 from dynevent.machine import ServerConfig, accept_any
@@ -449,20 +449,12 @@ def test_a_plain_one_shot_client_drives_a_whole_run(graph: Graph, robot: Robot) 
 
 @pytest.mark.spec("R6.4", "R7.1", "R8.2", "R11.1", "R15.1")
 def test_the_documented_adapter_serves_a_client_in_another_process(graph: Graph) -> None:
-    import os
-    import subprocess
-    import sys
     from pathlib import Path
 
     example = Path(__file__).resolve().parents[2] / "docs" / "examples" / "ros_adapter.py"
-    process = subprocess.Popen(
-        [sys.executable, str(example), "--robot", ROBOT, "--robot", "tinyRobot2", "--seconds", "60"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-        env=os.environ.copy(),
-    )
+    adapter = Child([str(example), "--robot", ROBOT, "--robot", "tinyRobot2", "--seconds", "60"])
     try:
+        adapter.wait_line("ready")
         client = _client(graph)
         other: DynamicEventClient = graph.node(
             "other", lambda node: DynamicEventClient(node, FLEET, "tinyRobot2")
@@ -476,10 +468,11 @@ def test_the_documented_adapter_serves_a_client_in_another_process(graph: Graph)
         refused = client.next("go_to_place", "42").wait(WAIT)  # JSON, not a place: the server refuses it
         assert isinstance(refused, cl.Outcome) and refused.kind is cl.OutcomeKind.REJECTED
         assert _outcome(client.finish()).kind is cl.OutcomeKind.COMPLETED
+    except AssertionError as failure:
+        raise AssertionError(f"{failure}\n--- the adapter printed:\n{adapter.output}") from failure
     finally:
-        process.send_signal(2)
-        output, _ = process.communicate(timeout=WAIT)
-    assert process.returncode == 0, output
+        code = adapter.stop()
+    assert code == 0, adapter.output
 
 
 # --------------------------------------------------------------------------- §16: the description service

@@ -7,51 +7,31 @@ import os
 import signal
 import subprocess
 import sys
-import threading
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
-from ros_support import WAIT, Graph, wait_for
+from ros_support import START, Child, Graph, wait_for
 
 from dynevent.ros import DynamicEventClient
 
 ROBOT = "serveRobot"
 
 
-class Serve:
+class Serve(Child):
     """A ``dynevent serve`` process and its live log."""
 
     def __init__(self, *args: str) -> None:
         import tempfile
 
         self.tmp = tempfile.mkdtemp(prefix="dynevent-serve-")
-        self.lines: list[str] = []
-        self.process = subprocess.Popen(
-            [sys.executable, "-m", "dynevent", "serve", "--robot", ROBOT, "--rebegin", "0", *args],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-            env=os.environ.copy(),
-        )
-        self._reader = threading.Thread(target=self._read, daemon=True)
-        self._reader.start()
+        super().__init__(["-m", "dynevent", "serve", "--robot", ROBOT, "--rebegin", "0", *args])
 
-    def _read(self) -> None:
-        assert self.process.stdout is not None
-        for line in self.process.stdout:
-            self.lines.append(line.rstrip("\n"))
-
-    def saw(self, text: str) -> bool:
-        return any(text in line for line in self.lines)
-
-    def stop(self, signum: int = signal.SIGINT) -> int:
-        if self.process.poll() is None:
-            self.process.send_signal(signum)
-        code = self.process.wait(timeout=WAIT)
-        self._reader.join(timeout=WAIT)
-        return code
+    def ready(self) -> Serve:
+        """Wait (bounded) for the line serve prints once its robots are on the graph."""
+        self.wait_line("serving ")
+        return self
 
 
 def send(*args: str, timeout: float = 20.0) -> subprocess.CompletedProcess[str]:
@@ -83,7 +63,7 @@ def test_serve_and_send_survive_kill_9_in_the_middle_of_a_child(tmp_path: Path, 
         encoding="utf-8",
     )
     state = tmp_path / "state.db"
-    serve = Serve("--config", str(config), "--state", str(state))
+    serve = Serve("--config", str(config), "--state", str(state)).ready()
     try:
         done = send("--place", "pantry")
         assert done.returncode == 0, done.stdout + done.stderr
@@ -115,7 +95,7 @@ def test_serve_and_send_survive_kill_9_in_the_middle_of_a_child(tmp_path: Path, 
         serve.process.send_signal(signal.SIGKILL)
         assert serve.stop() == -signal.SIGKILL
         assert slow.wait(timeout=30) == 1  # its server died: no answer within its bound
-        serve = Serve("--config", str(config), "--state", str(state))
+        serve = Serve("--config", str(config), "--state", str(state)).ready()
         wait_for(lambda: serve.saw("restored: run 1, last id 3"), "the restore")
         wait_for(lambda: watcher.state.phase == 1 and watcher.state.current_id == 3, "WAITING id 3 again")
         assert watcher.state.seq == 1  # the same run goes on
@@ -126,14 +106,14 @@ def test_serve_and_send_survive_kill_9_in_the_middle_of_a_child(tmp_path: Path, 
         assert ended.returncode == 0, ended.stdout
     finally:
         code = serve.stop()
-    assert code == 0, "\n".join(serve.lines)
+    assert code == 0, serve.output
 
 
 def test_a_foreign_state_file_is_refused_and_left_as_it_was(tmp_path: Path) -> None:
     state = tmp_path / "state.db"
     state.write_bytes(b"not a database" * 100)
     serve = Serve("--state", str(state), "--seconds", "5")
-    assert serve.process.wait(timeout=WAIT) == 2
+    assert serve.process.wait(timeout=START) == 2
     serve.stop()
     assert any("is not a dynevent state store" in line for line in serve.lines), serve.lines
     assert not any("Traceback" in line for line in serve.lines)
@@ -142,7 +122,7 @@ def test_a_foreign_state_file_is_refused_and_left_as_it_was(tmp_path: Path) -> N
 
 @pytest.mark.spec("R4.13")
 def test_send_explains_and_exits_by_the_outcome(watcher: Any) -> None:
-    serve = Serve()
+    serve = Serve().ready()
     try:
         wait_for(lambda: watcher.state.phase == 1, "WAITING")
         idle = send("--cancel")
@@ -161,7 +141,8 @@ def test_send_explains_and_exits_by_the_outcome(watcher: Any) -> None:
         assert missing.returncode == 2 and "no Dynamic Event server" in missing.stdout
         assert "Traceback" not in missing.stderr
     finally:
-        assert serve.stop() == 0
+        code = serve.stop()
+    assert code == 0, serve.output
 
 
 @pytest.mark.spec("R3.1", "R4.7")
@@ -173,7 +154,7 @@ def test_serve_begins_on_command_and_send_explains_a_refusal_it_cannot_see(
     from dynevent.ros.serve import BEGIN_COMMAND_TOPIC
     from dynevent.ros.server import latched
 
-    serve = Serve()
+    serve = Serve().ready()
     try:
         wait_for(lambda: watcher.state.phase == 1, "WAITING")
         assert send("--end").returncode == 0
@@ -191,7 +172,8 @@ def test_serve_begins_on_command_and_send_explains_a_refusal_it_cannot_see(
         assert "outcome: rejected" in refused.stdout
         assert "does not support this category" in refused.stdout
     finally:
-        assert serve.stop() == 0
+        code = serve.stop()
+    assert code == 0, serve.output
 
 
 def _write(folder: Path, text: str) -> Path:
@@ -205,20 +187,8 @@ def test_serve_runs_children_of_several_robots_at_once(graph: Graph) -> None:
     """Robots number their children alike (each run's ids start at its own id): one robot's child
     must never stop another's."""
     robots = ("twinA", "twinB", "twinC")
-    process = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "dynevent",
-            "serve",
-            "--rebegin",
-            "0",
-            *[f"--robot={robot}" for robot in robots],
-        ],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-        env=os.environ.copy(),
-    )
+    serve = Child(["-m", "dynevent", "serve", "--rebegin", "0", *[f"--robot={robot}" for robot in robots]])
+    serve.wait_line("serving ")
     try:
         sends = [
             subprocess.Popen(
@@ -246,5 +216,5 @@ def test_serve_runs_children_of_several_robots_at_once(graph: Graph) -> None:
             assert send_process.returncode == 0, output
             assert "outcome: completed" in output
     finally:
-        process.send_signal(signal.SIGINT)
-        assert process.wait(timeout=WAIT) == 0
+        code = serve.stop()
+    assert code == 0, serve.output
