@@ -55,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
         with trace.open("w", encoding="utf-8") as out:
             out.writelines(cycle_lines(cycles))
         size = trace.stat().st_size
-        _, floor_kib, _ = _run([sys.executable, "-c", "import dynevent.check"])
+        _, floor_kib, _ = _run([sys.executable, "-c", "import dynevent.tools.check"])
         wall, peak_kib, output = _run([sys.executable, "-m", "dynevent", "check", str(trace)])
     records = int(output.rsplit(":", 1)[1].split()[0].replace(",", ""))
     lines = [
@@ -68,7 +68,7 @@ def main(argv: list[str] | None = None) -> int:
         "",
         f"- {wall:.1f} s: **{records / wall:,.0f} records/s** (target: at least 40,000)",
         f"- peak resident memory: **{peak_kib / 1024:.1f} MB** (target: under 60 MB for 100 MB); "
-        f"a process that only imports dynevent.check: {floor_kib / 1024:.1f} MB",
+        f"a process that only imports dynevent.tools.check: {floor_kib / 1024:.1f} MB",
     ]
     print("\n".join(lines))
     if args.write:

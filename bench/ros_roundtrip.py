@@ -54,7 +54,7 @@ kind, fleet, robot = sys.argv[1:4]
 rclpy.init()
 node = rclpy.create_node("bench_server_" + kind)
 if kind == "dynevent":
-    from dynevent.machine import ServerConfig, accept_any
+    from dynevent.server.machine import ServerConfig, accept_any
     from dynevent.ros import DynamicEventServer
 
     class Children:

@@ -55,11 +55,11 @@ from bench.peers.script import (  # noqa: E402
     uuid,
     whole_event,
 )
-from dynevent import inputs as ins  # noqa: E402
-from dynevent import machine, snapshot  # noqa: E402
-from dynevent.fleet import Fleet  # noqa: E402
-from dynevent.machine import ServerConfig, State, accept_any  # noqa: E402
-from dynevent.names import action_name  # noqa: E402
+from dynevent.server import inputs as ins  # noqa: E402
+from dynevent.server import machine, snapshot  # noqa: E402
+from dynevent.server.fleet import Fleet  # noqa: E402
+from dynevent.server.machine import ServerConfig, State, accept_any  # noqa: E402
+from dynevent.wire.names import action_name  # noqa: E402
 
 IMPLEMENTATIONS = ("dynevent", "floor", "transitions", "statemachine")
 PEERS = ("floor", "transitions", "statemachine")

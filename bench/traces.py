@@ -9,10 +9,11 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from dynevent import _json, machine
-from dynevent import inputs as ins
-from dynevent.check import step_records
-from dynevent.messages import Goal
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.tools.check import step_records
+from dynevent.wire import _json
+from dynevent.wire.messages import Goal
 
 FLEET, ROBOT = "tinyRobot", "tinyRobot1"
 CONFIG = {

@@ -24,16 +24,18 @@ from typing import Any
 
 import attrs
 
-from dynevent import cli, driver, machine, snapshot, vectors
 from dynevent import client as cl
-from dynevent import inputs as ins
-from dynevent.check import check_trace
-from dynevent.description import EventDescription, EventSpec
-from dynevent.fleet import Fleet
-from dynevent.messages import MESSAGE_TYPES
-from dynevent.names import action_name, parse_name, validate_token
-from dynevent.records import config_from_json, input_from_json, output_from_json, rule_validator
-from dynevent.store import StateStore
+from dynevent.conformance import driver, vectors
+from dynevent.conformance.records import config_from_json, input_from_json, output_from_json, rule_validator
+from dynevent.server import inputs as ins
+from dynevent.server import machine, snapshot
+from dynevent.server.fleet import Fleet
+from dynevent.server.store import StateStore
+from dynevent.tools import cli
+from dynevent.tools.check import check_trace
+from dynevent.wire.description import EventDescription, EventSpec
+from dynevent.wire.messages import MESSAGE_TYPES
+from dynevent.wire.names import action_name, parse_name, validate_token
 
 from . import mutate
 
@@ -328,7 +330,7 @@ def _client_request(value: Any) -> object:
 
 
 def _status(data: Any) -> Any:
-    from dynevent.messages import DynamicEventStatus
+    from dynevent.wire.messages import DynamicEventStatus
 
     return DynamicEventStatus.from_dict(data)
 

@@ -16,7 +16,7 @@ import json
 import sys
 from typing import Any
 
-from dynevent.driver import Driver
+from dynevent.conformance.driver import Driver
 
 
 class BrokenDriver(Driver):

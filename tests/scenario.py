@@ -22,11 +22,11 @@ from typing import Any
 
 import attrs
 
-from dynevent import inputs as ins
-from dynevent import outputs as outs
-from dynevent.machine import ServerConfig, State, Validator, accept, accept_any, step
-from dynevent.messages import DynamicEventStatus, Feedback, Goal, LogEntry, Result, Time
-from dynevent.vocab import DynamicState, EventType, GoalStatus, RejectReason
+from dynevent.server import inputs as ins
+from dynevent.server import outputs as outs
+from dynevent.server.machine import ServerConfig, State, Validator, accept, accept_any, step
+from dynevent.wire.messages import DynamicEventStatus, Feedback, Goal, LogEntry, Result, Time
+from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReason
 
 FLEET = "tinyRobot"
 ROBOT = "r1"

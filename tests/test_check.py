@@ -12,10 +12,11 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from dynevent import _json, machine
-from dynevent import inputs as ins
-from dynevent.check import Report, TraceError, check_trace, read_trace, step_records
-from dynevent.messages import Goal
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.tools.check import Report, TraceError, check_trace, read_trace, step_records
+from dynevent.wire import _json
+from dynevent.wire.messages import Goal
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "docs" / "examples"
@@ -510,7 +511,7 @@ def test_check_reads_a_trace_as_a_stream_holding_a_few_records(monkeypatch: pyte
     import sys
     from pathlib import Path
 
-    from dynevent import check
+    from dynevent.tools import check
 
     root = str(Path(__file__).resolve().parents[1])
     if root not in sys.path:

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import pytest
 
-from dynevent import cli
-from dynevent.diagram import render
+from dynevent.tools import cli
+from dynevent.tools.diagram import render
 
 ROOT = Path(__file__).resolve().parents[1]
 CLI_DOC = ROOT / "docs" / "cli.md"
@@ -256,7 +256,7 @@ def test_a_reader_that_goes_away_stops_the_command_quietly(args: list[str]) -> N
 
 def test_the_driver_stops_quietly_when_its_runner_goes_away() -> None:
     process = subprocess.Popen(
-        [sys.executable, "-m", "dynevent.driver"],
+        [sys.executable, "-m", "dynevent.conformance.driver"],
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -297,10 +297,10 @@ def test_the_testing_kit_without_hypothesis_names_the_extra() -> None:
 def test_help_imports_no_protocol_module() -> None:
     """``dynevent --help`` stays quick: the command line imports a command's module only to run it."""
     probe = (
-        "import sys; from dynevent import cli\n"
+        "import sys; from dynevent.tools import cli\n"
         "try:\n    cli.main(['--help'])\nexcept SystemExit:\n    pass\n"
-        "heavy = sorted(m for m in sys.modules if m.split('.')[:2] in (['dynevent', 'machine'], "
-        "['dynevent', 'check'], ['dynevent', 'vectors'], ['dynevent', 'explain'], ['dynevent', 'demo']))\n"
+        "heavy = sorted(m for m in sys.modules if m.startswith(('dynevent.server', 'dynevent.client', "
+        "'dynevent.conformance', 'dynevent.tools.check', 'dynevent.tools.explain', 'dynevent.tools.demo')))\n"
         "print('HEAVY', heavy, 'attrs' in sys.modules)\n"
     )
     done = subprocess.run(

@@ -11,9 +11,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from dynevent import client, machine
-from dynevent import inputs as ins
-from dynevent import outputs as outs
+from dynevent import client
 from dynevent.client import (
     SECOND,
     BeginReceived,
@@ -36,9 +34,12 @@ from dynevent.client import (
     ViewChanged,
 )
 from dynevent.errors import InvalidMessage
-from dynevent.messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.server import outputs as outs
 from dynevent.testing.strategies import messages
-from dynevent.vocab import DynamicState, EventType, GoalStatus, RejectReason, Status
+from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
+from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReason, Status
 
 PREFIX = "00000000000000ab"
 U32 = 2**32 - 1

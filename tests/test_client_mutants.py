@@ -1,4 +1,4 @@
-"""Tests that kill the mutants mutmut made of src/dynevent/client.py (see docs/testing.md).
+"""Tests that kill the mutants mutmut made of src/dynevent/client/machine.py (see docs/testing.md).
 
 They pin what tests/test_client.py left loose: the edge checks and their
 errors, keyword-only construction, the ``KIND`` names that traces record, the
@@ -16,9 +16,7 @@ from typing import Any
 
 import pytest
 
-from dynevent import client, machine
-from dynevent import inputs as ins
-from dynevent import outputs as outs
+from dynevent import client
 from dynevent.client import (
     SECOND,
     BeginReceived,
@@ -43,9 +41,12 @@ from dynevent.client import (
     ViewChanged,
 )
 from dynevent.errors import InvalidMessage
-from dynevent.inputs import NOW_RANGE
-from dynevent.messages import DynamicEventStatus, Feedback, Goal, Result
-from dynevent.vocab import EventType, GoalStatus, RejectReason
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.server import outputs as outs
+from dynevent.server.inputs import NOW_RANGE
+from dynevent.wire.messages import DynamicEventStatus, Feedback, Goal, Result
+from dynevent.wire.vocab import EventType, GoalStatus, RejectReason
 from test_client import (  # the client tests' own builders
     INACTIVE,
     PREFIX,

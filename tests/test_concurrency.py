@@ -15,12 +15,12 @@ from typing import Any
 
 import pytest
 
-from dynevent import inputs as ins
-from dynevent import outputs as outs
-from dynevent.machine import ServerConfig
-from dynevent.messages import Goal
-from dynevent.server import LockedRobotServer, RobotServer
-from dynevent.vocab import EventType
+from dynevent.server import inputs as ins
+from dynevent.server import outputs as outs
+from dynevent.server.holder import LockedRobotServer, RobotServer
+from dynevent.server.machine import ServerConfig
+from dynevent.wire.messages import Goal
+from dynevent.wire.vocab import EventType
 
 THREADS = 6
 GOALS_PER_THREAD = 25

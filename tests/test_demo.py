@@ -6,7 +6,7 @@ import re
 
 import pytest
 
-from dynevent import demo
+from dynevent.tools import demo
 
 SEEDS = range(8)
 

@@ -1,4 +1,4 @@
-"""Tests of dynevent.description: the ``dynamic_event`` event description."""
+"""Tests of dynevent.wire.description: the ``dynamic_event`` event description."""
 
 from __future__ import annotations
 
@@ -11,15 +11,15 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from dynevent._json import MAX_DEPTH, dumps
-from dynevent.description import (
+from dynevent.errors import InvalidDescription
+from dynevent.wire._json import MAX_DEPTH, dumps
+from dynevent.wire.description import (
     DEFAULT_CATEGORY,
     MAX_DESCRIPTION_BYTES,
     EventDescription,
     EventSpec,
     JsonValue,
 )
-from dynevent.errors import InvalidDescription
 
 pytestmark = pytest.mark.spec("R1.5")
 
@@ -544,7 +544,7 @@ def is_spec(value: Any) -> bool:
 
 
 def is_valid(obj: dict[str, Any]) -> bool:
-    """The reading rules, written independently of dynevent.description."""
+    """The reading rules, written independently of dynevent.wire.description."""
     return (
         ("estimate" not in obj or is_spec(obj["estimate"]))
         and (

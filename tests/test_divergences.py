@@ -19,10 +19,10 @@ from pathlib import Path
 import attrs
 import pytest
 
-from dynevent import outputs as outs
-from dynevent.machine import ServerConfig, State, status_message
-from dynevent.messages import DescriptionResponse
-from dynevent.vocab import Compatibility, IdPolicy, RejectReason
+from dynevent.server import outputs as outs
+from dynevent.server.machine import ServerConfig, State, status_message
+from dynevent.wire.messages import DescriptionResponse
+from dynevent.wire.vocab import Compatibility, IdPolicy, RejectReason
 from scenario import (
     ABORTED,
     ANY_TEXT,
@@ -501,7 +501,7 @@ def test_the_begin_description_is_published_as_given() -> None:
 
 @pytest.mark.spec("R1.4", "R2.2")
 def test_a_fresh_server_has_a_status_to_publish_and_the_topics_their_depths() -> None:
-    from dynevent.names import BEGIN_TOPIC_DEPTH, ROBOT_BEGIN_TOPIC_DEPTH, STATUS_TOPIC_DEPTH
+    from dynevent.wire.names import BEGIN_TOPIC_DEPTH, ROBOT_BEGIN_TOPIC_DEPTH, STATUS_TOPIC_DEPTH
 
     message = status_message(State.new(FLEET, ROBOT), T0)
     assert (message.dynamic_event_seq, message.dynamic_state, message.status, message.id) == (
@@ -515,7 +515,7 @@ def test_a_fresh_server_has_a_status_to_publish_and_the_topics_their_depths() ->
 
 @pytest.mark.spec("R5.3", "R5.1", "R19.1")
 def test_a_lost_race_is_executed_once_then_answered() -> None:
-    from dynevent import inputs as ins
+    from dynevent.server import inputs as ins
 
     run = running(child_id=5, uuid=u(1))
     outputs = run.step(ins.GoalSubmitted(goal_uuid=u(2), goal=next_goal(run.seq, 6), now=T0))
@@ -553,7 +553,7 @@ def test_a_task_signal_is_told_and_a_kill_stays_a_kill() -> None:
 
 @pytest.mark.spec("R12.5", "R21.2")
 def test_stubbornness_always_ends_with_stubborn_end() -> None:
-    from dynevent import inputs as ins
+    from dynevent.server import inputs as ins
 
     for end in ("next", "finished", "signal", "shutdown", "restart"):
         run = running(child_id=5, uuid=u(1), stubborn=3.0)
@@ -575,8 +575,8 @@ def test_stubbornness_always_ends_with_stubborn_end() -> None:
 
 @pytest.mark.spec("R21.1", "R21.3")
 def test_a_restored_state_goes_on_with_its_run() -> None:
-    from dynevent import inputs as ins
-    from dynevent import snapshot
+    from dynevent.server import inputs as ins
+    from dynevent.server import snapshot
 
     run = running(child_id=5, uuid=u(1))
     restored = Run(CONFIG, snapshot.loads(snapshot.dumps(run.state)))

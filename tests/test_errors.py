@@ -12,11 +12,11 @@ import dynevent
 from dynevent import errors
 
 OLD_HOMES = {
-    "dynevent.check": ["TraceError"],
-    "dynevent.records": ["InvalidRecord"],
-    "dynevent.store": ["InvalidStore"],
-    "dynevent.vectors": ["InvalidVector", "ImplementationError"],
-    "dynevent.fleet": ["UnknownRobot", "DuplicateRobot"],
+    "dynevent.tools.check": ["TraceError"],
+    "dynevent.conformance.records": ["InvalidRecord"],
+    "dynevent.server.store": ["InvalidStore"],
+    "dynevent.conformance.vectors": ["InvalidVector", "ImplementationError"],
+    "dynevent.server.fleet": ["UnknownRobot", "DuplicateRobot"],
 }
 
 

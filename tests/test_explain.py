@@ -9,12 +9,13 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from dynevent import cli, machine
-from dynevent import outputs as outs
-from dynevent.explain import UNKNOWN_GOAL, explain, format_explanation, state_from_status
-from dynevent.messages import DynamicEventStatus, Goal
+from dynevent.server import machine
+from dynevent.server import outputs as outs
 from dynevent.testing.strategies import messages
-from dynevent.vocab import DynamicState, EventType, RejectReason
+from dynevent.tools import cli
+from dynevent.tools.explain import UNKNOWN_GOAL, explain, format_explanation, state_from_status
+from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.vocab import DynamicState, EventType, RejectReason
 
 INACTIVE = DynamicEventStatus(dynamic_event_seq=3, dynamic_state=0, status="uninitialized", id=0)
 WAITING = DynamicEventStatus(dynamic_event_seq=3, dynamic_state=1, status="standby", id=5)

@@ -13,15 +13,15 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from dynevent import inputs as ins
-from dynevent import machine, snapshot
 from dynevent.errors import DyneventError, InvalidName, InvalidSnapshot
-from dynevent.fleet import FORMAT, VERSION, DuplicateRobot, Fleet, RobotKey, Routed, UnknownRobot
-from dynevent.machine import ServerConfig, State, accept_any
-from dynevent.messages import Goal
-from dynevent.names import BEGIN_TOPIC, NameKind, build_name, parse_name
-from dynevent.outputs import Accepted, GoalAccepted, GoalRejected, Rejected, StartChild
-from dynevent.vocab import EventType, RejectReason
+from dynevent.server import inputs as ins
+from dynevent.server import machine, snapshot
+from dynevent.server.fleet import FORMAT, VERSION, DuplicateRobot, Fleet, RobotKey, Routed, UnknownRobot
+from dynevent.server.machine import ServerConfig, State, accept_any
+from dynevent.server.outputs import Accepted, GoalAccepted, GoalRejected, Rejected, StartChild
+from dynevent.wire.messages import Goal
+from dynevent.wire.names import BEGIN_TOPIC, NameKind, build_name, parse_name
+from dynevent.wire.vocab import EventType, RejectReason
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "fleet.md"
 DOC_BLOCKS = re.findall(r"```python\n(.*?)```", DOC.read_text(encoding="utf-8"), flags=re.DOTALL)
@@ -457,7 +457,7 @@ def test_the_snapshot_document_is_one_json_object_of_robot_snapshots() -> None:
     fleet = _fleet()
     fleet.step("alpha", "r1", _begin())
     document = json.loads(fleet.dumps())
-    assert document["format"] == FORMAT == "dynevent.fleet"
+    assert document["format"] == FORMAT == "dynevent.server.fleet"
     assert document["version"] == VERSION == 1
     assert document["robots"] == [snapshot.snapshot(state) for _, state in fleet.items()]
     assert fleet.snapshot() == document
@@ -518,7 +518,7 @@ _DELETE = object()
         (("extra",), [], "$"),
         (("robots", 1), [], "$.robots[1]"),
         (("robots", 1, "version"), 9, "$.robots[1].version"),
-        (("robots", 1, "format"), "dynevent.fleet", "$.robots[1].format"),
+        (("robots", 1, "format"), "dynevent.server.fleet", "$.robots[1].format"),
         (("robots", 1, "state", "seq"), -1, "$.robots[1].state.seq"),
         (("robots", 1, "state", "status"), "lost", "$.robots[1].state.status"),
         (("robots", 2, "state", "robot"), "r 1", "$.robots[2].state.robot"),
@@ -538,7 +538,14 @@ def test_corrupt_documents_are_refused_with_a_path(path: Sequence[Any], value: A
 
 @pytest.mark.parametrize(
     "document",
-    [None, [], "dynevent.fleet", 1, {"format": "dynevent.fleet"}, snapshot.snapshot(State.new("a", "b"))],
+    [
+        None,
+        [],
+        "dynevent.server.fleet",
+        1,
+        {"format": "dynevent.server.fleet"},
+        snapshot.snapshot(State.new("a", "b")),
+    ],
 )
 def test_what_is_not_a_fleet_snapshot_is_refused(document: Any) -> None:
     with pytest.raises(InvalidSnapshot):
@@ -546,7 +553,8 @@ def test_what_is_not_a_fleet_snapshot_is_refused(document: Any) -> None:
 
 
 @pytest.mark.parametrize(
-    "text", ["", "{", '{"format": "dynevent.fleet", "format": "x"}', b"\xff\xfe", "[" * 100 + "]" * 100]
+    "text",
+    ["", "{", '{"format": "dynevent.server.fleet", "format": "x"}', b"\xff\xfe", "[" * 100 + "]" * 100],
 )
 def test_text_that_is_not_json_is_refused(text: str | bytes) -> None:
     with pytest.raises(InvalidSnapshot) as caught:

@@ -21,17 +21,17 @@ from typing import Any
 import pytest
 from hypothesis import given
 
-from dynevent import inputs as ins
-from dynevent import machine, snapshot
-from dynevent.description import MAX_DESCRIPTION_BYTES, EventDescription
-from dynevent.driver import Driver
+from dynevent.conformance.driver import Driver
+from dynevent.conformance.records import InvalidRecord, config_from_json, input_from_json, output_from_json
+from dynevent.conformance.vectors import InvalidVector, parse_vector_file
 from dynevent.errors import DyneventError, InvalidDescription, InvalidMessage, InvalidSnapshot
-from dynevent.fleet import Fleet
-from dynevent.messages import MESSAGE_TYPES, Goal
-from dynevent.records import InvalidRecord, config_from_json, input_from_json, output_from_json
+from dynevent.server import inputs as ins
+from dynevent.server import machine, snapshot
+from dynevent.server.fleet import Fleet
 from dynevent.testing.strategies import hostile_json_values
-from dynevent.vectors import InvalidVector, parse_vector_file
-from dynevent.vocab import EventType, RejectReason
+from dynevent.wire.description import MAX_DESCRIPTION_BYTES, EventDescription
+from dynevent.wire.messages import MESSAGE_TYPES, Goal
+from dynevent.wire.vocab import EventType, RejectReason
 
 TEN_MB = "x" * 10_000_000
 DEEP = "[" * 100_000 + "]" * 100_000
@@ -213,7 +213,7 @@ def test_a_store_whose_schema_text_is_not_utf8_is_refused(tmp_path: Any) -> None
     import shutil
     from pathlib import Path
 
-    from dynevent.store import InvalidStore, StateStore
+    from dynevent.server.store import InvalidStore, StateStore
 
     path = tmp_path / "state.db"
     shutil.copy(Path(__file__).parent / "data" / "store-non-utf8-schema.db", path)
@@ -222,7 +222,7 @@ def test_a_store_whose_schema_text_is_not_utf8_is_refused(tmp_path: Any) -> None
 
 
 def test_a_trace_time_of_a_huge_integer_is_a_located_error() -> None:
-    from dynevent.check import TraceError, check_trace
+    from dynevent.tools.check import TraceError, check_trace
 
     with pytest.raises(TraceError, match="time"):
         check_trace('{"type": "status", "time": ' + "9" * 400 + ', "message": {}}')
@@ -230,7 +230,7 @@ def test_a_trace_time_of_a_huge_integer_is_a_located_error() -> None:
 
 @pytest.mark.parametrize("status", ['{"a": 1}', '["succeeded"]'])
 def test_a_result_record_status_of_the_wrong_json_type_is_a_located_error(status: str) -> None:
-    from dynevent.check import TraceError, check_trace
+    from dynevent.tools.check import TraceError, check_trace
 
     line = (
         '{"type": "result", "time": 1, "goal_uuid": "'

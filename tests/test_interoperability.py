@@ -11,13 +11,13 @@ from __future__ import annotations
 import attrs
 import pytest
 
-from dynevent import _json
-from dynevent import inputs as ins
-from dynevent import outputs as outs
 from dynevent.errors import InvalidConfig
-from dynevent.machine import ServerConfig, State, accept_any, status_message, step
-from dynevent.messages import DynamicEventStatus, Goal
-from dynevent.vocab import DynamicState, EventType, GoalStatus, RejectReason
+from dynevent.server import inputs as ins
+from dynevent.server import outputs as outs
+from dynevent.server.machine import ServerConfig, State, accept_any, status_message, step
+from dynevent.wire import _json
+from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReason
 from scenario import CONFIG, RMF_ROS2, next_goal, running, s, u, waiting
 
 

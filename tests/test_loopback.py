@@ -12,13 +12,14 @@ from hypothesis import event, given
 from hypothesis import strategies as st
 from hypothesis.control import currently_in_test_context
 
-from dynevent import client, machine
-from dynevent import inputs as ins
-from dynevent import outputs as outs
+from dynevent import client
 from dynevent.client import SECOND, ClientState, Outcome, OutcomeKind, Refused, SendGoal
-from dynevent.loopback import Adapter, ChildScript, Loopback, Options, format_timeline, timeline_jsonl
-from dynevent.messages import Goal
-from dynevent.vocab import Compatibility, DynamicState, EventType, IdPolicy, RejectReason, Status
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.server import outputs as outs
+from dynevent.tools.loopback import Adapter, ChildScript, Loopback, Options, format_timeline, timeline_jsonl
+from dynevent.wire.messages import Goal
+from dynevent.wire.vocab import Compatibility, DynamicState, EventType, IdPolicy, RejectReason, Status
 
 PREFIX = "0123456789abcdef"
 U32 = 2**32 - 1

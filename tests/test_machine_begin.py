@@ -6,10 +6,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from dynevent import outputs as outs
-from dynevent.machine import State, status_message
-from dynevent.messages import DynamicEventDescription, DynamicEventStatus, Time
-from dynevent.vocab import RejectReason
+from dynevent.server import outputs as outs
+from dynevent.server.machine import State, status_message
+from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Time
+from dynevent.wire.vocab import RejectReason
 from scenario import (
     DESC,
     FLEET,

@@ -5,8 +5,8 @@ from __future__ import annotations
 import attrs
 import pytest
 
-from dynevent import outputs as outs
-from dynevent.machine import QueuedGoal
+from dynevent.server import outputs as outs
+from dynevent.server.machine import QueuedGoal
 from scenario import (
     ABORTED,
     CANCEL_ID,

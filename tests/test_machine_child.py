@@ -6,9 +6,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from dynevent import inputs as ins
-from dynevent import outputs as outs
-from dynevent.vocab import GoalStatus, Status
+from dynevent.server import inputs as ins
+from dynevent.server import outputs as outs
+from dynevent.wire.vocab import GoalStatus, Status
 from scenario import (
     ABORTED,
     ANY_TEXT,

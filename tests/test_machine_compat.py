@@ -7,9 +7,9 @@ import math
 import attrs
 import pytest
 
-from dynevent import outputs as outs
-from dynevent.machine import ServerConfig
-from dynevent.vocab import Compatibility, IdPolicy, RejectReason
+from dynevent.server import outputs as outs
+from dynevent.server.machine import ServerConfig
+from dynevent.wire.vocab import Compatibility, IdPolicy, RejectReason
 from scenario import (
     CANCEL_ID,
     CATEGORIES,

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from dynevent import outputs as outs
-from dynevent.messages import DescriptionResponse
+from dynevent.server import outputs as outs
+from dynevent.wire.messages import DescriptionResponse
 from scenario import (
     DESC,
     INACTIVE,

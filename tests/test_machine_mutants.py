@@ -1,4 +1,4 @@
-"""Tests that kill the mutants mutmut made of src/dynevent/machine.py (see docs/testing.md).
+"""Tests that kill the mutants mutmut made of src/dynevent/server/machine.py (see docs/testing.md).
 
 Each test pins a behaviour the scenario tests left loose: the configuration's
 validation errors, keyword-only construction, the initial state, the exact
@@ -21,12 +21,11 @@ from typing import Any
 import attrs
 import pytest
 
-from dynevent import inputs as ins
-from dynevent import machine
-from dynevent import outputs as outs
-from dynevent.diagram import render
 from dynevent.errors import InvalidConfig, InvalidName
-from dynevent.machine import (
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.server import outputs as outs
+from dynevent.server.machine import (
     Position,
     QueuedGoal,
     RunningGoal,
@@ -37,7 +36,8 @@ from dynevent.machine import (
     accept_any,
     allowed_targets,
 )
-from dynevent.vocab import DynamicState, IdPolicy, RejectReason
+from dynevent.tools.diagram import render
+from dynevent.wire.vocab import DynamicState, IdPolicy, RejectReason
 from scenario import (
     CONFIG,
     FLEET,

@@ -20,12 +20,12 @@ from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import run_state_machine_as_test
 
-from dynevent import _json, machine, snapshot
-from dynevent import inputs as ins
-from dynevent import outputs as outs
-from dynevent.machine import QueuedGoal, ServerConfig, State, accept_any
-from dynevent.messages import DynamicEventStatus, Goal
-from dynevent.records import config_from_json, output_to_json
+from dynevent.conformance.records import config_from_json, output_to_json
+from dynevent.conformance.vectors import InProcessImplementation
+from dynevent.server import inputs as ins
+from dynevent.server import machine, snapshot
+from dynevent.server import outputs as outs
+from dynevent.server.machine import QueuedGoal, ServerConfig, State, accept_any
 from dynevent.testing import (
     DEFAULT_CONFIG,
     DyneventServer,
@@ -37,8 +37,9 @@ from dynevent.testing import (
     input_sequences,
     server_state_machine,
 )
-from dynevent.vectors import InProcessImplementation
-from dynevent.vocab import Compatibility, DynamicState, EventType
+from dynevent.wire import _json
+from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.vocab import Compatibility, DynamicState, EventType
 
 SECOND = 1_000_000_000
 PROFILE = os.environ.get("DYNEVENT_HYPOTHESIS_PROFILE", "ci")

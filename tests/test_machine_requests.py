@@ -11,12 +11,12 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from dynevent import outputs as outs
-from dynevent.description import MAX_DESCRIPTION_BYTES, EventDescription
 from dynevent.errors import InvalidConfig, InvalidDescription
-from dynevent.machine import QueuedGoal, ServerConfig, accept_any
-from dynevent.messages import Goal
-from dynevent.vocab import EventType, IdPolicy, RejectReason
+from dynevent.server import outputs as outs
+from dynevent.server.machine import QueuedGoal, ServerConfig, accept_any
+from dynevent.wire.description import MAX_DESCRIPTION_BYTES, EventDescription
+from dynevent.wire.messages import Goal
+from dynevent.wire.vocab import EventType, IdPolicy, RejectReason
 from scenario import (
     ANY_TEXT,
     CANCEL_ID,

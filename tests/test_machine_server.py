@@ -1,4 +1,4 @@
-"""The mutable conveniences of dynevent.server: RobotServer, LockedRobotServer and Execution."""
+"""The mutable conveniences of dynevent.server.holder: RobotServer, LockedRobotServer and Execution."""
 
 from __future__ import annotations
 
@@ -6,11 +6,11 @@ from collections.abc import Callable
 
 import pytest
 
-from dynevent import inputs as ins
-from dynevent import outputs as outs
-from dynevent.machine import State
-from dynevent.server import Execution, LockedRobotServer, RobotServer
-from dynevent.vocab import RejectReason, Status
+from dynevent.server import inputs as ins
+from dynevent.server import outputs as outs
+from dynevent.server.holder import Execution, LockedRobotServer, RobotServer
+from dynevent.server.machine import State
+from dynevent.wire.vocab import RejectReason, Status
 from scenario import (
     ABORTED,
     CANCELED,

@@ -8,9 +8,9 @@ from typing import Any
 import attrs
 import pytest
 
-from dynevent import outputs as outs
-from dynevent.machine import RunningGoal, ServerConfig, accept_any
-from dynevent.vocab import IdPolicy
+from dynevent.server import outputs as outs
+from dynevent.server.machine import RunningGoal, ServerConfig, accept_any
+from dynevent.wire.vocab import IdPolicy
 from scenario import (
     ANY_TEXT,
     CONFIG,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from dynevent import outputs as outs
+from dynevent.server import outputs as outs
 from scenario import (
     ABORTED,
     CANCELED,

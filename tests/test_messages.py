@@ -12,10 +12,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from dynevent import messages as wire
 from dynevent.errors import DyneventError, InvalidMessage
 from dynevent.testing.strategies import hostile_json_values, messages, out_of_range_values, wire_dicts
-from dynevent.vocab import DynamicState, EventType, Tier
+from dynevent.wire import messages as wire
+from dynevent.wire.vocab import DynamicState, EventType, Tier
 
 ALL = wire.MESSAGE_TYPES
 

@@ -1,4 +1,4 @@
-"""Tests of dynevent.names: building and parsing the per-robot ROS 2 names."""
+"""Tests of dynevent.wire.names: building and parsing the per-robot ROS 2 names."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from dynevent.errors import InvalidName
-from dynevent.names import (
+from dynevent.wire.names import (
     BEGIN_TOPIC,
     MAX_NAME_LENGTH,
     NameKind,
@@ -298,7 +298,7 @@ tokens = st.one_of(
 
 
 def is_token(text: str) -> bool:
-    """The token rules, written independently of dynevent.names."""
+    """The token rules, written independently of dynevent.wire.names."""
     return (
         text != ""
         and all(c in ALNUM or c == "_" for c in text)
@@ -378,7 +378,7 @@ def test_any_text_is_a_name_or_invalid_name(text: str) -> None:
 def test_validate_robot_refuses_exactly_what_building_every_name_refuses(
     fleet_length: int, robot_length: int, odd: str
 ) -> None:
-    from dynevent.names import NameKind, build_name, validate_robot
+    from dynevent.wire.names import NameKind, build_name, validate_robot
 
     fleet, robot = "f" * fleet_length, "r" * (robot_length - 1) + odd
 

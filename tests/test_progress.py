@@ -9,7 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from dynevent._progress import Progress
+from dynevent.tools._progress import Progress
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -40,7 +40,7 @@ def test_readme_links_are_absolute_and_name_files_that_exist() -> None:
 
 
 def test_the_command_lines_links_and_the_package_urls_name_files_that_exist() -> None:
-    from dynevent import cli
+    from dynevent.tools import cli
 
     help_texts = "\n".join(
         cli_output(cli.main, [*command, "--help"]) for command in ([], ["check"], ["vectors"], ["diagram"])

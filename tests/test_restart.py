@@ -5,14 +5,14 @@ from __future__ import annotations
 import pytest
 from hypothesis import given
 
-from dynevent import inputs as ins
-from dynevent import machine, snapshot
-from dynevent import outputs as outs
-from dynevent.machine import State
-from dynevent.messages import Result
-from dynevent.records import config_from_json
+from dynevent.conformance.records import config_from_json
+from dynevent.server import inputs as ins
+from dynevent.server import machine, snapshot
+from dynevent.server import outputs as outs
+from dynevent.server.machine import State
 from dynevent.testing import DEFAULT_CONFIG, input_sequences
-from dynevent.vocab import DynamicState, GoalStatus
+from dynevent.wire.messages import Result
+from dynevent.wire.vocab import DynamicState, GoalStatus
 from scenario import T0, next_goal, u, waiting
 
 CONFIG = config_from_json(dict(DEFAULT_CONFIG))

@@ -14,12 +14,13 @@ from pathlib import Path
 
 import pytest
 
-from dynevent import machine, vectors
-from dynevent import outputs as outs
-from dynevent.driver import state_from_json
-from dynevent.messages import Goal, Result
-from dynevent.records import config_from_json, input_from_json, output_to_json
-from dynevent.vocab import Failure, GoalStatus, RejectReason
+from dynevent.conformance import vectors
+from dynevent.conformance.driver import state_from_json
+from dynevent.conformance.records import config_from_json, input_from_json, output_to_json
+from dynevent.server import machine
+from dynevent.server import outputs as outs
+from dynevent.wire.messages import Goal, Result
+from dynevent.wire.vocab import Failure, GoalStatus, RejectReason
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = (ROOT / "docs" / "spec.md").read_text(encoding="utf-8")
@@ -43,7 +44,7 @@ def _run(vector: vectors.Vector) -> list[tuple[object, outs.Output]]:
 
 
 def machine_kinds() -> set[str]:
-    from dynevent import inputs
+    from dynevent.server import inputs
 
     return set(inputs.INPUT_TYPES)
 
@@ -100,7 +101,7 @@ def test_the_rule_is_an_annotation_not_part_of_the_value() -> None:
 
 def _running(config: machine.ServerConfig) -> machine.State:
     state = machine.State.new("fleet", "robot")
-    from dynevent import inputs as ins
+    from dynevent.server import inputs as ins
 
     state = machine.step(state, ins.Begin(description="{}", event_id=1, now=1), config).state
     goal = Goal(dynamic_event_seq=1, event_type=1, category="go", description="{}", id=2)
@@ -110,7 +111,7 @@ def _running(config: machine.ServerConfig) -> machine.State:
 
 @pytest.mark.spec("R8.2", "R8.3", "R9.3")
 def test_the_running_goal_and_the_waiting_cancels_are_answered_under_their_own_rules() -> None:
-    from dynevent import inputs as ins
+    from dynevent.server import inputs as ins
 
     config = machine.ServerConfig(categories={"go": machine.accept_any})
     state = _running(config)

@@ -9,12 +9,12 @@ import attrs
 import pytest
 from hypothesis import given
 
-from dynevent import machine, snapshot
-from dynevent.driver import Driver
+from dynevent.conformance.driver import Driver
+from dynevent.conformance.records import config_from_json
 from dynevent.errors import InvalidSnapshot
-from dynevent.fleet import Fleet
-from dynevent.machine import State
-from dynevent.records import config_from_json
+from dynevent.server import machine, snapshot
+from dynevent.server.fleet import Fleet
+from dynevent.server.machine import State
 from dynevent.testing import DEFAULT_CONFIG, input_sequences
 from scenario import deferred, running, stubborn, waiting
 

@@ -14,10 +14,10 @@ from pathlib import Path
 import attrs
 import pytest
 
-from dynevent import inputs as ins
-from dynevent import machine, snapshot
-from dynevent.machine import State
-from dynevent.store import InvalidStore, StateStore
+from dynevent.server import inputs as ins
+from dynevent.server import machine, snapshot
+from dynevent.server.machine import State
+from dynevent.server.store import InvalidStore, StateStore
 from scenario import CONFIG, next_goal, running, u, waiting
 
 
@@ -48,9 +48,9 @@ def attrs_replace(state: State, **changes: object) -> State:
 
 WRITER = """
 import sys
-from dynevent import inputs as ins, machine
-from dynevent.machine import ServerConfig, State, accept_any
-from dynevent.store import StateStore
+from dynevent.server import inputs as ins, machine
+from dynevent.server.machine import ServerConfig, State, accept_any
+from dynevent.server.store import StateStore
 store = StateStore(sys.argv[1])
 config = ServerConfig(categories={"go_to_place": accept_any})
 state = State.new("fleet", "robot")

@@ -23,7 +23,7 @@ from typing import Any
 import jsonschema
 import pytest
 
-from dynevent import vectors
+from dynevent.conformance import vectors
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = (ROOT / "docs" / "spec.md").read_text(encoding="utf-8")
@@ -173,7 +173,7 @@ def test_cli_passes_in_process(shipped: list[vectors.Vector]) -> None:
 
 
 def test_cli_passes_over_the_driver_protocol(shipped: list[vectors.Vector]) -> None:
-    result = _dynevent("--impl", f"{PYTHON} -m dynevent.driver")
+    result = _dynevent("--impl", f"{PYTHON} -m dynevent.conformance.driver")
     assert result.returncode == 0, result.stdout + result.stderr
     assert SUMMARY_LINE.findall(result.stdout) == [(str(len(shipped)), "0")]
 
@@ -310,7 +310,9 @@ def test_a_typo_in_an_expectation_is_a_vector_file_error_not_a_failure(tmp_path:
 
 def test_without_jsonschema_the_reader_alone_checks_and_says_so(tmp_path: Path) -> None:
     path = _with_a_typo_in_an_expectation(tmp_path)
-    blocked = "import sys; sys.modules['jsonschema'] = None; from dynevent.cli import main; sys.exit(main())"
+    blocked = (
+        "import sys; sys.modules['jsonschema'] = None; from dynevent.tools.cli import main; sys.exit(main())"
+    )
     result = subprocess.run(
         [PYTHON, "-c", blocked, "vectors", str(path)], capture_output=True, text=True, timeout=60, check=False
     )
@@ -376,8 +378,16 @@ STALL = "import sys, time; sys.stdout.write('{\"ok'); sys.stdout.flush(); time.s
             ["--timeout", "1"],
             "did not answer within 1 s",
         ),
-        (f"{sys.executable} -m dynevent.driver", ["--timeout", "nan"], "--timeout: expected seconds"),
-        (f"{sys.executable} -m dynevent.driver", ["--timeout", "-1"], "--timeout: expected seconds"),
+        (
+            f"{sys.executable} -m dynevent.conformance.driver",
+            ["--timeout", "nan"],
+            "--timeout: expected seconds",
+        ),
+        (
+            f"{sys.executable} -m dynevent.conformance.driver",
+            ["--timeout", "-1"],
+            "--timeout: expected seconds",
+        ),
     ],
     ids=["empty", "bad-quoting", "exits", "not-utf8", "half-line-stall", "nan-timeout", "negative-timeout"],
 )

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from dynevent.vocab import DynamicState, EventType, GoalStatus, Status, Tier
+from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, Status, Tier
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "reference" / "schemas" / "task_state.json"
 

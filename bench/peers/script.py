@@ -15,7 +15,7 @@ form: tuples such as ``("accepted", uuid)``, ``("rejected", uuid, reason)``,
 ``("feedback", uuid, status, id, log seqs)``, ``("status", seq, phase, status, id)``,
 ``("answer", uuid, goal status, execution failure, result status, result id)``.
 The peers speak the common form natively; :class:`DyneventDriver` drives
-dynevent's :class:`~dynevent.server.RobotServer` with real inputs and
+dynevent's :class:`~dynevent.server.holder.RobotServer` with real inputs and
 translates its outputs.
 """
 
@@ -24,11 +24,11 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
-from dynevent import inputs as ins
-from dynevent import outputs as outs
-from dynevent.machine import ServerConfig, accept_any
-from dynevent.messages import Goal
-from dynevent.server import RobotServer
+from dynevent.server import inputs as ins
+from dynevent.server import outputs as outs
+from dynevent.server.holder import RobotServer
+from dynevent.server.machine import ServerConfig, accept_any
+from dynevent.wire.messages import Goal
 
 from .rules import CANCEL, FINISHED, NEXT
 

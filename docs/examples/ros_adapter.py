@@ -22,8 +22,8 @@ from typing import Any
 import rclpy
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 
-from dynevent.machine import ServerConfig
 from dynevent.ros import ChildExecution, DynamicEventServer
+from dynevent.server.machine import ServerConfig
 
 REPORTS = 3
 PERIOD = 0.2  # seconds between two reports of a child

@@ -2,10 +2,10 @@
 
 The names a user needs most are importable from here (``from dynevent import
 Goal, ServerConfig, State, step``); each lives in the module that defines it
-(the wire in :mod:`dynevent.messages`, :mod:`dynevent.vocab` and
-:mod:`dynevent.names`; the robot's side in :mod:`dynevent.machine`,
-:mod:`dynevent.inputs`, :mod:`dynevent.outputs`, :mod:`dynevent.server`,
-:mod:`dynevent.fleet`, :mod:`dynevent.snapshot` and :mod:`dynevent.store`;
+(the wire in :mod:`dynevent.wire.messages`, :mod:`dynevent.wire.vocab` and
+:mod:`dynevent.wire.names`; the robot's side in :mod:`dynevent.server.machine`,
+:mod:`dynevent.server.inputs`, :mod:`dynevent.server.outputs`, :mod:`dynevent.server.holder`,
+:mod:`dynevent.server.fleet`, :mod:`dynevent.server.snapshot` and :mod:`dynevent.server.store`;
 the client's side in :mod:`dynevent.client`; every error in
 :mod:`dynevent.errors`).  They are imported on first use, so ``import
 dynevent`` itself stays quick.
@@ -37,29 +37,31 @@ _HOMES: dict[str, str] = {
             "Result",
             "Time",
         ),
-        "messages",
+        "wire.messages",
     ),
     **dict.fromkeys(
         (
             "Compatibility",
             "DynamicState",
             "EventType",
+            "Failure",
             "GoalStatus",
             "IdPolicy",
             "RejectReason",
             "Status",
             "Tier",
         ),
-        "vocab",
+        "wire.vocab",
     ),
-    **dict.fromkeys(("action_name", "begin_topic", "description_service", "status_topic"), "names"),
-    "EventDescription": "description",
+    **dict.fromkeys(("action_name", "begin_topic", "description_service", "status_topic"), "wire.names"),
+    "EventDescription": "wire.description",
     **dict.fromkeys(
-        ("ServerConfig", "State", "Transition", "accept", "accept_any", "status_message", "step"), "machine"
+        ("ServerConfig", "State", "Transition", "accept", "accept_any", "status_message", "step"),
+        "server.machine",
     ),
-    **dict.fromkeys(("LockedRobotServer", "RobotServer"), "server"),
-    "Fleet": "fleet",
-    "StateStore": "store",
+    **dict.fromkeys(("LockedRobotServer", "RobotServer"), "server.holder"),
+    "Fleet": "server.fleet",
+    "StateStore": "server.store",
     **dict.fromkeys(
         (
             "DuplicateRobot",
@@ -79,8 +81,19 @@ _HOMES: dict[str, str] = {
         "errors",
     ),
 }
-#: The modules importable as attributes (``dynevent.inputs.Tick``) once ``dynevent`` is imported.
-_MODULES = ("client", "errors", "inputs", "machine", "messages", "names", "outputs", "snapshot", "vocab")
+#: The modules importable as attributes (``dynevent.inputs.Tick``) once ``dynevent`` is imported,
+#: and where each lives.
+_MODULES: dict[str, str] = {
+    "client": "client",
+    "errors": "errors",
+    "inputs": "server.inputs",
+    "machine": "server.machine",
+    "messages": "wire.messages",
+    "names": "wire.names",
+    "outputs": "server.outputs",
+    "snapshot": "server.snapshot",
+    "vocab": "wire.vocab",
+}
 
 #: The public face; a test keeps it equal to the names above.
 __all__ = [
@@ -96,6 +109,7 @@ __all__ = [
     "DyneventError",
     "EventDescription",
     "EventType",
+    "Failure",
     "Feedback",
     "Fleet",
     "Goal",
@@ -148,7 +162,7 @@ __all__ = [
 def __getattr__(name: str) -> Any:
     """Import a public name's module on first use (PEP 562)."""
     if name in _MODULES:
-        value = importlib.import_module(f"{__name__}.{name}")
+        value = importlib.import_module(f"{__name__}.{_MODULES[name]}")
     elif name in _HOMES:
         value = getattr(importlib.import_module(f"{__name__}.{_HOMES[name]}"), name)
     else:
@@ -162,9 +176,8 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # what type checkers and editors see, without importing anything at run time
-    from . import client, errors, inputs, machine, messages, names, outputs, snapshot, vocab
-    from .description import EventDescription
-    from .errors import (
+    from dynevent import client, errors
+    from dynevent.errors import (
         DuplicateRobot,
         DyneventError,
         ImplementationError,
@@ -179,9 +192,22 @@ if TYPE_CHECKING:  # what type checkers and editors see, without importing anyth
         TraceError,
         UnknownRobot,
     )
-    from .fleet import Fleet
-    from .machine import ServerConfig, State, Transition, accept, accept_any, status_message, step
-    from .messages import (
+    from dynevent.server import inputs, machine, outputs, snapshot
+    from dynevent.server.fleet import Fleet
+    from dynevent.server.holder import LockedRobotServer, RobotServer
+    from dynevent.server.machine import (
+        ServerConfig,
+        State,
+        Transition,
+        accept,
+        accept_any,
+        status_message,
+        step,
+    )
+    from dynevent.server.store import StateStore
+    from dynevent.wire import messages, names, vocab
+    from dynevent.wire.description import EventDescription
+    from dynevent.wire.messages import (
         DescriptionRequest,
         DescriptionResponse,
         DynamicEventDescription,
@@ -192,13 +218,12 @@ if TYPE_CHECKING:  # what type checkers and editors see, without importing anyth
         Result,
         Time,
     )
-    from .names import action_name, begin_topic, description_service, status_topic
-    from .server import LockedRobotServer, RobotServer
-    from .store import StateStore
-    from .vocab import (
+    from dynevent.wire.names import action_name, begin_topic, description_service, status_topic
+    from dynevent.wire.vocab import (
         Compatibility,
         DynamicState,
         EventType,
+        Failure,
         GoalStatus,
         IdPolicy,
         RejectReason,

@@ -161,7 +161,7 @@ class ImplementationError(DyneventError):
 
 
 class UnknownRobot(DyneventError, KeyError):
-    """No robot of that fleet and name is in the :class:`~dynevent.fleet.Fleet` (a ``KeyError`` too)."""
+    """No robot of that fleet and name is in the :class:`~dynevent.server.fleet.Fleet` (a ``KeyError``)."""
 
     def __init__(self, fleet: str, robot: str) -> None:
         self.fleet = fleet
@@ -174,7 +174,7 @@ class UnknownRobot(DyneventError, KeyError):
 
 
 class DuplicateRobot(DyneventError):
-    """A robot was added to a :class:`~dynevent.fleet.Fleet` that already holds it."""
+    """A robot was added to a :class:`~dynevent.server.fleet.Fleet` that already holds it."""
 
     def __init__(self, fleet: str, robot: str) -> None:
         self.fleet = fleet

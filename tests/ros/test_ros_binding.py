@@ -19,10 +19,10 @@ from rmf_task_msgs.msg import DynamicEventStatus
 from ros_support import WAIT, Child, Graph, wait_for
 
 from dynevent import client as cl
-from dynevent.machine import ServerConfig, accept_any
-from dynevent.names import action_name, status_topic
 from dynevent.ros import ChildExecution, DynamicEventClient, DynamicEventServer
 from dynevent.ros.server import latched
+from dynevent.server.machine import ServerConfig, accept_any
+from dynevent.wire.names import action_name, status_topic
 
 FLEET, ROBOT = "tinyRobot", "tinyRobot1"
 CONFIG = ServerConfig(categories={"go_to_place": accept_any, "perform_action": accept_any})
@@ -482,7 +482,7 @@ def test_the_documented_adapter_serves_a_client_in_another_process(graph: Graph)
 def test_the_description_service_answers_where_its_type_exists(graph: Graph) -> None:
     from rmf_task_msgs.srv import DescribeDynamicEvent
 
-    from dynevent.names import description_service
+    from dynevent.wire.names import description_service
 
     server = graph.node(
         "described",

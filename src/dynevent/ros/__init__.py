@@ -24,8 +24,8 @@ except ImportError as exc:  # pragma: no cover - depends on the environment
         "tests/ros/setup-ros-env.sh builds one from the registry's wheels."
     ) from exc
 
-from .client import DynamicEventClient, GoalRun
-from .server import ChildEvents, ChildExecution, DynamicEventServer, StubbornHolds
+from dynevent.ros.client import DynamicEventClient, GoalRun
+from dynevent.ros.server import ChildEvents, ChildExecution, DynamicEventServer, StubbornHolds
 
 __all__ = [
     "ChildEvents",

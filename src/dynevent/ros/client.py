@@ -24,17 +24,23 @@ from rclpy.action import ActionClient
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.task import Future
 
-from .. import client as cl
-from ..errors import (
+from dynevent import client as cl
+from dynevent.errors import (
     GoalWaitTimeout,  # defined there with every error; importable here too
     InvalidMessage,
 )
-from ..inputs import NOW_RANGE
-from ..names import ROBOT_BEGIN_TOPIC_DEPTH, STATUS_TOPIC_DEPTH, action_name, begin_topic, status_topic
-from ..vocab import GoalStatus
-from . import convert
-from .convert import DynamicEvent, RosDescription, RosStatus
-from .server import latched
+from dynevent.ros import convert
+from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
+from dynevent.ros.server import latched
+from dynevent.server.inputs import NOW_RANGE
+from dynevent.wire.names import (
+    ROBOT_BEGIN_TOPIC_DEPTH,
+    STATUS_TOPIC_DEPTH,
+    action_name,
+    begin_topic,
+    status_topic,
+)
+from dynevent.wire.vocab import GoalStatus
 
 __all__ = ["DynamicEventClient", "GoalRun", "GoalWaitTimeout"]
 

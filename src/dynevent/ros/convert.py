@@ -17,9 +17,9 @@ from rmf_task_msgs.msg import DynamicEventStatus as RosStatus
 from rmf_task_msgs.msg import LogEntry as RosLogEntry
 from unique_identifier_msgs.msg import UUID as RosUUID
 
-from ..errors import InvalidMessage
-from ..inputs import goal_uuid
-from ..messages import (
+from dynevent.errors import InvalidMessage
+from dynevent.server.inputs import goal_uuid
+from dynevent.wire.messages import (
     DynamicEventDescription,
     DynamicEventStatus,
     Feedback,

@@ -3,7 +3,7 @@
 It prints the robot's status as first seen, every feedback as it arrives,
 and the typed outcome; for a goal the robot refused (a ROS refusal carries
 no reason) it explains, from the status, why the robot most likely refused
-it and what to send instead (:mod:`dynevent.explain`).  Everything is bounded
+it and what to send instead (:mod:`dynevent.tools.explain`).  Everything is bounded
 by ``--timeout``.  Exit status: 0 when the goal succeeded (a NEXT whose event
 completed, a CANCEL or FINISHED that was carried out), 1 when it did not
 (refused, failed, cancelled, aborted, timed out), 2 on bad usage or input, or
@@ -24,15 +24,15 @@ from typing import Any
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
-from .. import client as cl
-from .. import explain
-from .. import outputs as outs
-from ..errors import (
+from dynevent import client as cl
+from dynevent.errors import (
     SendError,  # defined there with every error; importable here too
 )
-from ..messages import DynamicEventStatus, Goal
-from ..vocab import EventType, GoalStatus
-from .client import DynamicEventClient, GoalWaitTimeout
+from dynevent.ros.client import DynamicEventClient, GoalWaitTimeout
+from dynevent.server import outputs as outs
+from dynevent.tools import explain
+from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.vocab import EventType, GoalStatus
 
 __all__ = ["SendError", "goal_request", "run"]
 

@@ -8,7 +8,7 @@ fails).  Every robot begins a dynamic event at start, again some seconds
 after a run ends (``--rebegin``), and whenever a
 ``rmf_task_msgs/DynamicEventDescription`` naming it arrives on
 ``dynevent/serve/begin``.  With ``--state FILE`` every robot's state is kept
-in a SQLite store (:mod:`dynevent.store`); a restart on the same file
+in a SQLite store (:mod:`dynevent.server.store`); a restart on the same file
 continues every run (R21).  A readable live log of goals and answers goes to
 standard output.
 """
@@ -30,18 +30,18 @@ import rclpy
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.logging import LoggingSeverity
 
-from .. import outputs as outs
-from ..errors import (
+from dynevent.errors import (
     InvalidConfig,
     InvalidName,
     ServeError,  # defined there with every error; importable here too
 )
-from ..machine import ServerConfig, State
-from ..names import validate_token
-from ..store import StateStore
-from ..vocab import Compatibility, IdPolicy, Status
-from .convert import RosDescription
-from .server import ChildExecution, DynamicEventServer, latched
+from dynevent.ros.convert import RosDescription
+from dynevent.ros.server import ChildExecution, DynamicEventServer, latched
+from dynevent.server import outputs as outs
+from dynevent.server.machine import ServerConfig, State
+from dynevent.server.store import StateStore
+from dynevent.wire.names import validate_token
+from dynevent.wire.vocab import Compatibility, IdPolicy, Status
 
 __all__ = ["BEGIN_COMMAND_TOPIC", "CategorySpec", "ServeConfig", "ServeError", "load_config", "run"]
 
@@ -135,9 +135,7 @@ class SimulatedChildren:
                 self._forget(execution)
 
         with self._lock:
-            self._timers[execution] = self._node.create_timer(
-                min(spec.report_every, spec.duration), report
-            )
+            self._timers[execution] = self._node.create_timer(min(spec.report_every, spec.duration), report)
 
     def _forget(self, execution: ChildExecution) -> None:
         with self._lock:

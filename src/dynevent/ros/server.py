@@ -3,15 +3,15 @@
 How rclpy's callbacks meet the machine (docs/ros.md has the whole story):
 
 - ``goal_callback`` gets the goal without its UUID, so it only asks
-  :func:`dynevent.machine.accept` and answers ACCEPT or REJECT (the refusal's
+  :func:`dynevent.server.machine.accept` and answers ACCEPT or REJECT (the refusal's
   reason goes to the node's log: ROS actions carry none).
 - ``handle_accepted_callback`` has the goal handle: the goal is submitted to
-  the machine with its UUID (:class:`~dynevent.inputs.GoalSubmitted`, R5.3),
+  the machine with its UUID (:class:`~dynevent.server.inputs.GoalSubmitted`, R5.3),
   request and start in one step under the server's lock.  Between the two
   callbacks other threads may have changed the state; a goal that lost that
   race is still answered (aborted, ``race condition``).
-- ``cancel_callback`` steps :class:`~dynevent.inputs.CancelRequested` and
-  answers with the machine's :class:`~dynevent.outputs.CancelResponse`.
+- ``cancel_callback`` steps :class:`~dynevent.server.inputs.CancelRequested` and
+  answers with the machine's :class:`~dynevent.server.outputs.CancelResponse`.
 - Every other output goes to an outbox, carried out in order by a guard
   condition's callback.  The guard condition wakes the executor from any
   thread (an adapter's own threads report progress), and it shares a
@@ -37,13 +37,17 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 
-from .. import inputs as ins
-from .. import machine, names
-from .. import outputs as outs
-from ..errors import InvalidMessage
-from ..inputs import NOW_RANGE
-from ..machine import ServerConfig, State
-from ..names import (
+from dynevent.errors import InvalidMessage
+from dynevent.ros import convert
+from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.server import outputs as outs
+from dynevent.server.holder import Execution
+from dynevent.server.inputs import NOW_RANGE
+from dynevent.server.machine import ServerConfig, State
+from dynevent.wire import names
+from dynevent.wire.names import (
     BEGIN_TOPIC,
     BEGIN_TOPIC_DEPTH,
     ROBOT_BEGIN_TOPIC_DEPTH,
@@ -52,10 +56,7 @@ from ..names import (
     begin_topic,
     status_topic,
 )
-from ..server import Execution
-from ..vocab import GoalStatus, Status, Tier
-from . import convert
-from .convert import DynamicEvent, RosDescription, RosStatus
+from dynevent.wire.vocab import GoalStatus, Status, Tier
 
 __all__ = ["ChildEvents", "ChildExecution", "DynamicEventServer", "StubbornHolds", "latched"]
 

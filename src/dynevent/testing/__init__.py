@@ -15,7 +15,7 @@ except ModuleNotFoundError as exc:  # the extra is not installed: say which one
         name=exc.name,
     ) from exc
 
-from .stateful import (
+from dynevent.testing.stateful import (
     DEFAULT_CONFIG,
     DyneventServer,
     ImplementationServer,
@@ -28,7 +28,7 @@ from .stateful import (
     server_inputs,
     server_state_machine,
 )
-from .strategies import (
+from dynevent.testing.strategies import (
     hostile_json_values,
     json_values,
     messages,

@@ -5,7 +5,7 @@ The kit has three parts:
 - :class:`ServerUnderTest`, the small adapter interface an implementation is
   wrapped in (``reset``, ``apply``, ``view``), with :class:`DyneventServer`
   (dynevent's own machine) and :class:`ImplementationServer` (any program or
-  object speaking the conformance driver protocol of :mod:`dynevent.driver`);
+  object speaking the conformance driver protocol of :mod:`dynevent.conformance.driver`);
 - :class:`Observer`, a small reference model of the protocol state (phase,
   seq, status, current id, the goals and their ROS 2 lifecycle) that is
   derived only from the inputs sent and the outputs received, never from the
@@ -64,16 +64,17 @@ import attrs
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule
 
-from .. import _json, machine
-from .. import inputs as ins
-from .. import outputs as outs
-from .._fields import SECOND, U32_MAX, U64_MAX
-from .._json import dumps_sorted, parse
-from ..machine import ServerConfig, State
-from ..messages import DynamicEventStatus, Goal
-from ..records import config_from_json, input_to_json, output_from_json
-from ..vocab import Compatibility, DynamicState, EventType, GoalStatus, IdPolicy, Status, Tier
-from .strategies import messages
+from dynevent.conformance.records import config_from_json, input_to_json, output_from_json
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.server import outputs as outs
+from dynevent.server.machine import ServerConfig, State
+from dynevent.testing.strategies import messages
+from dynevent.wire import _json
+from dynevent.wire._fields import SECOND, U32_MAX, U64_MAX
+from dynevent.wire._json import dumps_sorted, parse
+from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.vocab import Compatibility, DynamicState, EventType, GoalStatus, IdPolicy, Status, Tier
 
 __all__ = [
     "DEFAULT_CONFIG",
@@ -91,7 +92,7 @@ __all__ = [
 
 _MS = 1_000_000
 
-#: The configuration record (:func:`dynevent.records.config_from_json` form) the kit uses by default:
+#: The configuration record (:func:`dynevent.conformance.records.config_from_json`) the kit uses by default:
 #: one category that needs an object with a ``place``, one that takes anything, and a short
 #: description limit so that over-long descriptions are cheap to generate.
 DEFAULT_CONFIG: Mapping[str, Any] = {
@@ -173,9 +174,9 @@ class ServerUnderTest(Protocol):
     """The adapter an implementation is wrapped in to be driven by the kit.
 
     ``reset`` starts a fresh server for one robot, configured by a
-    configuration record (the JSON form of :func:`dynevent.records.config_from_json`).
+    configuration record (the JSON form of :func:`dynevent.conformance.records.config_from_json`).
     ``apply`` feeds one input and returns the outputs, in order, as dynevent's
-    output classes (:mod:`dynevent.outputs`); it must not raise.  ``view``
+    output classes (:mod:`dynevent.server.outputs`); it must not raise.  ``view``
     returns the phase, seq and current id, or ``None`` when the implementation
     does not expose them (the kit then checks the outputs alone).
     """
@@ -191,7 +192,7 @@ class ServerUnderTest(Protocol):
 
 
 class DyneventServer:
-    """dynevent's own machine behind :class:`ServerUnderTest`: :func:`dynevent.machine.step` on a held state.
+    """dynevent's own machine behind :class:`ServerUnderTest`: :func:`~dynevent.server.machine.step`.
 
     ``state`` and ``config`` are public so that a test can wrap or perturb the
     server (e.g. to build a deliberately broken one).
@@ -230,10 +231,10 @@ class _Implementation(Protocol):
 class ImplementationServer:
     """Any implementation of the conformance driver protocol behind :class:`ServerUnderTest`.
 
-    ``implementation`` is a :class:`dynevent.vectors.Implementation` (for
-    instance :class:`~dynevent.vectors.ExternalImplementation` running another
+    ``implementation`` is a :class:`dynevent.conformance.vectors.Implementation` (for
+    instance :class:`~dynevent.conformance.vectors.ExternalImplementation` running another
     program); inputs and outputs cross as the JSON records of
-    :mod:`dynevent.records`.  Closing the implementation is the caller's job.
+    :mod:`dynevent.conformance.records`.  Closing the implementation is the caller's job.
     """
 
     def __init__(self, implementation: _Implementation) -> None:

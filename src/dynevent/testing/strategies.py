@@ -1,7 +1,7 @@
 """Hypothesis strategies for every wire message, valid and hostile.
 
 :func:`messages` derives a strategy for any wire class from its declared ROS
-field types, so it stays in step with :mod:`dynevent.messages` by construction.
+field types, so it stays in step with :mod:`dynevent.wire.messages` by construction.
 Integers are drawn over their full range (hypothesis favours the boundaries),
 float32 values include NaN, the infinities and subnormals, and strings range
 over all of Unicode that the wire can carry.
@@ -13,7 +13,7 @@ from typing import Any, TypeVar
 
 from hypothesis import strategies as st
 
-from .. import messages as wire
+from dynevent.wire import messages as wire
 
 __all__ = [
     "INTEGER_RANGES",

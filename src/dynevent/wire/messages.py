@@ -20,7 +20,7 @@ wire type        accepted Python value
 ``T[]``          any iterable of ``T``, stored as a tuple
 ===============  ==========================================================
 
-Enum members (:class:`~dynevent.vocab.EventType`, :class:`~dynevent.vocab.Tier`,
+Enum members (:class:`~dynevent.wire.vocab.EventType`, :class:`~dynevent.wire.vocab.Tier`,
 ...) are accepted and stored as their plain ``int``/``str`` value.  A value
 outside its range raises :class:`~dynevent.errors.InvalidMessage`, naming the
 class, the field and the value.
@@ -35,8 +35,9 @@ from typing import Any, ClassVar, TypeVar
 
 import attrs
 
-from . import _json
-from ._fields import (
+from dynevent.errors import InvalidMessage
+from dynevent.wire import _json
+from dynevent.wire._fields import (
     SECOND,
     WIRE_KEY,
     boolean_field,
@@ -50,7 +51,6 @@ from ._fields import (
     u32,
     u64,
 )
-from .errors import InvalidMessage
 
 __all__ = [
     "MESSAGE_TYPES",
@@ -186,7 +186,7 @@ class Time(WireMessage):
 class Goal(WireMessage):
     """``rmf_task_msgs/action/DynamicEvent`` goal: one command to the robot's server.
 
-    ``event_type`` is any uint32: values outside :class:`~dynevent.vocab.EventType`
+    ``event_type`` is any uint32: values outside :class:`~dynevent.wire.vocab.EventType`
     are legal on the wire and refused by the machine with a reason.
     """
 

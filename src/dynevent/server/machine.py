@@ -4,7 +4,7 @@ Rule 1: everything that decides what the server does lives in this file.  The
 rules are numbered as in docs/spec.md (``R4.2`` and so on) and every rule is
 cited where it is carried out.  The machine never raises, never reads a clock
 and never does I/O: time arrives in the inputs, and every effect leaves as an
-output value (:mod:`dynevent.outputs`).
+output value (:mod:`dynevent.server.outputs`).
 
 The machine's phase (INACTIVE, WAITING, RUNNING) is a projection of the state,
 and :data:`TRANSITIONS` declares, per phase and input, which phases a step may
@@ -20,13 +20,13 @@ from typing import Any, TypeAlias
 
 import attrs
 
-from . import _json
-from . import inputs as ins
-from . import outputs as outs
-from ._fields import SECOND, U32_MAX, U64_MAX, maker, replacer
-from .description import DEFAULT_CATEGORY, MAX_DESCRIPTION_BYTES
-from .errors import InvalidConfig
-from .messages import (
+from dynevent.errors import InvalidConfig
+from dynevent.server import inputs as ins
+from dynevent.server import outputs as outs
+from dynevent.wire import _json
+from dynevent.wire._fields import SECOND, U32_MAX, U64_MAX, maker, replacer
+from dynevent.wire.description import DEFAULT_CATEGORY, MAX_DESCRIPTION_BYTES
+from dynevent.wire.messages import (
     DescriptionResponse,
     DynamicEventDescription,
     DynamicEventStatus,
@@ -36,8 +36,17 @@ from .messages import (
     Result,
     Time,
 )
-from .names import validate_token
-from .vocab import Compatibility, DynamicState, EventType, Failure, GoalStatus, IdPolicy, RejectReason, Status
+from dynevent.wire.names import validate_token
+from dynevent.wire.vocab import (
+    Compatibility,
+    DynamicState,
+    EventType,
+    Failure,
+    GoalStatus,
+    IdPolicy,
+    RejectReason,
+    Status,
+)
 
 __all__ = [
     "EXECUTION_FAILURES",
@@ -68,7 +77,7 @@ __all__ = [
 Validator: TypeAlias = Callable[[str, Any], Sequence[str]]
 
 #: rmf_ros2's execution-failure strings by a short name (``"race"``, ``"idle_cancel"``, ...): the
-#: values of :class:`~dynevent.vocab.Failure`, kept for code written before it.
+#: values of :class:`~dynevent.wire.vocab.Failure`, kept for code written before it.
 EXECUTION_FAILURES: Mapping[str, str] = {failure.name.lower(): failure.value for failure in Failure}
 
 # Child statuses that end a child early: its goal is not answered as succeeded (R8.2).

@@ -8,9 +8,9 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 
-from . import DOCS, __version__
-from .diagram import FORMATS
-from .vocab import Compatibility
+from dynevent import DOCS, __version__
+from dynevent.tools.diagram import FORMATS
+from dynevent.wire.vocab import Compatibility
 
 __all__ = ["main"]
 
@@ -25,10 +25,10 @@ _DESCRIPTION = (
 
 
 def _lazy(module: str) -> Callable[[argparse.Namespace], int]:
-    """The ``_run`` of ``dynevent.<module>``, imported when the command runs: ``--help`` stays quick."""
+    """The ``_run`` of ``module`` (a dotted name), imported when the command runs: ``--help`` stays quick."""
 
     def run(args: argparse.Namespace) -> int:
-        code: int = importlib.import_module(f"dynevent.{module}")._run(args)
+        code: int = importlib.import_module(module)._run(args)
         return code
 
     return run
@@ -52,7 +52,7 @@ def _add_demo_command(commands: argparse._SubParsersAction[argparse.ArgumentPars
     parser.add_argument(
         "--seed", type=int, default=0, metavar="N", help="seed of the message delays and the race (0)"
     )
-    parser.set_defaults(run=_lazy("demo"))
+    parser.set_defaults(run=_lazy("dynevent.tools.demo"))
 
 
 def _add_check_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -67,7 +67,7 @@ def _add_check_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
     )
     parser.add_argument("trace", metavar="TRACE", help="the trace file, or - for standard input")
     parser.add_argument("--json", action="store_true", help="one JSON object per violation, then a summary")
-    parser.set_defaults(run=_lazy("check"))
+    parser.set_defaults(run=_lazy("dynevent.tools.check"))
 
 
 def _add_explain_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -108,13 +108,14 @@ def _add_explain_command(commands: argparse._SubParsersAction[argparse.ArgumentP
         help="judge as the spec says (standard, the default) or as rmf_ros2 does (accept, then abort)",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.set_defaults(run=_lazy("explain"))
+    parser.set_defaults(run=_lazy("dynevent.tools.explain"))
 
 
 def _vectors(args: argparse.Namespace) -> int:
     """``dynevent vectors``: run the conformance vectors; 0 all pass, 1 any fails, 2 bad input."""
-    from . import _json, vectors
-    from ._progress import Progress
+    from dynevent.conformance import vectors
+    from dynevent.tools._progress import Progress
+    from dynevent.wire import _json
 
     if args.files and not vectors.schema_validation_available():
         print(
@@ -163,7 +164,7 @@ def _vectors(args: argparse.Namespace) -> int:
 
 def _timeout(text: str) -> float:
     """``--timeout``: a finite number of seconds above 0, at most the vectors' bound."""
-    from .vectors import MAX_TIMEOUT
+    from dynevent.conformance.vectors import MAX_TIMEOUT
 
     try:
         value = float(text)
@@ -207,7 +208,7 @@ def _add_vectors_command(commands: argparse._SubParsersAction[argparse.ArgumentP
 
 
 def _diagram(args: argparse.Namespace) -> int:
-    from .diagram import render
+    from dynevent.tools.diagram import render
 
     print(render(args.format), end="")
     return 0
@@ -217,7 +218,8 @@ def _add_diagram_command(commands: argparse._SubParsersAction[argparse.ArgumentP
     parser = commands.add_parser(
         "diagram",
         help="print the server's phase diagram",
-        description="Print the server machine's phase diagram, drawn from dynevent.machine.TRANSITIONS "
+        description="Print the server machine's phase diagram, drawn from "
+        "dynevent.server.machine.TRANSITIONS "
         f"(the Mermaid form is the one {DOCS}/spec.md embeds).  Exit status: 0.",
     )
     parser.add_argument(
@@ -240,11 +242,11 @@ def _say(line: str) -> None:
 
 def _serve(args: argparse.Namespace) -> int:
     try:
-        from .ros import serve
+        from dynevent.ros import serve
     except ImportError as exc:
         print(_NO_ROS.format(command="serve", problem=exc), file=sys.stderr)
         return 2
-    from .errors import DyneventError
+    from dynevent.errors import DyneventError
 
     try:
         config = serve.load_config(args)
@@ -290,11 +292,11 @@ def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
 
 def _send(args: argparse.Namespace) -> int:
     try:
-        from .ros import send
+        from dynevent.ros import send
     except ImportError as exc:
         print(_NO_ROS.format(command="send", problem=exc), file=sys.stderr)
         return 2
-    from .errors import DyneventError
+    from dynevent.errors import DyneventError
 
     if not 0 < args.timeout < 1e6:
         print(f"dynevent send: --timeout: expected positive seconds (got {args.timeout})", file=sys.stderr)

@@ -16,7 +16,7 @@ from typing import Any, TypeVar, cast
 
 import attrs
 
-from .errors import InvalidMessage
+from dynevent.errors import InvalidMessage
 
 #: The largest uint32: run seqs and log seqs wrap from it to 0.
 U32_MAX = 2**32 - 1

@@ -1,11 +1,11 @@
 """Robots' states in an embedded SQLite database, so that a server survives its own end.
 
-:class:`StateStore` keeps one snapshot (:mod:`dynevent.snapshot`) per robot
+:class:`StateStore` keeps one snapshot (:mod:`dynevent.server.snapshot`) per robot
 in a SQLite file (stdlib ``sqlite3``, write-ahead log): :meth:`~StateStore.save`
 writes one robot's state in one transaction, :meth:`~StateStore.load`
 restores every robot's, each validated as a snapshot is.  A process killed
 at any moment leaves the last committed state of every robot; restore it and
-step :class:`~dynevent.inputs.Restart` (R21).
+step :class:`~dynevent.server.inputs.Restart` (R21).
 
 A file that is not a SQLite database, a database of something else, a
 store of another format or version, or a snapshot that does not validate is
@@ -20,17 +20,17 @@ import sqlite3
 import threading
 from pathlib import Path
 
-from . import snapshot
-from .errors import (
+from dynevent.errors import (
     InvalidSnapshot,
     InvalidStore,  # defined there with every error; importable here too
 )
-from .machine import State
+from dynevent.server import snapshot
+from dynevent.server.machine import State
 
 __all__ = ["FORMAT", "VERSION", "InvalidStore", "StateStore"]
 
 #: The ``format`` of a dynevent store, in its ``meta`` table.
-FORMAT = "dynevent.store"
+FORMAT = "dynevent.server.store"
 #: The store's layout version.
 VERSION = 1
 

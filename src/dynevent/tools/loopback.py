@@ -1,7 +1,7 @@
 """An in-process session between one client machine and one server machine, deterministic under a seed.
 
 :class:`Loopback` wires a :class:`~dynevent.client.ClientState` to a server
-:class:`~dynevent.machine.State` the way a ROS 2 binding would, through a
+:class:`~dynevent.server.machine.State` the way a ROS 2 binding would, through a
 queue of timed deliveries:
 
 - a goal the client sends becomes a ``GoalRequested`` input of the server;
@@ -36,7 +36,7 @@ the client concluded), ``"client->server"``, ``"server->client"`` and
 ``"adapter"`` (the task, the binding and the child events).
 
 This is a test and demonstration harness: adapter authors wire
-:mod:`dynevent.machine` (or :mod:`dynevent.server`) to their robot and do not
+:mod:`dynevent.server.machine` (or :mod:`dynevent.server.holder`) to their robot and do not
 need it.
 """
 
@@ -50,16 +50,17 @@ from typing import Any
 
 import attrs
 
-from . import _json, machine
-from . import client as cl
-from . import inputs as ins
-from . import outputs as outs
-from ._codec import encode
-from ._text import answer_text, goal_text, status_text
-from .client import SECOND, ClientOutput, ClientState, ClientTransition, Outcome
-from .machine import ServerConfig, State
-from .messages import DynamicEventDescription, Goal, Time
-from .vocab import Status
+from dynevent import client as cl
+from dynevent.client import SECOND, ClientOutput, ClientState, ClientTransition, Outcome
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.server import outputs as outs
+from dynevent.server.machine import ServerConfig, State
+from dynevent.wire import _json
+from dynevent.wire._codec import encode
+from dynevent.wire._text import answer_text, goal_text, status_text
+from dynevent.wire.messages import DynamicEventDescription, Goal, Time
+from dynevent.wire.vocab import Status
 
 __all__ = [
     "Adapter",

@@ -1,6 +1,6 @@
 """The conformance driver protocol: one implementation under test, over JSON lines.
 
-``python -m dynevent.driver`` serves dynevent's own machine on standard input
+``python -m dynevent.conformance.driver`` serves dynevent's own machine on standard input
 and output; ``dynevent vectors --impl COMMAND`` talks to any program that
 speaks the same protocol (docs/conformance.md specifies it):
 
@@ -13,7 +13,7 @@ speaks the same protocol (docs/conformance.md specifies it):
   "view": {"phase": "WAITING", "seq": 1, "current_id": 7}}``;
 - any fault → ``{"ok": false, "error": "..."}``; the driver keeps serving.
 
-Records (inputs, outputs, configurations) are those of :mod:`dynevent.records`.
+Records (inputs, outputs, configurations) are those of :mod:`dynevent.conformance.records`.
 """
 
 from __future__ import annotations
@@ -22,13 +22,15 @@ import os
 import sys
 from typing import IO, Any
 
-from . import __version__, _json, machine
-from ._codec import CodecError, decode, encode
-from .errors import DyneventError, InvalidSnapshot
-from .machine import ServerConfig, State
-from .names import validate_token
-from .records import InvalidRecord, config_from_json, input_from_json, output_to_json
-from .snapshot import check_state
+from dynevent import __version__
+from dynevent.conformance.records import InvalidRecord, config_from_json, input_from_json, output_to_json
+from dynevent.errors import DyneventError, InvalidSnapshot
+from dynevent.server import machine
+from dynevent.server.machine import ServerConfig, State
+from dynevent.server.snapshot import check_state
+from dynevent.wire import _json
+from dynevent.wire._codec import CodecError, decode, encode
+from dynevent.wire.names import validate_token
 
 __all__ = ["PROTOCOL_VERSION", "Driver", "main", "state_from_json", "view"]
 
@@ -123,7 +125,7 @@ def serve(reader: IO[str], writer: IO[str]) -> None:
 
 
 def main() -> int:
-    """Entry point of ``python -m dynevent.driver``."""
+    """Entry point of ``python -m dynevent.conformance.driver``."""
     try:
         serve(sys.stdin, sys.stdout)
     except KeyboardInterrupt:

@@ -31,7 +31,7 @@ silent or looser than the fleet adapter that reads it:
   rather than read as absent, as the adapter's ``get<std::string>()`` does.
 - Strings holding a lone UTF-16 surrogate (the JSON escape ``"\\ud800"``) are
   refused, since the text could not then be written as UTF-8 for the wire.
-- Nesting is limited to :data:`dynevent._json.MAX_DEPTH` levels counted from
+- Nesting is limited to :data:`dynevent.wire._json.MAX_DEPTH` levels counted from
   the top-level object, and text to :data:`MAX_DESCRIPTION_BYTES`, checked
   before parsing.
 
@@ -54,8 +54,8 @@ from typing import Any
 
 import attrs
 
-from dynevent._json import MAX_DEPTH, JsonProblem, dumps, parse, utf8_size
 from dynevent.errors import InvalidDescription, short_repr
+from dynevent.wire._json import MAX_DEPTH, JsonProblem, dumps, parse, utf8_size
 
 __all__ = [
     "DEFAULT_CATEGORY",

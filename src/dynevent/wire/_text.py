@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from .messages import DynamicEventStatus, Goal, Result
-from .vocab import DynamicState, EventType
+from dynevent.wire.messages import DynamicEventStatus, Goal, Result
+from dynevent.wire.vocab import DynamicState, EventType
 
 __all__ = ["answer_text", "goal_text", "status_text"]
 

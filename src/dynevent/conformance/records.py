@@ -30,13 +30,13 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from . import inputs as ins
-from . import outputs as outs
-from ._codec import CodecError, decode, encode
-from .errors import (
+from dynevent.errors import (
     InvalidRecord,  # defined there with every error; importable here too
 )
-from .machine import ServerConfig, Validator
+from dynevent.server import inputs as ins
+from dynevent.server import outputs as outs
+from dynevent.server.machine import ServerConfig, Validator
+from dynevent.wire._codec import CodecError, decode, encode
 
 __all__ = [
     "InvalidRecord",
@@ -148,7 +148,7 @@ def rule_validator(rule: object, path: str = "$") -> Validator:
 
 
 def config_from_json(data: object, path: str = "$") -> ServerConfig:
-    """A :class:`~dynevent.machine.ServerConfig` from its JSON form."""
+    """A :class:`~dynevent.server.machine.ServerConfig` from its JSON form."""
     if not isinstance(data, dict):
         raise InvalidRecord(path, "expected a configuration object")
     allowed = {

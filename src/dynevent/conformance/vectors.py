@@ -6,7 +6,7 @@ outputs the spec requires in answer (and optionally the phase, seq and current
 id after it).  The vectors ship with the package (``dynevent/conformance/``,
 one JSON file per spec section, with the JSON Schema ``vector.schema.json``)
 and run against dynevent in process or against any program that speaks the
-driver protocol of :mod:`dynevent.driver`.
+driver protocol of :mod:`dynevent.conformance.driver`.
 
 Matching is exact, except that the string ``"*"`` in an expected output
 matches any string (for sentences whose wording the spec leaves open).
@@ -28,13 +28,14 @@ from typing import Any, Protocol
 
 import attrs
 
-from . import __version__, _json
-from .driver import Driver
-from .errors import (  # defined there with every error; importable here too
+from dynevent import __version__
+from dynevent.conformance.driver import Driver
+from dynevent.errors import (  # defined there with every error; importable here too
     DyneventError,
     ImplementationError,
     InvalidVector,
 )
+from dynevent.wire import _json
 
 __all__ = [
     "SCHEMA_FILE",

@@ -1,6 +1,6 @@
 """The remote action client's Dynamic Event machine: pure commands and ``step`` over a frozen state.
 
-The server machine (:mod:`dynevent.machine`) is what a robot runs; this is
+The server machine (:mod:`dynevent.server.machine`) is what a robot runs; this is
 what the other end runs: a behaviour tree, a workflow engine or an operator
 tool that drives one robot through the action
 ``rmf/dynamic_event/command/<fleet>/<robot>``.  Like the server, it is a set
@@ -30,17 +30,17 @@ goals, which may arrive before the status that reports the end) and whether
 its own FINISHED goal ended the run.
 
 *Commands.*  :func:`request_next`, :func:`request_cancel` and
-:func:`request_finish` build a :class:`~dynevent.messages.Goal` with the
+:func:`request_finish` build a :class:`~dynevent.wire.messages.Goal` with the
 view's seq and the right ``event_type`` and ``id``, name it with a
 deterministic goal UUID (the state's 16-hex-digit prefix and a counter) and
 return it as :class:`SendGoal`.  A NEXT's id is one more than the highest id
 seen in the run, so it is unique in the run and passes the server's id rule
 (R4.12).  A CANCEL names the running child.  When the server, in the state
 the client knows of, would refuse the goal, the command returns
-:class:`Refused` instead, carrying a :class:`~dynevent.outputs.Rejected` with
+:class:`Refused` instead, carrying a :class:`~dynevent.server.outputs.Rejected` with
 the reason the server would give.  The checks are the server's own:
-:func:`dynevent.machine.accept` runs on the server state the client's view
-implies (:func:`dynevent.machine.state_from_status`, with the ids and the
+:func:`dynevent.server.machine.accept` runs on the server state the client's view
+implies (:func:`dynevent.server.machine.state_from_status`, with the ids and the
 child ends the client knows of), so the reasons come in the server's order
 (R4): ``inactive``, ``busy``, ``unsupported_category`` (when the client was
 told the robot's categories), ``description_invalid`` (too long),
@@ -60,45 +60,49 @@ is known to run) and reported ``timeout`` when it ends.
 
 from __future__ import annotations
 
-import enum
 from collections.abc import Iterable
-from typing import Any, ClassVar, TypeAlias
+from typing import Any
 
 import attrs
 
-from . import machine
-from ._fields import SECOND as _SECOND_NS
-from ._fields import U64_MAX, id_not_after, seq_after
-from .description import DEFAULT_CATEGORY
-from .errors import InvalidMessage
-from .inputs import NOW_RANGE, goal_uuid
-from .machine import ServerConfig, State
-from .messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, LogEntry, Result
-from .outputs import Rejected
-from .vocab import DynamicState, EventType, Failure, GoalStatus, RejectReason, Status
+from dynevent.client.inputs import (
+    BeginReceived,
+    ClientInput,
+    FeedbackReceived,
+    GoalResponse,
+    ResultReceived,
+    StatusReceived,
+    Tick,
+    _check_now,
+)
+from dynevent.client.outputs import (
+    _BY_FINAL_STATUS,
+    ClientOutput,
+    Ignored,
+    Outcome,
+    OutcomeKind,
+    Progress,
+    Refused,
+    RunBegan,
+    SendGoal,
+    TimedOut,
+    ViewChanged,
+)
+from dynevent.errors import InvalidMessage
+from dynevent.server import machine
+from dynevent.server.machine import ServerConfig, State
+from dynevent.server.outputs import Rejected
+from dynevent.wire._fields import SECOND as _SECOND_NS
+from dynevent.wire._fields import U64_MAX, id_not_after, seq_after
+from dynevent.wire.description import DEFAULT_CATEGORY
+from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.vocab import DynamicState, EventType, Failure, GoalStatus, RejectReason, Status
 
 __all__ = [
     "SECOND",
-    "BeginReceived",
-    "ClientInput",
-    "ClientOutput",
     "ClientState",
     "ClientTransition",
-    "FeedbackReceived",
-    "GoalResponse",
-    "Ignored",
     "OpenGoal",
-    "Outcome",
-    "OutcomeKind",
-    "Progress",
-    "Refused",
-    "ResultReceived",
-    "RunBegan",
-    "SendGoal",
-    "StatusReceived",
-    "Tick",
-    "TimedOut",
-    "ViewChanged",
     "next_deadline",
     "request_cancel",
     "request_finish",
@@ -112,303 +116,10 @@ SECOND = _SECOND_NS
 _HEX = frozenset("0123456789abcdefABCDEF")
 
 
-class OutcomeKind(str, enum.Enum):
-    """What became of one goal: the closed taxonomy of :class:`Outcome`.
-
-    The first six classify a goal that ran to its end by the final status in
-    its :class:`~dynevent.messages.Result` (for a NEXT or CANCEL goal, the
-    child event's; for FINISHED, the dynamic event's).  The last four say why
-    it did not.
-    """
-
-    #: The event ran to its end (final status ``completed``).
-    COMPLETED = "completed"
-    #: The event was cancelled (final status ``canceled``), by a CANCEL goal or the task.
-    CANCELED = "canceled"
-    #: The event was killed (final status ``killed``), e.g. the task was killed.
-    KILLED = "killed"
-    #: The event was skipped (final status ``skipped``).
-    SKIPPED = "skipped"
-    #: The event ended ``failed``.
-    FAILED = "failed"
-    #: The event ended ``error``, or with a status that is not a final one.
-    ERROR = "error"
-    #: The server accepted the goal and could not begin it; ``execution_failure`` holds its string.
-    EXECUTION_FAILURE = "execution_failure"
-    #: The server refused the goal request; ``reason`` says why when the refusal carried one.
-    REJECTED = "rejected"
-    #: The NEXT goal outran its timeout; the client cancelled it and it has now ended.
-    TIMEOUT = "timeout"
-    #: The run ended, or a new run began, before the answer arrived, and the goal never ran.
-    SUPERSEDED = "superseded"
-
-    def __str__(self) -> str:
-        return self.value
-
-
-_BY_FINAL_STATUS: dict[str, OutcomeKind] = {
-    Status.COMPLETED.value: OutcomeKind.COMPLETED,
-    Status.CANCELED.value: OutcomeKind.CANCELED,
-    Status.KILLED.value: OutcomeKind.KILLED,
-    Status.SKIPPED.value: OutcomeKind.SKIPPED,
-    Status.FAILED.value: OutcomeKind.FAILED,
-    Status.ERROR.value: OutcomeKind.ERROR,
-}
-
-# --------------------------------------------------------------------------- checks at the edge
-
-
-def _check_now(where: str, value: Any) -> int:
-    if type(value) is not int:
-        raise InvalidMessage(where, "now", value, "expected integer nanoseconds")
-    if not NOW_RANGE[0] <= value <= NOW_RANGE[1]:
-        raise InvalidMessage(where, "now", value, "outside the range of builtin_interfaces/Time")
-    return value
-
-
-def _uuid_converter(value: Any, instance: object, field: attrs.Attribute[Any]) -> str:
-    try:
-        return goal_uuid(value)
-    except ValueError as exc:
-        raise InvalidMessage(type(instance).__name__, field.name, value, str(exc)) from None
-
-
-def _now_converter(value: Any, instance: object, field: attrs.Attribute[Any]) -> int:
-    return _check_now(type(instance).__name__, value)
-
-
-def _field(function: Any, **kwargs: Any) -> Any:
-    """An ``attrs.field`` whose converter is ``function(value, instance, field)``."""
-    return attrs.field(converter=attrs.Converter(function, takes_self=True, takes_field=True), **kwargs)
-
-
-def _typed(cls: type) -> Any:
-    """A field that holds exactly an instance of ``cls``."""
-
-    def check(value: Any, instance: object, field: attrs.Attribute[Any]) -> Any:
-        if type(value) is not cls:
-            raise InvalidMessage(type(instance).__name__, field.name, value, f"expected a {cls.__name__}")
-        return value
-
-    return _field(check)
-
-
 def _prefix(value: Any) -> str:
     if type(value) is not str or len(value) != 16 or not all(ch in _HEX for ch in value):
         raise InvalidMessage("ClientState", "uuid_prefix", value, "expected 16 hexadecimal digits")
     return value.lower()
-
-
-# --------------------------------------------------------------------------- inputs
-
-
-class _ClientInput:
-    __slots__ = ()
-
-    #: The name of this input in traces.
-    KIND: ClassVar[str] = ""
-
-
-@attrs.frozen(kw_only=True)
-class BeginReceived(_ClientInput):
-    """A begin description arrived (``rmf/dynamic_event/begin/<fleet>/<robot>``)."""
-
-    KIND: ClassVar[str] = "begin_received"
-    message: DynamicEventDescription = _typed(DynamicEventDescription)
-
-
-@attrs.frozen(kw_only=True)
-class StatusReceived(_ClientInput):
-    """A status message arrived (``rmf/dynamic_event/status/<fleet>/<robot>``)."""
-
-    KIND: ClassVar[str] = "status_received"
-    message: DynamicEventStatus = _typed(DynamicEventStatus)
-
-
-def _rejection(value: Any, instance: object, field: attrs.Attribute[Any]) -> Rejected | None:
-    if value is not None and type(value) is not Rejected:
-        raise InvalidMessage(type(instance).__name__, field.name, value, "expected a Rejected or None")
-    return value
-
-
-@attrs.frozen(kw_only=True)
-class GoalResponse(_ClientInput):
-    """The server answered a goal request: accepted, or rejected.
-
-    A ROS rejection carries no reason (``rejection`` is ``None``); a client
-    talking to dynevent in-process may get the server's
-    :class:`~dynevent.outputs.Rejected`.
-    """
-
-    KIND: ClassVar[str] = "goal_response"
-    goal_uuid: str = _field(_uuid_converter)
-    accepted: bool = attrs.field(validator=attrs.validators.instance_of(bool))
-    rejection: Rejected | None = _field(_rejection, default=None)
-
-    def __attrs_post_init__(self) -> None:
-        if self.accepted and self.rejection is not None:
-            raise InvalidMessage("GoalResponse", "rejection", self.rejection, "an accepted goal has none")
-
-
-@attrs.frozen(kw_only=True)
-class FeedbackReceived(_ClientInput):
-    """Feedback arrived for a goal."""
-
-    KIND: ClassVar[str] = "feedback_received"
-    goal_uuid: str = _field(_uuid_converter)
-    feedback: Feedback = _typed(Feedback)
-
-
-def _terminal(value: Any, instance: object, field: attrs.Attribute[Any]) -> GoalStatus:
-    try:
-        status = GoalStatus(value)
-    except ValueError:
-        status = None
-    if status is None or not status.is_terminal:
-        raise InvalidMessage(
-            type(instance).__name__, field.name, value, "expected succeeded, canceled or aborted"
-        )
-    return status
-
-
-@attrs.frozen(kw_only=True)
-class ResultReceived(_ClientInput):
-    """A goal's terminal answer arrived: its final goal status and its result."""
-
-    KIND: ClassVar[str] = "result_received"
-    goal_uuid: str = _field(_uuid_converter)
-    status: GoalStatus = _field(_terminal)
-    result: Result = _typed(Result)
-
-
-@attrs.frozen(kw_only=True)
-class Tick(_ClientInput):
-    """Time passed: ``now`` in integer nanoseconds.  Timeouts are checked here."""
-
-    KIND: ClassVar[str] = "tick"
-    now: int = _field(_now_converter)
-
-
-#: Any input of the client machine.
-ClientInput: TypeAlias = (
-    BeginReceived | StatusReceived | GoalResponse | FeedbackReceived | ResultReceived | Tick
-)
-
-
-# --------------------------------------------------------------------------- outputs
-
-
-class _ClientOutput:
-    __slots__ = ()
-
-    #: The name of this output in traces.
-    KIND: ClassVar[str] = ""
-
-
-@attrs.frozen(kw_only=True)
-class SendGoal(_ClientOutput):
-    """Send this goal request on the action, under this goal UUID."""
-
-    KIND: ClassVar[str] = "send_goal"
-    goal_uuid: str
-    goal: Goal
-
-
-@attrs.frozen(kw_only=True)
-class Refused(_ClientOutput):
-    """A command was refused locally: the server, as the client knows it, would refuse the goal.
-
-    ``goal`` is the goal that was not sent (``None`` when none could be
-    built); ``rejection`` says why, with the reason the server would give.
-    """
-
-    KIND: ClassVar[str] = "refused"
-    event_type: EventType
-    rejection: Rejected
-    goal: Goal | None
-
-
-@attrs.frozen(kw_only=True)
-class Outcome(_ClientOutput):
-    """What became of one goal of this client: sent once, when the goal is over.
-
-    ``id`` is the event the goal concerns (a NEXT's child, as the result
-    names it; a CANCEL's target; a FINISHED's dynamic event, or 0 before it
-    ran).  ``status`` is the final status of the result (``""`` when the goal
-    never ran).  ``reason`` is known for rejections that carried one and for
-    the server's execution-failure strings.  ``goal_status`` and ``result``
-    are the terminal answer, ``rejection`` the server's refusal, when there
-    was one.
-    """
-
-    KIND: ClassVar[str] = "outcome"
-    goal_uuid: str
-    goal: Goal
-    kind: OutcomeKind
-    id: int
-    status: str
-    text: str
-    reason: RejectReason | None = None
-    execution_failure: str = ""
-    goal_status: GoalStatus | None = None
-    result: Result | None = None
-    rejection: Rejected | None = None
-
-
-@attrs.frozen(kw_only=True)
-class Progress(_ClientOutput):
-    """Feedback for one of this client's goals: the child's status, id and new log entries."""
-
-    KIND: ClassVar[str] = "progress"
-    goal_uuid: str
-    status: str
-    id: int
-    logs: tuple[LogEntry, ...]
-
-
-@attrs.frozen(kw_only=True)
-class RunBegan(_ClientOutput):
-    """A new dynamic event run has begun (first news of its description)."""
-
-    KIND: ClassVar[str] = "run_began"
-    seq: int
-    description: str
-
-
-@attrs.frozen(kw_only=True)
-class ViewChanged(_ClientOutput):
-    """The client's view of the robot changed (a status message was adopted)."""
-
-    KIND: ClassVar[str] = "view_changed"
-    phase: DynamicState
-    seq: int
-    current_id: int
-    status: str
-
-
-@attrs.frozen(kw_only=True)
-class TimedOut(_ClientOutput):
-    """A NEXT goal reached its deadline while open; the client cancels its child."""
-
-    KIND: ClassVar[str] = "timed_out"
-    goal_uuid: str
-    id: int
-    deadline: int
-
-
-@attrs.frozen(kw_only=True)
-class Ignored(_ClientOutput):
-    """Notice: the input had no effect, and why (a stale status, an answer for an unknown goal...)."""
-
-    KIND: ClassVar[str] = "ignored"
-    input: str
-    why: str
-
-
-#: Any output of the client machine.
-ClientOutput: TypeAlias = (
-    SendGoal | Refused | Outcome | Progress | RunBegan | ViewChanged | TimedOut | Ignored
-)
 
 
 # --------------------------------------------------------------------------- state
@@ -492,7 +203,6 @@ class ClientTransition:
 # --------------------------------------------------------------------------- knowledge
 
 
-
 def _run_over(state: ClientState, seq: int) -> bool:
     """Does the client know that run ``seq`` has ended?"""
     if state.newest_seq is None:
@@ -500,7 +210,6 @@ def _run_over(state: ClientState, seq: int) -> bool:
     if state.newest_seq != seq:
         return True
     return state.finished or (state.phase is DynamicState.INACTIVE and state.seq == seq)
-
 
 
 def _ended(state: ClientState, child_id: int) -> bool:
@@ -560,7 +269,7 @@ def _cancel_open(state: ClientState, seq: int, child_id: int) -> bool:
 
 
 def _projection(state: ClientState, event_type: int) -> State:
-    """The server state the client's view implies (:func:`~dynevent.machine.state_from_status`).
+    """The server state the client's view implies (:func:`~dynevent.server.machine.state_from_status`).
 
     Besides its last status message the client knows the ids it has seen in
     the run, that its own FINISHED ended the run, that a child it was told

@@ -107,7 +107,7 @@ TERMINAL_GOAL_STATUSES = frozenset({GoalStatus.SUCCEEDED, GoalStatus.CANCELED, G
 class RejectReason(str, enum.Enum):
     """Why a goal request was refused, or why an accepted goal could not start.
 
-    One closed vocabulary shared by the server machine (:func:`dynevent.machine.accept`),
+    One closed vocabulary shared by the server machine (:func:`dynevent.server.machine.accept`),
     the client machine's local refusals and the conformance vectors.  The
     order of the checks is given in docs/spec.md.
     """

@@ -32,13 +32,14 @@ from typing import Any
 
 import attrs
 
-from . import _json, machine
-from . import client as cl
-from . import inputs as ins
-from .loopback import Adapter, ChildScript, Loopback, Options, TimelineEvent
-from .messages import Goal
-from .records import rule_validator
-from .vocab import EventType, Failure, Status
+from dynevent import client as cl
+from dynevent.conformance.records import rule_validator
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.tools.loopback import Adapter, ChildScript, Loopback, Options, TimelineEvent
+from dynevent.wire import _json
+from dynevent.wire.messages import Goal
+from dynevent.wire.vocab import EventType, Failure, Status
 
 __all__ = ["STEPS", "WIDTH", "mermaid", "run_demo", "session_events", "summary"]
 

@@ -3,7 +3,7 @@
 A trace (docs/trace-format.md) is what was seen on the wire for one robot:
 begin and status messages, goal requests with their UUIDs, goal responses,
 feedback, terminal answers and action-level cancels, each with its time.
-The observer keeps a server state (:class:`dynevent.machine.State`) and
+The observer keeps a server state (:class:`dynevent.server.machine.State`) and
 infers the server's inputs from what it sees:
 
 - a ``begin`` is a ``Begin`` input (the event id arrives with the status
@@ -46,20 +46,37 @@ from typing import Any
 
 import attrs
 
-from . import _json, machine
-from . import inputs as ins
-from . import outputs as outs
-from ._fields import SECOND, U32_MAX, seq_after
-from ._progress import Progress
-from ._text import answer_text, goal_text, status_text
-from .errors import (
+from dynevent.conformance.records import InvalidRecord, config_from_json
+from dynevent.errors import (
     InvalidMessage,
     TraceError,  # defined there with every error; importable here too
 )
-from .machine import UNKNOWN_GOAL, QueuedGoal, RunningGoal, ServerConfig, State, state_from_status
-from .messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
-from .records import InvalidRecord, config_from_json
-from .vocab import DynamicState, EventType, Failure, GoalStatus, IdPolicy, RejectReason, Status, Tier
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.server import outputs as outs
+from dynevent.server.machine import (
+    UNKNOWN_GOAL,
+    QueuedGoal,
+    RunningGoal,
+    ServerConfig,
+    State,
+    state_from_status,
+)
+from dynevent.tools._progress import Progress
+from dynevent.wire import _json
+from dynevent.wire._fields import SECOND, U32_MAX, seq_after
+from dynevent.wire._text import answer_text, goal_text, status_text
+from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
+from dynevent.wire.vocab import (
+    DynamicState,
+    EventType,
+    Failure,
+    GoalStatus,
+    IdPolicy,
+    RejectReason,
+    Status,
+    Tier,
+)
 
 __all__ = [
     "RECORD_TYPES",

@@ -1,7 +1,7 @@
 """Mutable conveniences over the pure machine, for adapter authors.
 
 :class:`RobotServer` holds one robot's state and configuration and feeds
-inputs through :func:`dynevent.machine.step`; it adds nothing but holding the
+inputs through :func:`dynevent.server.machine.step`; it adds nothing but holding the
 state.  :class:`LockedRobotServer` does the same under one lock, for bindings
 whose callbacks run on several threads (rclpy's ``MultiThreadedExecutor``).
 :class:`Execution` is the adapter-facing view of one running child event, in
@@ -14,12 +14,12 @@ from __future__ import annotations
 import threading
 from typing import Any, Protocol
 
-from . import inputs as ins
-from . import machine, snapshot
-from .machine import ServerConfig, State, Transition
-from .messages import DynamicEventStatus, Goal
-from .outputs import Decision, Output
-from .vocab import Status, Tier
+from dynevent.server import inputs as ins
+from dynevent.server import machine, snapshot
+from dynevent.server.machine import ServerConfig, State, Transition
+from dynevent.server.outputs import Decision, Output
+from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.vocab import Status, Tier
 
 __all__ = ["Execution", "LockedRobotServer", "RobotServer", "Stepper"]
 
@@ -32,9 +32,9 @@ class Stepper(Protocol):
 
 
 class RobotServer:
-    """One robot's server: the current :class:`~dynevent.machine.State` and its config.
+    """One robot's server: the current :class:`~dynevent.server.machine.State` and its config.
 
-    Every method is the pure function of :mod:`dynevent.machine` applied to
+    Every method is the pure function of :mod:`dynevent.server.machine` applied to
     the held state; :meth:`step` also keeps the new state.
     """
 
@@ -57,7 +57,7 @@ class RobotServer:
         return self._config
 
     def accept(self, goal: Goal) -> Decision:
-        """Would ``goal`` be accepted now?  (:func:`dynevent.machine.accept`.)"""
+        """Would ``goal`` be accepted now?  (:func:`dynevent.server.machine.accept`.)"""
         return machine.accept(self._state, goal, self._config)
 
     def step(self, event: ins.Input) -> tuple[Output, ...]:
@@ -71,7 +71,7 @@ class RobotServer:
         return machine.status_message(self._state, now)
 
     def snapshot(self) -> str:
-        """The state as snapshot JSON text (:mod:`dynevent.snapshot`)."""
+        """The state as snapshot JSON text (:mod:`dynevent.server.snapshot`)."""
         return snapshot.dumps(self._state)
 
     @classmethod

@@ -1,6 +1,6 @@
 """What the server machine asks the adapter to do: its outputs, as values.
 
-:func:`dynevent.machine.step` returns a tuple of these, in the order the
+:func:`dynevent.server.machine.step` returns a tuple of these, in the order the
 adapter (or a ROS binding) must carry them out.  They are plain frozen data:
 the machine builds them from already-checked state, so they carry no
 validation of their own.
@@ -31,8 +31,8 @@ from typing import Any, ClassVar, TypeAlias
 
 import attrs
 
-from ._fields import ANNOTATION
-from .messages import (
+from dynevent.wire._fields import ANNOTATION
+from dynevent.wire.messages import (
     DescriptionResponse,
     DynamicEventDescription,
     DynamicEventStatus,
@@ -40,7 +40,7 @@ from .messages import (
     LogEntry,
     Result,
 )
-from .vocab import GoalStatus, RejectReason
+from dynevent.wire.vocab import GoalStatus, RejectReason
 
 __all__ = [
     "OUTPUT_TYPES",
@@ -90,14 +90,14 @@ class _Output:
 
 @attrs.frozen(kw_only=True)
 class Accepted:
-    """:func:`~dynevent.machine.accept` says yes."""
+    """:func:`~dynevent.server.machine.accept` says yes."""
 
     event_type: int
 
 
 @attrs.frozen(kw_only=True)
 class Rejected:
-    """:func:`~dynevent.machine.accept` says no, and why.
+    """:func:`~dynevent.server.machine.accept` says no, and why.
 
     ``reason`` is the closed code; ``text`` a human sentence.  The other fields
     carry the values that explain the refusal where they apply (``None`` or
@@ -121,7 +121,7 @@ class Rejected:
     rule: str = _rule()
 
 
-#: What :func:`~dynevent.machine.accept` returns.
+#: What :func:`~dynevent.server.machine.accept` returns.
 Decision: TypeAlias = Accepted | Rejected
 
 

@@ -1,4 +1,4 @@
-"""The server machine's phase diagram, drawn from :data:`dynevent.machine.TRANSITIONS`.
+"""The server machine's phase diagram, drawn from :data:`dynevent.server.machine.TRANSITIONS`.
 
 docs/spec.md embeds the Mermaid form; the test suite checks it is up to date.
 """
@@ -17,7 +17,9 @@ def _label(input_kind: str, guard: str, rule: str) -> str:
 
 
 def _mermaid() -> str:
-    from .machine import TRANSITIONS  # here, not at import: the command line's help stays quick
+    from dynevent.server.machine import (
+        TRANSITIONS,  # here, not at import: the command line's help stays quick
+    )
 
     lines = ["stateDiagram-v2", "    [*] --> INACTIVE"]
     for edge in TRANSITIONS:
@@ -28,7 +30,7 @@ def _mermaid() -> str:
 
 
 def _dot() -> str:
-    from .machine import TRANSITIONS
+    from dynevent.server.machine import TRANSITIONS
 
     lines = [
         "digraph dynamic_event {",

@@ -3,7 +3,7 @@
 A ``DynamicEventStatus`` message tells the seq, the phase and the current id
 (the dynamic event's own id while WAITING, the running child's while
 RUNNING).  :func:`state_from_status` rebuilds the server state those allow;
-:func:`explain` runs :func:`dynevent.machine.accept` on it, and when the goal
+:func:`explain` runs :func:`dynevent.server.machine.accept` on it, and when the goal
 is refused, says which check refused it (reason code, sentence, values, rule)
 and what to send instead, re-checking each correction until one passes.
 
@@ -23,15 +23,24 @@ from typing import Any
 
 import attrs
 
-from . import _json, machine
-from . import inputs as ins
-from . import outputs as outs
-from ._fields import U32_MAX, U64_MAX
-from ._text import goal_text, status_text
-from .errors import DyneventError, InvalidMessage
-from .machine import UNKNOWN_GOAL, ServerConfig, State, state_from_status
-from .messages import DynamicEventStatus, Goal
-from .vocab import Compatibility, DynamicState, EventType, Failure, GoalStatus, RejectReason, Status
+from dynevent.errors import DyneventError, InvalidMessage
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.server import outputs as outs
+from dynevent.server.machine import UNKNOWN_GOAL, ServerConfig, State, state_from_status
+from dynevent.wire import _json
+from dynevent.wire._fields import U32_MAX, U64_MAX
+from dynevent.wire._text import goal_text, status_text
+from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.vocab import (
+    Compatibility,
+    DynamicState,
+    EventType,
+    Failure,
+    GoalStatus,
+    RejectReason,
+    Status,
+)
 
 __all__ = [
     "UNKNOWN_GOAL",

@@ -17,15 +17,15 @@ from typing import Any
 
 import attrs
 
-from . import _json
-from ._codec import CodecError, decode, encode
-from ._fields import SECOND, U32_MAX, U64_MAX
-from .description import EventDescription
-from .errors import DyneventError, InvalidSnapshot
-from .inputs import NOW_RANGE
-from .machine import SECONDS_RANGE, State
-from .names import validate_robot, validate_token
-from .vocab import EventType, Status
+from dynevent.errors import DyneventError, InvalidSnapshot
+from dynevent.server.inputs import NOW_RANGE
+from dynevent.server.machine import SECONDS_RANGE, State
+from dynevent.wire import _json
+from dynevent.wire._codec import CodecError, decode, encode
+from dynevent.wire._fields import SECOND, U32_MAX, U64_MAX
+from dynevent.wire.description import EventDescription
+from dynevent.wire.names import validate_robot, validate_token
+from dynevent.wire.vocab import EventType, Status
 
 #: A day in nanoseconds: a refresh instant may lie up to one refresh period past the last ``now``.
 SECONDS_NS = 86_400 * SECOND

@@ -17,9 +17,9 @@ from typing import Any, Union
 
 import attrs
 
-from ._fields import ANNOTATION, string_problem
-from .errors import DyneventError
-from .messages import WireMessage
+from dynevent.errors import DyneventError
+from dynevent.wire._fields import ANNOTATION, string_problem
+from dynevent.wire.messages import WireMessage
 
 __all__ = ["CodecError", "decode", "encode"]
 

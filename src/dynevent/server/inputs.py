@@ -19,12 +19,12 @@ from typing import Any, ClassVar, TypeAlias
 
 import attrs
 
-from . import _fields
-from ._fields import SECOND, boolean_field, string, u64
-from .description import EventDescription
-from .errors import DyneventError, InvalidMessage
-from .messages import Goal
-from .vocab import Status, Tier
+from dynevent.errors import DyneventError, InvalidMessage
+from dynevent.wire import _fields
+from dynevent.wire._fields import SECOND, boolean_field, string, u64
+from dynevent.wire.description import EventDescription
+from dynevent.wire.messages import Goal
+from dynevent.wire.vocab import Status, Tier
 
 __all__ = [
     "MAX_LOG_TEXT_LENGTH",
@@ -220,7 +220,7 @@ class GoalSubmitted(_Input):
     """A goal the transport has already accepted arrives, to be requested and started in one step.
 
     For bindings whose goal callback cannot name the goal (rclpy's gets no
-    goal UUID): they check the goal with :func:`dynevent.machine.accept`, let
+    goal UUID): they check the goal with :func:`dynevent.server.machine.accept`, let
     the transport accept it, and submit it here with its UUID (R5.3).
     """
 

@@ -1,16 +1,16 @@
 """Many robots' servers in one object, routed by ``(fleet, robot)`` or by protocol name.
 
 A :class:`Fleet` holds, for every robot it knows, the robot's
-:class:`~dynevent.machine.State` and :class:`~dynevent.machine.ServerConfig`,
+:class:`~dynevent.server.machine.State` and :class:`~dynevent.server.machine.ServerConfig`,
 keyed by :class:`RobotKey` ``(fleet, robot)``.  Robots of several fleets may
 share one :class:`Fleet`.  It adds nothing to the rules: :meth:`Fleet.step` is
-:func:`dynevent.machine.step` applied to the held state of one robot.
+:func:`dynevent.server.machine.step` applied to the held state of one robot.
 
 Routing costs a constant number of dict lookups whatever the number of
 robots: by key directly, and by name (an action, topic or service name of
-:mod:`dynevent.names`) by splitting the name at its last two ``/`` and looking
+:mod:`dynevent.wire.names`) by splitting the name at its last two ``/`` and looking
 up the prefix and the key.  A name that does not route that way is handed to
-:func:`dynevent.names.parse_name`, so a malformed name raises the same
+:func:`dynevent.wire.names.parse_name`, so a malformed name raises the same
 :class:`~dynevent.errors.InvalidName` it would raise there.
 
 Configuration: each robot is added with its own config, or takes its fleet's
@@ -18,8 +18,8 @@ default (:meth:`Fleet.set_fleet_config`), or else the default of the whole
 :class:`Fleet`.  The config is chosen when the robot is added.
 
 Snapshots: :meth:`Fleet.snapshot` writes every robot's state as one JSON
-object ``{"format": "dynevent.fleet", "version": 1, "robots": [...]}`` whose
-items are the per-robot snapshots of :func:`dynevent.snapshot.snapshot`, in
+object ``{"format": "dynevent.server.fleet", "version": 1, "robots": [...]}`` whose
+items are the per-robot snapshots of :func:`dynevent.server.snapshot.snapshot`, in
 the order the robots were added.  Configs are not part of a snapshot (their
 validators are callables): :meth:`Fleet.restore` asks a lookup for them.  A
 document that is corrupt, of another format or of an unknown version is
@@ -35,18 +35,19 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Mapping
 from typing import Any, NamedTuple, TypeAlias
 
-from . import _json, machine, snapshot
-from . import inputs as ins
-from .errors import (  # defined there with every error; importable here too
+from dynevent.errors import (  # defined there with every error; importable here too
     DuplicateRobot,
     DyneventError,
     InvalidSnapshot,
     UnknownRobot,
 )
-from .machine import ServerConfig, State
-from .messages import DynamicEventStatus, Goal
-from .names import NameKind, build_name, parse_name, validate_robot, validate_token
-from .outputs import Decision, Output
+from dynevent.server import inputs as ins
+from dynevent.server import machine, snapshot
+from dynevent.server.machine import ServerConfig, State
+from dynevent.server.outputs import Decision, Output
+from dynevent.wire import _json
+from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.names import NameKind, build_name, parse_name, validate_robot, validate_token
 
 __all__ = [
     "FORMAT",
@@ -60,7 +61,7 @@ __all__ = [
 ]
 
 #: The ``format`` tag of a fleet snapshot.
-FORMAT = "dynevent.fleet"
+FORMAT = "dynevent.server.fleet"
 #: The fleet snapshot version this release writes and reads.
 VERSION = 1
 
@@ -149,7 +150,7 @@ class Fleet:
     ) -> RobotKey:
         """Add a robot and return its key.
 
-        The robot starts from :meth:`State.new <dynevent.machine.State.new>`,
+        The robot starts from :meth:`State.new <dynevent.server.machine.State.new>`,
         or from ``state`` (which must belong to this fleet and robot).  Raises
         :class:`~dynevent.errors.InvalidName` if the names are not valid tokens
         or make a protocol name too long, :class:`DuplicateRobot` if the robot
@@ -215,7 +216,7 @@ class Fleet:
     def route(self, name: str) -> RobotKey:
         """The robot a per-robot action, topic or service name belongs to.
 
-        Accepts what :func:`dynevent.names.parse_name` accepts.  Raises
+        Accepts what :func:`dynevent.wire.names.parse_name` accepts.  Raises
         :class:`~dynevent.errors.InvalidName` for anything else and
         :class:`UnknownRobot` for a well-formed name of a robot not here.
         """
@@ -247,7 +248,7 @@ class Fleet:
         return Routed(key, self.step(key.fleet, key.robot, event))
 
     def accept(self, fleet: str, robot: str, goal: Goal) -> Decision:
-        """Would the robot accept ``goal`` now?  (:func:`dynevent.machine.accept`.)"""
+        """Would the robot accept ``goal`` now?  (:func:`dynevent.server.machine.accept`.)"""
         seat = self._seat(fleet, robot)
         return machine.accept(seat.state, goal, seat.config)
 

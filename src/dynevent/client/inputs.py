@@ -1,0 +1,161 @@
+"""The client machine's inputs: what the action, the topics and the clock tell a client.
+
+Each is a frozen value checked where it is built (:class:`~dynevent.errors.InvalidMessage`
+names the field and the value); :func:`dynevent.client.step` never raises on one.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar, TypeAlias
+
+import attrs
+
+from dynevent.errors import InvalidMessage
+from dynevent.server.inputs import NOW_RANGE, goal_uuid
+from dynevent.server.outputs import Rejected
+from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Feedback, Result
+from dynevent.wire.vocab import GoalStatus
+
+__all__ = [
+    "BeginReceived",
+    "ClientInput",
+    "FeedbackReceived",
+    "GoalResponse",
+    "ResultReceived",
+    "StatusReceived",
+    "Tick",
+]
+
+
+# --------------------------------------------------------------------------- checks at the edge
+
+
+def _check_now(where: str, value: Any) -> int:
+    if type(value) is not int:
+        raise InvalidMessage(where, "now", value, "expected integer nanoseconds")
+    if not NOW_RANGE[0] <= value <= NOW_RANGE[1]:
+        raise InvalidMessage(where, "now", value, "outside the range of builtin_interfaces/Time")
+    return value
+
+
+def _uuid_converter(value: Any, instance: object, field: attrs.Attribute[Any]) -> str:
+    try:
+        return goal_uuid(value)
+    except ValueError as exc:
+        raise InvalidMessage(type(instance).__name__, field.name, value, str(exc)) from None
+
+
+def _now_converter(value: Any, instance: object, field: attrs.Attribute[Any]) -> int:
+    return _check_now(type(instance).__name__, value)
+
+
+def _field(function: Any, **kwargs: Any) -> Any:
+    """An ``attrs.field`` whose converter is ``function(value, instance, field)``."""
+    return attrs.field(converter=attrs.Converter(function, takes_self=True, takes_field=True), **kwargs)
+
+
+def _typed(cls: type) -> Any:
+    """A field that holds exactly an instance of ``cls``."""
+
+    def check(value: Any, instance: object, field: attrs.Attribute[Any]) -> Any:
+        if type(value) is not cls:
+            raise InvalidMessage(type(instance).__name__, field.name, value, f"expected a {cls.__name__}")
+        return value
+
+    return _field(check)
+
+
+# --------------------------------------------------------------------------- inputs
+
+
+class _ClientInput:
+    __slots__ = ()
+
+    #: The name of this input in traces.
+    KIND: ClassVar[str] = ""
+
+
+@attrs.frozen(kw_only=True)
+class BeginReceived(_ClientInput):
+    """A begin description arrived (``rmf/dynamic_event/begin/<fleet>/<robot>``)."""
+
+    KIND: ClassVar[str] = "begin_received"
+    message: DynamicEventDescription = _typed(DynamicEventDescription)
+
+
+@attrs.frozen(kw_only=True)
+class StatusReceived(_ClientInput):
+    """A status message arrived (``rmf/dynamic_event/status/<fleet>/<robot>``)."""
+
+    KIND: ClassVar[str] = "status_received"
+    message: DynamicEventStatus = _typed(DynamicEventStatus)
+
+
+def _rejection(value: Any, instance: object, field: attrs.Attribute[Any]) -> Rejected | None:
+    if value is not None and type(value) is not Rejected:
+        raise InvalidMessage(type(instance).__name__, field.name, value, "expected a Rejected or None")
+    return value
+
+
+@attrs.frozen(kw_only=True)
+class GoalResponse(_ClientInput):
+    """The server answered a goal request: accepted, or rejected.
+
+    A ROS rejection carries no reason (``rejection`` is ``None``); a client
+    talking to dynevent in-process may get the server's
+    :class:`~dynevent.server.outputs.Rejected`.
+    """
+
+    KIND: ClassVar[str] = "goal_response"
+    goal_uuid: str = _field(_uuid_converter)
+    accepted: bool = attrs.field(validator=attrs.validators.instance_of(bool))
+    rejection: Rejected | None = _field(_rejection, default=None)
+
+    def __attrs_post_init__(self) -> None:
+        if self.accepted and self.rejection is not None:
+            raise InvalidMessage("GoalResponse", "rejection", self.rejection, "an accepted goal has none")
+
+
+@attrs.frozen(kw_only=True)
+class FeedbackReceived(_ClientInput):
+    """Feedback arrived for a goal."""
+
+    KIND: ClassVar[str] = "feedback_received"
+    goal_uuid: str = _field(_uuid_converter)
+    feedback: Feedback = _typed(Feedback)
+
+
+def _terminal(value: Any, instance: object, field: attrs.Attribute[Any]) -> GoalStatus:
+    try:
+        status = GoalStatus(value)
+    except ValueError:
+        status = None
+    if status is None or not status.is_terminal:
+        raise InvalidMessage(
+            type(instance).__name__, field.name, value, "expected succeeded, canceled or aborted"
+        )
+    return status
+
+
+@attrs.frozen(kw_only=True)
+class ResultReceived(_ClientInput):
+    """A goal's terminal answer arrived: its final goal status and its result."""
+
+    KIND: ClassVar[str] = "result_received"
+    goal_uuid: str = _field(_uuid_converter)
+    status: GoalStatus = _field(_terminal)
+    result: Result = _typed(Result)
+
+
+@attrs.frozen(kw_only=True)
+class Tick(_ClientInput):
+    """Time passed: ``now`` in integer nanoseconds.  Timeouts are checked here."""
+
+    KIND: ClassVar[str] = "tick"
+    now: int = _field(_now_converter)
+
+
+#: Any input of the client machine.
+ClientInput: TypeAlias = (
+    BeginReceived | StatusReceived | GoalResponse | FeedbackReceived | ResultReceived | Tick
+)

@@ -1,0 +1,187 @@
+"""The client machine's outputs: goals to send, local refusals, outcomes and notices.
+
+Plain frozen values built by the machine (never by a user), so they are not checked again.
+"""
+
+from __future__ import annotations
+
+import enum
+from typing import ClassVar, TypeAlias
+
+import attrs
+
+from dynevent.server.outputs import Rejected
+from dynevent.wire.messages import Goal, LogEntry, Result
+from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReason, Status
+
+__all__ = [
+    "ClientOutput",
+    "Ignored",
+    "Outcome",
+    "OutcomeKind",
+    "Progress",
+    "Refused",
+    "RunBegan",
+    "SendGoal",
+    "TimedOut",
+    "ViewChanged",
+]
+
+
+class OutcomeKind(str, enum.Enum):
+    """What became of one goal: the closed taxonomy of :class:`Outcome`.
+
+    The first six classify a goal that ran to its end by the final status in
+    its :class:`~dynevent.wire.messages.Result` (for a NEXT or CANCEL goal, the
+    child event's; for FINISHED, the dynamic event's).  The last four say why
+    it did not.
+    """
+
+    #: The event ran to its end (final status ``completed``).
+    COMPLETED = "completed"
+    #: The event was cancelled (final status ``canceled``), by a CANCEL goal or the task.
+    CANCELED = "canceled"
+    #: The event was killed (final status ``killed``), e.g. the task was killed.
+    KILLED = "killed"
+    #: The event was skipped (final status ``skipped``).
+    SKIPPED = "skipped"
+    #: The event ended ``failed``.
+    FAILED = "failed"
+    #: The event ended ``error``, or with a status that is not a final one.
+    ERROR = "error"
+    #: The server accepted the goal and could not begin it; ``execution_failure`` holds its string.
+    EXECUTION_FAILURE = "execution_failure"
+    #: The server refused the goal request; ``reason`` says why when the refusal carried one.
+    REJECTED = "rejected"
+    #: The NEXT goal outran its timeout; the client cancelled it and it has now ended.
+    TIMEOUT = "timeout"
+    #: The run ended, or a new run began, before the answer arrived, and the goal never ran.
+    SUPERSEDED = "superseded"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+_BY_FINAL_STATUS: dict[str, OutcomeKind] = {
+    Status.COMPLETED.value: OutcomeKind.COMPLETED,
+    Status.CANCELED.value: OutcomeKind.CANCELED,
+    Status.KILLED.value: OutcomeKind.KILLED,
+    Status.SKIPPED.value: OutcomeKind.SKIPPED,
+    Status.FAILED.value: OutcomeKind.FAILED,
+    Status.ERROR.value: OutcomeKind.ERROR,
+}
+
+# --------------------------------------------------------------------------- outputs
+
+
+class _ClientOutput:
+    __slots__ = ()
+
+    #: The name of this output in traces.
+    KIND: ClassVar[str] = ""
+
+
+@attrs.frozen(kw_only=True)
+class SendGoal(_ClientOutput):
+    """Send this goal request on the action, under this goal UUID."""
+
+    KIND: ClassVar[str] = "send_goal"
+    goal_uuid: str
+    goal: Goal
+
+
+@attrs.frozen(kw_only=True)
+class Refused(_ClientOutput):
+    """A command was refused locally: the server, as the client knows it, would refuse the goal.
+
+    ``goal`` is the goal that was not sent (``None`` when none could be
+    built); ``rejection`` says why, with the reason the server would give.
+    """
+
+    KIND: ClassVar[str] = "refused"
+    event_type: EventType
+    rejection: Rejected
+    goal: Goal | None
+
+
+@attrs.frozen(kw_only=True)
+class Outcome(_ClientOutput):
+    """What became of one goal of this client: sent once, when the goal is over.
+
+    ``id`` is the event the goal concerns (a NEXT's child, as the result
+    names it; a CANCEL's target; a FINISHED's dynamic event, or 0 before it
+    ran).  ``status`` is the final status of the result (``""`` when the goal
+    never ran).  ``reason`` is known for rejections that carried one and for
+    the server's execution-failure strings.  ``goal_status`` and ``result``
+    are the terminal answer, ``rejection`` the server's refusal, when there
+    was one.
+    """
+
+    KIND: ClassVar[str] = "outcome"
+    goal_uuid: str
+    goal: Goal
+    kind: OutcomeKind
+    id: int
+    status: str
+    text: str
+    reason: RejectReason | None = None
+    execution_failure: str = ""
+    goal_status: GoalStatus | None = None
+    result: Result | None = None
+    rejection: Rejected | None = None
+
+
+@attrs.frozen(kw_only=True)
+class Progress(_ClientOutput):
+    """Feedback for one of this client's goals: the child's status, id and new log entries."""
+
+    KIND: ClassVar[str] = "progress"
+    goal_uuid: str
+    status: str
+    id: int
+    logs: tuple[LogEntry, ...]
+
+
+@attrs.frozen(kw_only=True)
+class RunBegan(_ClientOutput):
+    """A new dynamic event run has begun (first news of its description)."""
+
+    KIND: ClassVar[str] = "run_began"
+    seq: int
+    description: str
+
+
+@attrs.frozen(kw_only=True)
+class ViewChanged(_ClientOutput):
+    """The client's view of the robot changed (a status message was adopted)."""
+
+    KIND: ClassVar[str] = "view_changed"
+    phase: DynamicState
+    seq: int
+    current_id: int
+    status: str
+
+
+@attrs.frozen(kw_only=True)
+class TimedOut(_ClientOutput):
+    """A NEXT goal reached its deadline while open; the client cancels its child."""
+
+    KIND: ClassVar[str] = "timed_out"
+    goal_uuid: str
+    id: int
+    deadline: int
+
+
+@attrs.frozen(kw_only=True)
+class Ignored(_ClientOutput):
+    """Notice: the input had no effect, and why (a stale status, an answer for an unknown goal...)."""
+
+    KIND: ClassVar[str] = "ignored"
+    input: str
+    why: str
+
+
+#: Any output of the client machine.
+ClientOutput: TypeAlias = (
+    SendGoal | Refused | Outcome | Progress | RunBegan | ViewChanged | TimedOut | Ignored
+)
