@@ -8,6 +8,7 @@ from typing import Any
 import attrs
 import pytest
 from hypothesis import given
+from hypothesis import strategies as st
 
 from dynevent.conformance.driver import Driver
 from dynevent.conformance.records import config_from_json
@@ -16,6 +17,8 @@ from dynevent.server import machine, snapshot
 from dynevent.server.fleet import Fleet
 from dynevent.server.machine import State
 from dynevent.testing import DEFAULT_CONFIG, input_sequences
+from dynevent.wire.messages import Goal
+from dynevent.wire.vocab import EventType, Status
 from scenario import deferred, running, stubborn, waiting
 
 CONFIG = config_from_json(dict(DEFAULT_CONFIG))
@@ -112,3 +115,41 @@ def test_every_state_the_machine_reaches_keeps_the_invariants(events: list[Any])
     for event in events:
         state = machine.step(state, event, CONFIG).state
         assert snapshot.state_problems(state) == []
+
+
+def _resyncs(state: State, uuid: str, number: int, status: str) -> dict[str, State]:
+    """Every resync operation the machine offers an observer, applied to ``state``."""
+    goal = Goal(dynamic_event_seq=state.seq, event_type=EventType.NEXT, id=number)
+    displaced = [item.goal_uuid for item in state.queued][:1]
+    return {
+        "seq": machine.resync_seq(state, number) if not state.active else state,
+        "next_run": machine.resync_next_run(state, number) if not state.active else state,
+        "serving": machine.resync_serving(state) if not state.active else state,
+        "run_dropped": machine.resync_run_dropped(state),
+        "event_id": machine.resync_event_id(state, number) if state.active else state,
+        "queued": machine.resync_queued(state, uuid, goal) if state.active else state,
+        "dropped": machine.resync_dropped(state, (*displaced, uuid)[0]),
+        "child_started": machine.resync_child_started(state, resumed=True),
+        "start_dropped": machine.resync_start_dropped(state) if state.running is not None else state,
+        "running_goal": machine.resync_running_goal(state, uuid),
+        "child_id": machine.resync_child_id(state, max(number, state.last_id)),
+        "running": machine.resync_running(state, uuid, goal, max(number, state.last_id), status, displaced)
+        if state.active and not state.shutdown
+        else state,
+    }
+
+
+@pytest.mark.spec("R19.8")
+@given(
+    events=input_sequences(tuple(DEFAULT_CONFIG["categories"]), max_size=25),
+    number=st.integers(0, 2**32 - 1),
+    status=st.sampled_from([status.value for status in Status]),
+)
+def test_every_resync_an_observer_may_make_keeps_the_invariants(
+    events: list[Any], number: int, status: str
+) -> None:
+    state = State.new("fleet", "robot")
+    for event in events:
+        state = machine.step(state, event, CONFIG).state
+    for name, resynced in _resyncs(state, "0" * 31 + "f", number, status).items():
+        assert snapshot.state_problems(resynced) == [], name

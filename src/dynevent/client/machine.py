@@ -290,8 +290,7 @@ def _projection(state: ClientState, event_type: int) -> State:
         status=state.status,
         id=state.current_id if child is None else child,
     )
-    server = machine.state_from_status(view)
-    return attrs.evolve(server, last_id=max(server.last_id, state.last_id))
+    return machine.state_from_status(view, last_id=state.last_id)
 
 
 def _config(state: ClientState, category: str) -> ServerConfig:

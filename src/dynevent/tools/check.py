@@ -56,8 +56,6 @@ from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.server.machine import (
     UNKNOWN_GOAL,
-    QueuedGoal,
-    RunningGoal,
     ServerConfig,
     State,
     state_from_status,
@@ -608,13 +606,13 @@ class _Observer:
                 self.event_id_unknown = message.dynamic_state != DynamicState.INACTIVE
                 self.start_uncertain = self.st.running is not None and not self.st.running.started
             except ValueError as exc:
-                self.state = attrs.evolve(base, seq=message.dynamic_event_seq)
+                self.state = machine.resync_seq(base, message.dynamic_event_seq)
                 self.flag(
                     "R2.2", "status_phase", f"status {status_text(message)}: {exc}", "dynamic_state 0, 1 or 2"
                 )
             return True
         if record.kind == "begin":
-            self.state = attrs.evolve(base, seq=(record.message.dynamic_event_seq - 1) & U32_MAX)
+            self.state = machine.resync_next_run(base, record.message.dynamic_event_seq)
             return False
         self.state = base  # a trace from the server's start
         return False
@@ -666,8 +664,7 @@ class _Observer:
                 f"{goal_text(goal)} accepted",
                 f"rejected: {decision.reason.value} ({decision.text})",
             )
-            queued = (*self.st.queued, QueuedGoal(goal_uuid=record.goal_uuid, goal=goal))
-            self.state = attrs.evolve(self.st, queued=queued)
+            self.state = machine.resync_queued(self.st, record.goal_uuid, goal)
             return
         if self.unknowable(goal, record):
             return
@@ -731,7 +728,7 @@ class _Observer:
                 and answer.message.status == Status.CANCELED.value
             )
             if not deferred:
-                self.state = attrs.evolve(self.st, running=attrs.evolve(running, started=True))
+                self.state = machine.resync_child_started(self.st)
             self.start_uncertain = False
         self.commit(*self.simulate([ins.CancelRequested(goal_uuid=record.goal_uuid, now=self.now)]))
 
@@ -781,7 +778,7 @@ class _Observer:
         state = self.st
         if state.shutdown:
             self.flag("R15.2", "begin_after_shutdown", f"begin of run {message.dynamic_event_seq}", "nothing")
-            state = attrs.evolve(state, shutdown=False)
+            state = machine.resync_serving(state)
         if state.active:
             self.flag(
                 "R3.4",
@@ -793,7 +790,7 @@ class _Observer:
             if state.running is not None:
                 open_goals.append(state.running.goal_uuid)
             self.displace(open_goals)
-            state = attrs.evolve(state, active=False, running=None, queued=(), cancels=(), stubborn=None)
+            state = machine.resync_run_dropped(state)
         expected = (state.seq + 1) & U32_MAX
         if message.dynamic_event_seq != expected:
             self.flag(
@@ -802,7 +799,7 @@ class _Observer:
                 f"begin of run {message.dynamic_event_seq}",
                 f"seq {expected}, one above the previous run's {state.seq}",
             )
-            state = attrs.evolve(state, seq=(message.dynamic_event_seq - 1) & U32_MAX)
+            state = machine.resync_next_run(state, message.dynamic_event_seq)
         try:
             event = ins.Begin(description=message.description, event_id=0, now=self.now)
         except InvalidMessage as exc:
@@ -830,7 +827,7 @@ class _Observer:
         ):
             return
         self.event_id_pending = False
-        self.state = attrs.evolve(state, event_id=message.id, last_id=max(state.last_id, message.id))
+        self.state = machine.resync_event_id(state, message.id)
         patched = []
         for item in self.owed:
             output = item.output
@@ -914,7 +911,7 @@ class _Observer:
             seen = _GoalSeen(goal=Goal(), line=0, responded=True, accepted=True, owed=True)
             self.goals[uuid] = seen
             return seen
-        self.state = attrs.evolve(self.st, running=attrs.evolve(running, goal_uuid=uuid))
+        self.state = machine.resync_running_goal(self.st, uuid)
         seen = _GoalSeen(goal=running.goal, line=0, responded=True, accepted=True)
         self.goals[uuid] = seen
         return seen
@@ -987,7 +984,7 @@ class _Observer:
         if found is not None and _exact(found[3].output, record) and self.confirmed(found):
             return found
         saved = self.st
-        self.state = attrs.evolve(saved, running=attrs.evolve(running, started=True), interrupted=False)
+        self.state = machine.resync_child_started(saved, resumed=True)
         other = self.abduce(record)
         found_exact = found is not None and _exact(found[3].output, record)
         if (
@@ -1085,7 +1082,7 @@ class _Observer:
         running = self.st.running
         if running is None:
             return
-        self.state = attrs.evolve(self.st, running=attrs.evolve(running, child_id=child_id), last_id=child_id)
+        self.state = machine.resync_child_id(self.st, child_id)
         current = machine.status_message(self.st, self.now)
         self.owed = [
             attrs.evolve(item, output=outs.PublishStatus(message=current))
@@ -1152,23 +1149,7 @@ class _Observer:
                 if item.goal.event_type == EventType.CANCEL and item.goal.id == old
             )
         self.displace(displaced)
-        running = RunningGoal(
-            goal_uuid=uuid,
-            goal=goal,
-            child_id=feedback.id,
-            child_status=feedback.status,
-            started=feedback.status != Status.QUEUED.value,
-        )
-        self.state = attrs.evolve(
-            state,
-            queued=tuple(item for item in state.queued if item.goal_uuid not in (uuid, *displaced)),
-            running=running,
-            cancels=(),
-            status=feedback.status,
-            last_id=feedback.id,
-            stubborn=None,
-            active=True,
-        )
+        self.state = machine.resync_running(state, uuid, goal, feedback.id, feedback.status, displaced)
         self.owed = [item for item in self.owed if item.channel != "status"]
 
     def on_result(self, record: Record) -> None:
@@ -1233,7 +1214,7 @@ class _Observer:
             return False
         if record.message != result:
             return False
-        self.state = attrs.evolve(state, queued=tuple(item for item in state.queued if item is not queued))
+        self.state = machine.resync_dropped(state, uuid)
         return True
 
     def compare_answer(self, owed: _Owed, record: Record) -> None:
@@ -1251,7 +1232,7 @@ class _Observer:
             self.flag(owed.rule, "goal_status", label, f"{want} ({owed.rule})")
         elif owed.rule == "R11.1" and self.event_id_unknown:
             self.event_id_unknown = False  # the first FINISHED of a run joined late names its own id
-            self.state = attrs.evolve(self.st, event_id=observed.id)
+            self.state = machine.resync_event_id(self.st, observed.id)
         elif expected.id != observed.id:
             rule = "R8.1" if owed.rule in ("R8.2", "R8.3") else owed.rule
             self.flag(rule, "result_id", f"{label}: the result id does not match", f"{want} ({rule})")
@@ -1278,22 +1259,16 @@ class _Observer:
                 f"{label} while child {child} still runs",
                 f"the CANCEL waits for child {child} to end, then is answered with its result (R8.3)",
             )
-            self.state = attrs.evolve(
-                state,
-                cancels=tuple(other for other in state.cancels if other != uuid),
-                queued=tuple(item for item in state.queued if item.goal_uuid != uuid),
-            )
+            self.state = machine.resync_dropped(state, uuid)
             return
         if queued is not None:
             start = "its child starts" if queued.goal.event_type == EventType.NEXT else "it runs"
             self.flag("R6.4", "unexpected_answer", label, f"no answer yet: {start}")
-            self.state = attrs.evolve(
-                state, queued=tuple(item for item in state.queued if item.goal_uuid != uuid)
-            )
+            self.state = machine.resync_dropped(state, uuid)
             return
         if running is not None and running.goal_uuid == uuid:
             self.flag("R6.3", "unexpected_answer", label, "no answer while the child's start is deferred")
-            self.state = attrs.evolve(state, running=None, status=Status.STANDBY.value)
+            self.state = machine.resync_start_dropped(state)
             return
         self.flag("R19.1", "unexpected_answer", label, "no answer: the goal is not open")
 
