@@ -366,59 +366,37 @@ def step_records(event: ins.Input, outputs: Iterable[outs.Output]) -> list[dict[
     time = _seconds(event.now)
     rows: list[dict[str, Any]] = []
     if isinstance(event, ins.GoalRequested):
-        rows.append(
-            {"time": time, "type": "goal", "goal_uuid": event.goal_uuid, "goal": event.goal.to_dict()}
-        )
+        rows.append({"type": "goal", "goal_uuid": event.goal_uuid, "goal": event.goal.to_dict()})
     if isinstance(event, ins.CancelRequested):
-        rows.append({"time": time, "type": "cancel_request", "goal_uuid": event.goal_uuid})
-    for output in outputs:
-        if isinstance(output, outs.GoalAccepted):
-            rows.append(
-                {"time": time, "type": "goal_response", "goal_uuid": output.goal_uuid, "accepted": True}
-            )
-        elif isinstance(output, outs.GoalRejected):
-            rows.append(
-                {
-                    "time": time,
-                    "type": "goal_response",
-                    "goal_uuid": output.goal_uuid,
-                    "accepted": False,
-                    "reason": output.rejection.reason.value,
-                }
-            )
-        elif isinstance(output, outs.CancelResponse):
-            rows.append(
-                {
-                    "time": time,
-                    "type": "cancel_response",
-                    "goal_uuid": output.goal_uuid,
-                    "accepted": output.accepted,
-                }
-            )
-        elif isinstance(output, outs.PublishBegin):
-            rows.append({"time": time, "type": "begin", "message": output.message.to_dict()})
-        elif isinstance(output, outs.PublishStatus):
-            rows.append({"time": time, "type": "status", "message": output.message.to_dict()})
-        elif isinstance(output, outs.PublishFeedback):
-            rows.append(
-                {
-                    "time": time,
-                    "type": "feedback",
-                    "goal_uuid": output.goal_uuid,
-                    "feedback": output.feedback.to_dict(),
-                }
-            )
-        elif isinstance(output, outs.AnswerGoal):
-            rows.append(
-                {
-                    "time": time,
-                    "type": "result",
-                    "goal_uuid": output.goal_uuid,
-                    "status": output.status.value,
-                    "result": output.result.to_dict(),
-                }
-            )
-    return rows
+        rows.append({"type": "cancel_request", "goal_uuid": event.goal_uuid})
+    rows.extend(row for row in map(_output_record, outputs) if row is not None)
+    return [{"time": time, **row} for row in rows]
+
+
+def _output_record(output: outs.Output) -> dict[str, Any] | None:
+    """The trace record of one output, without its time; ``None`` for one that is not on the wire."""
+    if isinstance(output, outs.GoalAccepted):
+        return {"type": "goal_response", "goal_uuid": output.goal_uuid, "accepted": True}
+    if isinstance(output, outs.GoalRejected):
+        reason = output.rejection.reason.value
+        return {"type": "goal_response", "goal_uuid": output.goal_uuid, "accepted": False, "reason": reason}
+    if isinstance(output, outs.CancelResponse):
+        return {"type": "cancel_response", "goal_uuid": output.goal_uuid, "accepted": output.accepted}
+    if isinstance(output, outs.PublishBegin):
+        return {"type": "begin", "message": output.message.to_dict()}
+    if isinstance(output, outs.PublishStatus):
+        return {"type": "status", "message": output.message.to_dict()}
+    if isinstance(output, outs.PublishFeedback):
+        return {"type": "feedback", "goal_uuid": output.goal_uuid, "feedback": output.feedback.to_dict()}
+    if isinstance(output, outs.AnswerGoal):
+        result = output.result.to_dict()
+        return {
+            "type": "result",
+            "goal_uuid": output.goal_uuid,
+            "status": output.status.value,
+            "result": result,
+        }
+    return None
 
 
 # --------------------------------------------------------------------------- the observer
@@ -505,8 +483,118 @@ def _owes(owed: _Owed, record: Record) -> bool:
     return False
 
 
-class _Observer:
-    """Observer mode: see the module docs."""
+# --------------------------------------------------------------------------- the abducer
+
+#: A candidate that explains an observation: its inputs, the state after them, the outputs it owes
+#: and, among them, the one observed.
+_Found = tuple[list[ins.Input], State, list[_Owed], _Owed]
+
+
+def simulate(state: State, events: list[ins.Input], config: ServerConfig) -> tuple[State, list[_Owed]]:
+    """The state after ``events`` and the observable outputs they owe: the machine's, nothing else."""
+    owed: list[_Owed] = []
+    for event in events:
+        transition = machine.step(state, event, config)
+        for output in transition.outputs:
+            channel = _channel(output)
+            if channel is not None:
+                owed.append(_Owed(channel, output, output.rule))
+        state = transition.state
+    return state, owed
+
+
+def candidates(state: State, record: Record, now: int) -> Iterator[list[ins.Input]]:
+    """The inputs that may have produced ``record``, most likely first (see the module docs)."""
+    running = state.running
+    uuid = record.goal_uuid
+    if record.kind == "feedback":
+        feedback: Feedback = record.message
+        texts = [entry.text for entry in feedback.logs]
+        if running is not None and running.goal_uuid == uuid:
+            for signal_text, signal in _SIGNAL_LOGS.items():
+                if signal_text in texts:
+                    yield [signal(now=now)]
+            if running.started:
+                status = feedback.status if feedback.status in _STATUSES else running.child_status
+                last = feedback.logs[-1] if feedback.logs else None
+                tier = last.tier if last is not None and last.tier in _TIERS else "info"
+                log_text = last.text[: ins.MAX_LOG_TEXT_LENGTH] if last is not None else None
+                yield [ins.ChildProgress(status=status, log_text=log_text, tier=tier, now=now)]
+            else:
+                yield [ins.Resume(now=now)]
+        if any(item.goal_uuid == uuid for item in state.queued):
+            yield [ins.GoalStarted(goal_uuid=uuid, now=now)]
+            if state.interrupted:
+                yield [ins.Resume(now=now), ins.GoalStarted(goal_uuid=uuid, now=now)]
+            else:
+                yield [ins.Interrupt(now=now), ins.GoalStarted(goal_uuid=uuid, now=now)]
+        return
+    if record.kind == "result":
+        result: Result = record.message
+        if any(item.goal_uuid == uuid for item in state.queued):
+            yield [ins.GoalStarted(goal_uuid=uuid, now=now)]
+        if running is not None and running.started:
+            final = result.status if result.status in _STATUSES else Status.COMPLETED.value
+            yield [ins.ChildFinished(status=final, now=now)]
+        if running is not None and not running.started and running.goal_uuid == uuid:
+            for queued in state.queued:  # a CANCEL's start cancels a deferred child at once (R9.4)
+                if queued.goal.event_type == EventType.CANCEL:
+                    yield [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now)]
+            yield [ins.TaskCancel(now=now)]
+            yield [ins.TaskKill(now=now)]
+        if _first_line(result.execution_failure) == Failure.SHUTDOWN.value:
+            yield [ins.Shutdown(now=now)]
+        return
+    message: DynamicEventStatus = record.message
+    for queued in state.queued:
+        yield [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now)]
+    if running is not None and running.started and message.status in _STATUSES:
+        yield [ins.ChildProgress(status=message.status, now=now)]
+    if running is not None and not running.started:
+        yield [ins.Resume(now=now)]
+    if message.status == Status.KILLED.value:
+        yield [ins.TaskKill(now=now)]
+    if message.status == Status.CANCELED.value or message.dynamic_state == DynamicState.INACTIVE:
+        yield [ins.TaskCancel(now=now)]
+
+
+def confirmed(found: _Found, upcoming: Record | None) -> bool:
+    """Does the next record show the next output this candidate owes?"""
+    rest = [item for item in found[2] if item is not found[3]]
+    return bool(rest) and upcoming is not None and _owes(rest[0], upcoming)
+
+
+def abduce(
+    state: State, config: ServerConfig, record: Record, now: int, upcoming: Record | None
+) -> _Found | None:
+    """The first candidate whose first output on the action is this feedback or answer.
+
+    A candidate that reproduces the observation exactly is preferred; else
+    the first whose output is of the same kind for the same goal (the
+    differences are then reported).  The abducer only calls the machine.
+    """
+    channel = f"goal:{record.goal_uuid}"
+    kind = outs.PublishFeedback if record.kind == "feedback" else outs.AnswerGoal
+    near = None
+    exact: list[_Found] = []
+    for events in candidates(state, record, now):
+        after, owed = simulate(state, events, config)
+        first = next((item for item in owed if item.channel.startswith("goal:")), None)
+        if first is None or first.channel != channel or not isinstance(first.output, kind):
+            continue
+        if _exact(first.output, record):
+            exact.append((events, after, owed, first))
+        elif near is None:
+            near = (events, after, owed, first)
+    # candidates that agree on this record differ in what comes next: let the next record choose
+    for found in exact:
+        if confirmed(found, upcoming):
+            return found
+    return exact[0] if exact else near
+
+
+class _Part:
+    """What every part of the observer shares: the state, what is owed, the goals seen, the findings."""
 
     def __init__(self, header: _Header) -> None:
         self.config_known = header.config is not None
@@ -551,17 +639,8 @@ class _Observer:
         self.config = self.config_for(goal)
 
     def simulate(self, events: list[ins.Input]) -> tuple[State, list[_Owed]]:
-        """The state after ``events`` and the observable outputs they owe, without committing."""
-        state = self.st
-        owed: list[_Owed] = []
-        for event in events:
-            transition = machine.step(state, event, self.config)
-            for output in transition.outputs:
-                channel = _channel(output)
-                if channel is not None:
-                    owed.append(_Owed(channel, output, output.rule))
-            state = transition.state
-        return state, owed
+        """The state after ``events`` and the outputs they owe, without committing (see :func:`simulate`)."""
+        return simulate(self.st, events, self.config)
 
     def commit(self, state: State, owed: list[_Owed]) -> None:
         self.state = state
@@ -578,44 +657,67 @@ class _Observer:
                 seen.owed = True
             self.forget_channel(f"goal:{uuid}")
 
-    # ------------------------------------------------------------------ feeding
+    def abduce(self, record: Record) -> _Found | None:
+        """The candidate that explains ``record`` in the current state (see :func:`abduce`)."""
+        return abduce(self.st, self.config, record, self.now, self.upcoming)
 
-    def feed(self, record: Record) -> None:
-        self.line = record.line
-        self.now = max(self.now, record.time)
-        if self.state is None and self.sync(record):
-            return
-        handler = getattr(self, f"on_{record.kind}")
-        handler(record)
-        if record.kind == "result":
-            seen = self.goals.get(record.goal_uuid)
-            if seen is not None and seen.answered is not None:
-                seen.goal = _ANSWERED  # what is judged after its answer is the line: memory stays flat
+    def confirmed(self, found: _Found) -> bool:
+        return confirmed(found, self.upcoming)
 
-    def sync(self, record: Record) -> bool:
-        """Set the starting state from the first record; True when the record is used up."""
-        base = State.new("fleet", "robot")
-        self.partial = record.kind == "status" or (
-            record.kind == "begin" and record.message.dynamic_event_seq != 1
-        )
-        if record.kind == "status":
-            message: DynamicEventStatus = record.message
-            try:
-                self.state = state_from_status(message)
-                # a status names the highest id used (R2.2), not the dynamic event's own id
-                self.event_id_unknown = message.dynamic_state != DynamicState.INACTIVE
-                self.start_uncertain = self.st.running is not None and not self.st.running.started
-            except ValueError as exc:
-                self.state = machine.resync_seq(base, message.dynamic_event_seq)
-                self.flag(
-                    "R2.2", "status_phase", f"status {status_text(message)}: {exc}", "dynamic_state 0, 1 or 2"
-                )
-            return True
-        if record.kind == "begin":
-            self.state = machine.resync_next_run(base, record.message.dynamic_event_seq)
-            return False
-        self.state = base  # a trace from the server's start
-        return False
+    def bind_unknown(self, uuid: str, running_goal: bool = True) -> _GoalSeen | None:
+        """What the trace showed of this goal; a goal it never showed may have begun before it.
+
+        In a trace that begins mid-way, the first unknown goal seen while the
+        state's running goal is unknown (known from a RUNNING status) is taken
+        to be that goal, unless ``running_goal`` says the observation cannot
+        be the running goal's; any other unknown goal is not judged.
+        """
+        running = self.st.running
+        if uuid in self.goals:
+            return self.goals[uuid]
+        if not self.partial:
+            return None
+        if running is None or running.goal_uuid != UNKNOWN_GOAL or not running_goal:
+            seen = _GoalSeen(goal=Goal(), line=0, responded=True, accepted=True, owed=True)
+            self.goals[uuid] = seen
+            return seen
+        self.state = machine.resync_running_goal(self.st, uuid)
+        seen = _GoalSeen(goal=running.goal, line=0, responded=True, accepted=True)
+        self.goals[uuid] = seen
+        return seen
+
+    def abduce_uncertain(self, record: Record) -> tuple[list[ins.Input], State, list[_Owed], _Owed] | None:
+        """:meth:`abduce`, also in the world where a child whose start a status left uncertain has started."""
+        found = self.abduce(record)
+        running = self.st.running
+        if not self.start_uncertain or running is None or running.started:
+            return found
+        if found is not None and _exact(found[3].output, record) and self.confirmed(found):
+            return found
+        saved = self.st
+        self.state = machine.resync_child_started(saved, resumed=True)
+        other = self.abduce(record)
+        found_exact = found is not None and _exact(found[3].output, record)
+        if (
+            other is not None
+            and _exact(other[3].output, record)
+            and (self.confirmed(other) or not found_exact)
+        ):
+            self.start_uncertain = False
+            return other
+        self.state = saved
+        return found
+
+    def ahead(self, uuid: str) -> Record | None:
+        """The next feedback or answer of this goal among the records the observer sees ahead."""
+        for record in self.lookahead:
+            if record.goal_uuid == uuid and record.kind in ("feedback", "result"):
+                return record
+        return None
+
+
+class _Requests(_Part):
+    """Goal requests, their responses and action-level cancels: the machine's ``accept``, compared."""
 
     def on_goal(self, record: Record) -> None:
         seen = self.goals.get(record.goal_uuid)
@@ -763,6 +865,35 @@ class _Observer:
                 f"{word[owed.output.accepted]} ({owed.rule})",
             )
 
+
+class _Runs(_Part):
+    """Begin and status messages: runs, their seq, the dynamic event's id and the status topic."""
+
+    def sync(self, record: Record) -> bool:
+        """Set the starting state from the first record; True when the record is used up."""
+        base = State.new("fleet", "robot")
+        self.partial = record.kind == "status" or (
+            record.kind == "begin" and record.message.dynamic_event_seq != 1
+        )
+        if record.kind == "status":
+            message: DynamicEventStatus = record.message
+            try:
+                self.state = state_from_status(message)
+                # a status names the highest id used (R2.2), not the dynamic event's own id
+                self.event_id_unknown = message.dynamic_state != DynamicState.INACTIVE
+                self.start_uncertain = self.st.running is not None and not self.st.running.started
+            except ValueError as exc:
+                self.state = machine.resync_seq(base, message.dynamic_event_seq)
+                self.flag(
+                    "R2.2", "status_phase", f"status {status_text(message)}: {exc}", "dynamic_state 0, 1 or 2"
+                )
+            return True
+        if record.kind == "begin":
+            self.state = machine.resync_next_run(base, record.message.dynamic_event_seq)
+            return False
+        self.state = base  # a trace from the server's start
+        return False
+
     def on_begin(self, record: Record) -> None:
         message: DynamicEventDescription = record.message
         names = (message.fleet, message.robot)
@@ -869,7 +1000,7 @@ class _Observer:
         # in the server's order a step's answers and feedback come before its status: prefer a
         # candidate that owes none, then accept one whose other outputs are still to come
         found: tuple[State, list[_Owed]] | None = None
-        for events in self.candidates(record):
+        for events in candidates(self.st, record, self.now):
             state, owed = self.simulate(events)
             published = [item.output for item in owed if isinstance(item.output, outs.PublishStatus)]
             if not published or not _same_status(published[-1].message, message):
@@ -892,29 +1023,9 @@ class _Observer:
             f"{status_text(current)}, the state's status",
         )
 
-    # ------------------------------------------------------------------ the action's answers
 
-    def bind_unknown(self, uuid: str, running_goal: bool = True) -> _GoalSeen | None:
-        """What the trace showed of this goal; a goal it never showed may have begun before it.
-
-        In a trace that begins mid-way, the first unknown goal seen while the
-        state's running goal is unknown (known from a RUNNING status) is taken
-        to be that goal, unless ``running_goal`` says the observation cannot
-        be the running goal's; any other unknown goal is not judged.
-        """
-        running = self.st.running
-        if uuid in self.goals:
-            return self.goals[uuid]
-        if not self.partial:
-            return None
-        if running is None or running.goal_uuid != UNKNOWN_GOAL or not running_goal:
-            seen = _GoalSeen(goal=Goal(), line=0, responded=True, accepted=True, owed=True)
-            self.goals[uuid] = seen
-            return seen
-        self.state = machine.resync_running_goal(self.st, uuid)
-        seen = _GoalSeen(goal=running.goal, line=0, responded=True, accepted=True)
-        self.goals[uuid] = seen
-        return seen
+class _Feedback(_Part):
+    """Feedback: a child's start and progress, abduced, compared, and corrected when it disagrees."""
 
     def check_logs(self, feedback: Feedback) -> None:
         for entry in feedback.logs:
@@ -974,66 +1085,6 @@ class _Observer:
             self.compare_feedback(first, feedback, events)
             return
         self.unexplained_feedback(record, seen)
-
-    def abduce_uncertain(self, record: Record) -> tuple[list[ins.Input], State, list[_Owed], _Owed] | None:
-        """:meth:`abduce`, also in the world where a child whose start a status left uncertain has started."""
-        found = self.abduce(record)
-        running = self.st.running
-        if not self.start_uncertain or running is None or running.started:
-            return found
-        if found is not None and _exact(found[3].output, record) and self.confirmed(found):
-            return found
-        saved = self.st
-        self.state = machine.resync_child_started(saved, resumed=True)
-        other = self.abduce(record)
-        found_exact = found is not None and _exact(found[3].output, record)
-        if (
-            other is not None
-            and _exact(other[3].output, record)
-            and (self.confirmed(other) or not found_exact)
-        ):
-            self.start_uncertain = False
-            return other
-        self.state = saved
-        return found
-
-    def ahead(self, uuid: str) -> Record | None:
-        """The next feedback or answer of this goal among the records the observer sees ahead."""
-        for record in self.lookahead:
-            if record.goal_uuid == uuid and record.kind in ("feedback", "result"):
-                return record
-        return None
-
-    def confirmed(self, found: tuple[list[ins.Input], State, list[_Owed], _Owed]) -> bool:
-        """Does the next record show the next output this candidate owes?"""
-        rest = [item for item in found[2] if item is not found[3]]
-        return bool(rest) and self.upcoming is not None and _owes(rest[0], self.upcoming)
-
-    def abduce(self, record: Record) -> tuple[list[ins.Input], State, list[_Owed], _Owed] | None:
-        """The first candidate whose first output on the action is this feedback or answer.
-
-        A candidate that reproduces the observation exactly is preferred; else
-        the first whose output is of the same kind for the same goal (the
-        differences are then reported).
-        """
-        channel = f"goal:{record.goal_uuid}"
-        kind = outs.PublishFeedback if record.kind == "feedback" else outs.AnswerGoal
-        near = None
-        exact: list[tuple[list[ins.Input], State, list[_Owed], _Owed]] = []
-        for events in self.candidates(record):
-            state, owed = self.simulate(events)
-            first = next((item for item in owed if item.channel.startswith("goal:")), None)
-            if first is None or first.channel != channel or not isinstance(first.output, kind):
-                continue
-            if _exact(first.output, record):
-                exact.append((events, state, owed, first))
-            elif near is None:
-                near = (events, state, owed, first)
-        # candidates that agree on this record differ in what comes next: let the next record choose
-        for found in exact:
-            if self.confirmed(found):
-                return found
-        return exact[0] if exact else near
 
     def compare_feedback(self, owed: _Owed, feedback: Feedback, events: list[ins.Input]) -> None:
         assert isinstance(owed.output, outs.PublishFeedback)
@@ -1151,6 +1202,10 @@ class _Observer:
         self.displace(displaced)
         self.state = machine.resync_running(state, uuid, goal, feedback.id, feedback.status, displaced)
         self.owed = [item for item in self.owed if item.channel != "status"]
+
+
+class _Answers(_Part):
+    """Terminal answers: the end of a goal, abduced or owed, compared with the machine's."""
 
     def on_result(self, record: Record) -> None:
         result: Result = record.message
@@ -1272,63 +1327,23 @@ class _Observer:
             return
         self.flag("R19.1", "unexpected_answer", label, "no answer: the goal is not open")
 
-    # ------------------------------------------------------------------ abduction
 
-    def candidates(self, record: Record) -> Iterator[list[ins.Input]]:
-        """The inputs that may have produced ``record``, most likely first (see the module docs)."""
-        state = self.st
-        now = self.now
-        running = state.running
-        uuid = record.goal_uuid
-        if record.kind == "feedback":
-            feedback: Feedback = record.message
-            texts = [entry.text for entry in feedback.logs]
-            if running is not None and running.goal_uuid == uuid:
-                for signal_text, signal in _SIGNAL_LOGS.items():
-                    if signal_text in texts:
-                        yield [signal(now=now)]
-                if running.started:
-                    status = feedback.status if feedback.status in _STATUSES else running.child_status
-                    last = feedback.logs[-1] if feedback.logs else None
-                    tier = last.tier if last is not None and last.tier in _TIERS else "info"
-                    log_text = last.text[: ins.MAX_LOG_TEXT_LENGTH] if last is not None else None
-                    yield [ins.ChildProgress(status=status, log_text=log_text, tier=tier, now=now)]
-                else:
-                    yield [ins.Resume(now=now)]
-            if any(item.goal_uuid == uuid for item in state.queued):
-                yield [ins.GoalStarted(goal_uuid=uuid, now=now)]
-                if state.interrupted:
-                    yield [ins.Resume(now=now), ins.GoalStarted(goal_uuid=uuid, now=now)]
-                else:
-                    yield [ins.Interrupt(now=now), ins.GoalStarted(goal_uuid=uuid, now=now)]
+class _Observer(_Requests, _Runs, _Feedback, _Answers):
+    """Observer mode (see the module docs): each record goes to the part that reads its kind."""
+
+    # ------------------------------------------------------------------ feeding
+
+    def feed(self, record: Record) -> None:
+        self.line = record.line
+        self.now = max(self.now, record.time)
+        if self.state is None and self.sync(record):
             return
+        handler = getattr(self, f"on_{record.kind}")
+        handler(record)
         if record.kind == "result":
-            result: Result = record.message
-            if any(item.goal_uuid == uuid for item in state.queued):
-                yield [ins.GoalStarted(goal_uuid=uuid, now=now)]
-            if running is not None and running.started:
-                final = result.status if result.status in _STATUSES else Status.COMPLETED.value
-                yield [ins.ChildFinished(status=final, now=now)]
-            if running is not None and not running.started and running.goal_uuid == uuid:
-                for queued in state.queued:  # a CANCEL's start cancels a deferred child at once (R9.4)
-                    if queued.goal.event_type == EventType.CANCEL:
-                        yield [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now)]
-                yield [ins.TaskCancel(now=now)]
-                yield [ins.TaskKill(now=now)]
-            if _first_line(result.execution_failure) == Failure.SHUTDOWN.value:
-                yield [ins.Shutdown(now=now)]
-            return
-        message: DynamicEventStatus = record.message
-        for queued in state.queued:
-            yield [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now)]
-        if running is not None and running.started and message.status in _STATUSES:
-            yield [ins.ChildProgress(status=message.status, now=now)]
-        if running is not None and not running.started:
-            yield [ins.Resume(now=now)]
-        if message.status == Status.KILLED.value:
-            yield [ins.TaskKill(now=now)]
-        if message.status == Status.CANCELED.value or message.dynamic_state == DynamicState.INACTIVE:
-            yield [ins.TaskCancel(now=now)]
+            seen = self.goals.get(record.goal_uuid)
+            if seen is not None and seen.answered is not None:
+                seen.goal = _ANSWERED  # what is judged after its answer is the line: memory stays flat
 
 
 class _Unreadable(Exception):
