@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
-from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, Status, Tier
+from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, Status, Tier, Violation
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "reference" / "schemas" / "task_state.json"
 
@@ -49,3 +50,28 @@ def test_goal_status_lifecycle() -> None:
         GoalStatus.CANCELED,
         GoalStatus.ABORTED,
     }
+
+
+SPEC = (Path(__file__).resolve().parents[1] / "docs" / "spec.md").read_text(encoding="utf-8")
+TRACE_FORMAT = (Path(__file__).resolve().parents[1] / "docs" / "trace-format.md").read_text(encoding="utf-8")
+
+
+def test_every_violation_names_a_rule_of_the_spec() -> None:
+    rules = set(re.findall(r"\*\*(R\d+\.\d+)\*\*", SPEC))
+    assert {violation.rule for violation in Violation} <= rules
+    assert len({(violation.code, violation.rule) for violation in Violation}) == len(Violation)
+
+
+def test_the_finding_codes_documented_for_check_carry_the_vocabulary_rules() -> None:
+    """docs/trace-format.md's table of finding codes agrees with the vocabulary it documents."""
+    rows = re.findall(r"^\| (`[a-z_<>]+`(?:, `[a-z_<>]+`)*) \| ([^|]+) \|", TRACE_FORMAT, re.MULTILINE)
+    documented: dict[str, str] = {}
+    for codes, rules in rows:
+        for code in re.findall(r"`([a-z_<>]+)`", codes):
+            documented[code] = rules
+    checked = 0
+    for violation in Violation:
+        if violation.code in documented:
+            assert violation.rule in documented[violation.code], violation
+            checked += 1
+    assert checked >= 15  # the table is read

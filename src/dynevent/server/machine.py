@@ -49,9 +49,15 @@ from dynevent.wire.vocab import (
 )
 
 __all__ = [
+    "CHILD_END_RULE",
+    "CHILD_RESULT_RULE",
+    "DEFERRED_START_RULE",
     "EXECUTION_FAILURES",
+    "FINISHED_RULE",
+    "START_RULE",
     "TRANSITIONS",
     "UNKNOWN_GOAL",
+    "WAITING_CANCEL_RULE",
     "Edge",
     "Position",
     "QueuedGoal",
@@ -316,6 +322,20 @@ _make_feedback = maker(Feedback)
 _make_log_entry = maker(LogEntry)
 _make_result = maker(Result)
 _make_time = maker(Time)
+
+# The rules of outputs that others read back (``dynevent check``): each named once, here.
+#: A child's start (R6.4), and the report of a start deferred by an interruption (R6.3); a start's
+#: feedback carries the warning of a clamped stubborn period (R12.2).
+START_RULE = "R6.4"
+DEFERRED_START_RULE = "R6.3"
+#: The answers at a child's end: its NEXT goal's (R8.2) and the waiting CANCEL goals' (R8.3), whose
+#: result carries the child's id and final status (R8.1).
+CHILD_END_RULE = "R8.2"
+WAITING_CANCEL_RULE = "R8.3"
+CHILD_RESULT_RULE = "R8.1"
+#: A FINISHED goal's answer, which names the dynamic event's own id (R11.1).
+FINISHED_RULE = "R11.1"
+
 _replace_state = replacer(State)
 _replace_running = replacer(RunningGoal)
 _replace_stubborn = replacer(Stubbornness)
@@ -462,8 +482,10 @@ def resync_run_dropped(state: State) -> State:
 
 
 def resync_event_id(state: State, event_id: int) -> State:
-    """The dynamic event's own id is evidently ``event_id`` (a status or a FINISHED's answer said)."""
-    return _replace_state(state, event_id=event_id, last_id=max(state.last_id, event_id))
+    """The dynamic event's own id is evidently ``event_id`` (a status or a FINISHED's answer said); it
+    is the highest id used unless a higher one was, or a child runs (whose id is then the highest)."""
+    last_id = state.last_id if state.running is not None else max(state.last_id, event_id)
+    return _replace_state(state, event_id=event_id, last_id=last_id)
 
 
 def resync_queued(state: State, goal_uuid: str, goal: Goal) -> State:
@@ -665,7 +687,13 @@ def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
                 current_id=running.child_id,
                 requested_id=goal.id,
             )
-    return outs.Accepted(event_type=event_type)  # R4.16
+    if not standard and (
+        event_type == EventType.UNINITIALIZED
+        or event_type > EventType.FINISHED
+        or (event_type == EventType.CANCEL and (running is None or goal.id != running.child_id))
+    ):
+        return outs.Accepted(event_type=event_type, rule="R17.1")  # a check R17.1 leaves out would refuse it
+    return outs.Accepted(event_type=event_type, rule="R4.16")
 
 
 def _stale(state: State, goal: Goal, config: ServerConfig) -> bool:
@@ -765,7 +793,11 @@ def _start_child(
 
 
 def _answers_at_child_end(
-    state: State, running: RunningGoal, final: str, rule: str = "R8.2", cancels_rule: str = "R8.3"
+    state: State,
+    running: RunningGoal,
+    final: str,
+    rule: str = CHILD_END_RULE,
+    cancels_rule: str = WAITING_CANCEL_RULE,
 ) -> list[outs.Output]:
     """The running goal's and every waiting CANCEL goal's answers when the child ends (R8.2, R8.3).
 
@@ -920,7 +952,7 @@ def _start_goal(before: State, state: State, uuid: str, now: int, config: Server
         state = _end_stubbornness(state, outputs)
         result = _result("", Status.COMPLETED.value, state.event_id)
         outputs.append(
-            outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.SUCCEEDED, result=result, rule="R11.1")
+            outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.SUCCEEDED, result=result, rule=FINISHED_RULE)
         )
         state = _end_dynamic_event(state, Status.COMPLETED.value, outputs)
     else:  # only reachable in rmf_ros2 compatibility
@@ -960,12 +992,12 @@ def _start_next(
         )
         outputs.append(
             outs.PublishFeedback(
-                goal_uuid=uuid, feedback=_feedback(queued_status, child_id, logs), rule="R6.3"
+                goal_uuid=uuid, feedback=_feedback(queued_status, child_id, logs), rule=DEFERRED_START_RULE
             )
         )
         return _replace_state(state, running=running, status=queued_status)
     running = RunningGoal(goal_uuid=uuid, goal=goal, child_id=child_id, child_status="", started=False)
-    return _start_child("R6.4", state, running, outputs, logs, parsed)
+    return _start_child(START_RULE, state, running, outputs, logs, parsed)
 
 
 def _start_cancel(state: State, uuid: str, goal: Goal, outputs: list[outs.Output], now: int) -> State:

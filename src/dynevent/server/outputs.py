@@ -90,9 +90,11 @@ class _Output:
 
 @attrs.frozen(kw_only=True)
 class Accepted:
-    """:func:`~dynevent.server.machine.accept` says yes."""
+    """:func:`~dynevent.server.machine.accept` says yes; ``rule`` is R4.16, or R17.1 when only the
+    ``rmf_ros2`` mode lets the goal in (it is then aborted when it starts)."""
 
     event_type: int
+    rule: str = _rule()
 
 
 @attrs.frozen(kw_only=True)

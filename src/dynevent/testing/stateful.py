@@ -74,7 +74,16 @@ from dynevent.wire import _json
 from dynevent.wire._fields import SECOND, U32_MAX, U64_MAX
 from dynevent.wire._json import dumps_sorted, parse
 from dynevent.wire.messages import DynamicEventStatus, Goal
-from dynevent.wire.vocab import Compatibility, DynamicState, EventType, GoalStatus, IdPolicy, Status, Tier
+from dynevent.wire.vocab import (
+    Compatibility,
+    DynamicState,
+    EventType,
+    GoalStatus,
+    IdPolicy,
+    Status,
+    Tier,
+    Violation,
+)
 
 __all__ = [
     "DEFAULT_CONFIG",
@@ -270,14 +279,15 @@ def _decode_view(view: Any) -> ServerView | None:
 
 
 class ProtocolViolation(AssertionError):
-    """An output (or its absence) that docs/spec.md forbids; ``rule`` names the rule."""
+    """An output (or its absence) that docs/spec.md forbids: ``violation`` says which, ``rule`` its rule."""
 
-    def __init__(self, rule: str, problem: str, event: ins.Input | None = None) -> None:
-        self.rule = rule
+    def __init__(self, violation: Violation, problem: str, event: ins.Input | None = None) -> None:
+        self.violation = violation
+        self.rule = violation.rule
         self.problem = problem
         self.event = event
         where = "" if event is None else f" (after input {event!r})"
-        super().__init__(f"{rule}: {problem}{where}")
+        super().__init__(f"{violation.rule} {violation.code}: {problem}{where}")
 
 
 @attrs.define
@@ -367,8 +377,8 @@ class Observer:
 
     # ---------------------------------------------------------------- checking
 
-    def _fail(self, rule: str, problem: str) -> ProtocolViolation:
-        return ProtocolViolation(rule, problem, self._event)
+    def _fail(self, violation: Violation, problem: str) -> ProtocolViolation:
+        return ProtocolViolation(violation, problem, self._event)
 
     def check_view(self, view: ServerView | None) -> None:
         """The implementation's own view agrees with the model (R2.1, R2.2)."""
@@ -377,14 +387,16 @@ class Observer:
         expected = ServerView(self.phase, self.seq, self.current_id)
         if view != expected:
             raise ProtocolViolation(
-                "R2.2", f"the implementation's view is {view}, the outputs imply {expected}"
+                Violation.VIEW_MISMATCH, f"the implementation's view is {view}, the outputs imply {expected}"
             )
 
     def check_all_answered(self) -> None:
         """R19.1 at the end of a run: every accepted goal has its terminal answer."""
         unanswered = self.open_goals
         if unanswered:
-            raise self._fail("R19.1", f"accepted goals never answered (even after shutdown): {unanswered}")
+            raise self._fail(
+                Violation.NEVER_ANSWERED, f"accepted goals never answered (even after shutdown): {unanswered}"
+            )
 
     def observe(self, event: ins.Input, outputs: Sequence[outs.Output]) -> None:
         """Check one step's outputs against the model, then advance the model."""
@@ -392,9 +404,13 @@ class Observer:
         outputs = list(outputs)
         for output in outputs:
             if not isinstance(output, _OUTPUT_CLASSES):
-                raise self._fail("R19.7", f"apply returned {output!r}, which is not a dynevent output")
+                raise self._fail(
+                    Violation.FOREIGN_OUTPUT, f"apply returned {output!r}, which is not a dynevent output"
+                )
         if any(isinstance(output, outs.Ignored) for output in outputs) and len(outputs) != 1:
-            raise self._fail("R18.1", f"Ignored must be the only output of its step, got {outputs}")
+            raise self._fail(
+                Violation.IGNORED_NOT_ALONE, f"Ignored must be the only output of its step, got {outputs}"
+            )
         if isinstance(event, ins.GoalRequested):  # a request reusing a finished goal's UUID is a new goal
             record = self.goals.get(event.goal_uuid)
             if record is not None and record.life.is_terminal:
@@ -425,22 +441,29 @@ class Observer:
         if wire_status is not None:  # R17.4, R17.5: rmf_ros2 mode publishes what rmf_ros2's wire shows
             if len(statuses) != 1 or outputs[-1] is not statuses[0] or statuses[0].message != wire_status:
                 raise self._fail(
-                    "R17.4" if isinstance(event, ins.ChildFinished) else "R17.5",
+                    Violation.STATUS_AFTER_CHILD_END
+                    if isinstance(event, ins.ChildFinished)
+                    else Violation.STATUS_AFTER_REPORT,
                     f"status message {wire_status} as the last output expected; got {outputs}",
                 )
             return
         if statuses:
             if len(statuses) > 1 or outputs[-1] is not statuses[0]:
-                raise self._fail("R2.3", f"one status message, as the last output, expected; got {outputs}")
+                raise self._fail(
+                    Violation.STATUS_PUBLICATION,
+                    f"one status message, as the last output, expected; got {outputs}",
+                )
             expected = self.expected_status(event.now)
             if statuses[0].message != expected:
                 raise self._fail(
-                    "R19.5", f"status message {statuses[0].message} but the state implies {expected}"
+                    Violation.STATUS_NOT_STATE,
+                    f"status message {statuses[0].message} but the state implies {expected}",
                 )
         if (before != after) != bool(statuses):
             what = "changed without a status message" if before != after else "did not change"
             raise self._fail(
-                "R2.3", f"status {before} -> {after} {what}; status messages: {[s.message for s in statuses]}"
+                Violation.STATUS_PUBLICATION,
+                f"status {before} -> {after} {what}; status messages: {[s.message for s in statuses]}",
             )
 
     def _wire_status(self, event: ins.Input) -> DynamicEventStatus | None:
@@ -461,7 +484,7 @@ class Observer:
         if not active or record.goal.dynamic_event_seq != seq:
             where = f"run {seq}" if active else "no active run"
             raise self._fail(
-                "R5.2",
+                Violation.RACE_NOT_LOST,
                 f"a goal accepted for run {record.goal.dynamic_event_seq} started in {where} "
                 f"and was not aborted (it is {record.life})",
             )
@@ -469,19 +492,25 @@ class Observer:
     def _require_open(self, uuid: str, what: str) -> _GoalRecord:
         record = self.goals.get(uuid)
         if record is None:
-            raise self._fail("R19.1", f"{what} names goal {uuid}, which was never accepted")
+            raise self._fail(
+                Violation.ANSWER_NOT_ACCEPTED, f"{what} names goal {uuid}, which was never accepted"
+            )
         if record.life.is_terminal:
-            raise self._fail("R19.1", f"{what} names goal {uuid} after its terminal answer ({record.life})")
+            raise self._fail(
+                Violation.AFTER_ANSWER, f"{what} names goal {uuid} after its terminal answer ({record.life})"
+            )
         return record
 
     def _answer(self, output: outs.AnswerGoal) -> None:
         uuid = output.goal_uuid
         if uuid in self.rejected and uuid not in self.goals:
-            raise self._fail("R19.1", f"rejected goal {uuid} received an answer ({output.status})")
+            raise self._fail(
+                Violation.ANSWER_NOT_ACCEPTED, f"rejected goal {uuid} received an answer ({output.status})"
+            )
         record = self._require_open(uuid, f"AnswerGoal({output.status})")
         status = GoalStatus(output.status)
         if not status.is_terminal:
-            raise self._fail("R19.1", f"AnswerGoal with the non-terminal status {status}")
+            raise self._fail(Violation.GOAL_TRANSITION, f"AnswerGoal with the non-terminal status {status}")
         allowed = (
             {GoalStatus.CANCELING}
             if status is GoalStatus.CANCELED
@@ -489,7 +518,7 @@ class Observer:
         )
         if record.life not in allowed:
             raise self._fail(
-                "R19.1",
+                Violation.GOAL_TRANSITION,
                 f"goal {uuid} answered {status} from {record.life}: ROS 2 allows it only from "
                 + " or ".join(sorted(str(life) for life in allowed)),
             )
@@ -507,13 +536,15 @@ class Observer:
         minimum = self.config.stubborn_minimum
         if isinstance(output, outs.GoalAccepted):
             if not isinstance(event, ins.GoalRequested) or output.goal_uuid != event.goal_uuid:
-                raise self._fail("R19.1", f"{output} does not answer the input's goal request")
+                raise self._fail(
+                    Violation.RESPONSE_MISMATCH, f"{output} does not answer the input's goal request"
+                )
             record = self.goals.get(output.goal_uuid)
             if record is not None:
-                raise self._fail("R19.1", f"goal {output.goal_uuid} accepted a second time")
+                raise self._fail(Violation.GOAL_TRANSITION, f"goal {output.goal_uuid} accepted a second time")
             if event.goal.event_type == EventType.NEXT and self.running is not None:
                 raise self._fail(
-                    "R19.2",
+                    Violation.ONE_CHILD,
                     f"NEXT goal {output.goal_uuid} accepted while goal {self.running.goal_uuid} "
                     f"holds the running slot (child {self.running.child_id})",
                 )
@@ -521,28 +552,37 @@ class Observer:
             self.queued.append(output.goal_uuid)
         elif isinstance(output, outs.GoalRejected):
             if not isinstance(event, ins.GoalRequested) or output.goal_uuid != event.goal_uuid:
-                raise self._fail("R19.1", f"{output} does not answer the input's goal request")
+                raise self._fail(
+                    Violation.RESPONSE_MISMATCH, f"{output} does not answer the input's goal request"
+                )
             if output.goal_uuid not in self.goals:
                 self.rejected.add(output.goal_uuid)
         elif isinstance(output, outs.ExecuteGoal):
             record = self._require_open(output.goal_uuid, "ExecuteGoal")
             started = isinstance(event, ins.GoalStarted) and event.goal_uuid == output.goal_uuid
             if not (started or isinstance(event, ins.Shutdown)) or record.life is not GoalStatus.ACCEPTED:
-                raise self._fail("R19.1", f"ExecuteGoal for goal {output.goal_uuid} in state {record.life}")
+                raise self._fail(
+                    Violation.GOAL_TRANSITION,
+                    f"ExecuteGoal for goal {output.goal_uuid} in state {record.life}",
+                )
             record.life = GoalStatus.EXECUTING
             self.queued.remove(output.goal_uuid)
             if started and record.goal.event_type == EventType.CANCEL:
                 self.cancels.append(output.goal_uuid)
         elif isinstance(output, outs.CancelResponse):
             if not isinstance(event, ins.CancelRequested) or output.goal_uuid != event.goal_uuid:
-                raise self._fail("R19.1", f"{output} does not answer the input's cancel request")
+                raise self._fail(
+                    Violation.RESPONSE_MISMATCH, f"{output} does not answer the input's cancel request"
+                )
             if output.accepted:
                 record = self._require_open(output.goal_uuid, "an accepted CancelResponse")
                 record.life = GoalStatus.CANCELING
         elif isinstance(output, outs.PublishFeedback):
             record = self._require_open(output.goal_uuid, "PublishFeedback")
             if record.life is GoalStatus.ACCEPTED:
-                raise self._fail("R19.1", f"feedback to goal {output.goal_uuid}, which is not executing")
+                raise self._fail(
+                    Violation.GOAL_TRANSITION, f"feedback to goal {output.goal_uuid}, which is not executing"
+                )
             deferred_start = (
                 isinstance(event, ins.GoalStarted)
                 and event.goal_uuid == output.goal_uuid
@@ -557,31 +597,37 @@ class Observer:
             self._start_child(output, event)
         elif isinstance(output, (outs.CancelChild, outs.KillChild, outs.InterruptChild, outs.ResumeChild)):
             if not self.child_started or self.running is None or self.running.child_id != output.id:
-                raise self._fail("R19.2", f"{output} while the running child is {self.running}")
+                raise self._fail(Violation.ONE_CHILD, f"{output} while the running child is {self.running}")
         elif isinstance(output, outs.StubbornBegin):
             if ended is None or not ended.stubborn_period > 0:
-                raise self._fail("R12.1", f"{output} without a child that asked for stubbornness")
+                raise self._fail(
+                    Violation.STUBBORN_UNASKED, f"{output} without a child that asked for stubbornness"
+                )
             applied = max(ended.stubborn_period, minimum)
             if not output.period >= minimum or output.period != applied:
                 raise self._fail(
-                    "R19.4",
+                    Violation.STUBBORN_MINIMUM,
                     f"stubborn period {output.period} applied; expected {applied} (minimum {minimum})",
                 )
             self.stubborn = True
         elif isinstance(output, outs.StubbornHold):
             if not output.period >= minimum or not self.stubborn:
-                raise self._fail("R19.4", f"{output} (minimum {minimum}, stubborn: {self.stubborn})")
+                raise self._fail(
+                    Violation.STUBBORN_MINIMUM, f"{output} (minimum {minimum}, stubborn: {self.stubborn})"
+                )
         elif isinstance(output, outs.StubbornClamped):
             if not output.applied >= minimum:
-                raise self._fail("R19.4", f"{output} applies less than the minimum {minimum}")
+                raise self._fail(
+                    Violation.STUBBORN_MINIMUM, f"{output} applies less than the minimum {minimum}"
+                )
         elif isinstance(output, outs.StubbornDelay):
             if not self.stubborn:
-                raise self._fail("R12.3", f"{output} while not stubborn")
+                raise self._fail(Violation.DELAY_NOT_STUBBORN, f"{output} while not stubborn")
         elif isinstance(output, outs.StubbornEnd):
             self.stubborn = False
         elif isinstance(output, outs.DynamicEventFinished):
             if not self.active:
-                raise self._fail("R11.2", f"{output} while no dynamic event is active")
+                raise self._fail(Violation.FINISHED_INACTIVE, f"{output} while no dynamic event is active")
             self.active = False
             self.status = output.status
             self.running = None
@@ -589,7 +635,9 @@ class Observer:
             self._begin(output, event)
         elif isinstance(output, outs.Log):
             if output.entry.seq != self.log_seq:
-                raise self._fail("R7.3", f"LogEntry.seq {output.entry.seq}, expected {self.log_seq}")
+                raise self._fail(
+                    Violation.LOG_SEQ, f"LogEntry.seq {output.entry.seq}, expected {self.log_seq}"
+                )
             self.log_seq = (self.log_seq + 1) & U32_MAX
         elif isinstance(output, outs.DescriptionAnswer):
             response = output.response
@@ -598,29 +646,37 @@ class Observer:
                 expected = (False, "", "", 0)
             got = (response.running, response.status, response.description, response.id)
             if got != expected:
-                raise self._fail("R16.2", f"description answer {got}, expected {expected}")
+                raise self._fail(
+                    Violation.DESCRIPTION_ANSWER, f"description answer {got}, expected {expected}"
+                )
 
     def _start_child(self, output: outs.StartChild, event: ins.Input) -> None:
         running = self.running
         if running is not None and running.started:
             raise self._fail(
-                "R19.2", f"StartChild({output.id}) while child {running.child_id} still runs (no end between)"
+                Violation.ONE_CHILD,
+                f"StartChild({output.id}) while child {running.child_id} still runs (no end between)",
             )
         if running is not None:  # R14.5: the deferred child starts
             if running.child_id != output.id:
-                raise self._fail("R19.2", f"StartChild({output.id}) for deferred child {running.child_id}")
+                raise self._fail(
+                    Violation.ONE_CHILD, f"StartChild({output.id}) for deferred child {running.child_id}"
+                )
             running.started = True
         else:
             if not isinstance(event, ins.GoalStarted):
-                raise self._fail("R19.2", f"StartChild({output.id}) without a NEXT goal starting")
+                raise self._fail(Violation.ONE_CHILD, f"StartChild({output.id}) without a NEXT goal starting")
             record = self._require_open(event.goal_uuid, "StartChild")
             if record.goal.event_type != EventType.NEXT:
-                raise self._fail("R19.2", f"StartChild for a goal of event type {record.goal.event_type}")
+                raise self._fail(
+                    Violation.ONE_CHILD, f"StartChild for a goal of event type {record.goal.event_type}"
+                )
             named = self.config.id_policy is IdPolicy.GOAL and record.goal.id != 0
             expected = record.goal.id if named else (self.last_id + 1) & U64_MAX
             if output.id != expected:
                 raise self._fail(
-                    "R6.2", f"StartChild({output.id}) for goal id {record.goal.id}, expected {expected}"
+                    Violation.CHILD_ID,
+                    f"StartChild({output.id}) for goal id {record.goal.id}, expected {expected}",
                 )
             self.running = _Running(event.goal_uuid, output.id, started=True)
         self.last_id = output.id
@@ -629,15 +685,17 @@ class Observer:
     def _begin(self, output: outs.PublishBegin, event: ins.Input) -> None:
         if not isinstance(event, ins.Begin):
             raise self._fail(
-                "R19.3", f"a begin message (seq {output.message.dynamic_event_seq}) without a begin"
+                Violation.BEGIN_MESSAGE,
+                f"a begin message (seq {output.message.dynamic_event_seq}) without a begin",
             )
         expected = (self.seq + 1) & U32_MAX
         if output.message.dynamic_event_seq != expected:
             raise self._fail(
-                "R19.3", f"begin with seq {output.message.dynamic_event_seq}, expected {expected}"
+                Violation.BEGIN_MESSAGE,
+                f"begin with seq {output.message.dynamic_event_seq}, expected {expected}",
             )
         if self.active:
-            raise self._fail("R3.4", "a begin message while a dynamic event is active")
+            raise self._fail(Violation.BEGIN_WHILE_ACTIVE, "a begin message while a dynamic event is active")
         self.seq = expected
         self.active = True
         self.event_id = event.event_id
@@ -713,7 +771,9 @@ class ServerStateMachine(RuleBasedStateMachine):
             outputs = self.server.apply(event)
         except Exception as exc:
             self._broken = True
-            raise ProtocolViolation("R19.7", f"apply raised {type(exc).__name__}: {exc}", event) from exc
+            raise ProtocolViolation(
+                Violation.FOREIGN_OUTPUT, f"apply raised {type(exc).__name__}: {exc}", event
+            ) from exc
         try:
             self.model.observe(event, outputs)
         except ProtocolViolation:

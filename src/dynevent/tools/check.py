@@ -74,6 +74,7 @@ from dynevent.wire.vocab import (
     RejectReason,
     Status,
     Tier,
+    Violation,
 )
 
 __all__ = [
@@ -437,6 +438,17 @@ def _channel(output: outs.Output) -> str | None:
     return None
 
 
+def _failure(output: outs.Output) -> Failure | None:
+    """The execution failure an answer reports, if it is one of rmf_ros2's."""
+    return Failure.of(output.result.execution_failure) if isinstance(output, outs.AnswerGoal) else None
+
+
+def _result_rule(rule: str) -> str:
+    """The rule a wrong result breaks: R8.1 for the answers at a child's end, else the answer's own."""
+    at_child_end = rule in (machine.CHILD_END_RULE, machine.WAITING_CANCEL_RULE)
+    return machine.CHILD_RESULT_RULE if at_child_end else rule
+
+
 def _first_line(text: str) -> str:
     return text.split("\n", 1)[0]
 
@@ -618,7 +630,12 @@ class _Part:
 
     # ------------------------------------------------------------------ bookkeeping
 
-    def flag(self, rule: str, code: str, message: str, expected: str) -> None:
+    def flag(self, violation: Violation, message: str, expected: str) -> None:
+        """Report ``violation`` on the current line."""
+        self.differs(violation.rule, violation.code, message, expected)
+
+    def differs(self, rule: str, code: str, message: str, expected: str) -> None:
+        """Report an output that differs from the machine's, under the rule of the machine's output."""
         self.findings.append(
             Finding(line=self.line, rule=rule, code=code, message=message, expected=expected)
         )
@@ -723,8 +740,7 @@ class _Requests(_Part):
         seen = self.goals.get(record.goal_uuid)
         if seen is not None and seen.answered is None and (not seen.responded or seen.accepted):
             self.flag(
-                "R18.2",
-                "goal_uuid_reused",
+                Violation.GOAL_UUID_REUSED,
                 f"goal {record.goal_uuid} requested again while it is open (since line {seen.line})",
                 "a fresh goal UUID for every goal",
             )
@@ -749,7 +765,7 @@ class _Requests(_Part):
             self.learn(goal)
         if isinstance(decision, outs.Accepted) == record.accepted:
             if isinstance(decision, outs.Rejected) and not self.same_reason(decision, record):
-                self.flag(
+                self.differs(
                     decision.rule,
                     "wrong_reason",
                     f"{goal_text(goal)} rejected as {record.reason}",
@@ -760,7 +776,7 @@ class _Requests(_Part):
                 self.commit(*self.simulate([event]))
             return
         if isinstance(decision, outs.Rejected):  # accepted, but the rules refuse it
-            self.flag(
+            self.differs(
                 decision.rule,
                 f"accepted_{decision.reason.value}",
                 f"{goal_text(goal)} accepted",
@@ -772,8 +788,7 @@ class _Requests(_Part):
             return
         said = f" as {record.reason.value}" if record.reason is not None else ""
         self.flag(
-            "R4.16",
-            "rejected_acceptable",
+            Violation.REJECTED_ACCEPTABLE,
             f"{goal_text(goal)} rejected{said}",
             "accepted: the goal passes every check of R4",
         )
@@ -858,7 +873,7 @@ class _Requests(_Part):
         assert isinstance(owed.output, outs.CancelResponse)
         if owed.output.accepted != record.accepted:
             word = {True: "accepted", False: "rejected"}
-            self.flag(
+            self.differs(
                 owed.rule,
                 "cancel_response",
                 f"cancel of goal {record.goal_uuid} {word[record.accepted]}",
@@ -885,7 +900,7 @@ class _Runs(_Part):
             except ValueError as exc:
                 self.state = machine.resync_seq(base, message.dynamic_event_seq)
                 self.flag(
-                    "R2.2", "status_phase", f"status {status_text(message)}: {exc}", "dynamic_state 0, 1 or 2"
+                    Violation.STATUS_PHASE, f"status {status_text(message)}: {exc}", "dynamic_state 0, 1 or 2"
                 )
             return True
         if record.kind == "begin":
@@ -901,19 +916,17 @@ class _Runs(_Part):
             self.names = names
         elif names != self.names:
             self.flag(
-                "R3.3",
-                "begin_names",
+                Violation.BEGIN_NAMES,
                 f"begin names {message.fleet}/{message.robot}",
                 f"the robot of this trace, {self.names[0]}/{self.names[1]}",
             )
         state = self.st
         if state.shutdown:
-            self.flag("R15.2", "begin_after_shutdown", f"begin of run {message.dynamic_event_seq}", "nothing")
+            self.flag(Violation.BEGIN_AFTER_SHUTDOWN, f"begin of run {message.dynamic_event_seq}", "nothing")
             state = machine.resync_serving(state)
         if state.active:
             self.flag(
-                "R3.4",
-                "begin_while_active",
+                Violation.BEGIN_WHILE_ACTIVE,
                 f"begin of run {message.dynamic_event_seq} while run {state.seq} is active",
                 "the end of the run first: FINISHED, a task cancel or kill, with an INACTIVE status",
             )
@@ -925,8 +938,7 @@ class _Runs(_Part):
         expected = (state.seq + 1) & U32_MAX
         if message.dynamic_event_seq != expected:
             self.flag(
-                "R3.1",
-                "begin_seq",
+                Violation.BEGIN_SEQ,
                 f"begin of run {message.dynamic_event_seq}",
                 f"seq {expected}, one above the previous run's {state.seq}",
             )
@@ -935,8 +947,7 @@ class _Runs(_Part):
             event = ins.Begin(description=message.description, event_id=0, now=self.now)
         except InvalidMessage as exc:
             self.flag(
-                "R1.5",
-                "begin_description",
+                Violation.BEGIN_DESCRIPTION,
                 f"begin description: {exc.problem}",
                 "a dynamic_event description",
             )
@@ -977,8 +988,7 @@ class _Runs(_Part):
         message: DynamicEventStatus = record.message
         if message.dynamic_state not in (0, 1, 2):
             self.flag(
-                "R2.2",
-                "status_phase",
+                Violation.STATUS_PHASE,
                 f"status with dynamic_state {message.dynamic_state}",
                 "dynamic_state 0 (INACTIVE), 1 (WAITING) or 2 (RUNNING)",
             )
@@ -1017,8 +1027,7 @@ class _Runs(_Part):
             return
         self.owed = [item for item in self.owed if item.channel != "status"]
         self.flag(
-            "R2.2",
-            "status_mismatch",
+            Violation.STATUS_MISMATCH,
             f"status {status_text(message)}",
             f"{status_text(current)}, the state's status",
         )
@@ -1033,8 +1042,7 @@ class _Feedback(_Part):
             if last is not None and not seq_after(entry.seq, last):
                 how = "repeats" if entry.seq == last else "goes backwards"
                 self.flag(
-                    "R7.3",
-                    "log_seq",
+                    Violation.LOG_SEQ,
                     f"LogEntry.seq {entry.seq} after {last}: the log seq {how}",
                     f"a LogEntry.seq above {last}: every entry takes the robot's next log seq",
                 )
@@ -1048,12 +1056,11 @@ class _Feedback(_Part):
         label = f"feedback {feedback.status} id={feedback.id} for goal {uuid}"
         if seen is None or not seen.accepted:
             what = "never requested in this trace" if seen is None else "rejected"
-            self.flag("R7.1", "feedback_not_running", f"{label}, {what}", "no feedback: no goal of it runs")
+            self.flag(Violation.FEEDBACK_NOT_RUNNING, f"{label}, {what}", "no feedback: no goal of it runs")
             return
         if seen.answered is not None:
             self.flag(
-                "R19.1",
-                "after_answer",
+                Violation.AFTER_ANSWER,
                 f"{label} after its terminal answer (line {seen.answered})",
                 "nothing after a goal's terminal answer",
             )
@@ -1093,21 +1100,20 @@ class _Feedback(_Part):
             if isinstance(events[-1], (ins.GoalStarted, ins.Resume)):
                 policy = "the NEXT goal's id" if self.config.id_policy is IdPolicy.GOAL else "the next id"
                 self.flag(
-                    "R6.2",
-                    "child_id",
+                    Violation.CHILD_ID,
                     f"the child started for goal {owed.output.goal_uuid} has id {feedback.id}",
                     f"id {expected.id}, {policy}",
                 )
                 self.patch_child_id(feedback.id)
             else:
-                self.flag(
+                self.differs(
                     owed.rule,
                     "feedback_id",
                     f"feedback id={feedback.id} for goal {owed.output.goal_uuid}",
                     f"id={expected.id}, the running child's",
                 )
         if expected.status != feedback.status:
-            self.flag(
+            self.differs(
                 owed.rule,
                 "feedback_status",
                 f"feedback {feedback.status} for goal {owed.output.goal_uuid}",
@@ -1118,13 +1124,14 @@ class _Feedback(_Part):
     def check_clamp(self, owed: _Owed, feedback: Feedback) -> None:
         """A start's feedback carries the warning of a clamped stubborn period (R12.2)."""
         output = owed.output
-        if owed.rule not in ("R6.3", "R6.4") or not isinstance(output, outs.PublishFeedback):
+        if owed.rule not in (machine.START_RULE, machine.DEFERRED_START_RULE) or not isinstance(
+            output, outs.PublishFeedback
+        ):
             return
         warnings = [entry for entry in output.feedback.logs if entry.tier == Tier.WARNING.value]
         if warnings and not any(entry.tier == Tier.WARNING.value for entry in feedback.logs):
             self.flag(
-                "R12.2",
-                "clamp_not_reported",
+                Violation.CLAMP_NOT_REPORTED,
                 f"the start feedback of goal {output.goal_uuid} carries no warning",
                 f"a warning log entry: {warnings[0].text}",
             )
@@ -1161,22 +1168,23 @@ class _Feedback(_Part):
         if queued and goal.event_type == EventType.NEXT:
             _, owed = self.simulate([ins.GoalStarted(goal_uuid=uuid, now=self.now)])
             answer = next((item for item in owed if isinstance(item.output, outs.AnswerGoal)), None)
-            if answer is not None and answer.rule == "R5.2":
+            if answer is not None and _failure(answer.output) is Failure.RACE:
                 race = machine.race_lost(state, goal, self.config_for(goal))
                 self.flag(
-                    "R5.2",
-                    "race_not_lost",
+                    Violation.RACE_NOT_LOST,
                     f"{label}: its NEXT ({goal_text(goal)}) started a child",
                     f"aborted: {Failure.RACE.value!r}, as {race}",
                 )
             elif answer is not None and isinstance(answer.output, outs.AnswerGoal):
                 expected = answer_text(answer.output.status.value, answer.output.result, first_line=True)
-                self.flag(answer.rule, "feedback_not_running", f"{label}: its NEXT started a child", expected)
+                self.differs(
+                    answer.rule, "feedback_not_running", f"{label}: its NEXT started a child", expected
+                )
             self.force_start(uuid, goal, feedback)
             return
         if pending is not None:
             assert isinstance(pending.output, outs.AnswerGoal)
-            self.flag(
+            self.differs(
                 pending.rule,
                 "feedback_not_running",
                 f"{label}, whose event has ended",
@@ -1184,7 +1192,7 @@ class _Feedback(_Part):
             )
             return
         kind = EventType(goal.event_type).name if goal.event_type <= 3 else f"event_type {goal.event_type}"
-        self.flag("R7.1", "feedback_not_running", f"{label}, a {kind} goal that runs no child", "no feedback")
+        self.flag(Violation.FEEDBACK_NOT_RUNNING, f"{label}, a {kind} goal that runs no child", "no feedback")
 
     def force_start(self, uuid: str, goal: Goal, feedback: Feedback) -> None:
         """The server runs this NEXT, whatever the rules say: make it the running goal."""
@@ -1217,13 +1225,12 @@ class _Answers(_Part):
         if seen is None or not seen.accepted:
             what = "never requested in this trace" if seen is None else "rejected"
             self.flag(
-                "R19.1", "answer_not_accepted", f"{label}, {what}", "no answer: the goal was never accepted"
+                Violation.ANSWER_NOT_ACCEPTED, f"{label}, {what}", "no answer: the goal was never accepted"
             )
             return
         if seen.answered is not None:
             self.flag(
-                "R19.1",
-                "second_answer",
+                Violation.SECOND_ANSWER,
                 f"{label}: a second terminal answer (the first on line {seen.answered})",
                 "exactly one terminal answer per goal",
             )
@@ -1284,19 +1291,19 @@ class _Answers(_Part):
         if early and seen is not None and seen.line == 0:
             pass  # a goal from before the trace: whether it was cancelled through the action is not known
         elif record.status != output.status.value:
-            self.flag(owed.rule, "goal_status", label, f"{want} ({owed.rule})")
-        elif owed.rule == "R11.1" and self.event_id_unknown:
+            self.differs(owed.rule, "goal_status", label, f"{want} ({owed.rule})")
+        elif owed.rule == machine.FINISHED_RULE and self.event_id_unknown:
             self.event_id_unknown = False  # the first FINISHED of a run joined late names its own id
             self.state = machine.resync_event_id(self.st, observed.id)
         elif expected.id != observed.id:
-            rule = "R8.1" if owed.rule in ("R8.2", "R8.3") else owed.rule
-            self.flag(rule, "result_id", f"{label}: the result id does not match", f"{want} ({rule})")
+            rule = _result_rule(owed.rule)
+            self.differs(rule, "result_id", f"{label}: the result id does not match", f"{want} ({rule})")
         elif (_first_line(expected.execution_failure), expected.status) != (
             _first_line(observed.execution_failure),
             observed.status,
         ):
-            rule = "R8.1" if owed.rule in ("R8.2", "R8.3") else owed.rule
-            self.flag(rule, "result", label, f"{want} ({rule})")
+            rule = _result_rule(owed.rule)
+            self.differs(rule, "result", label, f"{want} ({rule})")
 
     def unexplained_answer(self, record: Record, seen: _GoalSeen) -> None:
         uuid = record.goal_uuid
@@ -1309,8 +1316,7 @@ class _Answers(_Part):
         ):
             child = running.child_id if running is not None else 0
             self.flag(
-                "R9.3",
-                "cancel_answered_early",
+                Violation.CANCEL_ANSWERED_EARLY,
                 f"{label} while child {child} still runs",
                 f"the CANCEL waits for child {child} to end, then is answered with its result (R8.3)",
             )
@@ -1318,14 +1324,14 @@ class _Answers(_Part):
             return
         if queued is not None:
             start = "its child starts" if queued.goal.event_type == EventType.NEXT else "it runs"
-            self.flag("R6.4", "unexpected_answer", label, f"no answer yet: {start}")
+            self.flag(Violation.ANSWER_BEFORE_START, label, f"no answer yet: {start}")
             self.state = machine.resync_dropped(state, uuid)
             return
         if running is not None and running.goal_uuid == uuid:
-            self.flag("R6.3", "unexpected_answer", label, "no answer while the child's start is deferred")
+            self.flag(Violation.ANSWER_WHILE_DEFERRED, label, "no answer while the child's start is deferred")
             self.state = machine.resync_start_dropped(state)
             return
-        self.flag("R19.1", "unexpected_answer", label, "no answer: the goal is not open")
+        self.flag(Violation.ANSWER_NOT_OPEN, label, "no answer: the goal is not open")
 
 
 class _Observer(_Requests, _Runs, _Feedback, _Answers):

@@ -324,7 +324,7 @@ def explain(
     decision = machine.accept(state, goal, config)
     if isinstance(decision, outs.Accepted):
         at_start, aborted = _start(state, goal, config)
-        rule = "R17.1" if compatibility is Compatibility.RMF_ROS2 and aborted else "R4.16"
+        rule = decision.rule
         advice = "" if not aborted else "see the refusal above: standard servers refuse this goal at once"
         instead = None
         if aborted:

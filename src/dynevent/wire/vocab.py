@@ -21,6 +21,7 @@ __all__ = [
     "RejectReason",
     "Status",
     "Tier",
+    "Violation",
 ]
 
 
@@ -198,3 +199,66 @@ class Compatibility(str, enum.Enum):
 
     def __str__(self) -> str:
         return self.value
+
+
+class Violation(enum.Enum):
+    """What a server can be seen doing that docs/spec.md forbids: a code, and the rule it breaks.
+
+    ``dynevent check`` reports each finding under one (``Finding.code`` and
+    ``Finding.rule``); the test kit raises ``ProtocolViolation`` naming one.
+    Where a server's output differs from the one the machine gives (a wrong
+    reason, answer or feedback), the finding names the rule of the machine's
+    output instead (``Output.rule``), so those are not listed here.
+    """
+
+    code: str
+    rule: str
+
+    def __init__(self, code: str, rule: str) -> None:
+        self.code = code
+        self.rule = rule
+
+    # a begin and the run it opens
+    BEGIN_DESCRIPTION = ("begin_description", "R1.5")
+    BEGIN_SEQ = ("begin_seq", "R3.1")
+    BEGIN_NAMES = ("begin_names", "R3.3")
+    BEGIN_WHILE_ACTIVE = ("begin_while_active", "R3.4")
+    BEGIN_AFTER_SHUTDOWN = ("begin_after_shutdown", "R15.2")
+    BEGIN_MESSAGE = ("begin_message", "R19.3")
+    # the status topic
+    STATUS_PHASE = ("status_phase", "R2.2")
+    STATUS_MISMATCH = ("status_mismatch", "R2.2")
+    VIEW_MISMATCH = ("view_mismatch", "R2.2")
+    STATUS_PUBLICATION = ("status_publication", "R2.3")
+    STATUS_AFTER_CHILD_END = ("status_after_child_end", "R17.4")
+    STATUS_AFTER_REPORT = ("status_after_report", "R17.5")
+    STATUS_NOT_STATE = ("status_not_state", "R19.5")
+    # goal requests, the running slot and children
+    REJECTED_ACCEPTABLE = ("rejected_acceptable", "R4.16")
+    RACE_NOT_LOST = ("race_not_lost", "R5.2")
+    CHILD_ID = ("child_id", "R6.2")
+    ANSWER_BEFORE_START = ("unexpected_answer", "R6.4")
+    ANSWER_WHILE_DEFERRED = ("unexpected_answer", "R6.3")
+    ONE_CHILD = ("one_child", "R19.2")
+    # feedback and logs
+    FEEDBACK_NOT_RUNNING = ("feedback_not_running", "R7.1")
+    LOG_SEQ = ("log_seq", "R7.3")
+    # cancels, the end of a run, stubbornness, the description service
+    CANCEL_ANSWERED_EARLY = ("cancel_answered_early", "R9.3")
+    FINISHED_INACTIVE = ("finished_inactive", "R11.2")
+    STUBBORN_UNASKED = ("stubborn_unasked", "R12.1")
+    CLAMP_NOT_REPORTED = ("clamp_not_reported", "R12.2")
+    DELAY_NOT_STUBBORN = ("delay_not_stubborn", "R12.3")
+    STUBBORN_MINIMUM = ("stubborn_minimum", "R19.4")
+    DESCRIPTION_ANSWER = ("description_answer", "R16.2")
+    # the life of a goal on the action
+    IGNORED_NOT_ALONE = ("ignored_not_alone", "R18.1")
+    GOAL_UUID_REUSED = ("goal_uuid_reused", "R18.2")
+    ANSWER_NOT_ACCEPTED = ("answer_not_accepted", "R19.1")
+    ANSWER_NOT_OPEN = ("unexpected_answer", "R19.1")
+    SECOND_ANSWER = ("second_answer", "R19.1")
+    AFTER_ANSWER = ("after_answer", "R19.1")
+    NEVER_ANSWERED = ("never_answered", "R19.1")
+    GOAL_TRANSITION = ("goal_transition", "R19.1")
+    RESPONSE_MISMATCH = ("response_mismatch", "R19.1")
+    FOREIGN_OUTPUT = ("foreign_output", "R19.7")
