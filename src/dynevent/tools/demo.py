@@ -36,6 +36,7 @@ from dynevent import client as cl
 from dynevent.conformance.records import rule_validator
 from dynevent.server import inputs as ins
 from dynevent.server import machine
+from dynevent.server import outputs as outs
 from dynevent.tools.loopback import Adapter, ChildScript, Loopback, Options, TimelineEvent
 from dynevent.wire import _json
 from dynevent.wire.messages import Goal
@@ -127,6 +128,14 @@ def _wrap(text: str, width: int, indent: str = "") -> list[str]:
     return textwrap.wrap(text, width, subsequent_indent=indent, break_on_hyphens=False) if text else []
 
 
+def _lost_race(event: TimelineEvent) -> bool:
+    """Did the server abort a goal at this step because it lost the race to its start (R5.2)?"""
+    return any(
+        isinstance(output, outs.AnswerGoal) and Failure.of(output.result.execution_failure) is Failure.RACE
+        for output in event.outputs
+    )
+
+
 def summary(tagged: Sequence[tuple[int, TimelineEvent]]) -> list[str]:
     """What the session showed, counted from its events."""
     events = [event for _, event in tagged]
@@ -137,9 +146,7 @@ def summary(tagged: Sequence[tuple[int, TimelineEvent]]) -> list[str]:
     accepted = sum(1 for decision in requested if decision == "accepted")
     rejected = [decision.split(" ", 2)[1] for decision in requested if decision.startswith("rejected: ")]
     outcomes = collections.Counter(str(e.record.get("kind")) for e in events if e.kind == "outcome")
-    races = sum(
-        1 for event in events if event.kind == "goal_started" and Failure.RACE.value in event.decision
-    )
+    races = sum(1 for event in events if _lost_race(event))
     clamps = [e.record for e in events if e.kind == "stubborn_clamped"]
     holds = sum(1 for event in events if event.kind in ("stubborn_begin", "stubborn_hold"))
     delays = sum(1 for event in events if event.kind == "stubborn_delay")
@@ -288,7 +295,7 @@ def mermaid(seed: int = 0) -> str:
             lines.append(f"    S-->>C: {text}")
         elif event.direction == "adapter":
             lines.append(f"    A->>S: {text}" if event.kind in _ADAPTER_INPUTS else f"    S->>A: {text}")
-            if f"aborted: {Failure.RACE.value}" in decision:
+            if _lost_race(event):
                 lines.append(f"    Note over S: {decision}")
         elif decision.startswith(("outcome", "refused")):
             lines.append(f"    Note over C: {decision}")

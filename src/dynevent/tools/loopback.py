@@ -206,7 +206,9 @@ class TimelineEvent:
     input, output or command (``"goal_requested"``, ``"publish_status"``,
     ``"request_next"``...); ``summary`` one human line; ``decision`` what the
     receiver made of it (``"accepted"``, ``"rejected: busy"``, ``"dropped"``...);
-    ``record`` the JSON record of the message or output.
+    ``record`` the JSON record of the message or output; ``outputs``, for an
+    input of the server, the machine's outputs of that step (each with its
+    ``rule``), for tools that read what the server decided as values, not text.
     """
 
     time: int
@@ -215,6 +217,7 @@ class TimelineEvent:
     summary: str
     decision: str = ""
     record: dict[str, Any] = attrs.field(factory=dict, eq=False, hash=False)
+    outputs: tuple[outs.Output, ...] = attrs.field(default=(), eq=False, hash=False)
 
     def to_dict(self) -> dict[str, Any]:
         """The event as plain JSON values."""
@@ -416,7 +419,15 @@ class Loopback:
         at = self.now + self._draw(self.options.delay)
         self._schedule(at, _Delivery("client", event, uuid), channel)
 
-    def _record(self, direction: str, kind: str, summary: str, decision: str, record: dict[str, Any]) -> None:
+    def _record(
+        self,
+        direction: str,
+        kind: str,
+        summary: str,
+        decision: str,
+        record: dict[str, Any],
+        outputs: tuple[outs.Output, ...] = (),
+    ) -> None:
         self.timeline.append(
             TimelineEvent(
                 time=self.now,
@@ -425,6 +436,7 @@ class Loopback:
                 summary=summary,
                 decision=decision,
                 record=record,
+                outputs=outputs,
             )
         )
 
@@ -550,10 +562,9 @@ class Loopback:
         )
         if isinstance(event, ins.GoalStarted) and not decision:
             decision = "executing"
-        if not isinstance(event, ins.GoalRequested):  # a goal request is recorded as a delivery
-            self._record(direction, event.KIND, summary, decision, _record(event.KIND, event))
-        else:
-            self._record(direction, event.KIND, goal_text(event.goal), decision, _record(event.KIND, event))
+        if isinstance(event, ins.GoalRequested):  # a goal request is recorded as a delivery
+            summary = goal_text(event.goal)
+        self._record(direction, event.KIND, summary, decision, _record(event.KIND, event), transition.outputs)
         for output in transition.outputs:
             self._route(output)
         return transition.outputs
