@@ -345,6 +345,90 @@ class _Delivery:
     tag: tuple[int, int] | None = None
 
 
+#: The wire message each client input stands for, in the timeline.
+_DELIVERY_KINDS: dict[type, str] = {
+    cl.BeginReceived: "publish_begin",
+    cl.StatusReceived: "publish_status",
+    cl.GoalResponse: "goal_response",
+    cl.FeedbackReceived: "publish_feedback",
+    cl.ResultReceived: "answer_goal",
+}
+
+
+def _input_text(event: ins.Input) -> str:
+    """One line for a task, adapter or binding input."""
+    if isinstance(event, ins.Begin):
+        return f"event {event.event_id} {event.description}"
+    if isinstance(event, (ins.ChildProgress, ins.ChildFinished)):
+        return event.status
+    if isinstance(event, (ins.GoalStarted, ins.GoalRequested, ins.CancelRequested)):
+        return _short(event.goal_uuid)
+    return ""
+
+
+def _delivery_text(event: cl.ClientInput) -> str:
+    """One line for a message delivered to the client."""
+    if isinstance(event, cl.StatusReceived):
+        return status_text(event.message)
+    if isinstance(event, cl.BeginReceived):
+        return f"seq={event.message.dynamic_event_seq} {event.message.description}"
+    if isinstance(event, cl.GoalResponse):
+        return f"{_short(event.goal_uuid)} " + ("accepted" if event.accepted else "rejected")
+    if isinstance(event, cl.FeedbackReceived):
+        return f"{_short(event.goal_uuid)} {event.feedback.status} id={event.feedback.id}"
+    if isinstance(event, cl.ResultReceived):
+        result = event.result
+        detail = result.execution_failure or f"{result.status} id={result.id}"
+        return f"{_short(event.goal_uuid)} {event.status.value}: {detail}"
+    return ""
+
+
+class _Wire:
+    """The simulated transport: deliveries queued by time, channels kept in order, seeded draws.
+
+    Everything random in a session is drawn here, in the order the session asks, so the same seed
+    gives the same session.
+    """
+
+    def __init__(self, options: Options, seed: int) -> None:
+        self.options = options
+        self.rng = random.Random(seed)
+        self._queue: list[tuple[int, float, int, _Delivery]] = []
+        self._order = itertools.count()
+        self._channels: dict[str, int] = {}
+
+    def draw(self, bounds: tuple[int, int]) -> int:
+        low, high = bounds
+        return low if low == high else self.rng.randint(low, high)
+
+    def schedule(self, at: int, delivery: _Delivery, channel: str | None, shuffle: bool = False) -> None:
+        """Queue ``delivery`` at ``at``; a channel keeps its deliveries in order unless shuffled."""
+        mixed = shuffle and self.options.reorder
+        if channel is not None and not mixed:
+            at = max(at, self._channels.get(channel, at))
+            self._channels[channel] = at
+        tiebreak = self.rng.random() if mixed else 0.0
+        heapq.heappush(self._queue, (at, tiebreak, next(self._order), delivery))
+
+    def send(
+        self, now: int, delay: tuple[int, int], delivery: _Delivery, channel: str, shuffle: bool = False
+    ) -> None:
+        """Queue ``delivery`` a drawn ``delay`` after ``now``."""
+        self.schedule(now + self.draw(delay), delivery, channel, shuffle)
+
+    def next_at(self) -> int | None:
+        """When the next delivery falls due (``None`` when nothing is queued)."""
+        return self._queue[0][0] if self._queue else None
+
+    def pop(self) -> tuple[int, _Delivery]:
+        at, _, _, delivery = heapq.heappop(self._queue)
+        return at, delivery
+
+    def deliveries(self) -> list[tuple[int, _Delivery]]:
+        """What is queued, in delivery order."""
+        return [(at, delivery) for at, _, _, delivery in sorted(self._queue)]
+
+
 class Loopback:
     """One client machine and one server machine, wired in-process; see the module docs.
 
@@ -381,10 +465,7 @@ class Loopback:
         self.on_send = on_send
         self.timeline: list[TimelineEvent] = []
         self.outcomes: list[Outcome] = []
-        self._rng = random.Random(seed)
-        self._queue: list[tuple[int, float, int, _Delivery]] = []
-        self._order = itertools.count()
-        self._channels: dict[str, int] = {}
+        self._wire = _Wire(self.options, seed)
         self._ticks: set[int] = set()
         self._children: dict[tuple[int, int], int] = {}
         self._foreign = itertools.count()
@@ -402,22 +483,8 @@ class Loopback:
 
     # ------------------------------------------------------------------ scheduling
 
-    def _draw(self, bounds: tuple[int, int]) -> int:
-        low, high = bounds
-        return low if low == high else self._rng.randint(low, high)
-
-    def _schedule(self, at: int, delivery: _Delivery, channel: str | None, shuffle: bool = False) -> None:
-        """Queue ``delivery`` at ``at``; a channel keeps its deliveries in order unless shuffled."""
-        mixed = shuffle and self.options.reorder
-        if channel is not None and not mixed:
-            at = max(at, self._channels.get(channel, at))
-            self._channels[channel] = at
-        tiebreak = self._rng.random() if mixed else 0.0
-        heapq.heappush(self._queue, (at, tiebreak, next(self._order), delivery))
-
     def _to_client(self, channel: str, event: cl.ClientInput, uuid: str = "") -> None:
-        at = self.now + self._draw(self.options.delay)
-        self._schedule(at, _Delivery("client", event, uuid), channel)
+        self._wire.send(self.now, self.options.delay, _Delivery("client", event, uuid), channel)
 
     def _record(
         self,
@@ -428,17 +495,8 @@ class Loopback:
         record: dict[str, Any],
         outputs: tuple[outs.Output, ...] = (),
     ) -> None:
-        self.timeline.append(
-            TimelineEvent(
-                time=self.now,
-                direction=direction,
-                kind=kind,
-                summary=summary,
-                decision=decision,
-                record=record,
-                outputs=outputs,
-            )
-        )
+        line = {"direction": direction, "kind": kind, "summary": summary, "decision": decision}
+        self.timeline.append(TimelineEvent(time=self.now, record=record, outputs=outputs, **line))
 
     # ------------------------------------------------------------------ the client side
 
@@ -452,9 +510,8 @@ class Loopback:
         for output in transition.outputs:
             if isinstance(output, cl.SendGoal):
                 self._ours.add(output.goal_uuid)
-                at = self.now + self._draw(self.options.delay)
-                delivery = _Delivery("goal", output.goal, output.goal_uuid)
-                self._schedule(at, delivery, "goal", shuffle=True)
+                request = _Delivery("goal", output.goal, output.goal_uuid)
+                self._wire.send(self.now, self.options.delay, request, "goal", shuffle=True)
             if command and isinstance(output, (cl.SendGoal, cl.Refused)):
                 goal = output.goal
                 summary = "" if goal is None else goal_text(goal)
@@ -469,7 +526,7 @@ class Loopback:
         deadline = cl.next_deadline(self.client)
         if deadline is not None and deadline not in self._ticks:
             self._ticks.add(deadline)
-            self._schedule(max(deadline, self.now), _Delivery("tick", deadline), None)
+            self._wire.schedule(max(deadline, self.now), _Delivery("tick", deadline), None)
         return transition.outputs
 
     def _command(self, kind: str, transition: ClientTransition) -> tuple[ClientOutput, ...]:
@@ -510,15 +567,14 @@ class Loopback:
         """
         uuid = f"{'f' * 16}{next(self._foreign):016x}"
         self._record("client", "send_foreign", goal_text(goal), f"send {_short(uuid)}", _record("goal", goal))
-        at = self.now + self._draw(self.options.delay)
-        self._schedule(at, _Delivery("goal", goal, uuid), "goal", shuffle=True)
+        self._wire.send(self.now, self.options.delay, _Delivery("goal", goal, uuid), "goal", shuffle=True)
         return uuid
 
     # ------------------------------------------------------------------ the server side
 
     def server_input(self, event: ins.Input) -> tuple[outs.Output, ...]:
         """Apply a task, adapter or binding input to the server now (its ``now`` is the caller's)."""
-        return self._server_step(event, "adapter", self._input_text(event))
+        return self._server_step(event, "adapter", _input_text(event))
 
     def begin(self, description: str = "{}", event_id: int = 0) -> tuple[outs.Output, ...]:
         """A task reaches a ``dynamic_event`` phase now."""
@@ -544,16 +600,6 @@ class Loopback:
         """The adapter shuts down now."""
         return self.server_input(ins.Shutdown(now=self.now))
 
-    @staticmethod
-    def _input_text(event: ins.Input) -> str:
-        if isinstance(event, ins.Begin):
-            return f"event {event.event_id} {event.description}"
-        if isinstance(event, (ins.ChildProgress, ins.ChildFinished)):
-            return event.status
-        if isinstance(event, (ins.GoalStarted, ins.GoalRequested, ins.CancelRequested)):
-            return _short(event.goal_uuid)
-        return ""
-
     def _server_step(self, event: ins.Input, direction: str, summary: str) -> tuple[outs.Output, ...]:
         transition = machine.step(self.server, event, self.config)
         self.server = transition.state
@@ -574,15 +620,15 @@ class Loopback:
         if isinstance(output, outs.GoalAccepted):
             if ours:
                 self._to_client("action", cl.GoalResponse(goal_uuid=output.goal_uuid, accepted=True))
-            at = self.now + self._draw(self.options.start_delay)
-            self._schedule(at, _Delivery("start", output.goal_uuid, output.goal_uuid), "start", shuffle=True)
+            start = _Delivery("start", output.goal_uuid, output.goal_uuid)
+            self._wire.send(self.now, self.options.start_delay, start, "start", shuffle=True)
         elif isinstance(output, outs.GoalRejected) and ours:
             rejection = None if self.options.ros_rejections else output.rejection
             response = cl.GoalResponse(goal_uuid=output.goal_uuid, accepted=False, rejection=rejection)
             self._to_client("action", response)
         elif isinstance(output, outs.PublishFeedback) and ours:
             event = cl.FeedbackReceived(goal_uuid=output.goal_uuid, feedback=output.feedback)
-            if self.options.drop_feedback and self._rng.random() < self.options.drop_feedback:
+            if self.options.drop_feedback and self._wire.rng.random() < self.options.drop_feedback:
                 summary = f"{output.feedback.status} id={output.feedback.id}"
                 self._record(
                     "server->client", "publish_feedback", summary, "dropped", _record(event.KIND, event)
@@ -608,7 +654,7 @@ class Loopback:
             self._children.setdefault(tag, len(self._children))
         index = self._children.get(tag, len(self._children))
         for at, event in self.adapter.react(output, now=self.now, index=index):
-            self._schedule(max(at, self.now), _Delivery("adapter", event, tag=tag), None)
+            self._wire.schedule(max(at, self.now), _Delivery("adapter", event, tag=tag), None)
 
     # ------------------------------------------------------------------ time
 
@@ -635,36 +681,16 @@ class Loopback:
         if running is None or not running.started or (self.server.seq, running.child_id) != tag:
             why = "the child is no longer running" if tag is None else f"child {tag[1]} is no longer running"
             self._record(
-                "adapter", event.KIND, self._input_text(event), f"stale: {why}", _record(event.KIND, event)
+                "adapter", event.KIND, _input_text(event), f"stale: {why}", _record(event.KIND, event)
             )
             return
-        self._server_step(event, "adapter", self._input_text(event))
+        self._server_step(event, "adapter", _input_text(event))
 
     def _client_delivery(self, event: cl.ClientInput) -> None:
         transition = cl.step(self.client, event)
         outputs = transition.outputs
-        kinds = {
-            cl.BeginReceived: "publish_begin",
-            cl.StatusReceived: "publish_status",
-            cl.GoalResponse: "goal_response",
-            cl.FeedbackReceived: "publish_feedback",
-            cl.ResultReceived: "answer_goal",
-        }
-        kind = kinds.get(type(event), event.KIND)
-        if isinstance(event, cl.StatusReceived):
-            summary = status_text(event.message)
-        elif isinstance(event, cl.BeginReceived):
-            summary = f"seq={event.message.dynamic_event_seq} {event.message.description}"
-        elif isinstance(event, cl.GoalResponse):
-            summary = f"{_short(event.goal_uuid)} " + ("accepted" if event.accepted else "rejected")
-        elif isinstance(event, cl.FeedbackReceived):
-            summary = f"{_short(event.goal_uuid)} {event.feedback.status} id={event.feedback.id}"
-        elif isinstance(event, cl.ResultReceived):
-            result = event.result
-            detail = result.execution_failure or f"{result.status} id={result.id}"
-            summary = f"{_short(event.goal_uuid)} {event.status.value}: {detail}"
-        else:
-            summary = ""
+        kind = _DELIVERY_KINDS.get(type(event), event.KIND)
+        summary = _delivery_text(event)
         decision = "; ".join(
             _client_text(output) for output in outputs if not isinstance(output, (cl.SendGoal, cl.Outcome))
         )
@@ -673,9 +699,9 @@ class Loopback:
 
     def step(self) -> bool:
         """Deliver the next scheduled item, moving ``now`` to its time; False when nothing is scheduled."""
-        if not self._queue:
+        if self._wire.next_at() is None:
             return False
-        at, _, _, delivery = heapq.heappop(self._queue)
+        at, delivery = self._wire.pop()
         self.now = max(self.now, at)
         self._deliver(delivery)
         return True
@@ -687,7 +713,8 @@ class Loopback:
         never settles fails instead of hanging.
         """
         for _ in range(limit):
-            if not self._queue or (until is not None and self._queue[0][0] > until):
+            due = self._wire.next_at()
+            if due is None or (until is not None and due > until):
                 break
             self.step()
         else:
@@ -708,7 +735,7 @@ class Loopback:
         ``adapter`` (a child report), ``client`` (a message to the client),
         ``tick`` (a client deadline).
         """
-        return tuple((at, delivery.kind) for at, _, _, delivery in sorted(self._queue))
+        return tuple((at, delivery.kind) for at, delivery in self._wire.deliveries())
 
     @property
     def quiescent(self) -> bool:
@@ -717,14 +744,16 @@ class Loopback:
         The client has then seen everything the server said, and the server
         every goal the client sent, so the client's view is the server's.
         """
-        return not any(delivery.kind in ("goal", "start", "client") for _, _, _, delivery in self._queue)
+        return not any(
+            delivery.kind in ("goal", "start", "client") for _, delivery in self._wire.deliveries()
+        )
 
     @property
     def statuses_in_flight(self) -> bool:
         """Is a status message on its way to the client?"""
         return any(
             delivery.kind == "client" and isinstance(delivery.payload, cl.StatusReceived)
-            for _, _, _, delivery in self._queue
+            for _, delivery in self._wire.deliveries()
         )
 
     def timeline_jsonl(self) -> str:
