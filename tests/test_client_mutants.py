@@ -929,3 +929,48 @@ def test_client_knows_the_child_runs_after_an_adapter_id_wrap() -> None:
     decision = machine.accept(server, Goal(dynamic_event_seq=1, event_type=EventType.FINISHED), config)
     assert isinstance(decision, outs.Rejected)
     assert finish.reason is decision.reason  # busy
+
+
+# --------------------------------------------------------------------------- survivors of the split layout
+
+
+@pytest.mark.spec("R4.2", "R4.6")
+def test_the_clients_own_refusals_carry_the_rules_of_their_reasons() -> None:
+    """A newer run's missing status is the server's R4.2; an own open NEXT is the server's R4.6."""
+    state = waiting(1)
+    state, _ = feed(state, begin(2))  # run 2 has begun, its status has not arrived
+    newer = refusal(next_a(state))
+    assert (newer.reason, newer.rule) == (RejectReason.SEQ_MISMATCH, "R4.2")
+    state, _ = sent(next_a(waiting(1)))
+    own = refusal(client.request_finish(state, now=0))
+    assert (own.reason, own.rule) == (RejectReason.BUSY, "R4.6")
+
+
+@pytest.mark.spec("R9.1")
+def test_an_own_next_without_a_child_yet_leaves_the_cancel_to_the_viewed_child() -> None:
+    """Our NEXT is accepted and has no child yet; another client's child 8 runs: a CANCEL names 8."""
+    state, send = sent(next_a(waiting(1)))
+    state, _ = feed(
+        state, GoalResponse(goal_uuid=send.goal_uuid, accepted=True), status(1, RUNNING, 8, "underway")
+    )
+    cancel = client.request_cancel(state, now=0)
+    (output,) = cancel.outputs
+    assert isinstance(output, SendGoal) and output.goal.id == 8
+
+
+@pytest.mark.spec("R8.1")
+def test_a_second_childs_end_is_known_before_its_status() -> None:
+    """Child 6 ended, then child 7: its answer arrives before the status; a NEXT is not refused as busy."""
+    state, uuid = running(1, 6)
+    state, _ = feed(state, answer(uuid, GoalStatus.SUCCEEDED, "completed", 6), status(1, WAITING, 6))
+    state, send = sent(next_a(state))
+    state, _ = feed(
+        state,
+        GoalResponse(goal_uuid=send.goal_uuid, accepted=True),
+        FeedbackReceived(goal_uuid=send.goal_uuid, feedback=Feedback(status="underway", id=7)),
+        status(1, RUNNING, 7, "underway"),
+        answer(send.goal_uuid, GoalStatus.SUCCEEDED, "completed", 7),
+    )
+    assert state.ended_id == 7
+    (output,) = next_a(state).outputs
+    assert isinstance(output, SendGoal), output
