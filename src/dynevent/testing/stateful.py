@@ -303,16 +303,18 @@ class _Running:
     started: bool
 
 
-class Observer:
-    """A reference model of one robot's server, built from inputs and outputs only.
+#: The outputs about goals on the action, which :meth:`_Goals._goal_effect` checks.
+_GOAL_OUTPUTS = (
+    outs.GoalAccepted,
+    outs.GoalRejected,
+    outs.ExecuteGoal,
+    outs.CancelResponse,
+    outs.PublishFeedback,
+)
 
-    Feed it every input and the outputs the implementation answered with
-    (:meth:`observe`); it raises :class:`ProtocolViolation` at the first
-    breach of the checked rules (see the module docs) and otherwise keeps
-    the state those outputs imply.  :meth:`check_all_answered` is the end of
-    run check of R19.1.  Its attributes are what a client could know, and what
-    the kit's rules build goals from.
-    """
+
+class _Model:
+    """What the observer's parts share: the modelled state of the robot's server, and how to fail."""
 
     def __init__(self, fleet: str, robot: str, config: ServerConfig) -> None:
         self.fleet = fleet
@@ -336,36 +338,9 @@ class Observer:
         self.cancels: list[str] = []
         self._event: ins.Input | None = None
 
-    # ---------------------------------------------------------------- views
-
-    @property
-    def phase(self) -> DynamicState:
-        """The phase the outputs imply (R2.1)."""
-        return machine.phase_of(self.active, self.running is not None)
-
-    @property
-    def current_id(self) -> int:
-        """The id the status topic must report (R2.2): the running child's, else the highest used."""
-        return machine.reported_id(self.active, self.last_id, self._child_id)
-
     @property
     def _child_id(self) -> int | None:
         return None if self.running is None else self.running.child_id
-
-    @property
-    def child_started(self) -> bool:
-        """A started child runs."""
-        return self.running is not None and self.running.started
-
-    @property
-    def open_goals(self) -> list[str]:
-        """Accepted goals not yet answered, in acceptance order."""
-        return [uuid for uuid, record in self.goals.items() if not record.life.is_terminal]
-
-    @property
-    def answered_goals(self) -> list[str]:
-        """Goals that received their terminal answer."""
-        return [uuid for uuid, record in self.goals.items() if record.life.is_terminal]
 
     def expected_status(self, now: int) -> DynamicEventStatus:
         """The status message R2.2 gives for the modelled state, with ``time`` = ``now``."""
@@ -375,20 +350,15 @@ class Observer:
         message = self.expected_status(0)
         return (message.dynamic_event_seq, message.dynamic_state, message.status, message.id)
 
-    # ---------------------------------------------------------------- checking
+    @property
+    def current_id(self) -> int:
+        """The id the status topic must report (R2.2): the running child's, else the highest used."""
+        return machine.reported_id(self.active, self.last_id, self._child_id)
 
-    def _fail(self, violation: Violation, problem: str) -> ProtocolViolation:
-        return ProtocolViolation(violation, problem, self._event)
-
-    def check_view(self, view: ServerView | None) -> None:
-        """The implementation's own view agrees with the model (R2.1, R2.2)."""
-        if view is None:
-            return
-        expected = ServerView(self.phase, self.seq, self.current_id)
-        if view != expected:
-            raise ProtocolViolation(
-                Violation.VIEW_MISMATCH, f"the implementation's view is {view}, the outputs imply {expected}"
-            )
+    @property
+    def child_started(self) -> bool:
+        """A started child runs."""
+        return self.running is not None and self.running.started
 
     def check_all_answered(self) -> None:
         """R19.1 at the end of a run: every accepted goal has its terminal answer."""
@@ -396,97 +366,6 @@ class Observer:
         if unanswered:
             raise self._fail(
                 Violation.NEVER_ANSWERED, f"accepted goals never answered (even after shutdown): {unanswered}"
-            )
-
-    def observe(self, event: ins.Input, outputs: Sequence[outs.Output]) -> None:
-        """Check one step's outputs against the model, then advance the model."""
-        self._event = event
-        outputs = list(outputs)
-        for output in outputs:
-            if not isinstance(output, _OUTPUT_CLASSES):
-                raise self._fail(
-                    Violation.FOREIGN_OUTPUT, f"apply returned {output!r}, which is not a dynevent output"
-                )
-        if any(isinstance(output, outs.Ignored) for output in outputs) and len(outputs) != 1:
-            raise self._fail(
-                Violation.IGNORED_NOT_ALONE, f"Ignored must be the only output of its step, got {outputs}"
-            )
-        if isinstance(event, ins.GoalRequested):  # a request reusing a finished goal's UUID is a new goal
-            record = self.goals.get(event.goal_uuid)
-            if record is not None and record.life.is_terminal:
-                del self.goals[event.goal_uuid]
-            self.rejected.discard(event.goal_uuid)
-        before = self._key()
-        wire_status = self._wire_status(event)
-        seq_before, active_before = self.seq, self.active
-        ended = self.running
-        ended_goal = None if ended is None else self.goals[ended.goal_uuid].goal
-        emptied = False
-        statuses = [output for output in outputs if isinstance(output, outs.PublishStatus)]
-        for output in outputs:
-            if isinstance(output, outs.AnswerGoal):
-                if self.running is not None and self.running.goal_uuid == output.goal_uuid:
-                    emptied = True
-                self._answer(output)
-            elif isinstance(output, outs.PublishStatus):
-                continue
-            else:
-                self._effect(output, event, outputs, ended_goal)
-        self._after(event, outputs, emptied)
-        if isinstance(event, ins.GoalStarted) and any(
-            isinstance(output, outs.ExecuteGoal) and output.goal_uuid == event.goal_uuid for output in outputs
-        ):
-            self._check_race(self.goals[event.goal_uuid], seq_before, active_before)
-        after = self._key()
-        if wire_status is not None:  # R17.4, R17.5: rmf_ros2 mode publishes what rmf_ros2's wire shows
-            if len(statuses) != 1 or outputs[-1] is not statuses[0] or statuses[0].message != wire_status:
-                raise self._fail(
-                    Violation.STATUS_AFTER_CHILD_END
-                    if isinstance(event, ins.ChildFinished)
-                    else Violation.STATUS_AFTER_REPORT,
-                    f"status message {wire_status} as the last output expected; got {outputs}",
-                )
-            return
-        if statuses:
-            if len(statuses) > 1 or outputs[-1] is not statuses[0]:
-                raise self._fail(
-                    Violation.STATUS_PUBLICATION,
-                    f"one status message, as the last output, expected; got {outputs}",
-                )
-            expected = self.expected_status(event.now)
-            if statuses[0].message != expected:
-                raise self._fail(
-                    Violation.STATUS_NOT_STATE,
-                    f"status message {statuses[0].message} but the state implies {expected}",
-                )
-        if (before != after) != bool(statuses):
-            what = "changed without a status message" if before != after else "did not change"
-            raise self._fail(
-                Violation.STATUS_PUBLICATION,
-                f"status {before} -> {after} {what}; status messages: {[s.message for s in statuses]}",
-            )
-
-    def _wire_status(self, event: ins.Input) -> DynamicEventStatus | None:
-        """The status message rmf_ros2 mode publishes for a child's report or end (R17.4, R17.5)."""
-        running = self.running
-        if self.config.compatibility is not Compatibility.RMF_ROS2 or running is None or not running.started:
-            return None
-        if isinstance(event, ins.ChildFinished) and self.task_signal:
-            return None  # the run ends: R13.4 and R2.3 as in standard mode
-        if not isinstance(event, (ins.ChildProgress, ins.ChildFinished)):
-            return None
-        return machine.status_of(self.seq, True, event.status, self.last_id, running.child_id, event.now)
-
-    def _check_race(self, record: _GoalRecord, seq: int, active: bool) -> None:
-        """R5.2: a goal that starts in another run, or with no run active, loses the race."""
-        if record.life is GoalStatus.ABORTED:
-            return
-        if not active or record.goal.dynamic_event_seq != seq:
-            where = f"run {seq}" if active else "no active run"
-            raise self._fail(
-                Violation.RACE_NOT_LOST,
-                f"a goal accepted for run {record.goal.dynamic_event_seq} started in {where} "
-                f"and was not aborted (it is {record.life})",
             )
 
     def _require_open(self, uuid: str, what: str) -> _GoalRecord:
@@ -500,6 +379,30 @@ class Observer:
                 Violation.AFTER_ANSWER, f"{what} names goal {uuid} after its terminal answer ({record.life})"
             )
         return record
+
+    @property
+    def open_goals(self) -> list[str]:
+        """Accepted goals not yet answered, in acceptance order."""
+        return [uuid for uuid, record in self.goals.items() if not record.life.is_terminal]
+
+    def _fail(self, violation: Violation, problem: str) -> ProtocolViolation:
+        return ProtocolViolation(violation, problem, self._event)
+
+
+class _Goals(_Model):
+    """The life of each goal on the action, as ROS 2 and the rules allow it (R19.1, R5.2)."""
+
+    def _check_race(self, record: _GoalRecord, seq: int, active: bool) -> None:
+        """R5.2: a goal that starts in another run, or with no run active, loses the race."""
+        if record.life is GoalStatus.ABORTED:
+            return
+        if not active or record.goal.dynamic_event_seq != seq:
+            where = f"run {seq}" if active else "no active run"
+            raise self._fail(
+                Violation.RACE_NOT_LOST,
+                f"a goal accepted for run {record.goal.dynamic_event_seq} started in {where} "
+                f"and was not aborted (it is {record.life})",
+            )
 
     def _answer(self, output: outs.AnswerGoal) -> None:
         uuid = output.goal_uuid
@@ -530,10 +433,8 @@ class Observer:
         if self.running is not None and self.running.goal_uuid == uuid:
             self.running = None
 
-    def _effect(
-        self, output: outs.Output, event: ins.Input, outputs: list[outs.Output], ended: Goal | None
-    ) -> None:
-        minimum = self.config.stubborn_minimum
+    def _goal_effect(self, output: outs.Output, event: ins.Input) -> None:
+        """The goal outputs: a response to a request, a goal's execution, a cancel response, feedback."""
         if isinstance(output, outs.GoalAccepted):
             if not isinstance(event, ins.GoalRequested) or output.goal_uuid != event.goal_uuid:
                 raise self._fail(
@@ -593,7 +494,15 @@ class Observer:
                 self.running = _Running(output.goal_uuid, output.feedback.id, started=False)
                 self.last_id = output.feedback.id
                 self.status = Status.QUEUED.value
-        elif isinstance(output, outs.StartChild):
+
+
+class _Children(_Model):
+    """Children, stubbornness, a run's begin and end, the robot's log and the description answer."""
+
+    def _child_effect(self, output: outs.Output, event: ins.Input, ended: Goal | None) -> None:
+        """The outputs about children, stubbornness, the run, the robot's log and the description."""
+        minimum = self.config.stubborn_minimum
+        if isinstance(output, outs.StartChild):
             self._start_child(output, event)
         elif isinstance(output, (outs.CancelChild, outs.KillChild, outs.InterruptChild, outs.ResumeChild)):
             if not self.child_started or self.running is None or self.running.child_id != output.id:
@@ -729,6 +638,128 @@ class Observer:
             self.check_all_answered()
         if emptied and self.active:  # R8.4, R9.4, R10.4: the slot emptied, the run goes on
             self.status = Status.STANDBY.value
+
+
+class Observer(_Goals, _Children):
+    """A reference model of one robot's server, built from inputs and outputs only.
+
+    Feed it every input and the outputs the implementation answered with
+    (:meth:`observe`); it raises :class:`ProtocolViolation` at the first
+    breach of the checked rules (see the module docs) and otherwise keeps
+    the state those outputs imply.  :meth:`check_all_answered` is the end of
+    run check of R19.1.  Its attributes are what a client could know, and what
+    the kit's rules build goals from; besides the views below it offers
+    ``current_id``, ``child_started``, ``open_goals`` and ``answered_goals``.
+    """
+
+    # ---------------------------------------------------------------- views
+
+    @property
+    def phase(self) -> DynamicState:
+        """The phase the outputs imply (R2.1)."""
+        return machine.phase_of(self.active, self.running is not None)
+
+    @property
+    def answered_goals(self) -> list[str]:
+        """Goals that received their terminal answer."""
+        return [uuid for uuid, record in self.goals.items() if record.life.is_terminal]
+
+    def check_view(self, view: ServerView | None) -> None:
+        """The implementation's own view agrees with the model (R2.1, R2.2)."""
+        if view is None:
+            return
+        expected = ServerView(self.phase, self.seq, self.current_id)
+        if view != expected:
+            raise ProtocolViolation(
+                Violation.VIEW_MISMATCH, f"the implementation's view is {view}, the outputs imply {expected}"
+            )
+
+    def observe(self, event: ins.Input, outputs: Sequence[outs.Output]) -> None:
+        """Check one step's outputs against the model, then advance the model."""
+        self._event = event
+        outputs = list(outputs)
+        for output in outputs:
+            if not isinstance(output, _OUTPUT_CLASSES):
+                raise self._fail(
+                    Violation.FOREIGN_OUTPUT, f"apply returned {output!r}, which is not a dynevent output"
+                )
+        if any(isinstance(output, outs.Ignored) for output in outputs) and len(outputs) != 1:
+            raise self._fail(
+                Violation.IGNORED_NOT_ALONE, f"Ignored must be the only output of its step, got {outputs}"
+            )
+        if isinstance(event, ins.GoalRequested):  # a request reusing a finished goal's UUID is a new goal
+            record = self.goals.get(event.goal_uuid)
+            if record is not None and record.life.is_terminal:
+                del self.goals[event.goal_uuid]
+            self.rejected.discard(event.goal_uuid)
+        before = self._key()
+        wire_status = self._wire_status(event)
+        seq_before, active_before = self.seq, self.active
+        ended = self.running
+        ended_goal = None if ended is None else self.goals[ended.goal_uuid].goal
+        emptied = False
+        statuses = [output for output in outputs if isinstance(output, outs.PublishStatus)]
+        for output in outputs:
+            if isinstance(output, outs.AnswerGoal):
+                if self.running is not None and self.running.goal_uuid == output.goal_uuid:
+                    emptied = True
+                self._answer(output)
+            elif isinstance(output, outs.PublishStatus):
+                continue
+            else:
+                self._effect(output, event, outputs, ended_goal)
+        self._after(event, outputs, emptied)
+        if isinstance(event, ins.GoalStarted) and any(
+            isinstance(output, outs.ExecuteGoal) and output.goal_uuid == event.goal_uuid for output in outputs
+        ):
+            self._check_race(self.goals[event.goal_uuid], seq_before, active_before)
+        after = self._key()
+        if wire_status is not None:  # R17.4, R17.5: rmf_ros2 mode publishes what rmf_ros2's wire shows
+            if len(statuses) != 1 or outputs[-1] is not statuses[0] or statuses[0].message != wire_status:
+                raise self._fail(
+                    Violation.STATUS_AFTER_CHILD_END
+                    if isinstance(event, ins.ChildFinished)
+                    else Violation.STATUS_AFTER_REPORT,
+                    f"status message {wire_status} as the last output expected; got {outputs}",
+                )
+            return
+        if statuses:
+            if len(statuses) > 1 or outputs[-1] is not statuses[0]:
+                raise self._fail(
+                    Violation.STATUS_PUBLICATION,
+                    f"one status message, as the last output, expected; got {outputs}",
+                )
+            expected = self.expected_status(event.now)
+            if statuses[0].message != expected:
+                raise self._fail(
+                    Violation.STATUS_NOT_STATE,
+                    f"status message {statuses[0].message} but the state implies {expected}",
+                )
+        if (before != after) != bool(statuses):
+            what = "changed without a status message" if before != after else "did not change"
+            raise self._fail(
+                Violation.STATUS_PUBLICATION,
+                f"status {before} -> {after} {what}; status messages: {[s.message for s in statuses]}",
+            )
+
+    def _wire_status(self, event: ins.Input) -> DynamicEventStatus | None:
+        """The status message rmf_ros2 mode publishes for a child's report or end (R17.4, R17.5)."""
+        running = self.running
+        if self.config.compatibility is not Compatibility.RMF_ROS2 or running is None or not running.started:
+            return None
+        if isinstance(event, ins.ChildFinished) and self.task_signal:
+            return None  # the run ends: R13.4 and R2.3 as in standard mode
+        if not isinstance(event, (ins.ChildProgress, ins.ChildFinished)):
+            return None
+        return machine.status_of(self.seq, True, event.status, self.last_id, running.child_id, event.now)
+
+    def _effect(
+        self, output: outs.Output, event: ins.Input, outputs: list[outs.Output], ended: Goal | None
+    ) -> None:
+        if isinstance(output, _GOAL_OUTPUTS):
+            self._goal_effect(output, event)
+        else:
+            self._child_effect(output, event, ended)
 
 
 # --------------------------------------------------------------------------- the state machine
