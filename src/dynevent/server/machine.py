@@ -611,6 +611,44 @@ def _check_description(goal: Goal, config: ServerConfig) -> tuple[Any, outs.Reje
     return parsed, None
 
 
+def _check_next(state: State, goal: Goal, config: ServerConfig) -> outs.Rejected | None:
+    """A NEXT goal's own checks (R4.7 to R4.12), in the spec's order."""
+    _, problem = _check_description(goal, config)  # R4.7 to R4.10
+    if problem is not None:
+        return problem
+    if not math.isfinite(goal.stubborn_period):
+        return _reject(
+            "R4.11",
+            RejectReason.NON_FINITE_STUBBORN_PERIOD,
+            f"stubborn_period {goal.stubborn_period} is not a finite number",
+        )
+    if _stale(state, goal, config):
+        if goal.id == 0:
+            text = f"id 0 asks the server for the next id, and none is left above {state.last_id}"
+        else:
+            text = f"id {goal.id} is not greater than {state.last_id}, the highest id used in this run"
+        return _reject("R4.12", RejectReason.STALE_ID, text, current_id=state.last_id, requested_id=goal.id)
+    return None
+
+
+def _check_cancel(running: RunningGoal | None, goal: Goal) -> outs.Rejected | None:
+    """A CANCEL goal's own checks (R4.13, R4.14): a child runs, and the goal names it."""
+    if running is None:
+        return _reject(
+            "R4.13", RejectReason.CANCEL_IDLE, "no event is running to cancel", Failure.IDLE_CANCEL.value
+        )
+    if goal.id != running.child_id:
+        return _reject(
+            "R4.14",
+            RejectReason.CANCEL_ID_MISMATCH,
+            f"the running event is {running.child_id}, the CANCEL names {goal.id}",
+            Failure.CANCEL_ID.value,
+            current_id=running.child_id,
+            requested_id=goal.id,
+        )
+    return None
+
+
 def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
     """Would the server accept ``goal`` now?  A pure query (R4).
 
@@ -656,37 +694,13 @@ def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
             current_id=running.child_id,
         )
     if event_type == EventType.NEXT:
-        _, problem = _check_description(goal, config)  # R4.7 to R4.10
+        problem = _check_next(state, goal, config)  # R4.7 to R4.12
         if problem is not None:
             return problem
-        if not math.isfinite(goal.stubborn_period):
-            return _reject(
-                "R4.11",
-                RejectReason.NON_FINITE_STUBBORN_PERIOD,
-                f"stubborn_period {goal.stubborn_period} is not a finite number",
-            )
-        if _stale(state, goal, config):
-            if goal.id == 0:
-                text = f"id 0 asks the server for the next id, and none is left above {state.last_id}"
-            else:
-                text = f"id {goal.id} is not greater than {state.last_id}, the highest id used in this run"
-            return _reject(
-                "R4.12", RejectReason.STALE_ID, text, current_id=state.last_id, requested_id=goal.id
-            )
     elif event_type == EventType.CANCEL and standard:
-        if running is None:
-            return _reject(
-                "R4.13", RejectReason.CANCEL_IDLE, "no event is running to cancel", Failure.IDLE_CANCEL.value
-            )
-        if goal.id != running.child_id:
-            return _reject(
-                "R4.14",
-                RejectReason.CANCEL_ID_MISMATCH,
-                f"the running event is {running.child_id}, the CANCEL names {goal.id}",
-                Failure.CANCEL_ID.value,
-                current_id=running.child_id,
-                requested_id=goal.id,
-            )
+        problem = _check_cancel(running, goal)  # R4.13, R4.14
+        if problem is not None:
+            return problem
     if not standard and (
         event_type == EventType.UNINITIALIZED
         or event_type > EventType.FINISHED
