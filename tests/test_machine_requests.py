@@ -588,7 +588,7 @@ def _expected_reason(
             return R.DESCRIPTION_INVALID
         if not math.isfinite(request.stubborn_period):
             return R.NON_FINITE_STUBBORN_PERIOD
-        if request.id <= last_id:
+        if request.id <= last_id if request.id != 0 else last_id == 2**64 - 1:  # id 0: the server assigns
             return R.STALE_ID
     if request.event_type == EventType.CANCEL:
         if situation != "running":
