@@ -168,79 +168,83 @@ def summary(tagged: Sequence[tuple[int, TimelineEvent]]) -> list[str]:
     return lines
 
 
+class _Script:
+    """The demo's chapters (:data:`STEPS`), played on one loopback session."""
+
+    def __init__(self, seed: int) -> None:
+        self.session = Loopback(
+            cl.ClientState.new("0123456789abcdef", categories=["go_to_place"]),
+            machine.State.new("tinyRobot", "tinyRobot1"),
+            _config(),
+            adapter=_adapter(),
+            options=Options(delay=(1 * _MS, 4 * _MS), start_delay=(5 * _MS, 15 * _MS), reorder=True),
+            seed=seed,
+        )
+        self.tagged: list[tuple[int, TimelineEvent]] = []
+
+    def chapter(self, index: int, body: Callable[[], Any]) -> None:
+        start = len(self.session.timeline)
+        body()
+        self.session.run()
+        self.tagged.extend((index, _readable(event)) for event in self.session.timeline[start:])
+
+    def tick(self, x: float) -> None:
+        self.session.server_input(ins.Tick(now=self.session.now, map_name="L1", x=x, y=2.0))
+
+    def foreign_next(self, place: str, id: int) -> None:
+        """Another client's NEXT, unknown to the client machine."""
+        description = f'"{place}"'
+        seq = self.session.client.seq
+        goal = Goal(
+            dynamic_event_seq=seq,
+            event_type=EventType.NEXT,
+            category="go_to_place",
+            description=description,
+            id=id,
+        )
+        self.session.send_foreign(goal)
+
+    def begin(self) -> None:
+        self.tick(4.0)
+        self.session.begin('{"category": "patrol", "detail": "rounds of the ward"}', event_id=5)
+
+    def stubborn(self) -> None:
+        self.session.request_next("go_to_place", '{"place": "lobby"}', stubborn_period=0.5)
+        self.session.run()
+        for x in (4.0, 4.02, 5.5, 5.5):  # held still, a small drift, a move: re-anchored, then held
+            self.session.advance(_SECOND)
+            self.tick(x)
+
+    def wrong_cancel(self) -> None:
+        self.session.request_next("go_to_place", '"charger"')
+        self.session.advance(500 * _MS)
+        running = self.session.server.running
+        wrong = (running.child_id if running is not None else 0) + 40
+        seq = self.session.client.seq
+        self.session.send_foreign(Goal(dynamic_event_seq=seq, event_type=EventType.CANCEL, id=wrong))
+
+    def race(self) -> None:
+        self.session.request_next("go_to_place", '"kitchen"')
+        self.foreign_next("loading_bay", 100)
+
+    def after_end(self) -> None:
+        self.session.request_next("go_to_place", '"pantry"')  # the client knows the run is over
+        self.foreign_next("pantry", 200)
+
+
 def session_events(seed: int) -> list[tuple[int, TimelineEvent]]:
     """Run the scripted session; every timeline event with the index of its step in :data:`STEPS`."""
-    session = Loopback(
-        cl.ClientState.new("0123456789abcdef", categories=["go_to_place"]),
-        machine.State.new("tinyRobot", "tinyRobot1"),
-        _config(),
-        adapter=_adapter(),
-        options=Options(delay=(1 * _MS, 4 * _MS), start_delay=(5 * _MS, 15 * _MS), reorder=True),
-        seed=seed,
-    )
-    tagged: list[tuple[int, TimelineEvent]] = []
-
-    def chapter(index: int, body: Callable[[], Any]) -> None:
-        start = len(session.timeline)
-        body()
-        session.run()
-        tagged.extend((index, _readable(event)) for event in session.timeline[start:])
-
-    def tick(x: float) -> None:
-        session.server_input(ins.Tick(now=session.now, map_name="L1", x=x, y=2.0))
-
-    def begin() -> None:
-        tick(4.0)
-        session.begin('{"category": "patrol", "detail": "rounds of the ward"}', event_id=5)
-
-    def stubborn() -> None:
-        session.request_next("go_to_place", '{"place": "lobby"}', stubborn_period=0.5)
-        session.run()
-        for x in (4.0, 4.02, 5.5, 5.5):  # held still, a small drift, a move: re-anchored, then held
-            session.advance(_SECOND)
-            tick(x)
-
-    def seq() -> int:
-        return session.client.seq
-
-    def wrong_cancel() -> None:
-        session.request_next("go_to_place", '"charger"')
-        session.advance(500 * _MS)
-        running = session.server.running
-        wrong = (running.child_id if running is not None else 0) + 40
-        session.send_foreign(Goal(dynamic_event_seq=seq(), event_type=EventType.CANCEL, id=wrong))
-
-    def race() -> None:
-        session.request_next("go_to_place", '"kitchen"')
-        rival = Goal(
-            dynamic_event_seq=seq(),
-            event_type=EventType.NEXT,
-            category="go_to_place",
-            description='"loading_bay"',
-            id=100,
-        )
-        session.send_foreign(rival)
-
-    def after_end() -> None:
-        session.request_next("go_to_place", '"pantry"')  # the client knows the run is over
-        late = Goal(
-            dynamic_event_seq=seq(),
-            event_type=EventType.NEXT,
-            category="go_to_place",
-            description='"pantry"',
-            id=200,
-        )
-        session.send_foreign(late)
-
-    chapter(0, begin)
-    chapter(1, lambda: session.request_next("go_to_place", '"pantry"'))
-    chapter(2, stubborn)
-    chapter(3, wrong_cancel)
-    chapter(4, session.request_cancel)
-    chapter(5, race)
-    chapter(6, session.request_finish)
-    chapter(7, after_end)
-    return tagged
+    script = _Script(seed)
+    session = script.session
+    script.chapter(0, script.begin)
+    script.chapter(1, lambda: session.request_next("go_to_place", '"pantry"'))
+    script.chapter(2, script.stubborn)
+    script.chapter(3, script.wrong_cancel)
+    script.chapter(4, session.request_cancel)
+    script.chapter(5, script.race)
+    script.chapter(6, session.request_finish)
+    script.chapter(7, script.after_end)
+    return script.tagged
 
 
 def run_demo(seed: int = 0, *, json_lines: bool = False) -> str:

@@ -322,34 +322,49 @@ def explain(
     else:
         config = ServerConfig(categories=validators)
     decision = machine.accept(state, goal, config)
+    strict = ServerConfig(categories=validators)  # the standard's checks, which rmf_ros2 defers (R17.1)
+    at_start, aborted = "", False
+    then: tuple[outs.Rejected, ...] = ()
     if isinstance(decision, outs.Accepted):
         at_start, aborted = _start(state, goal, config)
-        rule = decision.rule
-        advice = "" if not aborted else "see the refusal above: standard servers refuse this goal at once"
-        instead = None
-        if aborted:
-            refusal = machine.accept(state, goal, ServerConfig(categories=validators))
-            if isinstance(refusal, outs.Rejected):
-                instead, advice, _ = _fix(state, goal, refusal)
-                advice = f"{refusal.reason.value}: {refusal.text}; {advice}"
-        return Explanation(
-            status=status,
-            goal=goal,
-            decision=decision,
-            rule=rule,
-            at_start=at_start,
-            aborted_at_start=aborted,
-            then=(),
-            instead=instead,
-            advice=advice,
-            unknown=tuple(_unknowns(state, goal, decision, categories is not None)),
-            inconsistency=inconsistency,
-        )
+        instead, advice = _instead_of_an_abort(state, goal, strict) if aborted else (None, "")
+    else:
+        then, instead, advice = _corrections(state, goal, decision, strict)
+    return Explanation(
+        status=status,
+        goal=goal,
+        decision=decision,
+        rule=decision.rule,
+        at_start=at_start,
+        aborted_at_start=aborted,
+        then=then,
+        instead=instead,
+        advice=advice,
+        unknown=tuple(_unknowns(state, goal, decision, categories is not None)),
+        inconsistency=inconsistency,
+    )
+
+
+def _instead_of_an_abort(state: State, goal: Goal, strict: ServerConfig) -> tuple[Goal | None, str]:
+    """A goal rmf_ros2 accepts and aborts at its start: the standard's refusal, and its correction."""
+    advice = "see the refusal above: standard servers refuse this goal at once"
+    refusal = machine.accept(state, goal, strict)
+    if not isinstance(refusal, outs.Rejected):
+        return None, advice
+    instead, fix, _ = _fix(state, goal, refusal)
+    return instead, f"{refusal.reason.value}: {refusal.text}; {fix}"
+
+
+def _corrections(
+    state: State, goal: Goal, decision: outs.Rejected, strict: ServerConfig
+) -> tuple[tuple[outs.Rejected, ...], Goal | None, str]:
+    """The refusals after the first, the corrected goal (``None`` when none is accepted), the advice.
+
+    A correction must begin, not only be accepted: it is checked as the standard does (rmf_ros2
+    aborts at start exactly the goals the standard refuses, R17.1).
+    """
     then: list[outs.Rejected] = []
     instead, advice, keep = _fix(state, goal, decision)
-    # a correction must begin, not only be accepted: check it as the spec does (rmf_ros2 aborts at start
-    # exactly the goals the standard refuses, R17.1)
-    strict = ServerConfig(categories=validators)
     for _ in range(8):  # each correction removes one refusal; there are fewer than eight kinds
         if instead is None or not keep:
             break
@@ -362,19 +377,7 @@ def explain(
         instead = fixed
     if instead is not None and not isinstance(machine.accept(state, instead, strict), outs.Accepted):
         instead = None
-    return Explanation(
-        status=status,
-        goal=goal,
-        decision=decision,
-        rule=decision.rule,
-        at_start="",
-        aborted_at_start=False,
-        then=tuple(then),
-        instead=instead,
-        advice=advice,
-        unknown=tuple(_unknowns(state, goal, decision, categories is not None)),
-        inconsistency=inconsistency,
-    )
+    return tuple(then), instead, advice
 
 
 def format_explanation(explanation: Explanation) -> str:
