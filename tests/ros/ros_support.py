@@ -60,15 +60,19 @@ class Graph:
         self.executor = MultiThreadedExecutor(num_threads=4, context=self.context)
         self.nodes: list[Any] = []
         self.died: BaseException | None = None
+        self._closing = threading.Event()
         self._thread = threading.Thread(target=self._spin, daemon=True)
         self._thread.start()
 
     def _spin(self) -> None:
+        """Spin until :meth:`close` asks to stop; the executor is shut down only once this returns, so no
+        callback of rclpy's own meets an entity already destroyed."""
         from rclpy.executors import ExternalShutdownException
 
         try:
             with contextlib.suppress(ExternalShutdownException):
-                self.executor.spin()
+                while not self._closing.is_set():
+                    self.executor.spin_once(timeout_sec=0.05)
         except BaseException as error:  # the test that owns the graph fails with it, at close
             self.died = error
             raise
@@ -90,11 +94,12 @@ class Graph:
     def close(self) -> None:
         import rclpy
 
+        self._closing.set()
+        self._thread.join(timeout=5)
         self.executor.shutdown(timeout_sec=5)
         for node in self.nodes:
             node.destroy_node()
         rclpy.shutdown(context=self.context)
-        self._thread.join(timeout=5)
         if self.died is not None:
             raise AssertionError(f"the executor thread died: {self.died!r}") from self.died
 

@@ -310,7 +310,7 @@ def test_a_goal_that_loses_a_race_between_rclpys_two_callbacks_is_aborted(graph:
         robot.server.task_cancel()  # another thread of the adapter, in the window
         return response
 
-    robot.server._action.register_goal_callback(goal_callback_then_the_task_is_cancelled)
+    robot.server._ros.action.register_goal_callback(goal_callback_then_the_task_is_cancelled)
     raw = RawClient(graph, "raw")
     goal = raw.send(dynamic_event_seq=1, event_type=1, category="go_to_place", description='"a"', id=8)
     assert goal.wait_response()

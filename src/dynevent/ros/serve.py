@@ -243,6 +243,76 @@ def _config_from_dict(data: Any, source: str) -> ServeConfig:
     )
 
 
+class _Robots:
+    """The robots one ``dynevent serve`` node serves: their servers, their live log, their re-begins."""
+
+    def __init__(
+        self,
+        node: Any,
+        config: ServeConfig,
+        machine_config: ServerConfig,
+        store: StateStore | None,
+        say: Callable[[str], None],
+    ) -> None:
+        self.node = node
+        self.config = config
+        self.store = store
+        self.say = say
+        self.machine_config = machine_config
+        self.begins = DynamicEventServer.fleet_begin_publisher(node)
+        self.children = SimulatedChildren(node, config.categories, say)
+        self.servers: dict[str, DynamicEventServer] = {}
+        self.rebegin_timers: dict[str, Any] = {}
+
+    def observer(self, robot: str) -> Callable[[outs.Output | outs.Rejected], None]:
+        def observe(output: outs.Output | outs.Rejected) -> None:
+            line = _describe(output)
+            if line is not None:
+                self.say(f"{self.config.fleet}/{robot}  {line}")
+
+        return observe
+
+    def finished(self, robot: str) -> Callable[[str], None]:
+        def rebegin_later(status: str) -> None:
+            if self.config.rebegin > 0:
+                timer = self.node.create_timer(self.config.rebegin, lambda: self.begin_again(robot))
+                self.rebegin_timers[robot] = timer
+
+        return rebegin_later
+
+    def begin_again(self, robot: str, description: str = DEFAULT_DESCRIPTION) -> None:
+        timer = self.rebegin_timers.pop(robot, None)
+        if timer is not None:
+            self.node.destroy_timer(timer)
+        self.servers[robot].begin(description, 1)
+
+    def add(self, robot: str, restored: State | None) -> None:
+        """Serve ``robot``, from its restored state if any; a robot with no active run begins one."""
+        fleet = self.config.fleet
+        server = DynamicEventServer(
+            self.node,
+            fleet,
+            robot,
+            self.machine_config,
+            self.children,
+            begin_publisher=self.begins,
+            state=restored,
+            on_state=self.store.save if self.store is not None else None,
+            observer=self.observer(robot),
+            on_finished=self.finished(robot),
+        )
+        self.servers[robot] = server
+        if restored is not None:
+            self.say(f"{fleet}/{robot}  restored: run {restored.seq}, last id {restored.last_id}")
+            server.restart()
+        if not server.state.active:
+            server.begin(DEFAULT_DESCRIPTION, 1)
+
+    def on_begin_command(self, message: Any) -> None:
+        if message.fleet == self.config.fleet and message.robot in self.servers:
+            self.begin_again(message.robot, message.description or DEFAULT_DESCRIPTION)
+
+
 def run(
     config: ServeConfig, state_path: str | None, seconds: float | None, say: Callable[[str], None]
 ) -> int:
@@ -256,58 +326,10 @@ def run(
     rclpy.init()
     node = rclpy.create_node("dynevent_serve")
     node.get_logger().set_level(LoggingSeverity.WARN)  # the live log says the rest
-    begins = DynamicEventServer.fleet_begin_publisher(node)
-    children = SimulatedChildren(node, config.categories, say)
-    servers: dict[str, DynamicEventServer] = {}
-    rebegin_timers: dict[str, Any] = {}
-
-    def observer(robot: str) -> Callable[[outs.Output | outs.Rejected], None]:
-        def observe(output: outs.Output | outs.Rejected) -> None:
-            line = _describe(output)
-            if line is not None:
-                say(f"{config.fleet}/{robot}  {line}")
-
-        return observe
-
-    def finished(robot: str) -> Callable[[str], None]:
-        def rebegin_later(status: str) -> None:
-            if config.rebegin > 0:
-                timer = node.create_timer(config.rebegin, lambda: begin_again(robot))
-                rebegin_timers[robot] = timer
-
-        return rebegin_later
-
-    def begin_again(robot: str, description: str = DEFAULT_DESCRIPTION) -> None:
-        timer = rebegin_timers.pop(robot, None)
-        if timer is not None:
-            node.destroy_timer(timer)
-        servers[robot].begin(description, 1)
-
+    robots = _Robots(node, config, machine_config, store, say)
     for robot in config.robots:
-        restored: State | None = stored.get((config.fleet, robot))
-        servers[robot] = DynamicEventServer(
-            node,
-            config.fleet,
-            robot,
-            machine_config,
-            children,
-            begin_publisher=begins,
-            state=restored,
-            on_state=store.save if store is not None else None,
-            observer=observer(robot),
-            on_finished=finished(robot),
-        )
-        if restored is not None:
-            say(f"{config.fleet}/{robot}  restored: run {restored.seq}, last id {restored.last_id}")
-            servers[robot].restart()
-        if not servers[robot].state.active:
-            servers[robot].begin(DEFAULT_DESCRIPTION, 1)
-
-    def on_begin_command(message: Any) -> None:
-        if message.fleet == config.fleet and message.robot in servers:
-            begin_again(message.robot, message.description or DEFAULT_DESCRIPTION)
-
-    node.create_subscription(RosDescription, BEGIN_COMMAND_TOPIC, on_begin_command, latched(10))
+        robots.add(robot, stored.get((config.fleet, robot)))
+    node.create_subscription(RosDescription, BEGIN_COMMAND_TOPIC, robots.on_begin_command, latched(10))
     executor = MultiThreadedExecutor(num_threads=2)
     executor.add_node(node)
     stop = threading.Event()
@@ -315,9 +337,9 @@ def run(
         signal.signal(signum, lambda *_: stop.set())
     spinner = threading.Thread(target=_spin, args=(executor,), daemon=True)
     spinner.start()
-    say(f"serving {len(servers)} robot(s) of fleet {config.fleet}: {', '.join(servers)}")
+    say(f"serving {len(robots.servers)} robot(s) of fleet {config.fleet}: {', '.join(robots.servers)}")
     stop.wait(seconds)
-    for server in servers.values():
+    for server in robots.servers.values():
         server.shutdown()
     time.sleep(0.2)  # let the shutdown answers go out before the node goes
     executor.shutdown(timeout_sec=5)

@@ -170,6 +170,61 @@ class StubbornHolds(Protocol):
         """Release the hold."""
 
 
+class _Entities:
+    """One robot's ROS 2 entities on a node: its status and begin topics, its action server, the
+    stubborn-refresh timer, the wake-up guard condition and, when asked for, the description service.
+    Every callback runs in one mutually exclusive group: the server's steps never overlap."""
+
+    def __init__(
+        self,
+        server: DynamicEventServer,
+        node: Any,
+        fleet: str,
+        robot: str,
+        begin_publisher: Any | None,
+        description_service: Any | None,
+    ) -> None:
+        group = MutuallyExclusiveCallbackGroup()
+        self.status = node.create_publisher(
+            RosStatus, status_topic(fleet, robot), latched(STATUS_TOPIC_DEPTH)
+        )
+        self.begin = node.create_publisher(
+            RosDescription, begin_topic(fleet, robot), latched(ROBOT_BEGIN_TOPIC_DEPTH)
+        )
+        self.fleet_begin = (
+            begin_publisher if begin_publisher is not None else server.fleet_begin_publisher(node)
+        )
+        self.wake = node.create_guard_condition(server._drain, callback_group=group)
+        self.action = ActionServer(
+            node,
+            DynamicEvent,
+            action_name(fleet, robot),
+            execute_callback=server._execute,
+            goal_callback=server._goal_callback,
+            handle_accepted_callback=server._handle_accepted,
+            cancel_callback=server._cancel_callback,
+            callback_group=group,
+        )
+        self.timer = node.create_timer(server.config.stubborn_refresh, server._refresh, callback_group=group)
+        self.service = None
+        if description_service is not None:
+            self.service = node.create_service(
+                description_service,
+                names.description_service(fleet, robot),
+                server._describe,
+                callback_group=group,
+            )
+
+    def destroy(self, node: Any) -> None:
+        self.action.destroy()
+        node.destroy_timer(self.timer)
+        node.destroy_publisher(self.status)
+        node.destroy_publisher(self.begin)
+        node.destroy_guard_condition(self.wake)
+        if self.service is not None:
+            node.destroy_service(self.service)
+
+
 class DynamicEventServer:
     """One robot's Dynamic Event server on ``node`` (several may share a node: a fleet).
 
@@ -229,38 +284,9 @@ class DynamicEventServer:
         self._executions: dict[int, ChildExecution] = {}
         self._position: tuple[str, float, float] | None = None
         self._log = node.get_logger().get_child(f"{fleet}.{robot}")
-        self._group = MutuallyExclusiveCallbackGroup()
-        self._status = node.create_publisher(
-            RosStatus, status_topic(fleet, robot), latched(STATUS_TOPIC_DEPTH)
-        )
-        self._begin = node.create_publisher(
-            RosDescription, begin_topic(fleet, robot), latched(ROBOT_BEGIN_TOPIC_DEPTH)
-        )
-        self._fleet_begin = (
-            begin_publisher if begin_publisher is not None else self.fleet_begin_publisher(node)
-        )
-        self._wake = node.create_guard_condition(self._drain, callback_group=self._group)
-        self._action = ActionServer(
-            node,
-            DynamicEvent,
-            action_name(fleet, robot),
-            execute_callback=self._execute,
-            goal_callback=self._goal_callback,
-            handle_accepted_callback=self._handle_accepted,
-            cancel_callback=self._cancel_callback,
-            callback_group=self._group,
-        )
-        self._timer = node.create_timer(config.stubborn_refresh, self._refresh, callback_group=self._group)
-        self._service = None
-        if description_service is not None:
-            self._service = node.create_service(
-                description_service,
-                names.description_service(fleet, robot),
-                self._describe,
-                callback_group=self._group,
-            )
+        self._ros = _Entities(self, node, fleet, robot, begin_publisher, description_service)
         self._announce = True  # the status at the first drain, unless a step already queued one
-        self._wake.trigger()
+        self._ros.wake.trigger()
 
     # ---------------------------------------------------------------- plumbing
 
@@ -289,7 +315,7 @@ class DynamicEventServer:
         """Apply ``event`` under the lock; its outputs are carried out in order, on the executor."""
         with self._lock:
             outputs = self._step(event)
-        self._wake.trigger()
+        self._ros.wake.trigger()
         return outputs
 
     def _step(self, event: ins.Input) -> tuple[outs.Output, ...]:
@@ -343,13 +369,7 @@ class DynamicEventServer:
 
     def destroy(self) -> None:
         """Release the action server, publishers, timer and guard condition (after :meth:`shutdown`)."""
-        self._action.destroy()
-        self._node.destroy_timer(self._timer)
-        self._node.destroy_publisher(self._status)
-        self._node.destroy_publisher(self._begin)
-        self._node.destroy_guard_condition(self._wake)
-        if self._service is not None:
-            self._node.destroy_service(self._service)
+        self._ros.destroy(self._node)
 
     def _describe(self, request: Any, response: Any) -> Any:
         with self._lock:  # a query: its one output is the answer, not an effect for the outbox (R16)
@@ -408,7 +428,7 @@ class DynamicEventServer:
         uuid = convert.uuid_from_ros(goal_handle.goal_id)
         with self._lock:
             outputs = self._step(ins.CancelRequested(goal_uuid=uuid, now=self.now()))
-        self._wake.trigger()  # carried out after rclpy has moved the goal to CANCELING (same group)
+        self._ros.wake.trigger()  # carried out after rclpy has moved the goal to CANCELING (same group)
         response = next((output for output in outputs if isinstance(output, outs.CancelResponse)), None)
         return CancelResponse.ACCEPT if response is not None and response.accepted else CancelResponse.REJECT
 
@@ -447,7 +467,7 @@ class DynamicEventServer:
         if self._observer is not None:
             self._observer(output)
         if isinstance(output, outs.PublishStatus):
-            self._status.publish(convert.status_to_ros(output.message))
+            self._ros.status.publish(convert.status_to_ros(output.message))
         elif isinstance(output, outs.PublishFeedback):
             handle = self._handles.get(output.goal_uuid)
             if handle is not None:
@@ -459,8 +479,8 @@ class DynamicEventServer:
                 future.set_result(output)
         elif isinstance(output, outs.PublishBegin):
             message = convert.begin_to_ros(output.message)
-            self._begin.publish(message)
-            self._fleet_begin.publish(message)
+            self._ros.begin.publish(message)
+            self._ros.fleet_begin.publish(message)
         elif isinstance(output, outs.StartChild):
             started = ChildExecution(self, output)
             self._executions[output.id] = started
