@@ -765,6 +765,70 @@ class Observer(_Goals, _Children):
 # --------------------------------------------------------------------------- the state machine
 
 
+def _valid_descriptions(config: ServerConfig, category: str) -> list[str]:
+    """The kit's descriptions that ``config`` accepts for ``category`` (all of them for an unknown one)."""
+    validator = config.categories.get(category)
+    if validator is None:
+        return list(_DESCRIPTIONS)
+    limit = config.max_description_length
+    return [text for text in _DESCRIPTIONS if len(text) <= limit and _fits(validator, category, text)]
+
+
+def _next_goal(config: ServerConfig, categories: Sequence[str], model: Observer, data: st.DataObject) -> Goal:
+    """A NEXT goal the server must accept in the modelled state (unless it races)."""
+    category = data.draw(st.sampled_from(categories or ("none",)), label="category")
+    valid = _valid_descriptions(config, category) or list(_DESCRIPTIONS)
+    if config.id_policy is IdPolicy.GOAL:
+        step = data.draw(st.integers(0, 3), label="id step")  # 0: the server assigns the id (R6.2)
+        goal_id = 0 if step == 0 else min(model.last_id + step, U64_MAX)
+    else:
+        goal_id = data.draw(st.integers(0, 5), label="id")
+    return Goal(
+        dynamic_event_seq=model.seq,
+        event_type=EventType.NEXT,
+        category=category,
+        description=data.draw(st.sampled_from(valid), label="description"),
+        id=goal_id,
+        stubborn_period=data.draw(st.sampled_from(_STUBBORN), label="stubborn_period"),
+    )
+
+
+def _hostile(goal: Goal, fault: str, data: st.DataObject, config: ServerConfig, model: Observer) -> Goal:
+    """``goal`` made wrong in one way, ``fault``: its seq, event type, description, category, period or id."""
+    if fault == "seq":
+        shift = data.draw(st.sampled_from((1, 2, U32_MAX)), label="seq shift")
+        goal = attrs.evolve(goal, dynamic_event_seq=(model.seq + shift) & U32_MAX)
+    elif fault == "event_type":
+        event_type = data.draw(st.sampled_from((0, 4, 5, 1000, U32_MAX)), label="event_type")
+        goal = attrs.evolve(goal, event_type=event_type)
+    elif fault == "not_json":
+        goal = attrs.evolve(goal, description=data.draw(st.sampled_from(_NOT_JSON), label="text"))
+    elif fault == "invalid":
+        valid = set(_valid_descriptions(config, goal.category))
+        invalid = [text for text in _DESCRIPTIONS if text not in valid]
+        if invalid:
+            goal = attrs.evolve(goal, description=data.draw(st.sampled_from(invalid), label="text"))
+    elif fault == "too_long":
+        length = config.max_description_length + 1
+        if length <= 100_000:
+            goal = attrs.evolve(goal, description='"' + "x" * (length - 1) + '"')
+    elif fault == "category":
+        category = data.draw(st.sampled_from(("", "unknown", "Go_To_Place")), label="category")
+        goal = attrs.evolve(goal, category=category)
+    elif fault == "stubborn":
+        goal = attrs.evolve(goal, stubborn_period=data.draw(st.sampled_from(_NON_FINITE), label="period"))
+    elif fault == "stale":
+        goal = attrs.evolve(goal, id=max(model.last_id - data.draw(st.integers(0, 2), label="back"), 0))
+    elif fault == "cancel_id":
+        current = model.current_id
+        wrong = data.draw(st.sampled_from(((current + 1) & U64_MAX, (current - 1) & U64_MAX, 0)), label="id")
+        goal = Goal(dynamic_event_seq=model.seq, event_type=EventType.CANCEL, id=wrong)
+    else:  # a CANCEL or FINISHED carrying NEXT's fields, and a NaN period
+        event_type = data.draw(st.sampled_from((EventType.CANCEL, EventType.FINISHED)), label="type")
+        goal = attrs.evolve(goal, event_type=event_type, stubborn_period=math.nan)
+    return goal
+
+
 class ServerStateMachine(RuleBasedStateMachine):
     """Drive a server with generated inputs and check every step with an :class:`Observer`.
 
@@ -824,29 +888,10 @@ class ServerStateMachine(RuleBasedStateMachine):
         self.apply(ins.GoalRequested(goal_uuid=uuid or self._uuid(), goal=goal, now=self._tick()))
 
     def _valid_descriptions(self, category: str) -> list[str]:
-        validator = self.server_config.categories.get(category)
-        if validator is None:
-            return list(_DESCRIPTIONS)
-        limit = self.server_config.max_description_length
-        return [text for text in _DESCRIPTIONS if len(text) <= limit and _fits(validator, category, text)]
+        return _valid_descriptions(self.server_config, category)
 
     def _next_goal(self, data: st.DataObject) -> Goal:
-        category = data.draw(st.sampled_from(self.categories or ("none",)), label="category")
-        valid = self._valid_descriptions(category) or list(_DESCRIPTIONS)
-        model = self.model
-        if self.server_config.id_policy is IdPolicy.GOAL:
-            step = data.draw(st.integers(0, 3), label="id step")  # 0: the server assigns the id (R6.2)
-            goal_id = 0 if step == 0 else min(model.last_id + step, U64_MAX)
-        else:
-            goal_id = data.draw(st.integers(0, 5), label="id")
-        return Goal(
-            dynamic_event_seq=model.seq,
-            event_type=EventType.NEXT,
-            category=category,
-            description=data.draw(st.sampled_from(valid), label="description"),
-            id=goal_id,
-            stubborn_period=data.draw(st.sampled_from(_STUBBORN), label="stubborn_period"),
-        )
+        return _next_goal(self.server_config, self.categories, self.model, data)
 
     def _pick(self, data: st.DataObject, uuids: Sequence[str], label: str) -> str:
         return data.draw(st.sampled_from(list(uuids)), label=label)
@@ -941,41 +986,7 @@ class ServerStateMachine(RuleBasedStateMachine):
     @rule(fault=st.sampled_from(_FAULTS), data=st.data())
     def request_hostile(self, fault: str, data: st.DataObject) -> None:
         """A goal valid in every way but one: the wrong seq, event type, description, period or id."""
-        goal = self._next_goal(data)
-        model = self.model
-        if fault == "seq":
-            shift = data.draw(st.sampled_from((1, 2, U32_MAX)), label="seq shift")
-            goal = attrs.evolve(goal, dynamic_event_seq=(model.seq + shift) & U32_MAX)
-        elif fault == "event_type":
-            event_type = data.draw(st.sampled_from((0, 4, 5, 1000, U32_MAX)), label="event_type")
-            goal = attrs.evolve(goal, event_type=event_type)
-        elif fault == "not_json":
-            goal = attrs.evolve(goal, description=data.draw(st.sampled_from(_NOT_JSON), label="text"))
-        elif fault == "invalid":
-            valid = set(self._valid_descriptions(goal.category))
-            invalid = [text for text in _DESCRIPTIONS if text not in valid]
-            if invalid:
-                goal = attrs.evolve(goal, description=data.draw(st.sampled_from(invalid), label="text"))
-        elif fault == "too_long":
-            length = self.server_config.max_description_length + 1
-            if length <= 100_000:
-                goal = attrs.evolve(goal, description='"' + "x" * (length - 1) + '"')
-        elif fault == "category":
-            category = data.draw(st.sampled_from(("", "unknown", "Go_To_Place")), label="category")
-            goal = attrs.evolve(goal, category=category)
-        elif fault == "stubborn":
-            goal = attrs.evolve(goal, stubborn_period=data.draw(st.sampled_from(_NON_FINITE), label="period"))
-        elif fault == "stale":
-            goal = attrs.evolve(goal, id=max(model.last_id - data.draw(st.integers(0, 2), label="back"), 0))
-        elif fault == "cancel_id":
-            current = model.current_id
-            wrong = data.draw(
-                st.sampled_from(((current + 1) & U64_MAX, (current - 1) & U64_MAX, 0)), label="id"
-            )
-            goal = Goal(dynamic_event_seq=model.seq, event_type=EventType.CANCEL, id=wrong)
-        else:  # a CANCEL or FINISHED carrying NEXT's fields, and a NaN period
-            event_type = data.draw(st.sampled_from((EventType.CANCEL, EventType.FINISHED)), label="type")
-            goal = attrs.evolve(goal, event_type=event_type, stubborn_period=math.nan)
+        goal = _hostile(self._next_goal(data), fault, data, self.server_config, self.model)
         self._request(goal)
 
     @precondition(lambda self: bool(self.model.open_goals))
