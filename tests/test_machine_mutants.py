@@ -37,7 +37,8 @@ from dynevent.server.machine import (
     allowed_targets,
 )
 from dynevent.tools.diagram import render
-from dynevent.wire.vocab import DynamicState, IdPolicy, RejectReason
+from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.vocab import DynamicState, EventType, IdPolicy, RejectReason
 from scenario import (
     CONFIG,
     FLEET,
@@ -629,3 +630,67 @@ def test_a_finished_start_is_a_declared_edge() -> None:
     run.submit(u(1), finished_goal(1))
     assert run.phase in allowed_targets(DynamicState.WAITING, "goal_started")
     assert run.phase is DynamicState.INACTIVE
+
+
+# --------------------------------------------------------------------------- survivors of the split layout
+
+
+def test_the_dynamic_event_category_is_refused_naming_the_field() -> None:
+    with pytest.raises(InvalidConfig) as caught:
+        ServerConfig(categories={"dynamic_event": machine.accept_any})
+    assert caught.value.field == "categories" and caught.value.value == "dynamic_event"
+    assert caught.value.problem == (
+        "'dynamic_event' can never be a child category: a nested run would break the outer one"
+    )
+
+
+def test_the_smallest_description_limit_is_one_byte() -> None:
+    assert ServerConfig(max_description_length=1).max_description_length == 1
+
+
+@pytest.mark.parametrize("seconds", [1, 86_400])
+def test_whole_seconds_become_floats_up_to_the_bound(seconds: int) -> None:
+    config = ServerConfig(stubborn_minimum=seconds, stubborn_refresh=seconds)
+    assert type(config.stubborn_minimum) is float and type(config.stubborn_refresh) is float
+
+
+def test_a_zero_period_is_refused_as_given() -> None:
+    with pytest.raises(InvalidConfig) as caught:
+        ServerConfig(stubborn_minimum=0)
+    assert type(caught.value.value) is int and str(caught.value).endswith("(got 0)")
+
+
+@pytest.mark.spec("R17.1", "R4.16")
+@pytest.mark.parametrize(
+    ("event_type", "id", "running", "rule"),
+    [
+        (EventType.NEXT, 0, False, "R4.16"),
+        (EventType.FINISHED, 0, False, "R4.16"),
+        (0, 0, False, "R17.1"),
+        (4, 0, False, "R17.1"),
+        (EventType.CANCEL, 5, False, "R17.1"),
+        (EventType.CANCEL, 6, True, "R17.1"),
+        (EventType.CANCEL, 5, True, "R4.16"),
+    ],
+)
+def test_an_acceptance_names_the_rule_that_lets_the_goal_in(
+    event_type: int, id: int, running: bool, rule: str
+) -> None:
+    config = ServerConfig.rmf_ros2({"go_to_place": machine.accept_any})
+    state = _rmf_state(running)
+    goal = Goal(
+        dynamic_event_seq=state.seq, event_type=event_type, id=id, category="go_to_place", description="1"
+    )
+    decision = machine.accept(state, goal, config)
+    assert isinstance(decision, outs.Accepted) and decision.rule == rule
+
+
+def _rmf_state(running: bool) -> State:
+    """An active run of seq 1, with child 5 running or not."""
+    status = DynamicEventStatus(
+        dynamic_event_seq=1,
+        dynamic_state=DynamicState.RUNNING if running else DynamicState.WAITING,
+        status="underway" if running else "standby",
+        id=5 if running else 4,
+    )
+    return machine.state_from_status(status)

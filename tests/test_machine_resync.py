@@ -121,3 +121,48 @@ def test_a_next_forced_to_run() -> None:
     assert not after.interrupted
     held = machine.resync_running(queued, u(2), goal, 6, Status.QUEUED.value, [u(1)])
     assert held.running is not None and not held.running.started and held.interrupted
+
+
+# --------------------------------------------------------------------------- a status message's state
+
+
+def test_state_from_status_of_each_phase() -> None:
+    def of(phase: DynamicState, text: str, id: int, **kwargs: int) -> State:
+        message = DynamicEventStatus(dynamic_event_seq=3, dynamic_state=phase, status=text, id=id)
+        return machine.state_from_status(message, **kwargs)
+
+    base = State.new("fleet", "robot")
+    assert of(DynamicState.INACTIVE, "uninitialized", 0) == attrs.evolve(base, seq=3)
+    assert of(DynamicState.INACTIVE, "uninitialized", 0, last_id=9) == attrs.evolve(base, seq=3, last_id=9)
+    assert of(DynamicState.WAITING, "standby", 4, last_id=2) == attrs.evolve(
+        base, seq=3, active=True, event_id=4, description="{}", status="standby", last_id=4
+    )
+    assert of(DynamicState.WAITING, "standby", 4, last_id=6).last_id == 6
+    goal = Goal(dynamic_event_seq=3, event_type=EventType.NEXT, id=8)
+    unknown = machine.RunningGoal(
+        goal_uuid=UNKNOWN_GOAL, goal=goal, child_id=8, child_status="underway", started=True
+    )
+    assert of(DynamicState.RUNNING, "underway", 8) == attrs.evolve(
+        base, seq=3, active=True, description="{}", status="underway", last_id=8, running=unknown
+    )
+    deferred_start = of(DynamicState.RUNNING, "queued", 8, last_id=10)
+    assert deferred_start.running is not None and not deferred_start.running.started
+    assert deferred_start.interrupted and deferred_start.last_id == 10
+    named = machine.state_from_status(
+        DynamicEventStatus(dynamic_event_seq=1, dynamic_state=DynamicState.WAITING), "tinyRobot", "r1"
+    )
+    assert (named.fleet, named.robot) == ("tinyRobot", "r1")
+
+
+def test_the_unknown_goal_is_a_goal_uuid_no_client_draws() -> None:
+    assert UNKNOWN_GOAL == "0" * 32
+
+
+def test_state_from_status_refuses_a_phase_that_is_none() -> None:
+    message = DynamicEventStatus(dynamic_event_seq=1, dynamic_state=3)
+    try:
+        machine.state_from_status(message)
+    except ValueError as exc:
+        assert str(exc) == "dynamic_state 3 is none of INACTIVE (0), WAITING (1), RUNNING (2)"
+    else:
+        raise AssertionError("no ValueError")
