@@ -122,7 +122,8 @@ def test_the_rule_index_is_current() -> None:
     text = rule_index()
     if os.environ.get("DYNEVENT_UPDATE_RULE_INDEX") == "1":
         INDEX.write_text(text, encoding="utf-8")
-    assert INDEX.read_text(encoding="utf-8") == text, "docs/rule-index.md is stale: DYNEVENT_UPDATE_RULE_INDEX=1 pytest tests/test_spec_document.py"
+    how = "DYNEVENT_UPDATE_RULE_INDEX=1 pytest tests/test_spec_document.py"
+    assert INDEX.read_text(encoding="utf-8") == text, f"docs/rule-index.md is stale: {how}"
 
 
 def test_the_rule_index_reads_module_and_function_marks() -> None:
