@@ -60,6 +60,7 @@ from scenario import (
 )
 
 R = RejectReason
+U64_MAX = 2**64 - 1
 SPEC = (Path(__file__).resolve().parents[1] / "docs" / "spec.md").read_text(encoding="utf-8")
 ADAPTER = attrs.evolve(CONFIG, id_policy=IdPolicy.ADAPTER)
 
@@ -385,6 +386,12 @@ def _shut_down() -> Run:
             "stubborn_period -inf is not a finite number",
         ),
         (waiting, next_goal(1, 1), R.STALE_ID, "id 1 is not greater than 1, the highest id used in this run"),
+        (
+            lambda: waiting().evolve(last_id=U64_MAX),
+            next_goal(1, 0),
+            R.STALE_ID,
+            f"id 0 asks the server for the next id, and none is left above {U64_MAX}",
+        ),
         (waiting, cancel_goal(1, 5), R.CANCEL_IDLE, "no event is running to cancel"),
         (running, cancel_goal(1, 6), R.CANCEL_ID_MISMATCH, "the running event is 5, the CANCEL names 6"),
     ],
@@ -402,6 +409,7 @@ def _shut_down() -> Run:
         "nan_period",
         "infinite_period",
         "stale_id",
+        "stale_id_none_left",
         "cancel_idle",
         "cancel_id_mismatch",
     ],
@@ -694,3 +702,46 @@ def _rmf_state(running: bool) -> State:
         id=5 if running else 4,
     )
     return machine.state_from_status(status)
+
+
+# --------------------------------------------------------------------------- R5.2, R5.3: how a race was lost
+
+
+def _finished() -> Run:
+    run = waiting()
+    run.request(u(2), finished_goal(1))
+    run.start(u(2))
+    return run
+
+
+def _id_taken() -> Run:
+    run = waiting()
+    run.request(u(2), next_goal(1, 6))
+    run.start(u(2))
+    run.child_end()
+    return run
+
+
+@pytest.mark.spec("R5.2")
+@pytest.mark.parametrize(
+    ("build", "sent", "text"),
+    [
+        (lambda: waiting(seq=1), next_goal(1, 6), "its seq 1 is no longer the run's seq 2"),
+        (_finished, next_goal(1, 6), "no dynamic event is active any more"),
+        (running, next_goal(1, 6), "event 5 holds the running slot"),
+        (_id_taken, next_goal(1, 6), "its id 6 is no longer above 6, the highest id used"),
+        (waiting, next_goal(1, 6), ""),
+    ],
+    ids=["seq", "inactive", "running", "id", "not_lost"],
+)
+def test_race_lost_sentences(build: Callable[[], Run], sent: Goal, text: str) -> None:
+    run = build()
+    assert machine.race_lost(run.state, sent, run.config) == text
+
+
+@pytest.mark.spec("R5.3")
+def test_a_submitted_goal_that_lost_a_race_is_aborted_with_the_refusal_under_the_failure() -> None:
+    assert waiting().step(ins.GoalSubmitted(goal_uuid=u(2), goal=next_goal(7, 6), now=T0)) == (
+        outs.ExecuteGoal(goal_uuid=u(2)),
+        aborted(u(2), "race condition\n -- Expected 1, received 7"),
+    )

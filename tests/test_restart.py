@@ -13,7 +13,7 @@ from dynevent.server.machine import State
 from dynevent.testing import DEFAULT_CONFIG, input_sequences
 from dynevent.wire.messages import Result
 from dynevent.wire.vocab import DynamicState, GoalStatus
-from scenario import T0, next_goal, u, waiting
+from scenario import T0, next_goal, running, u, waiting
 
 CONFIG = config_from_json(dict(DEFAULT_CONFIG))
 SEQUENCES = input_sequences(tuple(DEFAULT_CONFIG["categories"]), max_size=40)
@@ -61,3 +61,15 @@ def test_a_restart_with_a_queued_goal_executes_it_before_its_answer() -> None:
         ),
     )
     assert run.state.queued == () and run.state.phase is DynamicState.WAITING
+
+
+@pytest.mark.spec("R21.2", "R13.6")
+def test_a_restart_ends_a_task_signalled_run_and_its_interruption_with_it() -> None:
+    """The child of an interrupted, cancelled task ended with the process: the task is over, not paused."""
+    run = running()
+    run.interrupt()
+    run.task_cancel()
+    assert (run.state.interrupted, run.state.task_signal) == (True, "canceled")
+    outputs = run.step(ins.Restart(now=T0))
+    assert (run.state.active, run.state.status, run.state.interrupted) == (False, "canceled", False)
+    assert outs.DynamicEventFinished(status="canceled") in outputs

@@ -141,3 +141,9 @@ def test_race_lost_says_how() -> None:
     busy = Goal(dynamic_event_seq=1, event_type=3)
     assert machine.race_lost(state, busy, config) == "event 2 holds the running slot"
     assert machine.race_lost(state, Goal(dynamic_event_seq=1, event_type=2, id=2), config) == ""
+
+
+@pytest.mark.parametrize("name", sorted(name for name in machine.__all__ if name.endswith("_RULE")))
+def test_every_rule_the_machine_names_for_its_readers_is_a_spec_rule(name: str) -> None:
+    """The constants check and the client read (the rule of a child's start, end, result...) are rules."""
+    assert getattr(machine, name) in RULES
