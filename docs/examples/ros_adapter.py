@@ -17,6 +17,7 @@ import contextlib
 import signal
 import sys
 import threading
+import time
 from typing import Any
 
 import rclpy
@@ -103,21 +104,26 @@ def main(argv: list[str] | None = None) -> int:
     stop = threading.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stop.set())
-    spinner = threading.Thread(target=_spin, args=(executor,), daemon=True)
-    spinner.start()
     print("ready", flush=True)
-    stop.wait(args.seconds)
+    _spin_until(executor, stop, time.monotonic() + args.seconds)
     for server in servers:
         server.shutdown()  # every open goal is answered "shutting down"
+    _spin_until(executor, threading.Event(), time.monotonic() + 0.2)  # the answers go out
     executor.shutdown(timeout_sec=5)
     node.destroy_node()
     rclpy.shutdown()
     return 0
 
 
-def _spin(executor: Any) -> None:
+def _spin_until(executor: Any, stop: threading.Event, deadline: float) -> None:
+    """Spin on this thread until ``stop`` is set or ``deadline`` (``time.monotonic()``) passes.
+
+    Spinning on the main thread, and not a daemon one, leaves no thread inside
+    rclpy when the process tears ROS down.
+    """
     with contextlib.suppress(ExternalShutdownException):
-        executor.spin()
+        while not stop.is_set() and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.1)
 
 
 if __name__ == "__main__":
