@@ -1,7 +1,7 @@
-"""A tiny harness for the machine scenario tests (``tests/test_machine_*.py``).
+"""A tiny harness for the spec section tests (``tests/spec/test_NN_*.py``).
 
 Not a test module: test files import it as ``from scenario import ...``
-(pytest's default "prepend" import mode puts ``tests/`` on ``sys.path``).
+(``pythonpath`` in pyproject.toml puts ``tests/`` on ``sys.path``).
 
 A :class:`Run` holds one robot's state (``tinyRobot``/``r1``) and a
 configuration, and steps it with one method per input; each method returns the
@@ -24,9 +24,10 @@ import attrs
 
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
+from dynevent.server.holder import LockedRobotServer, RobotServer
 from dynevent.server.machine import ServerConfig, State, Validator, accept, accept_any, step
 from dynevent.wire.messages import DynamicEventStatus, Feedback, Goal, LogEntry, Result, Time
-from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReason
+from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, IdPolicy, RejectReason, Status
 
 FLEET = "tinyRobot"
 ROBOT = "r1"
@@ -354,3 +355,33 @@ def stubborn(period: float = 3.0, child_id: int = 5, uuid: str = u(1), position:
     run.child_end("completed")
     assert run.state.stubborn is not None
     return run
+
+
+def shut_down() -> Run:
+    """A robot whose run began, then shut down (R15.1)."""
+    run = waiting()
+    run.shutdown()
+    return run
+
+
+# --------------------------------------------------------------------------- shared by several sections
+
+#: The configuration with the server's id policy ``adapter`` (R6.2).
+ADAPTER = attrs.evolve(CONFIG, id_policy=IdPolicy.ADAPTER)
+#: Every status a child may report (R7.1).
+CHILD_STATUSES = [status.value for status in Status]
+#: The two robot-server holders, which must behave alike.
+SERVER_CLASSES = [RobotServer, LockedRobotServer]
+
+
+def execute(uuid: str) -> outs.ExecuteGoal:
+    return outs.ExecuteGoal(goal_uuid=uuid)
+
+
+def running_server(cls: type[RobotServer] = RobotServer, child_id: int = 5) -> RobotServer:
+    """A holder of ``cls`` whose robot runs child ``child_id`` (started by the NEXT ``u(1)``)."""
+    server = cls(FLEET, ROBOT, CONFIG)
+    server.step(ins.Begin(description=DESC, event_id=1, now=T0))
+    server.step(ins.GoalRequested(goal_uuid=u(1), goal=next_goal(1, child_id), now=T0))
+    server.step(ins.GoalStarted(goal_uuid=u(1), now=T0))
+    return server

@@ -5,6 +5,6 @@ Python) and differ in what holds the phase: plain attributes (:mod:`.floor`),
 a ``transitions`` machine (:mod:`.with_transitions`) or a
 ``python-statemachine`` machine (:mod:`.with_statemachine`).  They speak the
 common form of :mod:`bench.peers.script`, into which dynevent's outputs are
-also translated, so that ``tests/test_bench_peers.py`` can check that every
+also translated, so that ``tests/project/test_bench_peers.py`` can check that every
 peer decides as dynevent does.
 """

@@ -458,7 +458,7 @@ def state_from_status(
 # When the server evidently did something the rules do not allow, the observer reports it, then
 # brings its state into agreement with what the server did, so that one fault is reported once.
 # These are the only ways it may change a state besides ``step``: each keeps the state one the
-# machine can hold (tests/test_state_invariants.py runs them on reachable states).
+# machine can hold (tests/spec/test_19_invariants.py runs them on reachable states).
 
 
 def resync_seq(state: State, seq: int) -> State:

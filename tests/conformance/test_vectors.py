@@ -1,0 +1,426 @@
+"""The conformance vectors: well-formed, covering every rule, passing, and catching a broken implementation.
+
+The vectors (``src/dynevent/conformance/*.json``) are written from docs/spec.md
+rule by rule; these tests check the files against their JSON Schema, that
+every numbered rule is cited by at least one vector, that ``dynevent vectors``
+passes against dynevent in process and over the driver protocol, and that it
+fails, with a diff naming the vector and the step, against a deliberately
+broken driver (``tests/broken_driver.py``).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shlex
+import subprocess
+import sys
+import time
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import jsonschema
+import pytest
+
+from dynevent.conformance import vectors
+
+ROOT = Path(__file__).resolve().parents[2]
+SPEC = (ROOT / "docs" / "spec.md").read_text(encoding="utf-8")
+RULES = re.findall(r"\*\*(R\d+\.\d+)\*\*", SPEC)
+CONFORMANCE = resources.files("dynevent") / "conformance"
+VECTOR_FILES = sorted(
+    entry.name
+    for entry in CONFORMANCE.iterdir()
+    if entry.name.endswith(".json") and not entry.name.endswith(".schema.json")
+)
+PYTHON = sys.executable
+BROKEN_DRIVER = ROOT / "tests" / "broken_driver.py"
+SUMMARY_LINE = re.compile(r"^(\d+) passed, (\d+) failed$", re.MULTILINE)
+
+
+def _rule_key(rule: str) -> tuple[int, ...]:
+    return tuple(int(part) for part in rule[1:].split("."))
+
+
+def _dynevent(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [PYTHON, "-m", "dynevent", "vectors", *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=ROOT,
+        check=False,
+    )
+
+
+@pytest.fixture(scope="module")
+def schema() -> Any:
+    return json.loads((CONFORMANCE / "vector.schema.json").read_text(encoding="utf-8"))
+
+
+@pytest.fixture(scope="module")
+def shipped() -> list[vectors.Vector]:
+    return vectors.load_vectors()
+
+
+# --------------------------------------------------------------------------- the files
+
+
+def test_the_schema_is_a_valid_draft_2020_12_schema(schema: Any) -> None:
+    jsonschema.Draft202012Validator.check_schema(schema)
+    assert schema["$schema"] == "https://json-schema.org/draft/2020-12/schema"
+
+
+@pytest.mark.parametrize("name", VECTOR_FILES)
+def test_vector_file_validates_against_the_schema(schema: Any, name: str) -> None:
+    data = json.loads((CONFORMANCE / name).read_text(encoding="utf-8"))
+    errors = sorted(
+        jsonschema.Draft202012Validator(schema).iter_errors(data), key=lambda error: error.json_path
+    )
+    assert not errors, "\n".join(f"{error.json_path}: {error.message}" for error in errors[:10])
+
+
+def test_the_schema_refuses_a_malformed_vector(schema: Any) -> None:
+    data = json.loads((CONFORMANCE / "03-begin.json").read_text(encoding="utf-8"))
+    first = data["vectors"][0]
+    del first["steps"][0]["expect"][0]["message"]["fleet"]
+    first["steps"][0]["input"]["now"] = 1.5
+    first["rules"] = ["4.2"]
+    paths = {error.json_path for error in jsonschema.Draft202012Validator(schema).iter_errors(data)}
+    assert "$.vectors[0].rules[0]" in paths
+    assert any(path.startswith("$.vectors[0].steps[0].input") for path in paths)
+    assert any(path.startswith("$.vectors[0].steps[0].expect[0]") for path in paths)
+
+
+def test_there_is_one_file_per_spec_section_and_one_for_rmf_ros2() -> None:
+    sections = {int(rule[1:].split(".")[0]) for rule in RULES}
+    numbered = {int(name.split("-")[0]) for name in VECTOR_FILES if name[:2].isdigit()}
+    assert numbered == sections - {17}
+    assert "compat-rmf_ros2.json" in VECTOR_FILES
+
+
+def test_every_vector_cites_its_files_section(shipped: list[vectors.Vector]) -> None:
+    for vector in shipped:
+        filename = vector.source.rsplit("/", 1)[-1]
+        section = "17" if filename.startswith("compat-") else str(int(filename.split("-")[0]))
+        assert any(rule.split(".")[0] == f"R{section}" for rule in vector.rules), (vector.name, filename)
+
+
+def test_every_spec_rule_is_covered_by_a_vector(shipped: list[vectors.Vector]) -> None:
+    cited = {rule for vector in shipped for rule in vector.rules}
+    missing = sorted(set(RULES) - cited, key=_rule_key)
+    assert not missing, f"rules no vector cites: {missing}"
+
+
+def test_every_cited_rule_exists(shipped: list[vectors.Vector]) -> None:
+    unknown = sorted({rule for vector in shipped for rule in vector.rules} - set(RULES))
+    assert not unknown, f"vectors cite rules docs/spec.md does not define: {unknown}"
+
+
+def test_rmf_ros2_mode_has_its_own_vectors(shipped: list[vectors.Vector]) -> None:
+    compat = [vector for vector in shipped if vector.source.endswith("compat-rmf_ros2.json")]
+    assert len(compat) >= 5
+    for vector in compat:
+        assert vector.config.get("compatibility") == "rmf_ros2", vector.name
+    cited = {rule for vector in compat for rule in vector.rules}
+    assert {"R17.1", "R17.2", "R17.3"} <= cited
+
+
+def test_wildcards_only_stand_for_open_wording(shipped: list[vectors.Vector]) -> None:
+    """The wildcard "*" is kept for sentences the spec leaves open, never for a value it fixes."""
+    open_wording = {"text", "why", "execution_failure", "errors"}
+
+    def walk(value: Any, key: str, where: str) -> None:
+        if value == vectors.WILDCARD:
+            assert key in open_wording, f"{where}: wildcard in {key!r}"
+        elif isinstance(value, dict):
+            for inner, item in value.items():
+                walk(item, inner, where)
+        elif isinstance(value, list):
+            for item in value:
+                walk(item, key, where)
+
+    for vector in shipped:
+        for index, step in enumerate(vector.steps, start=1):
+            for output in step.expect:
+                walk(output, "", f"{vector.name} step {index}")
+
+
+def test_vectors_are_short_and_summarised(shipped: list[vectors.Vector]) -> None:
+    assert 60 <= len(shipped) <= 160
+    for vector in shipped:
+        assert vector.summary, vector.name
+        assert len(vector.steps) <= 20, vector.name
+
+
+# --------------------------------------------------------------------------- running
+
+
+def test_every_vector_passes_in_process(shipped: list[vectors.Vector]) -> None:
+    failures = [outcome for outcome in vectors.run_vectors(shipped, vectors.InProcessImplementation())]
+    failed = [f"{outcome.vector.name}\n{outcome.failure.diff()}" for outcome in failures if outcome.failure]
+    assert not failed, "\n\n".join(failed)
+
+
+def test_cli_passes_in_process(shipped: list[vectors.Vector]) -> None:
+    result = _dynevent()
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert result.stdout.splitlines()[1].split() == ["rule", "vectors", "passed", "failed"]
+    assert re.search(r"^R9\.3\s+\d+\s+\d+\s+0$", result.stdout, re.MULTILINE)
+    summary = SUMMARY_LINE.findall(result.stdout)
+    assert summary == [(str(len(shipped)), "0")]
+
+
+def test_cli_passes_over_the_driver_protocol(shipped: list[vectors.Vector]) -> None:
+    result = _dynevent("--impl", f"{PYTHON} -m dynevent.conformance.driver")
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert SUMMARY_LINE.findall(result.stdout) == [(str(len(shipped)), "0")]
+
+
+def test_a_broken_implementation_fails_with_a_diff() -> None:
+    result = _dynevent("--impl", f"{PYTHON} {BROKEN_DRIVER}")
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "broken_driver" in result.stdout.splitlines()[0]
+    assert re.search(r"^R9\.3\s+(\d+)\s+0\s+\1  FAIL$", result.stdout, re.MULTILINE)
+    block = result.stdout.split("FAIL cancel-keeps-the-robot-running (conformance/09-cancel.json)", 1)[1]
+    assert "step 5: outputs differ" in block
+    assert '"type":"goal_started"' in block
+    assert '  + {"type":"answer_goal"' in block  # the one output too many, marked alone
+    assert "  - " not in block.split("FAIL", 1)[0]
+    passed, failed = (int(number) for number in SUMMARY_LINE.findall(result.stdout)[0])
+    assert passed > 0 and failed > 0
+
+
+def test_filter_selects_by_name_glob_and_rule() -> None:
+    result = _dynevent("--filter", "stateless-*")
+    assert result.returncode == 0
+    assert "6 passed, 0 failed" in result.stdout  # 20-stateless.json
+    result = _dynevent("--filter", "request-*-id*", "--json")
+    names = [json.loads(line)["name"] for line in result.stdout.splitlines()[:-1]]
+    assert names and all(re.fullmatch(r"request-.*-id.*", name) for name in names)
+    result = _dynevent("--filter", "R3.2", "--filter", "R10.4", "--json")
+    records = [json.loads(line) for line in result.stdout.splitlines()]
+    assert all("R3.2" in record["rules"] or "R10.4" in record["rules"] for record in records[:-1])
+    assert records[-1]["vectors"] == len(records) - 1 >= 2
+
+
+def test_filter_matching_nothing_is_a_usage_error() -> None:
+    result = _dynevent("--filter", "no-such-vector")
+    assert result.returncode == 2
+    assert "no vector matches" in result.stderr
+
+
+def test_json_output_is_one_object_per_vector_then_a_summary(shipped: list[vectors.Vector]) -> None:
+    result = _dynevent("--json")
+    assert result.returncode == 0
+    records = [json.loads(line) for line in result.stdout.splitlines()]
+    assert [record["type"] for record in records] == ["vector"] * len(shipped) + ["summary"]
+    assert {record["name"] for record in records[:-1]} == {vector.name for vector in shipped}
+    assert all(record["passed"] is True and record["failure"] is None for record in records[:-1])
+    summary = records[-1]
+    assert (summary["vectors"], summary["passed"], summary["failed"]) == (len(shipped), len(shipped), 0)
+    assert summary["rules"]["R9.3"]["failed"] == 0
+
+
+def test_json_output_of_a_failure_carries_the_diff() -> None:
+    result = _dynevent("--impl", f"{PYTHON} {BROKEN_DRIVER}", "--json", "--filter", "cancel-keeps")
+    assert result.returncode == 1
+    records = [json.loads(line) for line in result.stdout.splitlines()]
+    failing = [record for record in records if record["type"] == "vector" and not record["passed"]]
+    assert failing and failing[0]["failure"]["step"] == 5
+    assert failing[0]["failure"]["diff"].startswith("step 5: outputs differ")
+    assert records[-1]["failed"] == len(failing)
+
+
+# --------------------------------------------------------------------------- bad input
+
+
+def _write(tmp_path: Path, name: str, content: str) -> Path:
+    path = tmp_path / name
+    path.write_text(content, encoding="utf-8")
+    return path
+
+
+def test_a_given_file_is_run(tmp_path: Path) -> None:
+    example = json.loads((CONFORMANCE / "03-begin.json").read_text(encoding="utf-8"))
+    example["vectors"] = example["vectors"][:1]
+    path = _write(tmp_path, "one.json", json.dumps(example))
+    result = _dynevent(str(path))
+    assert result.returncode == 0
+    assert "1 passed, 0 failed" in result.stdout
+
+
+def test_a_wrong_expectation_in_a_given_file_fails(tmp_path: Path) -> None:
+    example = json.loads((CONFORMANCE / "03-begin.json").read_text(encoding="utf-8"))
+    example["vectors"] = example["vectors"][:1]
+    example["vectors"][0]["steps"][0]["view"]["seq"] = 2
+    path = _write(tmp_path, "wrong.json", json.dumps(example))
+    result = _dynevent(str(path))
+    assert result.returncode == 1
+    assert "step 1: view differs" in result.stdout
+
+
+@pytest.mark.parametrize(
+    ("content", "where"),
+    [
+        ('{"vectors": [', "$"),
+        ('{"vectors": {}}', "$.vectors"),
+        ('{"vectors": [{"name": "x"}]}', "$.vectors[0]"),
+        (
+            '{"vectors": [{"name": "x", "summary": "s", "rules": ["R3.1"], "fleet": "f", "robot": "r",'
+            ' "config": {}, "steps": [{"input": {"type": "begin"}, "expect": []}, {"input": {}}]}]}',
+            "$.vectors[0].steps[1]",
+        ),
+        (
+            '{"vectors": [{"name": "x", "summary": "s", "rules": [], "fleet": "f", "robot": "r",'
+            ' "config": {}, "steps": [{"input": {"type": "begin", "description": "{}", "event_id": 1,'
+            ' "now": 0, "interrupted": false}, "expect": []}]}]}',
+            "$.vectors[0].rules",
+        ),
+    ],
+)
+def test_a_malformed_vector_file_is_a_located_usage_error(tmp_path: Path, content: str, where: str) -> None:
+    path = _write(tmp_path, "bad.json", content)
+    result = _dynevent(str(path))
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert str(path) in result.stderr
+    assert f": {where}" in result.stderr
+    assert "Traceback" not in result.stderr
+    assert result.stdout == ""
+
+
+def _with_a_typo_in_an_expectation(tmp_path: Path) -> Path:
+    example = json.loads((CONFORMANCE / "03-begin.json").read_text(encoding="utf-8"))
+    example["vectors"] = example["vectors"][:1]
+    example["vectors"][0]["steps"][0]["expect"][0]["type"] = "publish_stauts"
+    return _write(tmp_path, "typo.json", json.dumps(example))
+
+
+def test_a_typo_in_an_expectation_is_a_vector_file_error_not_a_failure(tmp_path: Path) -> None:
+    """The schema (a real validator) finds it: exit 2 naming the file, the vector and the path."""
+    path = _with_a_typo_in_an_expectation(tmp_path)
+    name = json.loads(path.read_text(encoding="utf-8"))["vectors"][0]["name"]
+    result = _dynevent(str(path))
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert f"{path}: $.vectors[0].steps[0].expect[0]" in result.stderr
+    assert f"(vector {name!r})" in result.stderr and "(the vector file schema)" in result.stderr
+    assert result.stdout == ""
+
+
+def test_without_jsonschema_the_reader_alone_checks_and_says_so(tmp_path: Path) -> None:
+    path = _with_a_typo_in_an_expectation(tmp_path)
+    blocked = (
+        "import sys; sys.modules['jsonschema'] = None; from dynevent.tools.cli import main; sys.exit(main())"
+    )
+    result = subprocess.run(
+        [PYTHON, "-c", blocked, "vectors", str(path)], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert "pip install 'dynevent[vectors]'" in result.stderr
+    assert result.returncode == 1  # the typo reaches the run: the implementation is blamed
+    assert "Traceback" not in result.stderr
+
+
+def test_a_missing_vector_file_is_a_usage_error(tmp_path: Path) -> None:
+    result = _dynevent(str(tmp_path / "absent.json"))
+    assert result.returncode == 2
+    assert "absent.json" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_an_implementation_that_cannot_start_is_a_usage_error(tmp_path: Path) -> None:
+    result = _dynevent("--impl", str(tmp_path / "no-such-program"))
+    assert result.returncode == 2
+    assert "cannot start" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_an_implementation_that_does_not_speak_the_protocol_is_a_usage_error() -> None:
+    result = _dynevent("--impl", f"{PYTHON} -c \"print('hello there')\"", "--timeout", "5")
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+
+
+def test_the_rule_table_counts_each_vector_once_per_rule(shipped: list[vectors.Vector]) -> None:
+    outcomes = [vectors.Outcome(vector, None) for vector in shipped]
+    table = {tally.rule: tally for tally in vectors.rule_table(outcomes)}
+    assert [tally.rule for tally in vectors.rule_table(outcomes)] == sorted(table, key=_rule_key)
+    assert table["R3.2"].vectors == sum("R3.2" in vector.rules for vector in shipped)
+    report = vectors.format_report(outcomes, "x")
+    assert report.splitlines()[0] == "implementation: x"
+    assert report.splitlines()[-1] == f"{len(shipped)} passed, 0 failed"
+
+
+def test_every_divergence_has_a_vector() -> None:
+    """Each section of docs/divergences.md is shown by at least one vector that names it."""
+    text = (Path(__file__).resolve().parents[2] / "docs" / "divergences.md").read_text(encoding="utf-8")
+    sections = set(re.findall(r"^## (D\d+)\.", text, flags=re.MULTILINE))
+    assert sections, "docs/divergences.md lists no D-sections"
+    covered = {item for vector in vectors.load_vectors() for item in vector.divergences}
+    assert sections - covered == set(), f"divergences without a vector: {sorted(sections - covered)}"
+    assert covered - sections == set(), f"vectors name unknown divergences: {sorted(covered - sections)}"
+
+
+STALL = "import sys, time; sys.stdout.write('{\"ok'); sys.stdout.flush(); time.sleep(60)"
+
+
+@pytest.mark.parametrize(
+    ("impl", "extra", "problem"),
+    [
+        ("", [], "the implementation's command is empty"),
+        ("'unclosed", [], "No closing quotation"),
+        (f"{sys.executable} -c pass", [], "ended (exit code 0)"),
+        (
+            f"{sys.executable} -c \"import sys; sys.stdout.buffer.write(b'\\xff\\n'); sys.stdout.flush()\"",
+            [],
+            "not UTF-8",
+        ),
+        (
+            f"{sys.executable} -c {shlex.quote(STALL)}",
+            ["--timeout", "1"],
+            "did not answer within 1 s",
+        ),
+        (
+            f"{sys.executable} -m dynevent.conformance.driver",
+            ["--timeout", "nan"],
+            "--timeout: expected seconds",
+        ),
+        (
+            f"{sys.executable} -m dynevent.conformance.driver",
+            ["--timeout", "-1"],
+            "--timeout: expected seconds",
+        ),
+    ],
+    ids=["empty", "bad-quoting", "exits", "not-utf8", "half-line-stall", "nan-timeout", "negative-timeout"],
+)
+def test_a_broken_implementation_is_a_clear_error_within_the_timeout(
+    impl: str, extra: list[str], problem: str
+) -> None:
+    started = time.monotonic()
+    result = _dynevent("--impl", impl, *extra)
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert problem in result.stderr, result.stderr
+    assert "Traceback" not in result.stderr
+    assert time.monotonic() - started < 30  # the stalled one is cut at its 1 s timeout, not after 60 s
+
+
+@pytest.mark.parametrize("timeout", ["nan", "-1", "0", "inf", "1e9", "soon"])
+def test_a_bad_timeout_is_a_usage_error_even_in_process(timeout: str) -> None:
+    result = _dynevent("--timeout", timeout)
+    assert result.returncode == 2 and "--timeout: expected" in result.stderr and result.stdout == ""
+
+
+def test_a_sequence_diff_marks_one_extra_output_alone() -> None:
+    expected = [{"type": "a"}, {"type": "b"}, {"type": "c", "uuid": "*"}, {"type": "d"}]
+    got = [{"type": "a"}, {"type": "x"}, {"type": "b"}, {"type": "c", "uuid": "12ab"}, {"type": "e"}]
+    assert vectors.align(expected, got) == [
+        ("=", {"type": "a"}),
+        ("+", {"type": "x"}),
+        ("=", {"type": "b"}),
+        ("=", {"type": "c", "uuid": "12ab"}),  # "*" matches any string
+        ("-", {"type": "d"}),
+        ("+", {"type": "e"}),
+    ]
+    assert vectors.align([{"type": "a"}, {"type": "b"}], [{"type": "b"}]) == [
+        ("-", {"type": "a"}),
+        ("=", {"type": "b"}),
+    ]
+    assert vectors.align([], []) == []

@@ -1,0 +1,102 @@
+"""The package layout is the architecture: imports go one way, wire <- server <- client/conformance <- tools.
+
+Every import in ``src/dynevent`` (at module level or inside a function) is read from the source, so a
+lazy import that crosses a layer the wrong way fails here as a module-level one would.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+import dynevent
+
+SRC = Path(__file__).resolve().parents[2] / "src" / "dynevent"
+
+#: What each part of the package may import of dynevent (besides itself).  The top of the package
+#: (``dynevent/__init__.py``) names everything lazily, and ``__main__`` is the command line.
+ALLOWED: dict[str, frozenset[str]] = {
+    "errors": frozenset(),
+    "wire": frozenset({"errors"}),
+    "server": frozenset({"errors", "wire"}),
+    "client": frozenset({"errors", "wire", "server"}),
+    "conformance": frozenset({"errors", "wire", "server"}),
+    "tools": frozenset({"errors", "wire", "server", "client", "conformance", "ros"}),
+    "ros": frozenset({"errors", "wire", "server", "client", "tools"}),
+    "testing": frozenset({"errors", "wire", "server", "conformance"}),
+}
+
+
+def _part(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def _modules() -> list[tuple[str, Path]]:
+    found = []
+    for path in sorted(SRC.rglob("*.py")):
+        parts = list(path.relative_to(SRC.parent).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts.pop()
+        found.append((".".join(parts), path))
+    return found
+
+
+def _imports(module: str, path: Path) -> set[str]:
+    """The dynevent modules ``module`` imports, as absolute names."""
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")[: len(package.split(".")) - node.level + 1]
+                target = ".".join([*base, node.module] if node.module else base)
+            else:
+                target = node.module or ""
+            names.add(target)
+            names.update(_resolved(target, alias.name) for alias in node.names)
+    return {name for name in names if name.split(".")[0] == "dynevent"}
+
+
+def _resolved(package: str, name: str) -> str:
+    """``from package import name``: a module, or a name the top of dynevent re-exports lazily."""
+    if package == "dynevent":
+        if name in dynevent._MODULES:
+            return f"dynevent.{dynevent._MODULES[name]}"
+        if name in dynevent._HOMES:
+            return f"dynevent.{dynevent._HOMES[name]}"
+    return f"{package}.{name}"
+
+
+LAYERED = [(module, path) for module, path in _modules() if _part(module) in ALLOWED]
+
+
+def test_every_part_of_the_package_has_a_place_in_the_layers() -> None:
+    parts = {_part(module) for module, _ in _modules()} - {"", "__main__"}
+    assert parts == set(ALLOWED)
+
+
+@pytest.mark.parametrize(("module", "path"), LAYERED, ids=[module for module, _ in LAYERED])
+def test_imports_go_one_way(module: str, path: Path) -> None:
+    own = _part(module)
+    wrong = sorted(
+        name
+        for name in _imports(module, path)
+        if _part(name) in ALLOWED and _part(name) not in ALLOWED[own] | {own}
+    )
+    assert not wrong, f"{module} imports {wrong}: {own} may import only {sorted(ALLOWED[own])}"
+
+
+def test_the_reader_sees_a_wrong_way_import(tmp_path: Path) -> None:
+    """The check is not blind: a lazy import of the tools inside the machine is seen."""
+    path = tmp_path / "machine.py"
+    path.write_text(
+        "def f():\n    from dynevent.tools import explain\n    from ..client import step\n"
+        "    from dynevent import RobotServer\n"
+    )
+    found = _imports("dynevent.server.machine", path)
+    assert {"dynevent.tools.explain", "dynevent.client.step", "dynevent.server.holder"} <= found

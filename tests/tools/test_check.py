@@ -1,0 +1,539 @@
+"""``dynevent check``: observer mode over traces; a clean trace, one trace per violation, rmf_ros2's trace."""
+
+from __future__ import annotations
+
+import contextlib
+import random
+import re
+from pathlib import Path
+from typing import Any
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.tools.check import Report, TraceError, check_trace, read_trace, step_records
+from dynevent.wire import _json
+from dynevent.wire.messages import Goal
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "docs" / "examples"
+CONFIG = {
+    "type": "config",
+    "fleet": "tinyRobot",
+    "robot": "tinyRobot1",
+    "config": {"categories": {"go_to_place": {"accept": "any"}}},
+}
+
+
+def uuid(n: int) -> str:
+    return f"{n:032x}"
+
+
+class Trace:
+    """A trace written record by record; times advance by 0.1 s per call."""
+
+    def __init__(self, config: bool = True) -> None:
+        self.rows: list[dict[str, Any]] = [CONFIG] if config else []
+        self.time = 100.0
+
+    def add(self, kind: str, **fields: Any) -> Trace:
+        self.time = round(self.time + 0.1, 1)
+        self.rows.append({"time": self.time, "type": kind, **fields})
+        return self
+
+    def begin(self, seq: int = 1) -> Trace:
+        message = {"fleet": "tinyRobot", "robot": "tinyRobot1", "dynamic_event_seq": seq, "description": "{}"}
+        return self.add("begin", message=message)
+
+    def status(self, seq: int, phase: int, status: str, event_id: int) -> Trace:
+        message = {"dynamic_event_seq": seq, "dynamic_state": phase, "status": status, "id": event_id}
+        return self.add("status", message=message)
+
+    def goal(self, n: int, accepted: bool = True, reason: str | None = None, **goal: Any) -> Trace:
+        self.add("goal", goal_uuid=uuid(n), goal={"dynamic_event_seq": 1, **goal})
+        response: dict[str, Any] = {"goal_uuid": uuid(n), "accepted": accepted}
+        if reason is not None:
+            response["reason"] = reason
+        return self.add("goal_response", **response)
+
+    def next(self, n: int, event_id: int, accepted: bool = True, **goal: Any) -> Trace:
+        fields = {
+            "event_type": 1,
+            "category": "go_to_place",
+            "description": '"pantry"',
+            "id": event_id,
+            **goal,
+        }
+        return self.goal(n, accepted, **fields)
+
+    def feedback(self, n: int, status: str, event_id: int, logs: tuple[int, ...] = ()) -> Trace:
+        entries = [{"seq": seq, "tier": "info", "unix_millis_time": 0, "text": "moving"} for seq in logs]
+        return self.add(
+            "feedback", goal_uuid=uuid(n), feedback={"status": status, "id": event_id, "logs": entries}
+        )
+
+    def result(self, n: int, status: str, final: str = "", event_id: int = 0, failure: str = "") -> Trace:
+        result = {"execution_failure": failure, "status": final, "id": event_id}
+        return self.add("result", goal_uuid=uuid(n), status=status, result=result)
+
+    def started(self) -> Trace:
+        """Run 1 (event 5) with NEXT 6 running."""
+        self.begin().status(1, 1, "standby", 5)
+        return self.next(1, 6).feedback(1, "underway", 6).status(1, 2, "underway", 6)
+
+    def text(self) -> str:
+        return "".join(_json.dumps(row) + "\n" for row in self.rows)
+
+    def check(self) -> Report:
+        return check_trace(self.text(), "t.jsonl")
+
+    @property
+    def line(self) -> int:
+        """The line of the last record."""
+        return len(self.rows)
+
+
+def found(report: Report) -> list[tuple[int, str, str]]:
+    return [(finding.line, finding.rule, finding.code) for finding in report.findings]
+
+
+# --------------------------------------------------------------------------- clean traces
+
+
+def test_the_clean_example_is_clean() -> None:
+    report = check_trace((EXAMPLES / "clean-trace.jsonl").read_text(encoding="utf-8"), "clean")
+    assert report.clean and report.records == 36
+
+
+def test_a_whole_run_is_clean() -> None:
+    trace = Trace().started().feedback(1, "underway", 6, logs=(0,)).feedback(1, "delayed", 6, logs=(1,))
+    trace.status(1, 2, "delayed", 6).result(1, "succeeded", "completed", 6).status(1, 1, "standby", 6)
+    trace.goal(2, event_type=3).result(2, "succeeded", "completed", 5).status(1, 0, "uninitialized", 0)
+    assert trace.check().clean
+
+
+_KINDS = {"begin": 3, "goal": 8, "start": 7, "progress": 4, "finish": 3, "cancel": 2}
+_KINDS |= {"task_cancel": 1, "task_kill": 1, "interrupt": 1, "resume": 1, "tick": 1}
+_STATUSES = [
+    "underway",
+    "delayed",
+    "blocked",
+    "completed",
+    "failed",
+    "canceled",
+    "skipped",
+    "queued",
+    "error",
+]
+
+
+def _random_session(rng: random.Random, steps: int) -> list[dict[str, Any]]:
+    """Records of a server driven by random inputs, as a tap at the server writes them."""
+    config = machine.ServerConfig(categories={"go_to_place": machine.accept_any})
+    state = machine.State.new("tinyRobot", "tinyRobot1")
+    rows: list[dict[str, Any]] = []
+    now = 0
+    for count in range(steps):
+        now += rng.randint(1, 3) * 100_000_000
+        kind = rng.choices(list(_KINDS), weights=list(_KINDS.values()))[0]
+        if count == steps - 1 and rng.random() < 0.3:
+            kind = "shutdown"
+        event: ins.Input | None = None
+        if kind == "begin":
+            event = ins.Begin(description="{}", event_id=rng.choice([0, 5, 20]), now=now)
+        elif kind == "goal":
+            running = state.running.child_id if state.running else state.last_id
+            goal = Goal(
+                dynamic_event_seq=rng.choice([state.seq, state.seq, (state.seq - 1) % 2**32]),
+                event_type=rng.choice([1, 1, 1, 2, 2, 3, 0, 7]),
+                category=rng.choice(["go_to_place", "go_to_place", "dance"]),
+                description=rng.choice(['"p"', '"p"', "nope"]),
+                id=rng.choice([state.last_id + 1, state.last_id + 2, running, 3]),
+                stubborn_period=rng.choice([0.0, 0.5]),
+            )
+            event = ins.GoalRequested(goal_uuid=uuid(count + 1), goal=goal, now=now)
+        elif kind == "start" and state.queued:
+            queued = state.queued[0] if rng.random() < 0.7 else rng.choice(state.queued)
+            event = ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now)
+        elif kind == "cancel":
+            open_goals = [item.goal_uuid for item in state.queued] + list(state.cancels)
+            if state.running is not None:
+                open_goals.append(state.running.goal_uuid)
+            event = ins.CancelRequested(goal_uuid=rng.choice([*open_goals, uuid(999)]), now=now)
+        elif kind == "progress":
+            event = ins.ChildProgress(
+                status=rng.choice(_STATUSES), now=now, log_text=rng.choice([None, "hi"])
+            )
+        elif kind == "finish":
+            event = ins.ChildFinished(status=rng.choice(_STATUSES), now=now)
+        elif kind == "tick":
+            event = ins.Tick(now=now, map_name="L1", x=rng.random(), y=0.0)
+        elif kind in ("task_cancel", "task_kill", "interrupt", "resume", "shutdown"):
+            event = ins.INPUT_TYPES[kind](now=now)  # type: ignore[call-arg]
+        if event is None:
+            continue
+        transition = machine.step(state, event, config)
+        state = transition.state
+        rows.extend(step_records(event, transition.outputs))
+    return rows
+
+
+@pytest.mark.parametrize("with_config", [True, False])
+def test_every_trace_a_server_writes_is_clean(with_config: bool) -> None:
+    """Observer mode explains whatever the machine does: random sessions, whole or from a status on."""
+    for seed in range(150):
+        rng = random.Random(seed)
+        rows = _random_session(rng, 60)
+        statuses = [index for index, row in enumerate(rows) if row["type"] == "status"]
+        variants = [rows, rows[rng.choice(statuses) :]] if statuses else [rows]
+        for variant in variants:
+            head = [CONFIG] if with_config else []
+            text = "".join(_json.dumps(row) + "\n" for row in head + variant)
+            report = check_trace(text, f"seed {seed}")
+            assert report.clean, (seed, report.findings[:3])
+
+
+# --------------------------------------------------------------------------- one trace per violation
+
+
+def test_a_goal_accepted_with_a_stale_seq() -> None:
+    trace = Trace().begin().status(1, 1, "standby", 5).next(1, 6, dynamic_event_seq=0)
+    assert found(trace.check()) == [(trace.line, "R4.2", "accepted_seq_mismatch")]
+
+
+def test_a_next_accepted_while_busy() -> None:
+    trace = Trace().started().next(2, 7)
+    assert found(trace.check()) == [(trace.line, "R4.6", "accepted_busy")]
+
+
+def test_a_goal_accepted_while_inactive() -> None:
+    trace = Trace().next(1, 6, dynamic_event_seq=0)
+    assert found(trace.check()) == [(trace.line, "R4.3", "accepted_inactive")]
+
+
+def test_a_goal_refused_that_passes_every_check() -> None:
+    trace = Trace().begin().status(1, 1, "standby", 5).next(1, 6, accepted=False)
+    assert found(trace.check()) == [(trace.line, "R4.16", "rejected_acceptable")]
+
+
+def test_a_refusal_without_a_config_may_be_the_categories() -> None:
+    trace = Trace(config=False).begin().status(1, 1, "standby", 5).next(1, 6, accepted=False)
+    assert trace.check().clean
+
+
+def test_a_refusal_with_the_wrong_reason() -> None:
+    trace = Trace().started().goal(2, accepted=False, reason="cancel_idle", event_type=2, id=9)
+    assert found(trace.check()) == [(trace.line, "R4.14", "wrong_reason")]
+
+
+def test_a_second_terminal_answer() -> None:
+    trace = Trace().started().result(1, "succeeded", "completed", 6).status(1, 1, "standby", 6)
+    trace.result(1, "aborted", "canceled", 6)
+    assert found(trace.check()) == [(trace.line, "R19.1", "second_answer")]
+
+
+def test_an_answer_to_a_rejected_goal() -> None:
+    trace = Trace().started().next(2, 7, accepted=False).result(2, "aborted", failure="race condition")
+    assert found(trace.check()) == [(trace.line, "R19.1", "answer_not_accepted")]
+
+
+def test_a_status_that_disagrees_with_the_state() -> None:
+    trace = Trace().started().result(1, "succeeded", "completed", 6).status(1, 2, "completed", 6)
+    assert found(trace.check()) == [(trace.line, "R2.2", "status_mismatch")]
+
+
+def test_a_status_with_an_unknown_phase() -> None:
+    trace = Trace().started().status(1, 7, "underway", 6)
+    assert found(trace.check()) == [(trace.line, "R2.2", "status_phase")]
+
+
+def test_a_cancel_answered_before_the_child_ended() -> None:
+    trace = Trace().started().goal(2, event_type=2, id=6).result(2, "succeeded", "canceled", 6)
+    assert found(trace.check()) == [(trace.line, "R9.3", "cancel_answered_early")]
+
+
+def test_a_result_id_that_does_not_match() -> None:
+    trace = Trace().started().result(1, "succeeded", "completed", 9)
+    assert found(trace.check()) == [(trace.line, "R8.1", "result_id")]
+
+
+def test_a_finished_answer_naming_another_event() -> None:
+    trace = (
+        Trace()
+        .begin()
+        .status(1, 1, "standby", 5)
+        .goal(1, event_type=3)
+        .result(1, "succeeded", "completed", 6)
+    )
+    assert found(trace.check()) == [(trace.line, "R11.1", "result_id")]
+
+
+def test_an_early_end_answered_as_a_success() -> None:
+    trace = Trace().started().result(1, "succeeded", "canceled", 6)
+    assert found(trace.check()) == [(trace.line, "R8.2", "goal_status")]
+
+
+def test_log_seq_going_backwards_or_repeating() -> None:
+    trace = Trace().started().feedback(1, "underway", 6, logs=(4,))
+    trace.feedback(1, "underway", 6, logs=(2,))
+    backwards = trace.line
+    trace.feedback(1, "underway", 6, logs=(2,))
+    report = trace.check()
+    assert found(report) == [(backwards, "R7.3", "log_seq"), (trace.line, "R7.3", "log_seq")]
+    assert "goes backwards" in report.findings[0].message and "repeats" in report.findings[1].message
+
+
+def test_log_seq_wraps() -> None:
+    trace = (
+        Trace().started().feedback(1, "underway", 6, logs=(2**32 - 1,)).feedback(1, "underway", 6, logs=(0,))
+    )
+    assert trace.check().clean
+
+
+def test_a_clamp_without_its_warning() -> None:
+    trace = Trace().begin().status(1, 1, "standby", 5).next(1, 6, stubborn_period=0.5)
+    trace.feedback(1, "underway", 6)
+    assert found(trace.check()) == [(trace.line, "R12.2", "clamp_not_reported")]
+    trace.rows[-1]["feedback"]["logs"] = [{"seq": 0, "tier": "warning", "unix_millis_time": 0, "text": "2 s"}]
+    assert trace.check().clean
+
+
+def test_feedback_for_a_goal_not_running() -> None:
+    trace = Trace().started().goal(2, event_type=2, id=6).feedback(2, "underway", 6)
+    assert found(trace.check()) == [(trace.line, "R7.1", "feedback_not_running")]
+
+
+def test_feedback_after_the_terminal_answer() -> None:
+    trace = Trace().started().result(1, "succeeded", "completed", 6).feedback(1, "underway", 6)
+    assert found(trace.check()) == [(trace.line, "R19.1", "after_answer")]
+
+
+def test_feedback_naming_another_child() -> None:
+    trace = Trace().started().feedback(1, "underway", 8)
+    assert found(trace.check()) == [(trace.line, "R7.1", "feedback_id")]
+
+
+def test_a_child_not_named_by_its_goal() -> None:
+    trace = Trace().begin().status(1, 1, "standby", 5).next(1, 6).feedback(1, "underway", 9)
+    first = trace.line
+    trace.status(1, 2, "underway", 9)
+    assert found(trace.check()) == [(first, "R6.2", "child_id")]
+
+
+def test_a_goal_that_does_not_lose_its_race() -> None:
+    trace = Trace().begin().status(1, 1, "standby", 5).next(1, 6).next(2, 7)
+    trace.feedback(1, "underway", 6).status(1, 2, "underway", 6).feedback(2, "underway", 7)
+    report = trace.check()
+    assert found(report) == [(trace.line, "R5.2", "race_not_lost")]
+    assert "event 6 holds the running slot" in report.findings[0].expected
+
+
+def test_a_cancel_response_against_r10() -> None:
+    trace = (
+        Trace()
+        .started()
+        .add("cancel_request", goal_uuid=uuid(77))
+        .add("cancel_response", goal_uuid=uuid(77), accepted=True)
+    )
+    assert found(trace.check()) == [(trace.line, "R10.5", "cancel_response")]
+
+
+def test_an_action_level_cancel_is_followed() -> None:
+    trace = Trace().started().add("cancel_response", goal_uuid=uuid(1), accepted=True)
+    trace.result(1, "canceled", "canceled", 6).status(1, 1, "standby", 6)
+    assert trace.check().clean
+
+
+def test_a_begin_out_of_turn() -> None:
+    trace = Trace().begin().status(1, 1, "standby", 5).begin(seq=2)
+    active = trace.line
+    trace.status(2, 1, "standby", 5).goal(1, event_type=3, dynamic_event_seq=2)
+    trace.result(1, "succeeded", "completed", 5).status(2, 0, "uninitialized", 0).begin(seq=5)
+    assert found(trace.check()) == [(active, "R3.4", "begin_while_active"), (trace.line, "R3.1", "begin_seq")]
+
+
+def test_a_goal_uuid_reused_while_open() -> None:
+    trace = Trace().started().next(1, 7)
+    assert found(trace.check()) == [(trace.line - 1, "R18.2", "goal_uuid_reused")]
+
+
+def test_a_trace_from_a_late_subscriber_binds_the_running_goal() -> None:
+    trace = Trace(config=False).status(4, 2, "underway", 12).feedback(9, "delayed", 12)
+    trace.result(9, "succeeded", "completed", 12).status(4, 1, "standby", 12)
+    trace.goal(10, event_type=3, dynamic_event_seq=4).result(10, "succeeded", "completed", 3)
+    assert trace.check().clean
+
+
+# --------------------------------------------------------------------------- rmf_ros2 as it behaves today
+
+#: Each rmf_ros2 defect of docs/divergences.md that a trace shows, and the findings that flag it.
+RMF_ROS2_DEFECTS: dict[str, set[tuple[str, str]]] = {
+    "D1": {("R4.6", "accepted_busy"), ("R5.2", "race_not_lost")},  # a CANCEL frees the robot early
+    "D2": {("R2.2", "status_mismatch")},  # the status after a child's end says RUNNING
+    "D5": {("R5.2", "race_not_lost")},  # the seq is not checked again at start
+    "D7": {("R4.5", "accepted_unknown_event_type")},  # bad event types accepted, then aborted
+    "D8": {("R4.14", "accepted_cancel_id_mismatch")},  # bad CANCELs accepted, then aborted
+    "D9": {("R7.3", "log_seq")},  # LogEntry.seq is the dynamic event seq
+    "D11": {("R12.2", "clamp_not_reported")},  # the stubborn clamp is silent
+    "D12": {("R4.11", "accepted_non_finite_stubborn_period")},  # a NaN stubborn period is accepted
+}
+#: Defects no trace can show: interruptions, resumes, task signals and the adapter's shutdown are
+#: task inputs, not on the wire (a NEXT deferred after an unseen resume looks the same as one deferred
+#: by an unseen interruption); an answer that never comes (D15, D21) shows only as an absence a trace
+#: cannot bound; a nested run (D22) needs a configuration no trace header may hold (R4.17); a holding
+#: itinerary (D24) travels on the traffic schedule, not on the Dynamic Event topics.
+NOT_ON_THE_WIRE = {"D3", "D4", "D14", "D15", "D21", "D22", "D23", "D24"}
+
+
+def _rmf_ros2() -> Report:
+    return check_trace((EXAMPLES / "rmf_ros2-trace.jsonl").read_text(encoding="utf-8"), "rmf_ros2")
+
+
+def test_the_rmf_ros2_trace_is_flagged_for_each_defect() -> None:
+    report = _rmf_ros2()
+    kinds = {(finding.rule, finding.code) for finding in report.findings}
+    assert kinds == set().union(*RMF_ROS2_DEFECTS.values())
+    seq_recheck = [finding for finding in report.findings if "no longer the run's seq" in finding.expected]
+    busy_start = [finding for finding in report.findings if "holds the running slot" in finding.expected]
+    assert len(seq_recheck) == len(busy_start) == 1
+
+
+def test_every_defect_divergences_lists_is_flagged() -> None:
+    """docs/divergences.md lists rmf_ros2's defects; the rmf_ros2 trace shows each one a wire can show."""
+    path = ROOT / "docs" / "divergences.md"
+    if not path.exists():
+        pytest.skip("docs/divergences.md is not written yet")
+    rows = re.findall(
+        r"^\| (D\d+) \| (.+?) \| (defect|decision) \|", path.read_text(encoding="utf-8"), re.MULTILINE
+    )
+    defects = {name for name, _, kind in rows if kind == "defect"}
+    assert defects, "no defect found in the table of docs/divergences.md"
+    unclassified = defects - set(RMF_ROS2_DEFECTS) - NOT_ON_THE_WIRE
+    assert not unclassified, f"defects of docs/divergences.md this test does not know: {sorted(unclassified)}"
+    kinds = {(finding.rule, finding.code) for finding in _rmf_ros2().findings}
+    for name in sorted(defects - NOT_ON_THE_WIRE):
+        assert RMF_ROS2_DEFECTS[name] <= kinds, name
+
+
+# --------------------------------------------------------------------------- unreadable input
+
+
+@pytest.mark.parametrize(
+    ("line", "field"),
+    [
+        ("[1, 2]", "$"),
+        ('{"type": "nothing", "time": 1}', "type"),
+        ('{"type": "status", "time": 1}', "message"),
+        ('{"type": "status", "time": 1, "message": {}, "extra": 1}', "extra"),
+        ('{"type": "status", "time": "noon", "message": {}}', "time"),
+        ('{"type": "status", "time": 1e300, "message": {}}', "time"),
+        ('{"type": "status", "time": 1, "message": {"dynamic_state": 300}}', "message.dynamic_state"),
+        ('{"type": "goal", "time": 1, "goal_uuid": "xyz", "goal": {}}', "goal_uuid"),
+        ('{"type": "goal", "time": 1, "goal_uuid": "' + "0" * 32 + '", "goal": {"id": -1}}', "goal.id"),
+        (
+            '{"type": "goal_response", "time": 1, "goal_uuid": "' + "0" * 32 + '", "accepted": true}',
+            "goal_uuid",
+        ),
+        ('{"type": "goal_response", "time": 1, "goal_uuid": "' + "0" * 32 + '", "accepted": 1}', "accepted"),
+        (
+            '{"type": "result", "time": 1, "goal_uuid": "' + "0" * 32 + '", "status": "won", "result": {}}',
+            "status",
+        ),
+        (
+            '{"type": "feedback", "time": 1, "goal_uuid": "'
+            + "0" * 32
+            + '", "feedback": {"logs": [{"seq": "a"}]}}',
+            "feedback.logs[0].seq",
+        ),
+        (
+            '{"type": "config", "config": {"categories": {"a": {"accept": "nothing"}}}}',
+            "config.categories.a.accept",
+        ),
+    ],
+)
+def test_unreadable_input_names_the_line_and_the_field(line: str, field: str) -> None:
+    text = "# a comment\n\n" + line + "\n"
+    with pytest.raises(TraceError) as caught:
+        check_trace(text, "bad.jsonl")
+    assert (caught.value.source, caught.value.line, caught.value.field) == ("bad.jsonl", 3, field)
+    assert str(caught.value).startswith(f"bad.jsonl:3: {field}: ")
+
+
+def test_a_config_record_comes_first() -> None:
+    text = _json.dumps({"type": "status", "time": 1, "message": {}}) + "\n" + _json.dumps(CONFIG) + "\n"
+    with pytest.raises(TraceError, match=r"<trace>:2: type: a 'config' record"):
+        check_trace(text)
+
+
+def test_read_trace_skips_comments_and_parses_times_in_seconds() -> None:
+    header, records = read_trace(["# hi", "", '{"type": "status", "time": 1.5, "message": {}}'])
+    assert header.config is None and len(records) == 1
+    assert (records[0].line, records[0].time) == (3, 1_500_000_000)
+
+
+_VALID = Trace().started().result(1, "succeeded", "completed", 6).rows
+
+
+@given(st.lists(st.text(max_size=80) | st.sampled_from([_json.dumps(row) for row in _VALID]), max_size=12))
+def test_arbitrary_lines_give_findings_or_the_trace_error(lines: list[str]) -> None:
+    try:
+        report = check_trace(lines, "fuzz")
+    except TraceError as exc:
+        assert exc.line >= 1
+    else:
+        assert report.records <= len(lines)
+
+
+_FIELD_VALUES = st.one_of(
+    st.integers(-5, 2**64), st.text(max_size=8), st.booleans(), st.none(), st.floats(allow_nan=False)
+)
+
+
+@given(st.lists(st.tuples(st.integers(0, len(_VALID) - 1), st.text(max_size=12), _FIELD_VALUES), max_size=8))
+def test_mutated_records_give_findings_or_the_trace_error(mutations: list[tuple[int, str, Any]]) -> None:
+    rows = [dict(row) for row in _VALID]
+    for index, key, value in mutations:
+        target = rows[index]
+        nested = [name for name in ("message", "goal", "feedback", "result") if name in target]
+        if nested and key:
+            target[nested[0]] = {**target[nested[0]], key: value}
+        else:
+            target[key or "time"] = value
+    with contextlib.suppress(TraceError):
+        check_trace([_json.dumps(row) for row in rows], "fuzz")
+
+
+def test_check_reads_a_trace_as_a_stream_holding_a_few_records(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Memory stays flat: the observer never has more than LOOKAHEAD records read ahead of it."""
+    import sys
+    from pathlib import Path
+
+    from dynevent.tools import check
+
+    root = str(Path(__file__).resolve().parents[2])
+    if root not in sys.path:
+        sys.path.insert(0, root)
+    from bench.traces import cycle_lines
+
+    produced = 0
+    ahead: list[int] = []
+
+    def lines() -> Any:
+        nonlocal produced
+        for line in cycle_lines(300):
+            produced += 1
+            yield line
+
+    feed = check._Observer.feed
+
+    def counting_feed(self: Any, record: Any) -> None:
+        ahead.append(produced - record.line)
+        feed(self, record)
+
+    monkeypatch.setattr(check._Observer, "feed", counting_feed)
+    report = check_trace(lines(), "long")
+    assert report.clean and report.records == len(ahead) == 2102
+    assert max(ahead) == check.LOOKAHEAD

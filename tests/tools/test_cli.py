@@ -1,0 +1,309 @@
+"""The ``dynevent`` command, run as a subprocess: every subcommand, ``--help``, exit codes, docs/cli.md.
+
+``DYNEVENT_UPDATE_CLI_DOC=1 python -m pytest tests/tools/test_cli.py`` rewrites the
+outputs in docs/cli.md from the commands (then review the diff).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from dynevent.tools import cli
+from dynevent.tools.diagram import render
+
+ROOT = Path(__file__).resolve().parents[2]
+CLI_DOC = ROOT / "docs" / "cli.md"
+SUBCOMMANDS = ("demo", "check", "explain", "diagram", "vectors")
+RUNNING = '{"dynamic_event_seq": 3, "dynamic_state": 2, "status": "underway", "id": 8}'
+
+
+def dynevent(*args: str, stdin: str | None = None) -> subprocess.CompletedProcess[str]:
+    """Run ``python -m dynevent ARGS`` from the repository's root."""
+    return subprocess.run(
+        [sys.executable, "-m", "dynevent", *args],
+        input=stdin,
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=60,
+        check=False,
+    )
+
+
+# --------------------------------------------------------------------------- every subcommand
+
+
+@pytest.mark.parametrize("command", SUBCOMMANDS)
+def test_help_of_every_subcommand_documents_the_exit_status(command: str) -> None:
+    done = dynevent(command, "--help")
+    assert done.returncode == 0, done.stderr
+    assert f"usage: dynevent {command}" in done.stdout
+    assert "Exit status" in " ".join(done.stdout.split())
+
+
+def test_help_lists_the_subcommands_and_exit_codes() -> None:
+    done = dynevent("--help")
+    assert done.returncode == 0
+    for command in SUBCOMMANDS:
+        assert command in done.stdout
+    assert "2 usage or input errors" in " ".join(done.stdout.split())
+
+
+def test_no_arguments_print_the_help() -> None:
+    plain, helped = dynevent(), dynevent("--help")
+    assert plain.returncode == helped.returncode == 0
+    assert plain.stdout == helped.stdout and plain.stderr == ""
+    assert "race condition" not in plain.stdout  # the demo did not run
+
+
+def test_demo_is_byte_identical_for_a_seed_and_json_lines() -> None:
+    first, second = dynevent("demo", "--seed", "11"), dynevent("demo", "--seed", "11")
+    assert first.stdout == second.stdout and first.returncode == 0
+    lines = dynevent("demo", "--json", "--seed", "11").stdout.splitlines()
+    records = [json.loads(line) for line in lines]
+    assert {"step", "time", "direction", "kind", "summary", "decision", "record"} <= set(records[0])
+    decisions = " ".join(record["decision"] for record in records)
+    for expected in (
+        "rejected: cancel_id_mismatch",
+        "race condition",
+        "rejected: inactive",
+        "stubborn_clamped",
+    ):
+        assert expected in decisions
+
+
+def test_check_exit_codes_and_stdin() -> None:
+    clean = dynevent("check", "docs/examples/clean-trace.jsonl")
+    assert clean.returncode == 0 and "no violations" in clean.stdout
+    text = (ROOT / "docs" / "examples" / "rmf_ros2-trace.jsonl").read_text(encoding="utf-8")
+    flagged = dynevent("check", "-", stdin=text)
+    assert flagged.returncode == 1 and "<stdin>:" in flagged.stdout
+
+
+@pytest.mark.parametrize(
+    ("args", "stdin", "expected"),
+    [
+        (("check", "no/such/trace.jsonl"), None, "no/such/trace.jsonl: cannot read"),
+        (("check", "-"), '{"time": 1, "type": "goal"}\n', "<stdin>:1: goal: missing field"),
+        (("check", "-"), "not json\n", "<stdin>:1: $: not valid JSON"),
+        (("check", "-"), '{"time": true, "type": "status", "message": {}}', "<stdin>:1: time:"),
+        (("explain", "--status", "{", "--goal", "{}"), None, "--status: DynamicEventStatus: not valid JSON"),
+        (
+            ("explain", "--status", "{}", "--goal", '{"id": "x"}'),
+            None,
+            "--goal: Goal.id: expected an integer",
+        ),
+        (
+            ("explain", "--status", "{}", "--goal", "{}", "--categories", "a,,b"),
+            None,
+            "--categories: an empty",
+        ),
+        (("explain", "--status", "{}"), None, "the following arguments are required: --goal"),
+        (("demo", "--seed", "x"), None, "invalid int value"),
+        (("diagram", "--format", "svg"), None, "invalid choice"),
+        (("nonsense",), None, "invalid choice"),
+    ],
+)
+def test_bad_input_exits_2_without_a_traceback(
+    args: tuple[str, ...], stdin: str | None, expected: str
+) -> None:
+    done = dynevent(*args, stdin=stdin)
+    assert done.returncode == 2, (done.stdout, done.stderr)
+    assert expected in done.stderr
+    assert "Traceback" not in done.stderr + done.stdout
+
+
+def test_explain_exit_codes() -> None:
+    accepted = dynevent(
+        "explain", "--status", RUNNING, "--goal", '{"dynamic_event_seq": 3, "event_type": 2, "id": 8}'
+    )
+    assert accepted.returncode == 0 and "verdict:  accepted" in accepted.stdout
+    refused = dynevent(
+        "explain", "--json", "--status", RUNNING, "--goal", '{"dynamic_event_seq": 3, "event_type": 1}'
+    )
+    assert refused.returncode == 1
+    assert json.loads(refused.stdout)["reason"] == "busy"
+
+
+def test_explain_reads_json_from_a_file_or_standard_input(tmp_path: Path) -> None:
+    goal = '{"dynamic_event_seq": 3, "event_type": 2, "id": 8}'
+    inline = dynevent("explain", "--status", RUNNING, "--goal", goal)
+    (tmp_path / "status.json").write_text(RUNNING, encoding="utf-8")
+    from_file = dynevent("explain", "--status", f"@{tmp_path / 'status.json'}", "--goal", "-", stdin=goal)
+    assert (
+        (from_file.returncode, from_file.stdout) == (inline.returncode, inline.stdout) == (0, inline.stdout)
+    )
+    both = dynevent("explain", "--status", "-", "--goal", "-", stdin=RUNNING)
+    assert both.returncode == 2 and "--goal: standard input is already read for --status" in both.stderr
+    missing = dynevent("explain", "--status", f"@{tmp_path / 'nothing.json'}", "--goal", goal)
+    assert (
+        missing.returncode == 2
+        and "--status: cannot read" in missing.stderr
+        and "nothing.json" in missing.stderr
+    )
+    (tmp_path / "latin.json").write_bytes(b'{"status": "caf\xe9"}')
+    latin = dynevent("explain", "--status", f"@{tmp_path / 'latin.json'}", "--goal", goal)
+    assert latin.returncode == 2 and "is not UTF-8 (byte 15)" in latin.stderr
+    assert "Traceback" not in missing.stderr + latin.stderr + both.stderr
+
+
+def test_diagram_prints_what_the_spec_embeds() -> None:
+    assert dynevent("diagram").stdout == render("mermaid")
+    assert dynevent("diagram", "--format", "dot").stdout == render("dot")
+
+
+def test_main_in_process_returns_the_exit_code(capsys: pytest.CaptureFixture[str]) -> None:
+    assert cli.main(["diagram"]) == 0
+    assert capsys.readouterr().out == render("mermaid")
+    assert cli.main(["check", str(ROOT / "docs" / "examples" / "rmf_ros2-trace.jsonl")]) == 1
+
+
+# --------------------------------------------------------------------------- docs/cli.md
+
+_BLOCK = re.compile(r"```console\n(.*?)```", re.DOTALL)
+
+
+def _sessions(text: str) -> list[list[tuple[str, str]]]:
+    """Each console block as its ``(command, expected output)`` pairs."""
+    blocks = []
+    for body in _BLOCK.findall(text):
+        pairs: list[tuple[str, str]] = []
+        for line in body.splitlines(keepends=True):
+            if line.startswith("$ "):
+                pairs.append((line[2:].rstrip("\n"), ""))
+            else:
+                command, output = pairs[-1]
+                pairs[-1] = (command, output + line)
+        blocks.append(pairs)
+    return blocks
+
+
+def _run(command: str, previous: int) -> tuple[str, int]:
+    """The console output of one documented command (``echo $?`` echoes the previous exit status)."""
+    if command == "echo $?":
+        return f"{previous}\n", previous
+    stdin = None
+    if " < " in command:
+        command, path = command.split(" < ")
+        stdin = (ROOT / path.strip()).read_text(encoding="utf-8")
+    words = shlex.split(command)
+    assert words[0] == "dynevent", command
+    done = dynevent(*words[1:], stdin=stdin)
+    assert "Traceback" not in done.stderr
+    return done.stdout + done.stderr, done.returncode
+
+
+def _render(text: str) -> str:
+    def block(match: re.Match[str]) -> str:
+        previous = 0
+        parts = []
+        for command, _ in _sessions(match.group(0))[0]:
+            output, previous = _run(command, previous)
+            parts.append(f"$ {command}\n{output}")
+        return "```console\n" + "".join(parts) + "```"
+
+    return _BLOCK.sub(block, text)
+
+
+def test_cli_doc_shows_real_output() -> None:
+    text = CLI_DOC.read_text(encoding="utf-8")
+    if os.environ.get("DYNEVENT_UPDATE_CLI_DOC"):
+        CLI_DOC.write_text(_render(text), encoding="utf-8")
+        text = CLI_DOC.read_text(encoding="utf-8")
+    blocks = _sessions(text)
+    assert len(blocks) >= 8
+    for pairs in blocks:
+        previous = 0
+        for command, expected in pairs:
+            output, previous = _run(command, previous)
+            assert output == expected, f"docs/cli.md is stale for: $ {command}"
+
+
+def test_cli_doc_covers_every_subcommand() -> None:
+    commands = [command for pairs in _sessions(CLI_DOC.read_text(encoding="utf-8")) for command, _ in pairs]
+    for sub in ("demo", "check", "explain", "diagram"):
+        assert any(command.startswith(f"dynevent {sub}") for command in commands), sub
+
+
+@pytest.mark.parametrize(
+    "args",
+    [["demo"], ["diagram"], ["vectors"], ["check", "docs/examples/clean-trace.jsonl"]],
+    ids=lambda args: args[0],
+)
+def test_a_reader_that_goes_away_stops_the_command_quietly(args: list[str]) -> None:
+    """``dynevent ... | head``: a closed standard output is no traceback."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "dynevent", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        cwd=ROOT,
+        text=True,
+    )
+    assert process.stdout is not None
+    process.stdout.close()  # the reader is gone before the first line
+    _, error = process.communicate(timeout=60)
+    assert process.returncode == 141, error
+    assert "Traceback" not in error and error == ""
+
+
+def test_the_driver_stops_quietly_when_its_runner_goes_away() -> None:
+    process = subprocess.Popen(
+        [sys.executable, "-m", "dynevent.conformance.driver"],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        cwd=ROOT,
+        text=True,
+    )
+    assert process.stdin is not None and process.stdout is not None
+    process.stdout.close()
+    _, error = process.communicate('{"op": "bogus"}\n' * 50, timeout=60)
+    assert process.returncode == 141, error
+    assert "Traceback" not in error
+
+
+def test_an_empty_trace_or_vector_file_says_nothing_was_checked(tmp_path: Path) -> None:
+    trace = tmp_path / "empty.jsonl"
+    trace.write_text("# only a comment\n\n", encoding="utf-8")
+    checked = dynevent("check", str(trace))
+    assert checked.returncode == 2 and "nothing to check" in checked.stderr and checked.stdout == ""
+    empty = tmp_path / "none.json"
+    empty.write_text('{"vectors": []}', encoding="utf-8")
+    ran = dynevent("vectors", str(empty))
+    assert ran.returncode == 2 and f"no vector in {empty}" in ran.stderr
+
+
+def test_the_testing_kit_without_hypothesis_names_the_extra() -> None:
+    blocked = (
+        "import sys; sys.modules['hypothesis'] = None\n"
+        "try:\n    import dynevent.testing\n"
+        "except ModuleNotFoundError as exc:\n    print(exc)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", blocked], capture_output=True, text=True, cwd=ROOT, timeout=60, check=False
+    )
+    assert done.returncode == 0, done.stderr
+    assert "pip install 'dynevent[testing]'" in done.stdout
+
+
+def test_help_imports_no_protocol_module() -> None:
+    """``dynevent --help`` stays quick: the command line imports a command's module only to run it."""
+    probe = (
+        "import sys; from dynevent.tools import cli\n"
+        "try:\n    cli.main(['--help'])\nexcept SystemExit:\n    pass\n"
+        "heavy = sorted(m for m in sys.modules if m.startswith(('dynevent.server', 'dynevent.client', "
+        "'dynevent.conformance', 'dynevent.tools.check', 'dynevent.tools.explain', 'dynevent.tools.demo')))\n"
+        "print('HEAVY', heavy, 'attrs' in sys.modules)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert done.stdout.strip().endswith("HEAVY [] False"), done.stdout[-300:] + done.stderr
