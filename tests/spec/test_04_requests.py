@@ -2,7 +2,7 @@
 
 The section's conformance vectors are src/dynevent/conformance/04-requests.json.
 
-docs/spec.md section 4: goal requests, every reject reason, its values and the check order.
+Every reject reason, its values and the check order.
 """
 
 from __future__ import annotations

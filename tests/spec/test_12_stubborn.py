@@ -2,7 +2,7 @@
 
 The section's conformance vectors are src/dynevent/conformance/12-stubborn.json.
 
-docs/spec.md section 12: stubbornness (begin, clamp, refresh ticks, re-anchoring, end).
+Stubbornness (begin, clamp, refresh ticks, re-anchoring, end).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 The section's conformance vectors are src/dynevent/conformance/21-restart.json.
 
-R21: a state restored after its process ended is restarted: nothing the dead process held blocks.
+A state restored after its process ended is restarted: nothing the dead process held blocks.
 """
 
 from __future__ import annotations
