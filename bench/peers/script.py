@@ -9,25 +9,29 @@ A *script* is a list of raw events::
     ("finished", status)
 
 A *driver* has one method per event kind (``begin``, ``request``, ``start``,
-``progress``, ``finished``, each taking the event's values and ``now``) plus
-``accept(goal)``, and ``common(outputs)`` turning its outputs into the common
-form: tuples such as ``("accepted", uuid)``, ``("rejected", uuid, reason)``,
-``("feedback", uuid, status, id, log seqs)``, ``("status", seq, phase, status, id)``,
-``("answer", uuid, goal status, execution failure, result status, result id)``.
-The peers speak the common form natively; :class:`DyneventDriver` drives
-dynevent's :class:`~dynevent.server.holder.RobotServer` with real inputs and
-translates its outputs.
+``progress``, ``finished``, each taking the event's raw values and ``now``)
+plus ``accept(goal)``, and ``common(outputs)`` writing its outputs in the
+common form: the whole output in builtins, as :func:`plain` writes dynevent's,
+e.g. ``("publish_feedback", uuid, ("Feedback", "underway", 11, (("LogEntry",
+0, "info", 1700000000000, "left the lobby"),)))``.  The peers write that form
+natively; :class:`DyneventDriver` drives dynevent's
+:class:`~dynevent.server.holder.RobotServer` with inputs built from the raw
+values and converts its outputs with :func:`plain`.
 """
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
+
+import attrs
 
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.holder import RobotServer
 from dynevent.server.machine import ServerConfig, accept_any
+from dynevent.wire._fields import ANNOTATION
 from dynevent.wire.messages import Goal
 
 from .rules import CANCEL, FINISHED, NEXT
@@ -39,14 +43,15 @@ __all__ = [
     "DyneventDriver",
     "child_cycle",
     "common_outputs",
+    "plain",
     "play",
     "shared_script",
     "uuid",
     "whole_event",
 ]
 
-#: The categories every robot of the workloads supports.
-CATEGORIES = frozenset({"go_to_place", "perform_action"})
+#: The categories every robot of the workloads supports, each with dynevent's accept-everything validator.
+CATEGORIES = {"go_to_place": accept_any, "perform_action": accept_any}
 #: A small JSON description of a NEXT goal.
 DESCRIPTION = '{"place": "pantry", "orientation": 1.57}'
 #: The ``dynamic_event`` description the begin events carry.
@@ -67,9 +72,7 @@ class DyneventDriver:
     """dynevent's :class:`RobotServer`, fed with inputs built from the raw events."""
 
     def __init__(self, fleet: str = "fleet", robot: str = "robot", stubborn_minimum: float = 2.0) -> None:
-        config = ServerConfig(
-            categories={category: accept_any for category in CATEGORIES}, stubborn_minimum=stubborn_minimum
-        )
+        config = ServerConfig(categories=CATEGORIES, stubborn_minimum=stubborn_minimum)
         self.server = RobotServer(fleet, robot, config)
 
     @staticmethod
@@ -113,59 +116,35 @@ class DyneventDriver:
         return common_outputs(outputs)
 
 
-def _one(output: outs.Output) -> tuple[Any, ...]:
-    if isinstance(output, outs.GoalAccepted):
-        return ("accepted", output.goal_uuid)
-    if isinstance(output, outs.GoalRejected):
-        return ("rejected", output.goal_uuid, output.rejection.reason.value)
-    if isinstance(output, outs.ExecuteGoal):
-        return ("execute", output.goal_uuid)
-    if isinstance(output, outs.StubbornClamped):
-        return ("clamped", output.requested, output.applied)
-    if isinstance(output, outs.Log):
-        return ("log", output.entry.seq, output.entry.tier, output.entry.text)
-    if isinstance(output, outs.StartChild):
-        return ("start_child", output.id)
-    if isinstance(output, outs.PublishFeedback):
-        feedback = output.feedback
-        return (
-            "feedback",
-            output.goal_uuid,
-            feedback.status,
-            feedback.id,
-            tuple(entry.seq for entry in feedback.logs),
-        )
-    if isinstance(output, outs.PublishStatus):
-        message = output.message
-        return ("status", message.dynamic_event_seq, message.dynamic_state, message.status, message.id)
-    if isinstance(output, outs.AnswerGoal):
-        result = output.result
-        return (
-            "answer",
-            output.goal_uuid,
-            output.status.value,
-            result.execution_failure,
-            result.status,
-            result.id,
-        )
-    if isinstance(output, outs.CancelChild):
-        return ("cancel_child", output.id)
-    if isinstance(output, outs.StubbornBegin):
-        return ("stubborn_begin", output.period)
-    if isinstance(output, outs.StubbornEnd):
-        return ("stubborn_end",)
-    if isinstance(output, outs.PublishBegin):
-        return ("begin", output.message.dynamic_event_seq)
-    if isinstance(output, outs.DynamicEventFinished):
-        return ("finished", output.status)
-    if isinstance(output, outs.Ignored):
-        return ("ignored", output.input)
-    return (output.KIND,)
+def plain(value: Any) -> Any:
+    """A dynevent output (or any value in one) as the peers write it: the whole value in builtins.
+
+    An output becomes ``(KIND, *fields)``, a nested message ``(class name, *fields)``, both with
+    every field that takes part in equality (the ``rule`` annotation does not), in declaration order;
+    an enum member becomes its value; a tuple is converted item by item.
+    """
+    cls = type(value)
+    if attrs.has(cls):
+        fields = _FIELDS.get(cls)
+        if fields is None:
+            fields = _FIELDS[cls] = tuple(
+                field.name for field in attrs.fields(cls) if field.eq and not field.metadata.get(ANNOTATION)
+            )
+        name = getattr(value, "KIND", "") or cls.__name__
+        return (name, *(plain(getattr(value, field)) for field in fields))
+    if isinstance(value, enum.Enum):
+        return value.value
+    if cls is tuple:
+        return tuple(plain(item) for item in value)
+    return value
 
 
-def common_outputs(outputs: Iterable[outs.Output]) -> list[tuple[Any, ...]]:
-    """dynevent outputs in the common form."""
-    return [_one(output) for output in outputs]
+_FIELDS: dict[type, tuple[str, ...]] = {}
+
+
+def common_outputs(outputs: Iterable[outs.Output]) -> list[Any]:
+    """dynevent's outputs as the peers write theirs."""
+    return [plain(output) for output in outputs]
 
 
 # --------------------------------------------------------------------------- playing scripts

@@ -7,9 +7,6 @@ phase change sends an event, as an application written on
 
 from __future__ import annotations
 
-import json
-from typing import Any
-
 from statemachine import State, StateMachine
 
 from .rules import INACTIVE, RUNNING, WAITING, Rules
@@ -33,15 +30,9 @@ class _Phases(StateMachine):
 class StatemachineServer(Rules):
     """One robot's server; ``self.machine`` holds the phase."""
 
-    def __init__(
-        self,
-        fleet: str,
-        robot: str,
-        categories: frozenset[str],
-        stubborn_minimum: float = 2.0,
-        initial: str | None = None,
-    ) -> None:
-        self.setup(fleet, robot, categories, stubborn_minimum)
+    def start_machine(self, initial: str | None) -> None:
+        if initial is not None and initial not in _PHASE:
+            raise ValueError(f"snapshot.phase = {initial!r}: expected one of {sorted(_PHASE)}")
         self.machine = _Phases(start_value=initial)
 
     def phase(self) -> int:
@@ -59,28 +50,5 @@ class StatemachineServer(Rules):
     def ev_finish(self) -> None:
         self.machine.ev_finish()
 
-    def data(self) -> dict[str, Any]:
-        """The robot's data and machine state as plain JSON values."""
-        data = self.dump()
-        data["phase"] = self.machine.current_state_value
-        return data
-
-    @classmethod
-    def from_data(
-        cls, data: dict[str, Any], categories: frozenset[str], stubborn_minimum: float = 2.0
-    ) -> StatemachineServer:
-        """A server holding the data of :meth:`data`, its machine started in the saved state."""
-        server = cls(data["fleet"], data["robot"], categories, stubborn_minimum, initial=data["phase"])
-        server.load(data)
-        return server
-
-    def dumps(self) -> str:
-        """The robot's data and machine state as JSON text."""
-        return json.dumps(self.data())
-
-    @classmethod
-    def loads(
-        cls, text: str, categories: frozenset[str], stubborn_minimum: float = 2.0
-    ) -> StatemachineServer:
-        """A server holding the data of :meth:`dumps`."""
-        return cls.from_data(json.loads(text), categories, stubborn_minimum)
+    def saved_phase(self) -> str:
+        return str(self.machine.current_state_value)

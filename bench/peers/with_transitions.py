@@ -6,9 +6,6 @@ fires a trigger, as an application written on ``transitions`` would.
 
 from __future__ import annotations
 
-import json
-from typing import Any
-
 from transitions import Machine
 
 from .rules import INACTIVE, RUNNING, WAITING, Rules
@@ -30,42 +27,19 @@ class TransitionsServer(Rules):
 
     state: str
 
-    def __init__(
-        self,
-        fleet: str,
-        robot: str,
-        categories: frozenset[str],
-        stubborn_minimum: float = 2.0,
-        initial: str = "inactive",
-    ) -> None:
-        self.setup(fleet, robot, categories, stubborn_minimum)
+    def start_machine(self, initial: str | None) -> None:
+        if initial is not None and initial not in _PHASE:
+            raise ValueError(f"snapshot.phase = {initial!r}: expected one of {_STATES}")
         self.machine = Machine(
-            model=self, states=_STATES, transitions=_TRANSITIONS, initial=initial, auto_transitions=False
+            model=self,
+            states=_STATES,
+            transitions=_TRANSITIONS,
+            initial=initial or "inactive",
+            auto_transitions=False,
         )
 
     def phase(self) -> int:
         return _PHASE[self.state]
 
-    def data(self) -> dict[str, Any]:
-        """The robot's data and machine state as plain JSON values."""
-        data = self.dump()
-        data["phase"] = self.state
-        return data
-
-    @classmethod
-    def from_data(
-        cls, data: dict[str, Any], categories: frozenset[str], stubborn_minimum: float = 2.0
-    ) -> TransitionsServer:
-        """A server holding the data of :meth:`data`, its machine started in the saved state."""
-        server = cls(data["fleet"], data["robot"], categories, stubborn_minimum, initial=data["phase"])
-        server.load(data)
-        return server
-
-    def dumps(self) -> str:
-        """The robot's data and machine state as JSON text."""
-        return json.dumps(self.data())
-
-    @classmethod
-    def loads(cls, text: str, categories: frozenset[str], stubborn_minimum: float = 2.0) -> TransitionsServer:
-        """A server holding the data of :meth:`dumps`."""
-        return cls.from_data(json.loads(text), categories, stubborn_minimum)
+    def saved_phase(self) -> str:
+        return self.state
