@@ -116,11 +116,26 @@ def test_log_text_limit() -> None:
 
 
 @pytest.mark.parametrize(
-    "uuid", [b"\x00" * 15, b"\x00" * 17, "0" * 31, "0" * 33, "g" * 32, "", 7, None, b"", bytearray(3)]
+    "uuid",
+    [
+        *(b"\x00" * 15, b"\x00" * 17, "0" * 31, "0" * 33, "g" * 32, "", 7, None, b"", bytearray(3)),
+        # int(text, 16) and uuid.UUID take these; a goal UUID is hex digits only
+        *("0000_" + "0" * 27, " " + "0" * 31, "+" + "0" * 31, "0x" + "0" * 30, "{" + "0" * 32 + "}"),
+        "00000000-0000-0000-0000-00000000000_",
+    ],
 )
 def test_goal_uuid_of_the_wrong_shape_is_refused(uuid: Any) -> None:
     with pytest.raises(InvalidMessage, match=r"GoalStarted\.goal_uuid"):
         ins.GoalStarted(goal_uuid=uuid, now=0)
+
+
+@pytest.mark.parametrize(
+    "uuid", ["AbCdEf0123456789" * 2, "abcdef01-2345-6789-ABCD-ef0123456789", bytes(range(16))]
+)
+def test_goal_uuid_is_stored_as_32_lowercase_hex_digits(uuid: Any) -> None:
+    stored = ins.GoalStarted(goal_uuid=uuid, now=0).goal_uuid
+    assert len(stored) == 32 and set(stored) <= set("0123456789abcdef")
+    assert int(stored, 16) == int(uuid.hex() if isinstance(uuid, bytes) else uuid.replace("-", ""), 16)
 
 
 @pytest.mark.parametrize("now", [2**31 * 10**9, -(2**31) * 10**9 - 1, 1.5, True, int(HUGE_INT), None])

@@ -21,7 +21,16 @@ import attrs
 
 from dynevent.errors import DyneventError, InvalidMessage
 from dynevent.wire import _fields
-from dynevent.wire._fields import SECOND, boolean_field, string, u64
+from dynevent.wire._fields import (
+    FAST_KEY,
+    SECOND,
+    STRING_CHECK,
+    boolean_field,
+    fast_init,
+    integer_check,
+    string,
+    u64,
+)
 from dynevent.wire.description import EventDescription
 from dynevent.wire.messages import Goal
 from dynevent.wire.vocab import Status, Tier
@@ -56,32 +65,31 @@ NOW_RANGE = (-(2**31) * SECOND, 2**31 * SECOND - 1)
 
 _STATUSES = frozenset(status.value for status in Status)
 _TIERS = frozenset(tier.value for tier in Tier)
+_LOWER_HEX = frozenset("0123456789abcdef")
 
 
 def goal_uuid(value: object) -> str:
-    """Canonicalize a goal UUID: 16 bytes, a :class:`uuid.UUID`, or 32 hex digits.
+    """Canonicalize a goal UUID: 16 bytes, a :class:`uuid.UUID`, 32 hex digits, or 8-4-4-4-12 hex digits.
 
     Returns 32 lowercase hexadecimal digits.  Raises ``ValueError`` (not the
     project's error: callers wrap it with their own location).
     """
     if type(value) is str and len(value) == 32:
-        try:
-            int(value, 16)
-        except ValueError:
-            pass
-        else:
-            return value.lower()
+        lowered = value.lower()
+        if _LOWER_HEX.issuperset(lowered):  # int(value, 16) would also take "_", "+" and spaces
+            return lowered
     if isinstance(value, uuid.UUID):
         return value.hex
     if isinstance(value, (bytes, bytearray)):
         if len(value) != 16:
             raise ValueError(f"a goal UUID is 16 bytes, got {len(value)}")
         return bytes(value).hex()
-    if isinstance(value, str):
-        try:
-            return uuid.UUID(value).hex
-        except ValueError:
-            raise ValueError("expected 32 hexadecimal digits") from None
+    if isinstance(value, str):  # the hyphenated form, 8-4-4-4-12 (uuid.UUID would also take "_", "+", spaces)
+        if len(value) == 36 and all(value[index] == "-" for index in (8, 13, 18, 23)):
+            compact = value.replace("-", "").lower()
+            if len(compact) == 32 and _LOWER_HEX.issuperset(compact):
+                return compact
+        raise ValueError("expected 32 hexadecimal digits")
     raise ValueError("expected 16 bytes, a uuid.UUID or 32 hexadecimal digits")
 
 
@@ -159,17 +167,28 @@ def _conv(function: Any) -> Any:
     return attrs.Converter(function, takes_self=True, takes_field=True)
 
 
-def _checked(function: Any, **kwargs: Any) -> Any:
-    """An ``attrs.field`` whose converter is ``function(value, instance, field)``."""
-    return attrs.field(converter=_conv(function), **kwargs)
+def _checked(function: Any, fast: str | None = None, **kwargs: Any) -> Any:
+    """An ``attrs.field`` whose converter is ``function(value, instance, field)``; ``fast`` is the
+    check of the values it returns unchanged (see :func:`~dynevent.wire._fields.fast_init`)."""
+    metadata = {} if fast is None else {FAST_KEY: fast}
+    return attrs.field(converter=_conv(function), metadata=metadata, **kwargs)
 
 
 def _now_field() -> Any:
-    return _checked(_now)
+    return _checked(_now, integer_check(*NOW_RANGE))
 
 
 def _uuid_field() -> Any:
-    return _checked(_uuid)
+    return _checked(_uuid, "type({v}) is str and len({v}) == 32 and _LOWER_HEX.issuperset({v})")
+
+
+def _one_of_field(allowed: str, what: str, **kwargs: Any) -> Any:
+    """A field holding one of the names in the module's frozenset ``allowed``."""
+    return attrs.field(
+        converter=_one_of(globals()[allowed], what),
+        metadata={FAST_KEY: f"type({{v}}) is str and {{v}} in {allowed}"},
+        **kwargs,
+    )
 
 
 class _Input:
@@ -179,6 +198,7 @@ class _Input:
     KIND: ClassVar[str] = ""
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Begin(_Input):
     """A task reached a ``dynamic_event`` phase: the dynamic event begins.
@@ -196,16 +216,18 @@ class Begin(_Input):
     interrupted: bool = boolean_field()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class GoalRequested(_Input):
     """A goal request arrived (a ROS ``handle_goal`` callback)."""
 
     KIND: ClassVar[str] = "goal_requested"
     goal_uuid: str = _uuid_field()
-    goal: Goal = _checked(_goal)
+    goal: Goal = _checked(_goal, "type({v}) is Goal")
     now: int = _now_field()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class GoalStarted(_Input):
     """An accepted goal is handed over for execution (a ROS ``handle_accepted`` callback)."""
@@ -215,6 +237,7 @@ class GoalStarted(_Input):
     now: int = _now_field()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class GoalSubmitted(_Input):
     """A goal the transport has already accepted arrives, to be requested and started in one step.
@@ -226,10 +249,11 @@ class GoalSubmitted(_Input):
 
     KIND: ClassVar[str] = "goal_submitted"
     goal_uuid: str = _uuid_field()
-    goal: Goal = _checked(_goal)
+    goal: Goal = _checked(_goal, "type({v}) is Goal")
     now: int = _now_field()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class CancelRequested(_Input):
     """A client asked, through the action protocol, to cancel a goal (``handle_cancel``)."""
@@ -239,26 +263,33 @@ class CancelRequested(_Input):
     now: int = _now_field()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class ChildProgress(_Input):
     """The running child event reported a status, optionally with a log line."""
 
     KIND: ClassVar[str] = "child_progress"
-    status: str = attrs.field(converter=_one_of(_STATUSES, "task_state statuses"))  # type: ignore[misc]
+    status: str = _one_of_field("_STATUSES", "task_state statuses")
     now: int = _now_field()
-    log_text: str | None = _checked(_log_text, default=None)
-    tier: str = attrs.field(default="info", converter=_one_of(_TIERS, "log tiers"))  # type: ignore[misc]
+    log_text: str | None = _checked(
+        _log_text,
+        f"{{v}} is None or ({STRING_CHECK} and len({{v}}) <= {MAX_LOG_TEXT_LENGTH})",
+        default=None,
+    )
+    tier: str = _one_of_field("_TIERS", "log tiers", default="info")
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class ChildFinished(_Input):
     """The running child event ended with a final status."""
 
     KIND: ClassVar[str] = "child_finished"
-    status: str = attrs.field(converter=_one_of(_STATUSES, "task_state statuses"))  # type: ignore[misc]
+    status: str = _one_of_field("_STATUSES", "task_state statuses")
     now: int = _now_field()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Tick(_Input):
     """Time passed; the robot is on ``map_name`` at ``(x, y)`` metres."""
@@ -270,6 +301,7 @@ class Tick(_Input):
     y: float = _checked(_finite, default=0.0)
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Interrupt(_Input):
     """The task was interrupted (paused)."""
@@ -278,6 +310,7 @@ class Interrupt(_Input):
     now: int = _now_field()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Resume(_Input):
     """The task's interruption was released."""
@@ -286,6 +319,7 @@ class Resume(_Input):
     now: int = _now_field()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class TaskCancel(_Input):
     """The whole task was cancelled."""
@@ -294,6 +328,7 @@ class TaskCancel(_Input):
     now: int = _now_field()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class TaskKill(_Input):
     """The whole task was killed."""
@@ -302,6 +337,7 @@ class TaskKill(_Input):
     now: int = _now_field()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Shutdown(_Input):
     """The adapter is shutting down."""
@@ -310,6 +346,7 @@ class Shutdown(_Input):
     now: int = _now_field()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Restart(_Input):
     """The state was restored after the process that served it ended: its goal handles and child with it."""
@@ -318,6 +355,7 @@ class Restart(_Input):
     now: int = _now_field()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class DescriptionQuery(_Input):
     """A request of the proposal's description service."""

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import struct
+import sys
 from collections.abc import Callable, Iterable, Mapping
 from enum import Enum
 from typing import Any, TypeVar, cast
@@ -156,9 +157,40 @@ def _float_key(value: float) -> float | None:
     return None if math.isnan(value) else value
 
 
+#: Field metadata key of a fast check: a Python expression over ``{v}`` that is true only for values
+#: the field's converter would return unchanged (see :func:`fast_init`).
+FAST_KEY = "dynevent.fast"
+
+_INTEGER_RANGES = {
+    "uint8": (0, 2**8 - 1),
+    "uint32": (0, U32_MAX),
+    "uint64": (0, U64_MAX),
+    "int32": (-(2**31), 2**31 - 1),
+    "int64": (-(2**63), 2**63 - 1),
+}
+
+
+def integer_check(low: int, high: int) -> str:
+    """The fast check of an integer field of range [low, high]."""
+    return f"type({{v}}) is int and {low} <= {{v}} <= {high}"
+
+
+#: The fast check of a wire string: ASCII without NUL is always valid UTF-8 for the wire (R1.2).
+STRING_CHECK = "type({v}) is str and {v}.isascii() and '\\x00' not in {v}"
+
+_FAST_CHECKS = {
+    **{wire: integer_check(*bounds) for wire, bounds in _INTEGER_RANGES.items()},
+    "string": STRING_CHECK,
+    "bool": "type({v}) is bool",
+}
+
+
 def scalar(wire: str, default: Any) -> Any:
     eq_key = _float_key if wire == "float32" else True
-    return attrs.field(default=default, converter=_CONVERTERS[wire], eq=eq_key, metadata={WIRE_KEY: wire})
+    metadata: dict[str, Any] = {WIRE_KEY: wire}
+    if wire in _FAST_CHECKS:
+        metadata[FAST_KEY] = _FAST_CHECKS[wire]
+    return attrs.field(default=default, converter=_CONVERTERS[wire], eq=eq_key, metadata=metadata)
 
 
 def u8(default: int = 0) -> Any:
@@ -194,14 +226,22 @@ def boolean_field(default: bool = False) -> Any:
 
 
 def message(cls: type[Any]) -> Any:
-    return attrs.field(factory=cls, converter=_nested(cls), metadata={WIRE_KEY: cls})
+    return attrs.field(
+        factory=cls,
+        converter=_nested(cls),
+        metadata={WIRE_KEY: cls, FAST_KEY: f"type({{v}}) is _{cls.__name__}"},
+    )
 
 
 def sequence(cls: type[Any]) -> Any:
-    return attrs.field(factory=tuple, converter=_array(cls), metadata={WIRE_KEY: (cls,)})
+    return attrs.field(
+        factory=tuple, converter=_array(cls), metadata={WIRE_KEY: (cls,), FAST_KEY: "{v} == ()"}
+    )
 
 
 _T = TypeVar("_T")
+_C = TypeVar("_C", bound=type)
+_FACTORY: Any = type(attrs.Factory(list))
 _KEEP: Any = object()  # "no change" marker of generated replace functions
 
 
@@ -209,8 +249,9 @@ def _generate(cls: type, name: str, signature: str, body: list[str]) -> Any:
     """Compile a function over ``cls``'s fields that sets slots through their descriptors."""
     names = [field.name for field in attrs.fields(cls)]
     namespace: dict[str, Any] = {"_new": object.__new__, "_cls": cls, "_KEEP": _KEEP}
-    for field in names:
-        namespace[f"_set_{field}"] = cls.__dict__[field].__set__  # the slot's own setter skips frozen checks
+    for field in names:  # the slot's own setter skips frozen checks (a base class may own the slot)
+        owner = next(klass for klass in cls.__mro__ if field in klass.__dict__)
+        namespace[f"_set_{field}"] = owner.__dict__[field].__set__
     source = "\n".join(
         [f"def {name}({signature.format(names=names)}):", "    new = _new(_cls)", *body, "    return new"]
     )
@@ -228,6 +269,75 @@ def maker(cls: type[_T]) -> Callable[..., _T]:
     body = [f"    _set_{field}(new, {field})" for field in names]
     function: Callable[..., _T] = _generate(cls, "make", "*, " + ", ".join(names), body)
     return function
+
+
+def fast_init(cls: _C) -> _C:
+    """Give an attrs class an ``__init__`` that skips a field's converter when its fast check passes.
+
+    A class decorator, applied above ``@attrs.frozen``.  Each field whose
+    metadata has a :data:`FAST_KEY` check takes a value that passes it as it
+    is (the check accepts only values the converter would return unchanged);
+    any other value goes through the field's converter, so the checks and the
+    error messages are exactly attrs' own.  Fields without a check always go
+    through their converter.  Defaults and factories are kept.
+    """
+    fields = attrs.fields(cls)
+    # a check may name the module's globals (a vocabulary set, a class)
+    namespace: dict[str, Any] = dict(vars(sys.modules[cls.__module__]))
+    namespace.update(_cls=cls, _NOTHING=attrs.NOTHING)
+    params: list[str] = []
+    body: list[str] = []
+    for field in fields:
+        name = field.name
+        if field.validator is not None or not field.init or not field.kw_only:
+            raise TypeError(
+                f"fast_init: {cls.__name__}.{name} must be a keyword-only init field without validator"
+            )
+        owner = next(klass for klass in cls.__mro__ if name in klass.__dict__)
+        namespace[f"_set_{name}"] = owner.__dict__[name].__set__
+        namespace[f"_field_{name}"] = field
+        default = field.default
+        if default is attrs.NOTHING:
+            params.append(name)
+        elif isinstance(default, _FACTORY):
+            namespace[f"_factory_{name}"] = default.factory
+            params.append(f"{name}=_NOTHING")
+            body.append(f"    if {name} is _NOTHING: {name} = _factory_{name}()")
+        else:
+            namespace[f"_default_{name}"] = default
+            params.append(f"{name}=_default_{name}")
+        converter = field.converter
+        if converter is not None:
+            call = _converter_call(converter, name, namespace)
+            check = field.metadata.get(FAST_KEY)
+            if isinstance(field.metadata.get(WIRE_KEY), type):
+                namespace[f"_{field.metadata[WIRE_KEY].__name__}"] = field.metadata[WIRE_KEY]
+            if check is None:
+                body.append(f"    {name} = {call}")
+            else:
+                body.append(f"    if not ({check.format(v=name)}): {name} = {call}")
+        body.append(f"    _set_{name}(self, {name})")
+    source = "\n".join([f"def __init__(self, *, {', '.join(params)}):", *body])
+    exec(compile(source, f"<fast init of {cls.__qualname__}>", "exec"), namespace)
+    init = namespace["__init__"]
+    init.__qualname__ = f"{cls.__qualname__}.__init__"
+    init.__doc__ = vars(cls)["__init__"].__doc__
+    cls.__init__ = init  # type: ignore[misc]
+    return cls
+
+
+def _converter_call(converter: Any, name: str, namespace: dict[str, Any]) -> str:
+    """The call of ``converter`` on the local ``name`` in a generated ``__init__``."""
+    if isinstance(converter, attrs.Converter):
+        namespace[f"_convert_{name}"] = converter.converter  # type: ignore[attr-defined]
+        arguments = [name]
+        if converter.takes_self:  # type: ignore[attr-defined]
+            arguments.append("self")
+        if converter.takes_field:  # type: ignore[attr-defined]
+            arguments.append(f"_field_{name}")
+        return f"_convert_{name}({', '.join(arguments)})"
+    namespace[f"_convert_{name}"] = converter
+    return f"_convert_{name}({name})"
 
 
 def replacer(cls: type[_T]) -> Callable[..., _T]:

@@ -42,6 +42,7 @@ from dynevent.wire._fields import (
     WIRE_KEY,
     boolean_field,
     f32,
+    fast_init,
     i32,
     i64,
     message,
@@ -161,6 +162,7 @@ def _decode_array(owner: str, key: str, cls: type[WireMessage], raw: object) -> 
     return tuple(_decode_nested(owner, f"{key}[{index}]", cls, item) for index, item in enumerate(raw))
 
 
+@fast_init
 @attrs.frozen(kw_only=True, order=True)
 class Time(WireMessage):
     """``builtin_interfaces/msg/Time``: seconds and nanoseconds since the Unix epoch."""
@@ -182,6 +184,7 @@ class Time(WireMessage):
         return self.sec * SECOND + self.nanosec
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Goal(WireMessage):
     """``rmf_task_msgs/action/DynamicEvent`` goal: one command to the robot's server.
@@ -200,6 +203,7 @@ class Goal(WireMessage):
     stubborn_period: float = f32()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Result(WireMessage):
     """``rmf_task_msgs/action/DynamicEvent`` result: the terminal answer to one goal.
@@ -215,6 +219,7 @@ class Result(WireMessage):
     id: int = u64()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class LogEntry(WireMessage):
     """``rmf_task_msgs/msg/LogEntry``, matching ``log_entry.json``."""
@@ -227,6 +232,7 @@ class LogEntry(WireMessage):
     text: str = string()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Feedback(WireMessage):
     """``rmf_task_msgs/action/DynamicEvent`` feedback: status of the running event and new logs."""
@@ -238,6 +244,7 @@ class Feedback(WireMessage):
     logs: tuple[LogEntry, ...] = sequence(LogEntry)
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class DynamicEventDescription(WireMessage):
     """``rmf_task_msgs/msg/DynamicEventDescription``, published when a dynamic event begins."""
@@ -251,6 +258,7 @@ class DynamicEventDescription(WireMessage):
     start_time: Time = message(Time)
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class DynamicEventStatus(WireMessage):
     """``rmf_task_msgs/msg/DynamicEventStatus``, the robot's dynamic event state."""
@@ -264,6 +272,7 @@ class DynamicEventStatus(WireMessage):
     time: Time = message(Time)
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class DescriptionRequest(WireMessage):
     """Request of the proposal's description service (ROS requires at least one field)."""
@@ -273,6 +282,7 @@ class DescriptionRequest(WireMessage):
     at_least_one_field: bool = boolean_field()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class DescriptionResponse(WireMessage):
     """Response of the proposal's description service.
