@@ -20,6 +20,7 @@ from typing import Any
 
 import pytest
 from hypothesis import given
+from hypothesis import strategies as st
 
 from dynevent.conformance.driver import Driver
 from dynevent.conformance.records import InvalidRecord, config_from_json, input_from_json, output_from_json
@@ -256,3 +257,29 @@ def test_a_result_record_status_of_the_wrong_json_type_is_a_located_error(status
     )
     with pytest.raises(TraceError, match="status"):
         check_trace(line)
+
+
+_JSONISH = st.one_of(
+    st.text(alphabet=' \t\n\r{}[]",:0123456789.eE+-truefalsnul\\x', max_size=40),
+    st.recursive(
+        st.none() | st.booleans() | st.integers() | st.floats(allow_nan=False) | st.text(max_size=5),
+        lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=3), inner, max_size=3),
+        max_leaves=8,
+    ).map(json.dumps),
+)
+
+
+@given(text=_JSONISH, padding=st.sampled_from(["", " ", "\n\t", "  x"]))
+def test_the_strict_reader_decodes_as_the_standard_decoder_does(text: str, padding: str) -> None:
+    """The reader calls the decoder's scanner directly: values and errors are the decoder's own."""
+    from dynevent.wire import _json
+
+    def outcome(decode: Any, source: str) -> tuple[str, Any]:
+        try:
+            return "value", decode(source)
+        except (ValueError, _json.JsonProblem) as exc:
+            return type(exc).__name__, str(exc)
+
+    source = padding + text + padding
+    standard = json.JSONDecoder(object_pairs_hook=_json._pairs).decode
+    assert outcome(_json._decode, source) == outcome(standard, source)

@@ -12,6 +12,7 @@ import attrs
 import pytest
 
 from dynevent.server import outputs as outs
+from dynevent.server import snapshot
 from dynevent.server.machine import (
     RunningGoal,
     ServerConfig,
@@ -112,6 +113,50 @@ def test_a_category_dropped_before_the_start_aborts_with_one_error_line() -> Non
             f"{PARSE_FAILURE}\n -- category 'go_to_place' is not supported; supported: dock, perform_action",
         ),
     )
+
+
+def _counting() -> tuple[ServerConfig, list[str]]:
+    calls: list[str] = []
+
+    def validator(category: str, description: Any) -> Sequence[str]:
+        calls.append(description)
+        return ()
+
+    return ServerConfig(categories={"go_to_place": validator}), calls
+
+
+@pytest.mark.spec("R6.1")
+def test_under_the_configuration_that_accepted_it_the_check_is_kept() -> None:
+    config, calls = _counting()
+    run = waiting(config=config)
+    run.request(u(1), next_goal(1, 5))
+    assert calls == ["lobby"]
+    outputs = run.start(u(1))
+    assert calls == ["lobby"]  # not checked again
+    started = next(output for output in outputs if isinstance(output, outs.StartChild))
+    assert started.parsed == "lobby"
+
+
+@pytest.mark.spec("R6.1")
+def test_under_an_equal_but_other_configuration_the_check_runs_again() -> None:
+    config, calls = _counting()
+    run = waiting(config=config)
+    run.request(u(1), next_goal(1, 5))
+    run.config = attrs.evolve(config)
+    run.start(u(1))
+    assert calls == ["lobby", "lobby"]
+
+
+@pytest.mark.spec("R6.1")
+def test_a_restored_queued_goal_is_checked_again() -> None:
+    config, calls = _counting()
+    run = waiting(config=config)
+    run.request(u(1), next_goal(1, 5))
+    run.state = snapshot.loads(snapshot.dumps(run.state))
+    assert run.state.queued[0].checked is None
+    run.start(u(1))
+    assert calls == ["lobby", "lobby"]
+    assert run.phase is RUNNING
 
 
 # --------------------------------------------------------------------------- R6.2

@@ -24,7 +24,7 @@ from dynevent.errors import InvalidConfig
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.wire import _json
-from dynevent.wire._fields import SECOND, U32_MAX, U64_MAX, maker, replacer
+from dynevent.wire._fields import ANNOTATION, SECOND, U32_MAX, U64_MAX, fast_init, maker, replacer
 from dynevent.wire.description import DEFAULT_CATEGORY, MAX_DESCRIPTION_BYTES
 from dynevent.wire.messages import (
     DescriptionResponse,
@@ -100,6 +100,18 @@ EXECUTION_FAILURES: Mapping[str, str] = {failure.name.lower(): failure.value for
 
 # Child statuses that end a child early: its goal is not answered as succeeded (R8.2).
 _EARLY_END = frozenset({Status.CANCELED.value, Status.KILLED.value, Status.SKIPPED.value})
+
+# The vocabulary the steps use most, as module constants: reading an enum member (and its value)
+# costs several times reading a global.
+_UNINITIALIZED_TYPE, _NEXT, _CANCEL, _FINISHED = (int(event_type) for event_type in EventType)
+_INACTIVE, _WAITING, _RUNNING = (int(phase) for phase in DynamicState)
+_UNINITIALIZED, _STANDBY, _UNDERWAY = Status.UNINITIALIZED.value, Status.STANDBY.value, Status.UNDERWAY.value
+_QUEUED, _CANCELED, _COMPLETED = Status.QUEUED.value, Status.CANCELED.value, Status.COMPLETED.value
+_SUCCEEDED, _ABORTED, _CANCELED_GOAL = GoalStatus.SUCCEEDED, GoalStatus.ABORTED, GoalStatus.CANCELED
+_STANDARD, _RMF_ROS2, _GOAL_IDS = Compatibility.STANDARD, Compatibility.RMF_ROS2, IdPolicy.GOAL
+_PARSE_FAILURE = Failure.PARSE.value
+#: "No description parsed yet" (a parsed description may be any JSON value, None included).
+_UNCHECKED: Any = object()
 
 
 def accept_any(category: str, description: Any) -> Sequence[str]:
@@ -209,14 +221,26 @@ class ServerConfig:
         return cls(categories=categories, id_policy=IdPolicy.ADAPTER, compatibility=Compatibility.RMF_ROS2)
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class QueuedGoal:
-    """A goal that was accepted and has not started yet."""
+    """A goal that was accepted and has not started yet.
+
+    ``checked`` carries a NEXT's description check from its acceptance to its
+    start: ``(config, parsed description)``, the configuration it passed under
+    and what it parsed to.  An annotation (no part of equality, never
+    encoded): a goal restored from a snapshot, or started under another
+    configuration, is checked again (R6.1).
+    """
 
     goal_uuid: str
     goal: Goal
+    checked: tuple[ServerConfig, Any] | None = attrs.field(
+        default=None, eq=False, repr=False, metadata={ANNOTATION: True}
+    )
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class RunningGoal:
     """The NEXT goal that holds the running slot, and its child event.
@@ -235,6 +259,7 @@ class RunningGoal:
     canceling: bool = False
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Position:
     """Where a tick last reported the robot."""
@@ -244,6 +269,7 @@ class Position:
     y: float
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Stubbornness:
     """An active stubborn hold: ``period`` seconds, held since ``hold_since``, anchored at ``anchor``."""
@@ -254,6 +280,7 @@ class Stubbornness:
     anchor: Position | None
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class State:
     """Everything the server knows for one robot.
@@ -341,6 +368,7 @@ _replace_running = replacer(RunningGoal)
 _replace_stubborn = replacer(Stubbornness)
 
 
+@fast_init
 @attrs.frozen
 class Transition:
     """What one step did: the new state and the outputs, in order."""
@@ -367,12 +395,14 @@ def status_of(
     """The status message (R2.2) of a server in run ``seq`` whose dynamic event is ``active`` with
     ``status``, highest id used ``last_id`` and running child ``child_id`` (``None`` when none runs),
     stamped ``now``: what :func:`status_message` gives for a :class:`State`, for any model of one."""
+    if not active:
+        phase, status, reported = _INACTIVE, _UNINITIALIZED, 0
+    elif child_id is None:
+        phase, reported = _WAITING, last_id
+    else:
+        phase, reported = _RUNNING, child_id
     return _make_status(
-        dynamic_event_seq=seq,
-        dynamic_state=phase_of(active, child_id is not None).value,
-        status=status if active else Status.UNINITIALIZED.value,
-        id=reported_id(active, last_id, child_id),
-        time=_time(now),
+        dynamic_event_seq=seq, dynamic_state=phase, status=status, id=reported, time=_time(now)
     )
 
 
@@ -380,7 +410,7 @@ def _running_status(state: State, status: str, child_id: int, now: int) -> Dynam
     """A RUNNING status message naming a child, whatever the state (rmf_ros2 mode, R17.4, R17.5)."""
     return _make_status(
         dynamic_event_seq=state.seq,
-        dynamic_state=DynamicState.RUNNING.value,
+        dynamic_state=_RUNNING,
         status=status,
         id=child_id,
         time=_time(now),
@@ -573,7 +603,7 @@ def _reject(rule: str, reason: RejectReason, text: str, failure: str = "", **val
 
 def _check_description(goal: Goal, config: ServerConfig) -> tuple[Any, outs.Rejected | None]:
     """Check a NEXT goal's category, then parse and validate its description (R4.7 to R4.10)."""
-    failure = Failure.PARSE.value
+    failure = _PARSE_FAILURE
     validator = config.categories.get(goal.category)
     if validator is None:
         supported = tuple(sorted(config.categories))
@@ -597,7 +627,8 @@ def _check_description(goal: Goal, config: ServerConfig) -> tuple[Any, outs.Reje
             errors=(str(exc),),
         )
     try:
-        errors = tuple(str(error) for error in validator(goal.category, parsed))
+        found = validator(goal.category, parsed)
+        errors = () if type(found) in (tuple, list) and not found else tuple(str(error) for error in found)
     except Exception as exc:  # a faulty validator must not break the machine
         errors = (f"the validator raised {type(exc).__name__}: {exc}",)
     if errors:
@@ -611,13 +642,13 @@ def _check_description(goal: Goal, config: ServerConfig) -> tuple[Any, outs.Reje
     return parsed, None
 
 
-def _check_next(state: State, goal: Goal, config: ServerConfig) -> outs.Rejected | None:
-    """A NEXT goal's own checks (R4.7 to R4.12), in the spec's order."""
-    _, problem = _check_description(goal, config)  # R4.7 to R4.10
+def _check_next(state: State, goal: Goal, config: ServerConfig) -> tuple[Any, outs.Rejected | None]:
+    """A NEXT goal's own checks (R4.7 to R4.12), in the spec's order; its parsed description."""
+    parsed, problem = _check_description(goal, config)  # R4.7 to R4.10
     if problem is not None:
-        return problem
+        return None, problem
     if not math.isfinite(goal.stubborn_period):
-        return _reject(
+        return None, _reject(
             "R4.11",
             RejectReason.NON_FINITE_STUBBORN_PERIOD,
             f"stubborn_period {goal.stubborn_period} is not a finite number",
@@ -627,8 +658,10 @@ def _check_next(state: State, goal: Goal, config: ServerConfig) -> outs.Rejected
             text = f"id 0 asks the server for the next id, and none is left above {state.last_id}"
         else:
             text = f"id {goal.id} is not greater than {state.last_id}, the highest id used in this run"
-        return _reject("R4.12", RejectReason.STALE_ID, text, current_id=state.last_id, requested_id=goal.id)
-    return None
+        return None, _reject(
+            "R4.12", RejectReason.STALE_ID, text, current_id=state.last_id, requested_id=goal.id
+        )
+    return parsed, None
 
 
 def _check_cancel(running: RunningGoal | None, goal: Goal) -> outs.Rejected | None:
@@ -655,10 +688,15 @@ def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
     The checks run in the order of docs/spec.md section 4 and the first that
     fails decides.  Usable as it is in a ROS ``handle_goal`` callback.
     """
+    return _decide(state, goal, config)[0]
+
+
+def _decide(state: State, goal: Goal, config: ServerConfig) -> tuple[outs.Decision, Any]:
+    """:func:`accept`'s decision, and a NEXT's parsed description when it is accepted (else None)."""
     if state.shutdown:
         return _reject(
             "R4.1", RejectReason.SHUTTING_DOWN, "the server is shutting down", Failure.SHUTDOWN.value
-        )
+        ), None
     if goal.dynamic_event_seq != state.seq:
         return _reject(
             "R4.2",
@@ -666,60 +704,62 @@ def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
             f"Expected {state.seq}, received {goal.dynamic_event_seq}",
             expected_seq=state.seq,
             received_seq=goal.dynamic_event_seq,
-        )
+        ), None
     if not state.active:
-        return _reject("R4.3", RejectReason.INACTIVE, "no dynamic event is active for this robot")
+        return _reject("R4.3", RejectReason.INACTIVE, "no dynamic event is active for this robot"), None
     event_type = goal.event_type
-    standard = config.compatibility is Compatibility.STANDARD
-    if standard and event_type == EventType.UNINITIALIZED:
+    standard = config.compatibility is _STANDARD
+    if standard and event_type == _UNINITIALIZED_TYPE:
         return _reject(
             "R4.4",
             RejectReason.UNINITIALIZED_EVENT_TYPE,
             "event_type is 0 (UNINITIALIZED): the goal was default-initialized",
             Failure.EVENT_TYPE.value,
-        )
-    if standard and event_type > EventType.FINISHED:
+        ), None
+    if standard and event_type > _FINISHED:
         return _reject(
             "R4.5",
             RejectReason.UNKNOWN_EVENT_TYPE,
             f"event_type {event_type} is none of NEXT (1), CANCEL (2), FINISHED (3)",
             Failure.EVENT_TYPE.value,
-        )
+        ), None
     running = state.running
-    if running is not None and event_type != EventType.CANCEL:
+    if running is not None and event_type != _CANCEL:
         return _reject(
             "R4.6",
             RejectReason.BUSY,
             f"event {running.child_id} is running: only a CANCEL with its id is accepted",
             current_id=running.child_id,
-        )
-    if event_type == EventType.NEXT:
-        problem = _check_next(state, goal, config)  # R4.7 to R4.12
+        ), None
+    parsed = None
+    if event_type == _NEXT:
+        parsed, problem = _check_next(state, goal, config)  # R4.7 to R4.12
         if problem is not None:
-            return problem
-    elif event_type == EventType.CANCEL and standard:
+            return problem, None
+    elif event_type == _CANCEL and standard:
         problem = _check_cancel(running, goal)  # R4.13, R4.14
         if problem is not None:
-            return problem
+            return problem, None
     if not standard and (
-        event_type == EventType.UNINITIALIZED
-        or event_type > EventType.FINISHED
-        or (event_type == EventType.CANCEL and (running is None or goal.id != running.child_id))
+        event_type == _UNINITIALIZED_TYPE
+        or event_type > _FINISHED
+        or (event_type == _CANCEL and (running is None or goal.id != running.child_id))
     ):
-        return outs.Accepted(event_type=event_type, rule="R17.1")  # a check R17.1 leaves out would refuse it
-    return outs.Accepted(event_type=event_type, rule="R4.16")
+        # a check R17.1 leaves out would refuse it
+        return outs.Accepted(event_type=event_type, rule="R17.1"), None
+    return outs.Accepted(event_type=event_type, rule="R4.16"), parsed
 
 
 def _stale(state: State, goal: Goal, config: ServerConfig) -> bool:
     """R4.12: under id policy ``goal`` a NEXT names a fresh id, or 0 while one is left to assign."""
-    if config.id_policy is not IdPolicy.GOAL:
+    if config.id_policy is not _GOAL_IDS:
         return False
     return state.last_id == U64_MAX if goal.id == 0 else goal.id <= state.last_id
 
 
 def _child_id(state: State, goal: Goal, config: ServerConfig) -> int:
     """R6.2: the goal's id names the child, unless it is 0 or the adapter numbers children."""
-    if config.id_policy is IdPolicy.GOAL and goal.id != 0:
+    if config.id_policy is _GOAL_IDS and goal.id != 0:
         return goal.id
     return (state.last_id + 1) & U64_MAX
 
@@ -727,10 +767,9 @@ def _child_id(state: State, goal: Goal, config: ServerConfig) -> int:
 # --------------------------------------------------------------------------- step helpers
 
 
-def _log(state: State, text: str, tier: str, now: int) -> tuple[State, LogEntry]:
-    """A new log entry with the robot's next LogEntry.seq, which wraps at 2**32 (R7.3)."""
-    entry = _make_log_entry(seq=state.log_seq, tier=tier, unix_millis_time=now // 1_000_000, text=text)
-    return _replace_state(state, log_seq=(state.log_seq + 1) & U32_MAX), entry
+def _log_entry(seq: int, text: str, tier: str, now: int) -> LogEntry:
+    """The log entry numbered ``seq`` (the robot's next LogEntry.seq, which wraps at 2**32, R7.3)."""
+    return _make_log_entry(seq=seq, tier=tier, unix_millis_time=now // 1_000_000, text=text)
 
 
 def _result(failure: str, status: str, event_id: int) -> Result:
@@ -774,36 +813,33 @@ def _start_child(
     running: RunningGoal,
     outputs: list[outs.Output],
     logs: tuple[LogEntry, ...],
-    parsed: Any = None,
+    parsed: Any = _UNCHECKED,
+    **changes: Any,
 ) -> State:
     """Start the running goal's child (R6.4): stubbornness ends, status becomes underway.
 
-    ``parsed`` is the description already parsed by R6.1; a deferred start (R14.5) parses it again.
+    ``parsed`` is the description as R4.9 or R6.1 parsed it; a deferred start (R14.5) parses it
+    again.  ``changes`` are further fields of the new state, set in the same copy.
     """
-    state = _end_stubbornness(state, outputs)
+    if state.stubborn is not None:  # R12.5
+        outputs.append(outs.StubbornEnd(rule="R12.5"))
     goal = running.goal
-    if parsed is None:
+    if parsed is _UNCHECKED:
         try:
             parsed = _json.parse(goal.description)
         except _json.JsonProblem:  # unreachable after R6.1; kept so the machine cannot raise
             parsed = None
+    child_id = running.child_id
     outputs.append(
         outs.StartChild(
-            category=goal.category,
-            description=goal.description,
-            id=running.child_id,
-            parsed=parsed,
-            rule=rule,
+            category=goal.category, description=goal.description, id=child_id, parsed=parsed, rule=rule
         )
     )
-    underway = Status.UNDERWAY.value
-    running = _replace_running(running, started=True, child_status=underway)
-    outputs.append(
-        outs.PublishFeedback(
-            goal_uuid=running.goal_uuid, feedback=_feedback(underway, running.child_id, logs), rule=rule
-        )
-    )
-    return _replace_state(state, running=running, status=underway)
+    if not running.started or running.child_status != _UNDERWAY:
+        running = _replace_running(running, started=True, child_status=_UNDERWAY)
+    feedback = _feedback(_UNDERWAY, child_id, logs)
+    outputs.append(outs.PublishFeedback(goal_uuid=running.goal_uuid, feedback=feedback, rule=rule))
+    return _replace_state(state, running=running, status=_UNDERWAY, stubborn=None, **changes)
 
 
 def _answers_at_child_end(
@@ -818,17 +854,14 @@ def _answers_at_child_end(
     ``rule`` and ``cancels_rule`` name the rules that end it, when not a child's end (R9.4, R10.4, R13.3).
     """
     result = _result("", final, running.child_id)
+    status = _SUCCEEDED
     if final in _EARLY_END:
-        status = GoalStatus.CANCELED if running.cancel_requested else GoalStatus.ABORTED
-    else:
-        status = GoalStatus.SUCCEEDED
+        status = _CANCELED_GOAL if running.cancel_requested else _ABORTED
     answers: list[outs.Output] = [
         outs.AnswerGoal(goal_uuid=running.goal_uuid, status=status, result=result, rule=rule)
     ]
-    answers.extend(
-        outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.SUCCEEDED, result=result, rule=cancels_rule)
-        for uuid in state.cancels
-    )
+    for uuid in state.cancels:
+        answers.append(outs.AnswerGoal(goal_uuid=uuid, status=_SUCCEEDED, result=result, rule=cancels_rule))
     return answers
 
 
@@ -901,11 +934,12 @@ def _known_goal(state: State, uuid: str) -> bool:
 def _on_goal_requested(state: State, event: ins.GoalRequested, config: ServerConfig) -> Transition:
     if _known_goal(state, event.goal_uuid):
         return _ignored("R18.2", state, event.KIND, "a goal with this uuid is already open")
-    decision = accept(state, event.goal, config)
+    decision, parsed = _decide(state, event.goal, config)
     if isinstance(decision, outs.Rejected):
         rejected = outs.GoalRejected(goal_uuid=event.goal_uuid, rejection=decision, rule="R4.15")
         return Transition(state, (rejected,))
-    queued = (*state.queued, QueuedGoal(goal_uuid=event.goal_uuid, goal=event.goal))
+    checked = (config, parsed) if event.goal.event_type == _NEXT else None
+    queued = (*state.queued, QueuedGoal(goal_uuid=event.goal_uuid, goal=event.goal, checked=checked))
     accepted = outs.GoalAccepted(goal_uuid=event.goal_uuid, rule="R4.16")
     return Transition(_replace_state(state, queued=queued), (accepted,))
 
@@ -914,14 +948,15 @@ def _on_goal_submitted(state: State, event: ins.GoalSubmitted, config: ServerCon
     uuid = event.goal_uuid
     if _known_goal(state, uuid):
         return _ignored("R18.2", state, event.KIND, "a goal with this uuid is already open")
-    decision = accept(state, event.goal, config)
+    decision, parsed = _decide(state, event.goal, config)
     if isinstance(decision, outs.Rejected):  # the transport accepted it; it lost a race since
         outputs = (
             outs.ExecuteGoal(goal_uuid=uuid, rule="R5.3"),
             _failure("R5.3", uuid, Failure.RACE, decision.text),
         )
         return Transition(state, outputs)
-    queued = (*state.queued, QueuedGoal(goal_uuid=uuid, goal=event.goal))
+    checked = (config, parsed) if event.goal.event_type == _NEXT else None
+    queued = (*state.queued, QueuedGoal(goal_uuid=uuid, goal=event.goal, checked=checked))
     return _start_goal(state, _replace_state(state, queued=queued), uuid, event.now, config)
 
 
@@ -936,9 +971,9 @@ def race_lost(state: State, goal: Goal, config: ServerConfig) -> str:
         return f"its seq {goal.dynamic_event_seq} is no longer the run's seq {state.seq}"
     if not state.active:
         return "no dynamic event is active any more"
-    if state.running is not None and goal.event_type != EventType.CANCEL:
+    if state.running is not None and goal.event_type != _CANCEL:
         return f"event {state.running.child_id} holds the running slot"
-    if goal.event_type == EventType.NEXT and _stale(state, goal, config):
+    if goal.event_type == _NEXT and _stale(state, goal, config):
         return f"its id {goal.id} is no longer above {state.last_id}, the highest id used"
     return ""
 
@@ -953,41 +988,59 @@ def _start_goal(before: State, state: State, uuid: str, now: int, config: Server
     """Start the queued goal ``uuid`` (R5): ``before`` is the state the step began from."""
     found = next(queued for queued in state.queued if queued.goal_uuid == uuid)
     goal = found.goal
-    state = _replace_state(state, queued=tuple(queued for queued in state.queued if queued is not found))
+    rest = tuple(queued for queued in state.queued if queued is not found)
     outputs: list[outs.Output] = [outs.ExecuteGoal(goal_uuid=uuid, rule="R5.1")]
     if race_lost(state, goal, config):
         outputs.append(_failure("R5.2", uuid, Failure.RACE))
-        return _finish(before, state, outputs, now)
-    if goal.event_type == EventType.NEXT:
-        state = _start_next(state, uuid, goal, config, outputs, now)
-    elif goal.event_type == EventType.CANCEL:
+        return _finish(before, _replace_state(state, queued=rest), outputs, now)
+    if goal.event_type == _NEXT:
+        checked = found.checked
+        parsed = checked[1] if checked is not None and checked[0] is config else _UNCHECKED
+        started = _start_next(state, rest, uuid, goal, config, outputs, now, parsed)
+        if started is not None:  # a goal holds the slot where none did (R5.2): the status changed (R2.3)
+            outputs.append(outs.PublishStatus(message=status_message(started, now), rule="R2.3"))
+            return Transition(started, tuple(outputs))
+        return _finish(before, _replace_state(state, queued=rest), outputs, now)
+    state = _replace_state(state, queued=rest)
+    if goal.event_type == _CANCEL:
         state = _start_cancel(state, uuid, goal, outputs, now)
     elif goal.event_type == EventType.FINISHED:
         state = _end_stubbornness(state, outputs)
-        result = _result("", Status.COMPLETED.value, state.event_id)
-        outputs.append(
-            outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.SUCCEEDED, result=result, rule=FINISHED_RULE)
-        )
-        state = _end_dynamic_event(state, Status.COMPLETED.value, outputs)
+        result = _result("", _COMPLETED, state.event_id)
+        outputs.append(outs.AnswerGoal(goal_uuid=uuid, status=_SUCCEEDED, result=result, rule=FINISHED_RULE))
+        state = _end_dynamic_event(state, _COMPLETED, outputs)
     else:  # only reachable in rmf_ros2 compatibility
         outputs.append(_failure("R17.2", uuid, Failure.EVENT_TYPE))
     return _finish(before, state, outputs, now)
 
 
 def _start_next(
-    state: State, uuid: str, goal: Goal, config: ServerConfig, outputs: list[outs.Output], now: int
-) -> State:
-    parsed, problem = _check_description(goal, config)
-    if problem is not None:  # rmf_ros2 has no string for R4.7: it never re-checks the category
-        failure = problem.execution_failure or f"{Failure.PARSE.value}\n -- {problem.text}"
-        outputs.append(
-            outs.AnswerGoal(
-                goal_uuid=uuid, status=GoalStatus.ABORTED, result=_result(failure, "", 0), rule="R6.1"
+    state: State,
+    queued: tuple[QueuedGoal, ...],
+    uuid: str,
+    goal: Goal,
+    config: ServerConfig,
+    outputs: list[outs.Output],
+    now: int,
+    parsed: Any = _UNCHECKED,
+) -> State | None:
+    """Start a NEXT goal (R6): the new state, with ``queued`` the goals left waiting; None when
+    its description fails the check again (R6.1) and the goal is aborted.
+
+    ``parsed`` is the description as the goal's acceptance parsed it, under this configuration;
+    :data:`_UNCHECKED` has it checked again.
+    """
+    if parsed is _UNCHECKED:
+        parsed, problem = _check_description(goal, config)
+        if problem is not None:  # rmf_ros2 has no string for R4.7: it never re-checks the category
+            failure = problem.execution_failure or f"{_PARSE_FAILURE}\n -- {problem.text}"
+            outputs.append(
+                outs.AnswerGoal(goal_uuid=uuid, status=_ABORTED, result=_result(failure, "", 0), rule="R6.1")
             )
-        )
-        return state
+            return None
     child_id = _child_id(state, goal, config)
     logs: tuple[LogEntry, ...] = ()
+    log_seq = state.log_seq
     period = goal.stubborn_period
     if 0.0 < period < config.stubborn_minimum:
         outputs.append(outs.StubbornClamped(requested=period, applied=config.stubborn_minimum, rule="R12.2"))
@@ -995,23 +1048,26 @@ def _start_next(
             f"stubborn_period {period:g} s is below the minimum of {config.stubborn_minimum:g} s; "
             f"{config.stubborn_minimum:g} s will be used"
         )
-        state, entry = _log(state, text, "warning", now)
+        entry = _log_entry(log_seq, text, "warning", now)
+        log_seq = (log_seq + 1) & U32_MAX  # R7.3
         outputs.append(outs.Log(entry=entry, rule="R12.2"))
         logs = (entry,)
-    state = _replace_state(state, last_id=child_id)
     if state.interrupted:  # the child's start is deferred
-        queued_status = Status.QUEUED.value
         running = RunningGoal(
-            goal_uuid=uuid, goal=goal, child_id=child_id, child_status=queued_status, started=False
+            goal_uuid=uuid, goal=goal, child_id=child_id, child_status=_QUEUED, started=False
         )
         outputs.append(
             outs.PublishFeedback(
-                goal_uuid=uuid, feedback=_feedback(queued_status, child_id, logs), rule=DEFERRED_START_RULE
+                goal_uuid=uuid, feedback=_feedback(_QUEUED, child_id, logs), rule=DEFERRED_START_RULE
             )
         )
-        return _replace_state(state, running=running, status=queued_status)
-    running = RunningGoal(goal_uuid=uuid, goal=goal, child_id=child_id, child_status="", started=False)
-    return _start_child(START_RULE, state, running, outputs, logs, parsed)
+        return _replace_state(
+            state, queued=queued, last_id=child_id, running=running, status=_QUEUED, log_seq=log_seq
+        )
+    running = RunningGoal(goal_uuid=uuid, goal=goal, child_id=child_id, child_status=_UNDERWAY, started=True)
+    return _start_child(
+        START_RULE, state, running, outputs, logs, parsed, queued=queued, last_id=child_id, log_seq=log_seq
+    )
 
 
 def _start_cancel(state: State, uuid: str, goal: Goal, outputs: list[outs.Output], now: int) -> State:
@@ -1069,12 +1125,7 @@ def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerCon
     logs: tuple[LogEntry, ...] = ()
     log_seq = state.log_seq
     if event.log_text is not None:  # the log_seq wraps (R7.3)
-        entry = _make_log_entry(
-            seq=log_seq,
-            tier=event.tier,
-            unix_millis_time=event.now // 1_000_000,
-            text=event.log_text,
-        )
+        entry = _log_entry(log_seq, event.log_text, event.tier, event.now)
         log_seq = (log_seq + 1) & U32_MAX
         outputs.append(outs.Log(entry=entry, rule="R7.2"))
         logs = (entry,)
@@ -1092,11 +1143,12 @@ def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerCon
         status=state.status if state.task_signal else status,  # R7.4
         log_seq=log_seq,
     )
-    if config.compatibility is Compatibility.RMF_ROS2:  # every report, the child's own status
+    if config.compatibility is _RMF_ROS2:  # every report, the child's own status
         wire = _running_status(after, status, running.child_id, event.now)
         outputs.append(outs.PublishStatus(message=wire, rule="R17.5"))
-        return Transition(after, tuple(outputs))
-    return _finish(state, after, outputs, event.now)
+    elif after.status != state.status:  # the run, the slot and the id are as they were (R2.3)
+        outputs.append(outs.PublishStatus(message=status_message(after, event.now), rule="R2.3"))
+    return Transition(after, tuple(outputs))
 
 
 def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerConfig) -> Transition:
@@ -1104,11 +1156,11 @@ def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerCon
     if running is None or not running.started:
         return _ignored("R18.4", state, event.KIND, "no child event is running")
     outputs = _answers_at_child_end(state, running, event.status)
-    after = _replace_state(state, running=None, cancels=())
     if state.task_signal:  # the dynamic event ends with the signal (R13.4)
+        after = _replace_state(state, running=None, cancels=())
         after = _end_dynamic_event(after, state.task_signal, outputs, task_over=True)
         return _finish(state, after, outputs, event.now)
-    after = _replace_state(after, status=Status.STANDBY.value)  # R8.4
+    stubborn = None
     period = running.goal.stubborn_period
     if period > 0.0:
         applied = max(period, config.stubborn_minimum)
@@ -1129,12 +1181,14 @@ def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerCon
             next_refresh=event.now + _seconds(config.stubborn_refresh),
             anchor=anchor,
         )
-        after = _replace_state(after, stubborn=stubborn)
-    if config.compatibility is Compatibility.RMF_ROS2:  # published while the slot is still held
+    after = _replace_state(state, running=None, cancels=(), status=_STANDBY, stubborn=stubborn)  # R8.4
+    if config.compatibility is _RMF_ROS2:  # published while the slot is still held
         stale = _running_status(after, event.status, running.child_id, event.now)
         outputs.append(outs.PublishStatus(message=stale, rule="R17.4"))
         return Transition(after, tuple(outputs))
-    return _finish(state, after, outputs, event.now)
+    # the slot is free where a goal held it: the status changed (R2.3)
+    outputs.append(outs.PublishStatus(message=status_message(after, event.now), rule="R2.3"))
+    return Transition(after, tuple(outputs))
 
 
 def _seconds(value: float) -> int:
@@ -1208,9 +1262,9 @@ def _on_task_signal(state: State, event: ins.TaskCancel | ins.TaskKill, config: 
     if state.task_signal in (Status.KILLED.value, signal):
         return _ignored("R18.7", state, event.KIND, f"the task was already {state.task_signal}")
     outputs: list[outs.Output] = []
-    after, entry = _log(state, f"Received signal to {'kill' if kill else 'cancel'}", "info", event.now)
+    entry = _log_entry(state.log_seq, f"Received signal to {'kill' if kill else 'cancel'}", "info", event.now)
     outputs.append(outs.Log(entry=entry, rule="R13.1"))
-    after = _replace_state(after, task_signal=signal, status=signal)
+    after = _replace_state(state, task_signal=signal, status=signal, log_seq=(state.log_seq + 1) & U32_MAX)
     running = after.running
     if running is not None and running.started:
         outputs.append(

@@ -31,7 +31,7 @@ from typing import Any, ClassVar, TypeAlias
 
 import attrs
 
-from dynevent.wire._fields import ANNOTATION
+from dynevent.wire._fields import ANNOTATION, fast_init
 from dynevent.wire.messages import (
     DescriptionResponse,
     DynamicEventDescription,
@@ -79,6 +79,7 @@ def _rule() -> Any:
     return attrs.field(default="", eq=False, metadata={ANNOTATION: True})
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class _Output:
     #: The name of this output in traces and vectors.
@@ -88,6 +89,7 @@ class _Output:
     rule: str = _rule()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Accepted:
     """:func:`~dynevent.server.machine.accept` says yes; ``rule`` is R4.16, or R17.1 when only the
@@ -97,6 +99,7 @@ class Accepted:
     rule: str = _rule()
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Rejected:
     """:func:`~dynevent.server.machine.accept` says no, and why.
@@ -127,6 +130,7 @@ class Rejected:
 Decision: TypeAlias = Accepted | Rejected
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class GoalAccepted(_Output):
     """Accept the goal request (``handle_goal`` returns ACCEPT)."""
@@ -135,6 +139,7 @@ class GoalAccepted(_Output):
     goal_uuid: str
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class GoalRejected(_Output):
     """Reject the goal request (``handle_goal`` returns REJECT); ``rejection`` says why."""
@@ -144,6 +149,7 @@ class GoalRejected(_Output):
     rejection: Rejected
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class CancelResponse(_Output):
     """Answer an action-level cancel request (``handle_cancel``)."""
@@ -153,6 +159,7 @@ class CancelResponse(_Output):
     accepted: bool
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class ExecuteGoal(_Output):
     """Move the accepted goal to *executing* (``goal_handle.execute()``)."""
@@ -161,6 +168,7 @@ class ExecuteGoal(_Output):
     goal_uuid: str
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class PublishFeedback(_Output):
     """Publish feedback to the goal."""
@@ -170,6 +178,7 @@ class PublishFeedback(_Output):
     feedback: Feedback
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class AnswerGoal(_Output):
     """The goal's one terminal answer: succeed, abort or cancel it with ``result``."""
@@ -180,6 +189,7 @@ class AnswerGoal(_Output):
     result: Result
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class PublishBegin(_Output):
     """Publish the begin description on ``rmf/dynamic_event/begin`` and the robot's begin topic."""
@@ -188,6 +198,7 @@ class PublishBegin(_Output):
     message: DynamicEventDescription
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class PublishStatus(_Output):
     """Publish the robot's dynamic event status."""
@@ -196,6 +207,7 @@ class PublishStatus(_Output):
     message: DynamicEventStatus
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class StartChild(_Output):
     """Start a child event of ``category`` with this description and ``id``.
@@ -211,6 +223,7 @@ class StartChild(_Output):
     parsed: Any = attrs.field(hash=False)
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class CancelChild(_Output):
     """Tell the running child to cancel."""
@@ -219,6 +232,7 @@ class CancelChild(_Output):
     id: int
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class KillChild(_Output):
     """Tell the running child to stop at once (the task was killed)."""
@@ -227,6 +241,7 @@ class KillChild(_Output):
     id: int
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class InterruptChild(_Output):
     """Hand the task's interruption to the running child."""
@@ -235,6 +250,7 @@ class InterruptChild(_Output):
     id: int
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class ResumeChild(_Output):
     """Release the interruption handed to the running child."""
@@ -243,6 +259,7 @@ class ResumeChild(_Output):
     id: int
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class StubbornBegin(_Output):
     """Become a stubborn negotiator and declare a hold of ``period`` seconds from ``since``.
@@ -260,6 +277,7 @@ class StubbornBegin(_Output):
     y: float
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class StubbornHold(_Output):
     """The robot moved or changed map: declare a new hold of ``period`` seconds there, from ``since``."""
@@ -272,6 +290,7 @@ class StubbornHold(_Output):
     y: float
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class StubbornDelay(_Output):
     """The robot held still: report ``delay`` seconds of cumulative delay since the hold began."""
@@ -280,6 +299,7 @@ class StubbornDelay(_Output):
     delay: float
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class StubbornEnd(_Output):
     """Stop being stubborn and release the hold."""
@@ -287,6 +307,7 @@ class StubbornEnd(_Output):
     KIND: ClassVar[str] = "stubborn_end"
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class DynamicEventFinished(_Output):
     """The dynamic event is over with ``status``; the task may move on."""
@@ -295,6 +316,7 @@ class DynamicEventFinished(_Output):
     status: str
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class InterruptConfirmed(_Output):
     """The task's interruption took effect (no child was running to hand it to)."""
@@ -302,6 +324,7 @@ class InterruptConfirmed(_Output):
     KIND: ClassVar[str] = "interrupt_confirmed"
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class DescriptionAnswer(_Output):
     """The answer to a description query."""
@@ -310,6 +333,7 @@ class DescriptionAnswer(_Output):
     response: DescriptionResponse
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class SeqWrapped(_Output):
     """Notice: the dynamic event seq wrapped from ``previous`` (2**32 - 1) to ``seq`` (0)."""
@@ -319,6 +343,7 @@ class SeqWrapped(_Output):
     seq: int
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class StubbornClamped(_Output):
     """Notice: a stubborn period below the minimum was raised to it."""
@@ -328,6 +353,7 @@ class StubbornClamped(_Output):
     applied: float
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Log(_Output):
     """A log entry for the task's log (also carried by feedback when a goal runs)."""
@@ -336,6 +362,7 @@ class Log(_Output):
     entry: LogEntry
 
 
+@fast_init
 @attrs.frozen(kw_only=True)
 class Ignored(_Output):
     """Notice: the input had no effect, and why (e.g. a child report with no child running)."""

@@ -272,9 +272,10 @@ def maker(cls: type[_T]) -> Callable[..., _T]:
 
 
 def fast_init(cls: _C) -> _C:
-    """Give an attrs class an ``__init__`` that skips a field's converter when its fast check passes.
+    """Give an attrs class an ``__init__`` that sets its slots directly, skipping a field's converter
+    when its fast check passes.
 
-    A class decorator, applied above ``@attrs.frozen``.  Each field whose
+    A class decorator, applied above ``@attrs.frozen`` (slotted, no validators).  Each field whose
     metadata has a :data:`FAST_KEY` check takes a value that passes it as it
     is (the check accepts only values the converter would return unchanged);
     any other value goes through the field's converter, so the checks and the
@@ -289,10 +290,8 @@ def fast_init(cls: _C) -> _C:
     body: list[str] = []
     for field in fields:
         name = field.name
-        if field.validator is not None or not field.init or not field.kw_only:
-            raise TypeError(
-                f"fast_init: {cls.__name__}.{name} must be a keyword-only init field without validator"
-            )
+        if field.validator is not None or not field.init:
+            raise TypeError(f"fast_init: {cls.__name__}.{name} must be an init field without validator")
         owner = next(klass for klass in cls.__mro__ if name in klass.__dict__)
         namespace[f"_set_{name}"] = owner.__dict__[name].__set__
         namespace[f"_field_{name}"] = field
@@ -317,7 +316,10 @@ def fast_init(cls: _C) -> _C:
             else:
                 body.append(f"    if not ({check.format(v=name)}): {name} = {call}")
         body.append(f"    _set_{name}(self, {name})")
-    source = "\n".join([f"def __init__(self, *, {', '.join(params)}):", *body])
+    positional = [param for param, field in zip(params, fields, strict=True) if not field.kw_only]
+    keywords = [param for param, field in zip(params, fields, strict=True) if field.kw_only]
+    signature = ", ".join(["self", *positional, *(["*", *keywords] if keywords else [])])
+    source = "\n".join([f"def __init__({signature}):", *body])
     exec(compile(source, f"<fast init of {cls.__qualname__}>", "exec"), namespace)
     init = namespace["__init__"]
     init.__qualname__ = f"{cls.__qualname__}.__init__"

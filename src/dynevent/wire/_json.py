@@ -10,6 +10,8 @@ sentence, and refuses duplicate object keys, which JSON leaves undefined.
 from __future__ import annotations
 
 import json
+import re
+from collections.abc import Callable
 from typing import Any
 
 __all__ = ["MAX_DEPTH", "JsonProblem", "dumps", "parse"]
@@ -23,16 +25,42 @@ class JsonProblem(Exception):
 
 
 def _pairs(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    result: dict[str, Any] = {}
-    for key, value in pairs:
-        if key in result:
-            raise JsonProblem(f"duplicate key {key!r}")
-        result[key] = value
+    result = dict(pairs)
+    if len(result) != len(pairs):  # a key came twice: name the first one that did
+        seen: set[str] = set()
+        for key, _ in pairs:
+            if key in seen:
+                raise JsonProblem(f"duplicate key {key!r}")
+            seen.add(key)
     return result
 
 
-#: One decoder for every parse (``json.loads`` with a hook builds a new one each call).
+#: One decoder for every parse (``json.loads`` with a hook builds a new one each call); its scanner is
+#: called directly, with the whitespace handling of ``JSONDecoder.decode`` around it.
 _DECODER = json.JSONDecoder(object_pairs_hook=_pairs)
+_SCAN: Callable[[str, int], tuple[Any, int]] = vars(_DECODER)["scan_once"]
+_SPACE = re.compile(r"[ \t\n\r]*").match  # JSON's whitespace, as json.decoder.WHITESPACE matches it
+_BLANK = frozenset(" \t\n\r")
+
+
+def _skip_space(text: str, index: int) -> int:
+    """The index of the first character at or after ``index`` that is not JSON whitespace."""
+    match = _SPACE(text, index)
+    return index if match is None else match.end()
+
+
+def _decode(text: str) -> Any:
+    """``_DECODER.decode(text)``: the same values and the same errors, without its two Python layers."""
+    index = _skip_space(text, 0) if text and text[0] in _BLANK else 0
+    try:
+        value, end = _SCAN(text, index)
+    except StopIteration as stop:
+        raise json.JSONDecodeError("Expecting value", text, stop.value) from None
+    if end != len(text):
+        end = _skip_space(text, end)
+        if end != len(text):
+            raise json.JSONDecodeError("Extra data", text, end)
+    return value
 
 
 def _depth_ok(value: Any) -> bool:
@@ -61,7 +89,7 @@ def parse(text: str | bytes | bytearray) -> Any:
     if not isinstance(text, str):
         raise JsonProblem(f"expected JSON text, got {type(text).__name__}")
     try:
-        value = _DECODER.decode(text)
+        value = _decode(text)
     except JsonProblem:
         raise
     except json.JSONDecodeError as exc:
@@ -71,7 +99,7 @@ def parse(text: str | bytes | bytearray) -> Any:
     except ValueError as exc:
         raise JsonProblem(f"not valid JSON: {exc}") from None
     # only a text with more brackets than the limit can be too deep; then walk the parsed containers
-    if text.count("[") + text.count("{") > MAX_DEPTH and not _depth_ok(value):
+    if len(text) > MAX_DEPTH and text.count("[") + text.count("{") > MAX_DEPTH and not _depth_ok(value):
         raise JsonProblem(f"nested deeper than {MAX_DEPTH} levels")
     return value
 
