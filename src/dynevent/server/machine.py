@@ -378,8 +378,7 @@ class Transition:
 
 
 def _time(now: int) -> Time:
-    sec, nanosec = divmod(now, SECOND)
-    return _make_time(sec=sec, nanosec=nanosec)
+    return _make_time(sec=now // SECOND, nanosec=now % SECOND)
 
 
 def status_message(state: State, now: int) -> DynamicEventStatus:
@@ -923,10 +922,19 @@ def _on_begin(state: State, event: ins.Begin, config: ServerConfig) -> Transitio
     return _finish(state, after, outputs, event.now)
 
 
+def _queued(state: State, uuid: str) -> QueuedGoal | None:
+    """The accepted goal ``uuid`` waiting to start, or None."""
+    for queued in state.queued:
+        if queued.goal_uuid == uuid:
+            return queued
+    return None
+
+
 def _known_goal(state: State, uuid: str) -> bool:
+    running = state.running
     return (
-        any(queued.goal_uuid == uuid for queued in state.queued)
-        or (state.running is not None and state.running.goal_uuid == uuid)
+        _queued(state, uuid) is not None
+        or (running is not None and running.goal_uuid == uuid)
         or uuid in state.cancels
     )
 
@@ -956,8 +964,8 @@ def _on_goal_submitted(state: State, event: ins.GoalSubmitted, config: ServerCon
         )
         return Transition(state, outputs)
     checked = (config, parsed) if event.goal.event_type == _NEXT else None
-    queued = (*state.queued, QueuedGoal(goal_uuid=uuid, goal=event.goal, checked=checked))
-    return _start_goal(state, _replace_state(state, queued=queued), uuid, event.now, config)
+    found = QueuedGoal(goal_uuid=uuid, goal=event.goal, checked=checked)
+    return _start_goal(state, _replace_state(state, queued=(*state.queued, found)), found, event.now, config)
 
 
 def race_lost(state: State, goal: Goal, config: ServerConfig) -> str:
@@ -979,16 +987,16 @@ def race_lost(state: State, goal: Goal, config: ServerConfig) -> str:
 
 
 def _on_goal_started(state: State, event: ins.GoalStarted, config: ServerConfig) -> Transition:
-    if not any(queued.goal_uuid == event.goal_uuid for queued in state.queued):
+    found = _queued(state, event.goal_uuid)
+    if found is None:
         return _ignored("R18.3", state, event.KIND, "no accepted goal with this uuid is waiting to start")
-    return _start_goal(state, state, event.goal_uuid, event.now, config)
+    return _start_goal(state, state, found, event.now, config)
 
 
-def _start_goal(before: State, state: State, uuid: str, now: int, config: ServerConfig) -> Transition:
-    """Start the queued goal ``uuid`` (R5): ``before`` is the state the step began from."""
-    found = next(queued for queued in state.queued if queued.goal_uuid == uuid)
-    goal = found.goal
-    rest = tuple(queued for queued in state.queued if queued is not found)
+def _start_goal(before: State, state: State, found: QueuedGoal, now: int, config: ServerConfig) -> Transition:
+    """Start the queued goal ``found`` (R5): ``before`` is the state the step began from."""
+    uuid, goal = found.goal_uuid, found.goal
+    rest = () if len(state.queued) == 1 else tuple(queued for queued in state.queued if queued is not found)
     outputs: list[outs.Output] = [outs.ExecuteGoal(goal_uuid=uuid, rule="R5.1")]
     if race_lost(state, goal, config):
         outputs.append(_failure("R5.2", uuid, Failure.RACE))

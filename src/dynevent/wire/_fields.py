@@ -182,6 +182,7 @@ _FAST_CHECKS = {
     **{wire: integer_check(*bounds) for wire, bounds in _INTEGER_RANGES.items()},
     "string": STRING_CHECK,
     "bool": "type({v}) is bool",
+    "float32": "type({v}) is float and {v} == 0.0",  # the default; any other float is rounded to float32
 }
 
 
