@@ -37,7 +37,6 @@ from typing import Any, NamedTuple, TypeAlias
 
 from dynevent.errors import (  # defined there with every error; importable here too
     DuplicateRobot,
-    DyneventError,
     InvalidSnapshot,
     UnknownRobot,
 )
@@ -313,10 +312,9 @@ class Fleet:
             if key in fleet._seats:
                 raise InvalidSnapshot(where, f"robot {state.robot!r} of fleet {state.fleet!r} appears twice")
             chosen = None if configs is None else configs(*key)
-            try:
-                fleet.add(state.fleet, state.robot, chosen, state=state)
-            except DyneventError as exc:  # a name too long for the protocol's names
-                raise InvalidSnapshot(where + ".state", str(exc)) from None
+            seat = RobotKey(*key)  # restore checked every name of the robot (R19.8)
+            config_of = fleet.default_config(seat.fleet) if chosen is None else _config(chosen, "config")
+            fleet._seats[seat] = _Seat(seat, state, config_of)
         return fleet
 
     @classmethod
@@ -330,7 +328,7 @@ class Fleet:
     ) -> Fleet:
         """A new fleet from fleet snapshot JSON text (see :meth:`restore`)."""
         try:
-            data = _json.parse(text)
+            data = _json.parse(text, bounded=False)  # restore decodes against the snapshot's schema
         except _json.JsonProblem as exc:
             raise InvalidSnapshot("$", str(exc)) from None
         return cls.restore(data, configs, config=config, fleet_configs=fleet_configs)

@@ -37,6 +37,8 @@ FORMAT = "dynevent.state"
 VERSION = 1
 
 _STATUSES = frozenset(status.value for status in Status)
+_LOWER_HEX = frozenset("0123456789abcdef")
+_STATE_FIELDS = frozenset(attrs.fields_dict(State))
 
 
 def snapshot(state: State) -> dict[str, Any]:
@@ -89,7 +91,7 @@ def state_problems(state: State) -> list[tuple[str, str]]:
     elif state.cancels:
         found.append(("$.state.cancels", "CANCEL goals wait while no goal runs"))
     for uuid in uuids:
-        if len(uuid) != 32 or any(char not in "0123456789abcdef" for char in uuid):
+        if len(uuid) != 32 or not _LOWER_HEX.issuperset(uuid):
             found.append(("$.state", f"goal uuid {uuid!r} is not 32 lowercase hexadecimal digits"))
     if len(set(uuids)) != len(uuids):
         found.append(("$.state", "a goal uuid appears twice"))
@@ -120,7 +122,7 @@ def restore(data: object) -> State:
     except CodecError as exc:
         raise InvalidSnapshot(exc.path, exc.problem) from None
     fields = data.get("state")
-    missing = sorted(set(attrs.fields_dict(State)) - set(fields)) if isinstance(fields, dict) else []
+    missing = sorted(_STATE_FIELDS - set(fields)) if isinstance(fields, dict) else []
     if missing:
         raise InvalidSnapshot(
             "$.state", f"missing fields {missing}: a snapshot holds exactly the state's fields"
@@ -198,7 +200,7 @@ def _phase_problems(state: State) -> list[tuple[str, str]]:
 def loads(text: str | bytes | bytearray) -> State:
     """Restore a state from snapshot JSON text."""
     try:
-        data = _json.parse(text)
+        data = _json.parse(text, bounded=False)  # restore decodes against the state's schema
     except _json.JsonProblem as exc:
         raise InvalidSnapshot("$", str(exc)) from None
     return restore(data)

@@ -13,7 +13,7 @@ import enum
 import functools
 import types
 import typing
-from typing import Any, Union
+from typing import Any, TypeAlias, Union
 
 import attrs
 
@@ -70,19 +70,24 @@ def _describe(tp: Any) -> str:
 
 
 #: Where a value sits: the root's name, then object keys and array indexes (made text only on error).
-_Where = tuple[str | int, ...]
+#: Where a value sits: the root's path, or ``(where of the parent, key or index)``, written out only
+#: for an error (building a flat path for every value would cost more than decoding it).
+_Where: TypeAlias = "str | tuple[_Where, str | int]"
 _Decoder = typing.Callable[[Any, _Where], Any]
 
 
 def _text(where: _Where) -> str:
-    parts = [str(where[0])]
-    parts.extend(f"[{part}]" if isinstance(part, int) else f".{part}" for part in where[1:])
-    return "".join(parts)
+    parts: list[str] = []
+    while isinstance(where, tuple):
+        where, part = where
+        parts.append(f"[{part}]" if isinstance(part, int) else f".{part}")
+    parts.append(where)
+    return "".join(reversed(parts))
 
 
 def decode(tp: Any, data: Any, path: str = "$") -> Any:
     """A value of type ``tp`` built from the plain JSON ``data``."""
-    return _decoder(tp)(data, (path,))
+    return _decoder(tp)(data, path)
 
 
 @functools.cache
@@ -142,7 +147,7 @@ def _tuple(item_type: Any) -> _Decoder:
     def decode_tuple(data: Any, where: _Where) -> Any:
         if not isinstance(data, list):
             raise CodecError(_text(where), f"expected an array, got {type(data).__name__}")
-        return tuple(item(value, (*where, index)) for index, value in enumerate(data))
+        return tuple(item(value, (where, index)) for index, value in enumerate(data))
 
     return decode_tuple
 
@@ -222,12 +227,15 @@ def _attrs(cls: type) -> _Decoder:
             )
         values: dict[str, Any] = {}
         for key, raw in data.items():
-            if key not in fields:
-                raise CodecError(_text((*where, key)), f"unknown field of {cls.__name__}")
-            values[key] = field_decoder(key)(raw, (*where, key))
+            decoder = decoders.get(key)
+            if decoder is None:
+                if key not in fields:
+                    raise CodecError(_text((where, key)), f"unknown field of {cls.__name__}")
+                decoder = field_decoder(key)
+            values[key] = decoder(raw, (where, key))
         for name in required:
             if name not in values:
-                raise CodecError(_text((*where, name)), f"missing field of {cls.__name__}")
+                raise CodecError(_text((where, name)), f"missing field of {cls.__name__}")
         try:
             return cls(**values)
         except DyneventError as exc:

@@ -75,11 +75,14 @@ def _depth_ok(value: Any) -> bool:
     return True
 
 
-def parse(text: str | bytes | bytearray) -> Any:
+def parse(text: str | bytes | bytearray, *, bounded: bool = True) -> Any:
     """Parse JSON text strictly; raise :class:`JsonProblem` on any fault.
 
     ``NaN``, ``Infinity`` and ``-Infinity`` are accepted, as Python's and
-    rosbridge's encoders write them for non-finite floats.
+    rosbridge's encoders write them for non-finite floats.  ``bounded=False``
+    skips the walk that refuses nesting deeper than :data:`MAX_DEPTH` (text
+    far deeper is still refused): for callers that decode the value against
+    a schema of bounded depth, which refuses any other nesting anyway.
     """
     if isinstance(text, (bytes, bytearray)):
         try:
@@ -99,7 +102,12 @@ def parse(text: str | bytes | bytearray) -> Any:
     except ValueError as exc:
         raise JsonProblem(f"not valid JSON: {exc}") from None
     # only a text with more brackets than the limit can be too deep; then walk the parsed containers
-    if len(text) > MAX_DEPTH and text.count("[") + text.count("{") > MAX_DEPTH and not _depth_ok(value):
+    if (
+        bounded
+        and len(text) > MAX_DEPTH
+        and text.count("[") + text.count("{") > MAX_DEPTH
+        and not _depth_ok(value)
+    ):
         raise JsonProblem(f"nested deeper than {MAX_DEPTH} levels")
     return value
 

@@ -182,12 +182,18 @@ def validate_robot(fleet: object, robot: object) -> tuple[str, str]:
     """
     fleet_token = validate_token("fleet", fleet)
     robot_token = validate_token("robot", robot)
+    if 3 + _LONGEST_AFFIXES + len(fleet_token) + len(robot_token) <= MAX_NAME_LENGTH:
+        return fleet_token, robot_token  # even the longest name fits
     for kind, prefix in _PREFIX.items():
         if 3 + len(prefix) + len(fleet_token) + len(robot_token) + len(_DERIVED_SUFFIX.get(kind, "")) > (
             MAX_NAME_LENGTH
         ):
             build_name(kind, fleet_token, robot_token)  # raises, saying which name and why
     return fleet_token, robot_token
+
+
+#: The longest prefix and suffix of any protocol name, together.
+_LONGEST_AFFIXES = max(len(prefix) + len(_DERIVED_SUFFIX.get(kind, "")) for kind, prefix in _PREFIX.items())
 
 
 def action_name(fleet: object, robot: object) -> str:
