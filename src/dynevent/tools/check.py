@@ -224,6 +224,16 @@ def _boolean(data: dict[str, Any], key: str, source: str, line: int) -> bool:
     return value
 
 
+#: Per record type: the fields it may have and those it must have (every record but config has a time).
+_FIELDS_OF = {
+    kind: (
+        frozenset(fields | {"type"} | (set() if kind == "config" else {"time"})),
+        frozenset(_REQUIRED[kind] | (set() if kind == "config" else {"time"})),
+    )
+    for kind, fields in RECORD_TYPES.items()
+}
+
+
 def _record(data: Any, source: str, line: int) -> Record | dict[str, Any]:
     """A trace record, or the fields of the config record."""
     if not isinstance(data, dict):
@@ -231,13 +241,13 @@ def _record(data: Any, source: str, line: int) -> Record | dict[str, Any]:
     kind = data.get("type")
     if not isinstance(kind, str) or kind not in RECORD_TYPES:
         raise TraceError(source, line, "type", f"expected one of {sorted(RECORD_TYPES)}, got {kind!r}")
-    allowed = RECORD_TYPES[kind] | {"type"} | (set() if kind == "config" else {"time"})
-    unknown = sorted(set(data) - allowed)
-    if unknown:
+    keys = data.keys()
+    allowed, required = _FIELDS_OF[kind]
+    if not keys <= allowed:
+        unknown = sorted(keys - allowed)
         raise TraceError(source, line, unknown[0], f"unknown field of a {kind!r} record")
-    required = _REQUIRED[kind] | (set() if kind == "config" else {"time"})
-    missing = sorted(required - set(data))
-    if missing:
+    if not required <= keys:
+        missing = sorted(required - keys)
         raise TraceError(source, line, missing[0], f"missing field of a {kind!r} record")
     if kind == "config":
         return data

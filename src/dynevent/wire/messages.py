@@ -121,21 +121,23 @@ class WireMessage:
         name = cls.__name__
         if not isinstance(data, dict):
             raise InvalidMessage(name, "", data, "expected a JSON object")
-        fields = attrs.fields_dict(cls)  # type: ignore[arg-type]
+        plan = _PLANS.get(cls) or _plan(cls)
         values: dict[str, Any] = {}
         for key, raw in data.items():
-            field = fields.get(key) if isinstance(key, str) else None
-            if field is None:
+            step = plan.get(key) if isinstance(key, str) else None
+            if step is None:
                 raise InvalidMessage(name, str(key), raw, "unknown field")
-            wire = field.metadata[WIRE_KEY]
-            if isinstance(wire, tuple):
-                values[key] = _decode_array(name, key, wire[0], raw)
-            elif isinstance(wire, type):
-                values[key] = _decode_nested(name, key, wire, raw)
-            elif wire.startswith(("uint", "int")) and type(raw) is not int:
-                raise InvalidMessage(name, key, raw, f"expected an integer ({wire})")
-            else:
+            how, wire = step
+            if how is _AS_IS:
                 values[key] = raw
+            elif how is _INTEGER:
+                if type(raw) is not int:
+                    raise InvalidMessage(name, key, raw, f"expected an integer ({wire})")
+                values[key] = raw
+            elif how is _NESTED:
+                values[key] = _decode_nested(name, key, wire, raw)
+            else:
+                values[key] = _decode_array(name, key, wire, raw)
         return cls(**values)
 
     @classmethod
@@ -146,6 +148,28 @@ class WireMessage:
         except _json.JsonProblem as exc:
             raise InvalidMessage(cls.__name__, "", text, str(exc)) from None
         return cls.from_dict(data)
+
+
+# How from_dict reads each field of a class: as it is (the constructor checks it), an integer (a JSON
+# number with a fraction or exponent is refused, not truncated), a nested message, or an array of them.
+_AS_IS, _INTEGER, _NESTED, _ARRAY = "as is", "integer", "nested", "array"
+_PLANS: dict[type, dict[str, tuple[str, Any]]] = {}
+
+
+def _plan(cls: type) -> dict[str, tuple[str, Any]]:
+    plan: dict[str, tuple[str, Any]] = {}
+    for field in attrs.fields(cls):
+        wire = field.metadata[WIRE_KEY]
+        if isinstance(wire, tuple):
+            plan[field.name] = (_ARRAY, wire[0])
+        elif isinstance(wire, type):
+            plan[field.name] = (_NESTED, wire)
+        elif wire.startswith(("uint", "int")):
+            plan[field.name] = (_INTEGER, wire)
+        else:
+            plan[field.name] = (_AS_IS, wire)
+    _PLANS[cls] = plan
+    return plan
 
 
 def _decode_nested(owner: str, key: str, cls: type[WireMessage], raw: object) -> WireMessage:
