@@ -188,11 +188,14 @@ def _accept_next(impl: str, sizes: Sizes) -> Prepare:
         driver = waiting(impl)
         n = sizes.accept
         if impl == "dynevent":
-            server, goal = driver.server, DyneventDriver.goal(raw)
+            server, goal = (
+                driver.server,
+                DyneventDriver.goal,
+            )  # the Goal built from raw values, as peers check them
 
             def run() -> None:
                 for _ in range(n):
-                    server.accept(goal)
+                    server.accept(goal(raw))
 
             return run, n
         accept = driver.accept
@@ -213,11 +216,14 @@ def _accept_cancel(impl: str, sizes: Sizes) -> Prepare:
         driver = running(impl)
         n = sizes.accept
         if impl == "dynevent":
-            server, goal = driver.server, DyneventDriver.goal(raw)
+            server, goal = (
+                driver.server,
+                DyneventDriver.goal,
+            )  # the Goal built from raw values, as peers check them
 
             def run() -> None:
                 for _ in range(n):
-                    server.accept(goal)
+                    server.accept(goal(raw))
 
             return run, n
         accept = driver.accept
@@ -460,9 +466,15 @@ def workloads(impls: Sequence[str], sizes: Sizes) -> list[Workload]:
     """Every timed workload, in table order."""
     rows = [
         Workload(
-            "1a", "accept: NEXT with a small JSON description", {i: _accept_next(i, sizes) for i in impls}
+            "1a",
+            "accept: NEXT with a small JSON description (goal built from raw values)",
+            {i: _accept_next(i, sizes) for i in impls},
         ),
-        Workload("1b", "accept: CANCEL of the running child", {i: _accept_cancel(i, sizes) for i in impls}),
+        Workload(
+            "1b",
+            "accept: CANCEL of the running child (goal built from raw values)",
+            {i: _accept_cancel(i, sizes) for i in impls},
+        ),
         Workload(
             "2",
             "full child cycle (request, start, 3 progress + log, finish)",
@@ -757,6 +769,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         metavar="KEYS",
         help="time only these workloads (comma-separated keys, e.g. 2,2p); implies --no-write",
     )
+    parser.add_argument(
+        "--section",
+        metavar="NAME",
+        help="with --only: write the table as section NAME of results.md (a run with another library)",
+    )
     args = parser.parse_args(argv)
     if args.profile:
         print(profile())
@@ -770,7 +787,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         keys = set(args.only.split(","))
         rows = [row for row in rows if row.key in keys]
         measure(rows, impls, sizes.repeats)
-        print("\n".join(table(rows, impls)))
+        lines = table(rows, impls)
+        if args.section:
+            lines = [
+                f"## Workloads {args.only}, {sizes.repeats} samples (`bench/run.py --only {args.only}`)",
+                "",
+                *machine_description(),
+                "",
+                *lines,
+            ]
+            results.write_section(args.section, lines, args.output)
+        print("\n".join(lines))
         return 0
     print(
         f"measuring {len(rows)} workloads x {len(impls)} implementations x {sizes.repeats}", file=sys.stderr
