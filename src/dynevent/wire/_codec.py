@@ -187,6 +187,10 @@ def _str(data: Any, where: _Where) -> str:
     return data
 
 
+#: The decoders that return a value of this exact type as it is (a string: when ASCII without NUL).
+_KEPT: dict[_Decoder, type] = {_int: int, _bool: bool, _str: str}
+
+
 def _enum(tp: type[enum.Enum]) -> _Decoder:
     def decode_enum(data: Any, where: _Where) -> Any:
         try:
@@ -232,7 +236,11 @@ def _attrs(cls: type) -> _Decoder:
                 if key not in fields:
                     raise CodecError(_text((where, key)), f"unknown field of {cls.__name__}")
                 decoder = field_decoder(key)
-            values[key] = decoder(raw, (where, key))
+            kind = type(raw)
+            if _KEPT.get(decoder) is kind and (kind is not str or (raw.isascii() and "\x00" not in raw)):
+                values[key] = raw  # a value its decoder would return as it is: no call
+            else:
+                values[key] = decoder(raw, (where, key))
         for name in required:
             if name not in values:
                 raise CodecError(_text((where, name)), f"missing field of {cls.__name__}")
