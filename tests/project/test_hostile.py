@@ -18,6 +18,7 @@ import tracemalloc
 from collections.abc import Callable
 from typing import Any
 
+import attrs
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -134,6 +135,10 @@ def test_goal_uuid_of_the_wrong_shape_is_refused(uuid: Any) -> None:
     "uuid", ["AbCdEf0123456789" * 2, "abcdef01-2345-6789-ABCD-ef0123456789", bytes(range(16))]
 )
 def test_goal_uuid_is_stored_as_32_lowercase_hex_digits(uuid: Any) -> None:
+    class Text(str):
+        pass
+
+    assert ins.GoalStarted(goal_uuid=Text("ab" * 16), now=0).goal_uuid == "ab" * 16
     stored = ins.GoalStarted(goal_uuid=uuid, now=0).goal_uuid
     assert len(stored) == 32 and set(stored) <= set("0123456789abcdef")
     assert int(stored, 16) == int(uuid.hex() if isinstance(uuid, bytes) else uuid.replace("-", ""), 16)
@@ -283,3 +288,21 @@ def test_the_strict_reader_decodes_as_the_standard_decoder_does(text: str, paddi
     source = padding + text + padding
     standard = json.JSONDecoder(object_pairs_hook=_json._pairs).decode
     assert outcome(_json._decode, source) == outcome(standard, source)
+
+
+def test_an_annotation_in_a_snapshot_is_an_unknown_field() -> None:
+    """A queued goal's kept description check is never read from JSON: a snapshot cannot plant one."""
+    from dynevent.errors import InvalidSnapshot
+    from dynevent.server import snapshot
+    from dynevent.server.machine import QueuedGoal, State
+    from dynevent.wire.messages import Goal
+
+    goal = Goal(dynamic_event_seq=1, event_type=1, category="go_to_place", description="{}", id=2)
+    state = attrs.evolve(
+        State.new("fleet", "robot"), seq=1, active=True, queued=(QueuedGoal(goal_uuid="a" * 32, goal=goal),)
+    )
+    data = json.loads(snapshot.dumps(state))
+    assert "checked" not in data["state"]["queued"][0]
+    data["state"]["queued"][0]["checked"] = []
+    with pytest.raises(InvalidSnapshot, match=r"\$\.state\.queued\[0\]\.checked"):
+        snapshot.restore(data)

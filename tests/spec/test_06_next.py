@@ -148,6 +148,18 @@ def test_under_an_equal_but_other_configuration_the_check_runs_again() -> None:
 
 
 @pytest.mark.spec("R6.1")
+def test_a_kept_check_of_another_shape_is_checked_again() -> None:
+    config, calls = _counting()
+    run = waiting(config=config)
+    run.request(u(1), next_goal(1, 5))
+    queued = attrs.evolve(run.state.queued[0], checked=())  # a state built by hand
+    run.state = attrs.evolve(run.state, queued=(queued,))
+    run.start(u(1))  # the machine never raises (R19.7)
+    assert calls == ["lobby", "lobby"]
+    assert run.phase is RUNNING
+
+
+@pytest.mark.spec("R6.1")
 def test_a_restored_queued_goal_is_checked_again() -> None:
     config, calls = _counting()
     run = waiting(config=config)

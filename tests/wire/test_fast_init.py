@@ -115,3 +115,19 @@ def test_a_class_with_a_validator_is_refused() -> None:
 
     with pytest.raises(TypeError, match=r"Checked\.value"):
         fast_init(Checked)
+
+
+def test_an_empty_sequence_must_be_a_plain_tuple_to_skip_its_converter() -> None:
+    class Empty(tuple):  # type: ignore[type-arg]
+        pass
+
+    assert type(messages.Feedback(logs=Empty()).logs) is tuple
+    with pytest.raises(InvalidMessage, match=r"Feedback\.logs"):
+        messages.Feedback(logs=_EqualsEverything())
+
+
+class _EqualsEverything:
+    def __eq__(self, other: object) -> bool:
+        return True
+
+    __hash__ = None  # type: ignore[assignment]

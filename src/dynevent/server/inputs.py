@@ -74,6 +74,8 @@ def goal_uuid(value: object) -> str:
     Returns 32 lowercase hexadecimal digits.  Raises ``ValueError`` (not the
     project's error: callers wrap it with their own location).
     """
+    if isinstance(value, str) and type(value) is not str:  # a str subclass: its characters
+        value = str.__str__(value)
     if type(value) is str and len(value) == 32:
         lowered = value.lower()
         if _LOWER_HEX.issuperset(lowered):  # int(value, 16) would also take "_", "+" and spaces

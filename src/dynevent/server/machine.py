@@ -1002,8 +1002,12 @@ def _start_goal(before: State, state: State, found: QueuedGoal, now: int, config
         outputs.append(_failure("R5.2", uuid, Failure.RACE))
         return _finish(before, _replace_state(state, queued=rest), outputs, now)
     if goal.event_type == _NEXT:
-        checked = found.checked
-        parsed = checked[1] if checked is not None and checked[0] is config else _UNCHECKED
+        checked = found.checked  # kept only under this very configuration (R6.1)
+        parsed = (
+            checked[1]
+            if type(checked) is tuple and len(checked) == 2 and checked[0] is config
+            else _UNCHECKED
+        )
         started = _start_next(state, rest, uuid, goal, config, outputs, now, parsed)
         if started is not None:  # a goal holds the slot where none did (R5.2): the status changed (R2.3)
             outputs.append(outs.PublishStatus(message=status_message(started, now), rule="R2.3"))

@@ -212,7 +212,9 @@ def _message(tp: type[WireMessage]) -> _Decoder:
 
 
 def _attrs(cls: type) -> _Decoder:
-    fields = attrs.fields_dict(cls)
+    # what encoding writes, and nothing else: an annotation (an output's rule, a queued goal's kept
+    # check) is never read from JSON
+    fields = {name: field for name, field in attrs.fields_dict(cls).items() if name in _encoded(cls)}
     hints = typing.get_type_hints(cls)
     required = [name for name, field in fields.items() if field.default is attrs.NOTHING]
     decoders: dict[str, _Decoder] = {}

@@ -236,7 +236,9 @@ def message(cls: type[Any]) -> Any:
 
 def sequence(cls: type[Any]) -> Any:
     return attrs.field(
-        factory=tuple, converter=_array(cls), metadata={WIRE_KEY: (cls,), FAST_KEY: "{v} == ()"}
+        factory=tuple,
+        converter=_array(cls),
+        metadata={WIRE_KEY: (cls,), FAST_KEY: "type({v}) is tuple and not {v}"},
     )
 
 
