@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 from dynevent.errors import InvalidMessage
 from dynevent.server import inputs as ins
 from dynevent.wire import messages
-from dynevent.wire._fields import FAST_KEY, U32_MAX, U64_MAX, fast_init
+from dynevent.wire._fields import FAST_KEY, U32_MAX, U64_MAX, copier, fast_init
 from dynevent.wire.vocab import EventType, Status, Tier
 
 _CLASSES = [
@@ -131,3 +131,14 @@ class _EqualsEverything:
         return True
 
     __hash__ = None  # type: ignore[assignment]
+
+
+def test_a_copier_takes_the_changed_fields_in_order_and_keeps_the_rest() -> None:
+    time = messages.Time(sec=1, nanosec=2)
+    status = messages.DynamicEventStatus(dynamic_event_seq=3, status="standby", id=4, time=time)
+    copy = copier(messages.DynamicEventStatus, "status", "id")
+    copied = copy(status, "underway", 5)
+    assert copied == attrs.evolve(status, status="underway", id=5)
+    assert copied.time is time and status.status == "standby"
+    with pytest.raises(TypeError, match="no fields"):
+        copier(messages.DynamicEventStatus, "colour")

@@ -24,7 +24,7 @@ from dynevent.errors import InvalidConfig
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.wire import _json
-from dynevent.wire._fields import ANNOTATION, SECOND, U32_MAX, U64_MAX, fast_init, maker, replacer
+from dynevent.wire._fields import ANNOTATION, SECOND, U32_MAX, U64_MAX, copier, fast_init, maker, replacer
 from dynevent.wire.description import DEFAULT_CATEGORY, MAX_DESCRIPTION_BYTES
 from dynevent.wire.messages import (
     DescriptionResponse,
@@ -364,6 +364,11 @@ CHILD_RESULT_RULE = "R8.1"
 FINISHED_RULE = "R11.1"
 
 _replace_state = replacer(State)
+# the copies of the most frequent steps, each taking the fields it changes positionally
+_copy_queued = copier(State, "queued")
+_copy_at_start = copier(State, "queued", "last_id", "running", "status", "stubborn", "log_seq")
+_copy_at_progress = copier(State, "running", "status", "log_seq")
+_copy_at_child_end = copier(State, "running", "cancels", "status", "stubborn")
 _replace_running = replacer(RunningGoal)
 _replace_stubborn = replacer(Stubbornness)
 
@@ -813,12 +818,11 @@ def _start_child(
     outputs: list[outs.Output],
     logs: tuple[LogEntry, ...],
     parsed: Any = _UNCHECKED,
-    **changes: Any,
-) -> State:
-    """Start the running goal's child (R6.4): stubbornness ends, status becomes underway.
+) -> RunningGoal:
+    """Start the running goal's child (R6.4): its outputs, and the goal as started.
 
-    ``parsed`` is the description as R4.9 or R6.1 parsed it; a deferred start (R14.5) parses it
-    again.  ``changes`` are further fields of the new state, set in the same copy.
+    The caller's new state holds the returned goal, status ``underway`` and no stubbornness (R12.5).
+    ``parsed`` is the description as R4.9 or R6.1 parsed it; a deferred start (R14.5) parses it again.
     """
     if state.stubborn is not None:  # R12.5
         outputs.append(outs.StubbornEnd(rule="R12.5"))
@@ -836,9 +840,9 @@ def _start_child(
     )
     if not running.started or running.child_status != _UNDERWAY:
         running = _replace_running(running, started=True, child_status=_UNDERWAY)
-    feedback = _feedback(_UNDERWAY, child_id, logs)
+    feedback = _make_feedback(status=_UNDERWAY, id=child_id, logs=logs)
     outputs.append(outs.PublishFeedback(goal_uuid=running.goal_uuid, feedback=feedback, rule=rule))
-    return _replace_state(state, running=running, status=_UNDERWAY, stubborn=None, **changes)
+    return running
 
 
 def _answers_at_child_end(
@@ -949,7 +953,7 @@ def _on_goal_requested(state: State, event: ins.GoalRequested, config: ServerCon
     checked = (config, parsed) if event.goal.event_type == _NEXT else None
     queued = (*state.queued, QueuedGoal(goal_uuid=event.goal_uuid, goal=event.goal, checked=checked))
     accepted = outs.GoalAccepted(goal_uuid=event.goal_uuid, rule="R4.16")
-    return Transition(_replace_state(state, queued=queued), (accepted,))
+    return Transition(_copy_queued(state, queued), (accepted,))
 
 
 def _on_goal_submitted(state: State, event: ins.GoalSubmitted, config: ServerConfig) -> Transition:
@@ -1077,9 +1081,8 @@ def _start_next(
             state, queued=queued, last_id=child_id, running=running, status=_QUEUED, log_seq=log_seq
         )
     running = RunningGoal(goal_uuid=uuid, goal=goal, child_id=child_id, child_status=_UNDERWAY, started=True)
-    return _start_child(
-        START_RULE, state, running, outputs, logs, parsed, queued=queued, last_id=child_id, log_seq=log_seq
-    )
+    running = _start_child(START_RULE, state, running, outputs, logs, parsed)
+    return _copy_at_start(state, queued, child_id, running, _UNDERWAY, None, log_seq)
 
 
 def _start_cancel(state: State, uuid: str, goal: Goal, outputs: list[outs.Output], now: int) -> State:
@@ -1136,25 +1139,25 @@ def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerCon
     outputs: list[outs.Output] = []
     logs: tuple[LogEntry, ...] = ()
     log_seq = state.log_seq
-    if event.log_text is not None:  # the log_seq wraps (R7.3)
-        entry = _log_entry(log_seq, event.log_text, event.tier, event.now)
+    text = event.log_text
+    if text is not None:  # the log_seq wraps (R7.3)
+        entry = _make_log_entry(
+            seq=log_seq, tier=event.tier, unix_millis_time=event.now // 1_000_000, text=text
+        )
         log_seq = (log_seq + 1) & U32_MAX
         outputs.append(outs.Log(entry=entry, rule="R7.2"))
         logs = (entry,)
     status = event.status
     outputs.append(
         outs.PublishFeedback(
-            goal_uuid=running.goal_uuid, feedback=_feedback(status, running.child_id, logs), rule="R7.1"
+            goal_uuid=running.goal_uuid,
+            feedback=_make_feedback(status=status, id=running.child_id, logs=logs),
+            rule="R7.1",
         )
     )
     if running.child_status != status:
         running = _replace_running(running, child_status=status)
-    after = _replace_state(
-        state,
-        running=running,
-        status=state.status if state.task_signal else status,  # R7.4
-        log_seq=log_seq,
-    )
+    after = _copy_at_progress(state, running, state.status if state.task_signal else status, log_seq)  # R7.4
     if config.compatibility is _RMF_ROS2:  # every report, the child's own status
         wire = _running_status(after, status, running.child_id, event.now)
         outputs.append(outs.PublishStatus(message=wire, rule="R17.5"))
@@ -1193,7 +1196,7 @@ def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerCon
             next_refresh=event.now + _seconds(config.stubborn_refresh),
             anchor=anchor,
         )
-    after = _replace_state(state, running=None, cancels=(), status=_STANDBY, stubborn=stubborn)  # R8.4
+    after = _copy_at_child_end(state, None, (), _STANDBY, stubborn)  # R8.4
     if config.compatibility is _RMF_ROS2:  # published while the slot is still held
         stale = _running_status(after, event.status, running.child_id, event.now)
         outputs.append(outs.PublishStatus(message=stale, rule="R17.4"))
@@ -1262,7 +1265,8 @@ def _on_resume(state: State, event: ins.Resume, config: ServerConfig) -> Transit
     if running.started:
         return Transition(after, (outs.ResumeChild(id=running.child_id, rule="R14.4"),))
     outputs: list[outs.Output] = []
-    after = _start_child("R14.5", after, running, outputs, ())
+    running = _start_child("R14.5", after, running, outputs, ())
+    after = _replace_state(after, running=running, status=_UNDERWAY, stubborn=None)
     return _finish(state, after, outputs, event.now)
 
 

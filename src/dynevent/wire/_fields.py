@@ -345,6 +345,21 @@ def _converter_call(converter: Any, name: str, namespace: dict[str, Any]) -> str
     return f"_convert_{name}({name})"
 
 
+def copier(cls: type[_T], *changed: str) -> Callable[..., _T]:
+    """A copy function for one slotted class that takes new values of ``changed``, positionally.
+
+    ``copy(instance, *values)`` copies every other slot as it is: for a step that always changes
+    the same fields, cheaper than :func:`replacer`'s keyword arguments and their "no change" tests.
+    """
+    names = [field.name for field in attrs.fields(cls)]  # type: ignore[arg-type]
+    unknown = set(changed) - set(names)
+    if unknown:
+        raise TypeError(f"copier: {cls.__name__} has no fields {sorted(unknown)}")
+    body = [f"    _set_{field}(new, {field if field in changed else 'self.' + field})" for field in names]
+    function: Callable[..., _T] = _generate(cls, "copy", ", ".join(["self", *changed]), body)
+    return function
+
+
 def replacer(cls: type[_T]) -> Callable[..., _T]:
     """A fast ``attrs.evolve`` for one slotted class: keyword-only changes, no ``__init__``.
 
