@@ -38,44 +38,32 @@ import struct
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from dynevent.server.inputs import LOWER_HEX, MAX_LOG_TEXT_LENGTH, NOW_RANGE
+from dynevent.wire._fields import SECOND, U32_MAX, U64_MAX
 from dynevent.wire._json import JsonProblem, parse, utf8_size
+from dynevent.wire.description import MAX_DESCRIPTION_BYTES
+from dynevent.wire.vocab import DynamicState, EventType, Failure, Status, Tier
 
-INACTIVE, WAITING, RUNNING = 0, 1, 2
-NEXT, CANCEL, FINISHED = 1, 2, 3
-SECOND = 1_000_000_000
-_U8 = 2**8 - 1
-_U32 = 2**32 - 1
-_U64 = 2**64 - 1
-_NOW_LOW, _NOW_HIGH = -(2**31) * SECOND, 2**31 * SECOND - 1
-_MAX_LOG_TEXT = 16_384
-_MAX_DESCRIPTION = 1_000_000
-_EARLY_END = frozenset({"canceled", "killed", "skipped"})
-_STATUSES = frozenset(
-    {
-        "uninitialized",
-        "blocked",
-        "error",
-        "failed",
-        "queued",
-        "standby",
-        "underway",
-        "delayed",
-        "skipped",
-        "canceled",
-        "killed",
-        "completed",
-    }
-)
-_TIERS = frozenset({"uninitialized", "info", "warning", "error"})
-_HEX = frozenset("0123456789abcdef")
+# The protocol's facts, read from dynevent's vocabulary and limits (the peers differ in how they
+# work, not in what the protocol says), as plain builtins.
+INACTIVE, WAITING, RUNNING = (int(phase) for phase in DynamicState)
+NEXT, CANCEL, FINISHED = int(EventType.NEXT), int(EventType.CANCEL), int(EventType.FINISHED)
+_U32, _U64 = U32_MAX, U64_MAX
+_NOW_LOW, _NOW_HIGH = NOW_RANGE
+_MAX_LOG_TEXT = MAX_LOG_TEXT_LENGTH
+_MAX_DESCRIPTION = MAX_DESCRIPTION_BYTES
+_EARLY_END = frozenset({Status.CANCELED.value, Status.KILLED.value, Status.SKIPPED.value})
+_STATUSES = frozenset(status.value for status in Status)
+_TIERS = frozenset(tier.value for tier in Tier)
+_HEX = LOWER_HEX
 _F32 = struct.Struct("<f")
 
-# rmf_ros2's execution-failure strings (dynevent's Failure vocabulary)
-RACE = "race condition"
-IDLE_CANCEL = "an idle dynamic event cannot be cancelled"
-CANCEL_ID = "ID for cancel request does not match current event"
-EVENT_TYPE = "invalid event_type"
-PARSE = "Description parsing failure"
+# rmf_ros2's execution-failure strings
+RACE = Failure.RACE.value
+IDLE_CANCEL = Failure.IDLE_CANCEL.value
+CANCEL_ID = Failure.CANCEL_ID.value
+EVENT_TYPE = Failure.EVENT_TYPE.value
+PARSE = Failure.PARSE.value
 
 #: A goal in raw form: (seq, event_type, category, description, id, stubborn_period).
 Goal = tuple[int, int, str, str, int, float]
@@ -199,7 +187,7 @@ def check_begin_description(value: Any) -> str:
     """A begin description: strict JSON of at most 1 MB, an object whose category and detail are strings."""
     text = check_string("Begin", "description", value)
     if utf8_size(text) > _MAX_DESCRIPTION:
-        raise bad("Begin", "description", value, "above the limit of 1,000,000 bytes")
+        raise bad("Begin", "description", value, f"above the limit of {_MAX_DESCRIPTION} bytes")
     try:
         parsed = parse(text)
     except JsonProblem as exc:

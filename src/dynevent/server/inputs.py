@@ -65,7 +65,8 @@ NOW_RANGE = (-(2**31) * SECOND, 2**31 * SECOND - 1)
 
 _STATUSES = frozenset(status.value for status in Status)
 _TIERS = frozenset(tier.value for tier in Tier)
-_LOWER_HEX = frozenset("0123456789abcdef")
+#: The digits of a stored goal UUID.
+LOWER_HEX = frozenset("0123456789abcdef")
 
 
 def goal_uuid(value: object) -> str:
@@ -78,7 +79,7 @@ def goal_uuid(value: object) -> str:
         value = str.__str__(value)
     if type(value) is str and len(value) == 32:
         lowered = value.lower()
-        if _LOWER_HEX.issuperset(lowered):  # int(value, 16) would also take "_", "+" and spaces
+        if LOWER_HEX.issuperset(lowered):  # int(value, 16) would also take "_", "+" and spaces
             return lowered
     if isinstance(value, uuid.UUID):
         return value.hex
@@ -89,7 +90,7 @@ def goal_uuid(value: object) -> str:
     if isinstance(value, str):  # the hyphenated form, 8-4-4-4-12 (uuid.UUID would also take "_", "+", spaces)
         if len(value) == 36 and all(value[index] == "-" for index in (8, 13, 18, 23)):
             compact = value.replace("-", "").lower()
-            if len(compact) == 32 and _LOWER_HEX.issuperset(compact):
+            if len(compact) == 32 and LOWER_HEX.issuperset(compact):
                 return compact
         raise ValueError("expected 32 hexadecimal digits")
     raise ValueError("expected 16 bytes, a uuid.UUID or 32 hexadecimal digits")
@@ -181,7 +182,7 @@ def _now_field() -> Any:
 
 
 def _uuid_field() -> Any:
-    return _checked(_uuid, "type({v}) is str and len({v}) == 32 and _LOWER_HEX.issuperset({v})")
+    return _checked(_uuid, "type({v}) is str and len({v}) == 32 and LOWER_HEX.issuperset({v})")
 
 
 def _one_of_field(allowed: str, what: str, **kwargs: Any) -> Any:

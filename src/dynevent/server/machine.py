@@ -780,10 +780,6 @@ def _result(failure: str, status: str, event_id: int) -> Result:
     return _make_result(execution_failure=failure, status=status, id=event_id)
 
 
-def _feedback(status: str, event_id: int, logs: tuple[LogEntry, ...]) -> Feedback:
-    return _make_feedback(status=status, id=event_id, logs=logs)
-
-
 def _failure(rule: str, goal_uuid: str, failure: Failure, detail: str = "") -> outs.AnswerGoal:
     """The goal is aborted with ``failure``, and a `` -- detail`` line after it when there is one."""
     text = f"{failure.value}\n -- {detail}" if detail else failure.value
@@ -1074,7 +1070,9 @@ def _start_next(
         )
         outputs.append(
             outs.PublishFeedback(
-                goal_uuid=uuid, feedback=_feedback(_QUEUED, child_id, logs), rule=DEFERRED_START_RULE
+                goal_uuid=uuid,
+                feedback=_make_feedback(status=_QUEUED, id=child_id, logs=logs),
+                rule=DEFERRED_START_RULE,
             )
         )
         return _replace_state(
@@ -1286,7 +1284,7 @@ def _on_task_signal(state: State, event: ins.TaskCancel | ins.TaskKill, config: 
         outputs.append(
             outs.PublishFeedback(
                 goal_uuid=running.goal_uuid,
-                feedback=_feedback(running.child_status, running.child_id, (entry,)),
+                feedback=_make_feedback(status=running.child_status, id=running.child_id, logs=(entry,)),
                 rule="R13.1",
             )
         )

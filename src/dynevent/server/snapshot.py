@@ -18,7 +18,7 @@ from typing import Any
 import attrs
 
 from dynevent.errors import DyneventError, InvalidSnapshot
-from dynevent.server.inputs import NOW_RANGE
+from dynevent.server.inputs import LOWER_HEX, NOW_RANGE
 from dynevent.server.machine import SECONDS_RANGE, State
 from dynevent.wire import _json
 from dynevent.wire._codec import CodecError, decode, encode
@@ -37,7 +37,6 @@ FORMAT = "dynevent.state"
 VERSION = 1
 
 _STATUSES = frozenset(status.value for status in Status)
-_LOWER_HEX = frozenset("0123456789abcdef")
 _STATE_FIELDS = frozenset(attrs.fields_dict(State))
 
 
@@ -91,7 +90,7 @@ def state_problems(state: State) -> list[tuple[str, str]]:
     elif state.cancels:
         found.append(("$.state.cancels", "CANCEL goals wait while no goal runs"))
     for uuid in uuids:
-        if len(uuid) != 32 or not _LOWER_HEX.issuperset(uuid):
+        if len(uuid) != 32 or not LOWER_HEX.issuperset(uuid):
             found.append(("$.state", f"goal uuid {uuid!r} is not 32 lowercase hexadecimal digits"))
     if len(set(uuids)) != len(uuids):
         found.append(("$.state", "a goal uuid appears twice"))

@@ -140,12 +140,15 @@ def _wrap(function: Callable[[Any, object, attrs.Attribute[Any]], Any]) -> attrs
 
 
 WIRE_KEY = "dynevent.wire"
+_INTEGER_RANGES = {
+    "uint8": (0, 2**8 - 1),
+    "uint32": (0, U32_MAX),
+    "uint64": (0, U64_MAX),
+    "int32": (-(2**31), 2**31 - 1),
+    "int64": (-(2**63), 2**63 - 1),
+}
 _CONVERTERS: dict[str, attrs.Converter[Any, Any]] = {
-    "uint8": _integer(0, 2**8 - 1, "uint8"),
-    "uint32": _integer(0, U32_MAX, "uint32"),
-    "uint64": _integer(0, U64_MAX, "uint64"),
-    "int32": _integer(-(2**31), 2**31 - 1, "int32"),
-    "int64": _integer(-(2**63), 2**63 - 1, "int64"),
+    **{wire: _integer(low, high, wire) for wire, (low, high) in _INTEGER_RANGES.items()},
     "float32": _wrap(_float32),
     "string": _wrap(check_string),
     "bool": _wrap(_boolean),
@@ -160,14 +163,6 @@ def _float_key(value: float) -> float | None:
 #: Field metadata key of a fast check: a Python expression over ``{v}`` that is true only for values
 #: the field's converter would return unchanged (see :func:`fast_init`).
 FAST_KEY = "dynevent.fast"
-
-_INTEGER_RANGES = {
-    "uint8": (0, 2**8 - 1),
-    "uint32": (0, U32_MAX),
-    "uint64": (0, U64_MAX),
-    "int32": (-(2**31), 2**31 - 1),
-    "int64": (-(2**63), 2**63 - 1),
-}
 
 
 def integer_check(low: int, high: int) -> str:
@@ -248,13 +243,18 @@ _FACTORY: Any = type(attrs.Factory(list))
 _KEEP: Any = object()  # "no change" marker of generated replace functions
 
 
+def _slot_setter(cls: type, name: str) -> Any:
+    """The setter of slot ``name`` of ``cls``, past the frozen ``__setattr__`` (a base class may own it)."""
+    owner = next(klass for klass in cls.__mro__ if name in klass.__dict__)
+    return owner.__dict__[name].__set__
+
+
 def _generate(cls: type, name: str, signature: str, body: list[str]) -> Any:
     """Compile a function over ``cls``'s fields that sets slots through their descriptors."""
     names = [field.name for field in attrs.fields(cls)]
     namespace: dict[str, Any] = {"_new": object.__new__, "_cls": cls, "_KEEP": _KEEP}
-    for field in names:  # the slot's own setter skips frozen checks (a base class may own the slot)
-        owner = next(klass for klass in cls.__mro__ if field in klass.__dict__)
-        namespace[f"_set_{field}"] = owner.__dict__[field].__set__
+    for field in names:
+        namespace[f"_set_{field}"] = _slot_setter(cls, field)
     source = "\n".join(
         [f"def {name}({signature.format(names=names)}):", "    new = _new(_cls)", *body, "    return new"]
     )
@@ -295,8 +295,7 @@ def fast_init(cls: _C) -> _C:
         name = field.name
         if field.validator is not None or not field.init:
             raise TypeError(f"fast_init: {cls.__name__}.{name} must be an init field without validator")
-        owner = next(klass for klass in cls.__mro__ if name in klass.__dict__)
-        namespace[f"_set_{name}"] = owner.__dict__[name].__set__
+        namespace[f"_set_{name}"] = _slot_setter(cls, name)
         namespace[f"_field_{name}"] = field
         default = field.default
         if default is attrs.NOTHING:
