@@ -7,6 +7,7 @@ import re
 from pathlib import Path
 from typing import Any
 
+import attrs
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -55,7 +56,14 @@ from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.testing.strategies import messages
 from dynevent.wire.messages import DynamicEventStatus, Feedback, Goal, Result
-from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReason, Status
+from dynevent.wire.vocab import (
+    ENDED_CHILD_STATUSES,
+    DynamicState,
+    EventType,
+    GoalStatus,
+    RejectReason,
+    Status,
+)
 
 # --------------------------------------------------------------------------- construction
 
@@ -800,12 +808,12 @@ def test_dynamic_event_is_never_a_category_the_client_sends() -> None:
     assert rejection.reason is RejectReason.UNSUPPORTED_CATEGORY and rejection.categories == ()
 
 
-@pytest.mark.spec("R2.2", "R20.1")
+@pytest.mark.spec("R2.2", "R20.1", "R20.2")
 @given(
     st.sampled_from([INACTIVE, WAITING, RUNNING]),
     st.integers(1, 2**32 - 1),
     st.integers(0, 2**64 - 1),
-    st.sampled_from(["standby", "underway", "queued", "completed"]),
+    st.sampled_from(["standby", "underway", "queued", "error", *sorted(ENDED_CHILD_STATUSES)]),
     st.sampled_from([EventType.NEXT, EventType.CANCEL, EventType.FINISHED]),
     st.sampled_from(['"x"', "{", '"' + "a" * 1_000_001 + '"']),
     st.sampled_from([0.0, math.nan]),
@@ -819,7 +827,8 @@ def test_a_clients_refusal_is_the_servers_on_the_state_its_status_implies(
     description: str,
     period: float,
 ) -> None:
-    """A client that knows only one status message refuses exactly what the server in that state would."""
+    """A client that knows only one status message refuses exactly what the server in that state would;
+    a RUNNING status with a child's final status is the WAITING state of R20.2."""
     message = status(seq, phase, event_id, text)
     state, _ = feed(ClientState.new(PREFIX), message)
     if event_type == EventType.NEXT:
@@ -830,7 +839,10 @@ def test_a_clients_refusal_is_the_servers_on_the_state_its_status_implies(
         transition = client.request_finish(state, now=0)
     (output,) = transition.outputs
     goal = output.goal
-    server = machine.state_from_status(message.message)
+    implied = message.message
+    if phase is RUNNING and text in ENDED_CHILD_STATUSES:
+        implied = attrs.evolve(implied, dynamic_state=WAITING)
+    server = machine.state_from_status(implied)
     decision = machine.accept(server, goal, CONFIG)
     if isinstance(output, Refused):
         assert isinstance(decision, outs.Rejected), (output, decision)

@@ -92,14 +92,26 @@ class Graph:
         return built
 
     def close(self) -> None:
+        """Stop spinning and destroy everything the graph made, down to its DDS participant.
+
+        rclpy's ``destroy_node`` leaves a node's waitables (action servers and clients) alive, and they
+        keep the node, and ``shutdown`` keeps the context's participant, until the garbage collector
+        gets to them: a later test's client would meet this test's action servers, still on the graph
+        under the same names (the ROS tests' missed discoveries came from there).
+        """
         import rclpy
 
         self._closing.set()
         self._thread.join(timeout=5)
         self.executor.shutdown(timeout_sec=5)
         for node in self.nodes:
+            for waitable in list(node.waitables):
+                destroy = getattr(waitable, "destroy", None)
+                if destroy is not None:
+                    destroy()
             node.destroy_node()
         rclpy.shutdown(context=self.context)
+        self.context.destroy()
         if self.died is not None:
             raise AssertionError(f"the executor thread died: {self.died!r}") from self.died
 

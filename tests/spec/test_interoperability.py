@@ -283,3 +283,71 @@ def test_a_submitted_goal_is_requested_and_started_in_one_step() -> None:
     assert submitted.step(ins.GoalSubmitted(goal_uuid=u(1), goal=next_goal(1, 9), now=submitted.now)) == (
         outs.Ignored(input="goal_submitted", why="a goal with this uuid is already open"),
     )
+
+
+class PublishingRobot(Robot):
+    """A robot whose status topic holds the last status message it published (not the state's own)."""
+
+    def __init__(self, config: ServerConfig) -> None:
+        self.published: DynamicEventStatus | None = None
+        super().__init__(config)
+
+    def step(self, event: ins.Input) -> tuple[outs.Output, ...]:
+        outputs = super().step(event)
+        for output in outputs:
+            if isinstance(output, outs.PublishStatus):
+                self.published = output.message
+        return outputs
+
+    def latest_status(self) -> DynamicEventStatus:
+        assert self.published is not None
+        return self.published
+
+
+def _fresh_client_goal(robot: PublishingRobot, command: str) -> Goal:
+    """What dynevent's client machine, knowing only the robot's status topic, sends for ``command``."""
+    from dynevent import client
+
+    state = client.ClientState.new("00000000000000cd")
+    state = client.step(state, client.StatusReceived(message=robot.latest_status())).state
+    if command == "next":
+        transition = client.request_next(state, "go_to_place", '"pantry"', now=robot.now)
+    else:
+        transition = client.request_finish(state, now=robot.now)
+    (output,) = transition.outputs
+    assert isinstance(output, client.SendGoal), output
+    return output.goal
+
+
+@pytest.mark.spec("R20.2", "R17.4")
+@pytest.mark.parametrize("final", ["completed", "failed", "canceled", "killed", "skipped"])
+def test_the_client_machine_reads_a_childs_final_status_under_running_as_its_end(final: str) -> None:
+    robot = PublishingRobot(RMF_ROS2)
+    _, outputs = robot.send(_fresh_client_goal(robot, "next"))
+    child = _started(outputs)
+    robot.child_end(final)
+    seen = robot.latest_status()
+    assert (seen.dynamic_state, seen.status, seen.id) == (DynamicState.RUNNING, final, child)  # R17.4
+    _, outputs = robot.send(_fresh_client_goal(robot, "next"))
+    second = _started(outputs)
+    assert second != child
+    robot.child_end()
+    _, outputs = robot.send(_fresh_client_goal(robot, "finish"))
+    answer = next(output for output in outputs if isinstance(output, outs.AnswerGoal))
+    assert answer.status is GoalStatus.SUCCEEDED
+
+
+@pytest.mark.spec("R20.2", "R4.6")
+@pytest.mark.parametrize("reported", ["underway", "error", "blocked", "delayed", "queued"])
+def test_a_running_status_without_a_final_status_keeps_the_robot_busy_for_the_client(reported: str) -> None:
+    from dynevent import client
+
+    state = client.ClientState.new("00000000000000cd")
+    running_status = DynamicEventStatus(
+        dynamic_event_seq=1, dynamic_state=DynamicState.RUNNING, status=reported, id=8
+    )
+    state = client.step(state, client.StatusReceived(message=running_status)).state
+    (output,) = client.request_next(state, "go_to_place", '"pantry"', now=0).outputs
+    assert isinstance(output, client.Refused) and output.rejection.reason is RejectReason.BUSY
+    (cancel,) = client.request_cancel(state, now=0).outputs
+    assert isinstance(cancel, client.SendGoal) and cancel.goal.id == 8

@@ -26,7 +26,8 @@ than 0) are stale and ignored.
 begin description or a status message): the run's description, the highest
 event id seen in the run (status, feedback, results, rejections and its own
 NEXT goals), the highest child id it knows has ended (from answers to its own
-goals, which may arrive before the status that reports the end) and whether
+goals, which may arrive before the status that reports the end, and from a
+RUNNING status that carries a child's final status, R20.2) and whether
 its own FINISHED goal ended the run.
 
 *Commands.*  :func:`request_next`, :func:`request_cancel` and
@@ -96,7 +97,15 @@ from dynevent.wire._fields import SECOND as _SECOND_NS
 from dynevent.wire._fields import U64_MAX, id_not_after, seq_after
 from dynevent.wire.description import DEFAULT_CATEGORY
 from dynevent.wire.messages import DynamicEventStatus, Goal
-from dynevent.wire.vocab import DynamicState, EventType, Failure, GoalStatus, RejectReason, Status
+from dynevent.wire.vocab import (
+    ENDED_CHILD_STATUSES,
+    DynamicState,
+    EventType,
+    Failure,
+    GoalStatus,
+    RejectReason,
+    Status,
+)
 
 __all__ = [
     "SECOND",
@@ -215,6 +224,13 @@ def _run_over(state: ClientState, seq: int) -> bool:
 def _ended(state: ClientState, child_id: int) -> bool:
     """Does the client know that child ``child_id`` of the newest run has ended?"""
     return state.ended_id is not None and id_not_after(child_id, state.ended_id)
+
+
+def _child_ended(state: ClientState, child_id: int) -> ClientState:
+    """Record that child ``child_id`` of the newest run has ended."""
+    if state.ended_id is None or not id_not_after(child_id, state.ended_id):
+        return attrs.evolve(state, ended_id=child_id)
+    return state
 
 
 def _new_run(state: ClientState, seq: int) -> ClientState:
@@ -498,6 +514,8 @@ def _on_status(state: ClientState, event: StatusReceived) -> ClientTransition:
     state = attrs.evolve(state, phase=phase, seq=seq, current_id=message.id, status=message.status)
     if phase is not DynamicState.INACTIVE:
         state = _seen_id(state, seq, message.id)
+    if phase is DynamicState.RUNNING and message.status in ENDED_CHILD_STATUSES:
+        state = _child_ended(state, message.id)  # R20.2: the child's final status names its end
     outputs: list[ClientOutput] = []
     if (phase, seq, message.id, message.status) != before:
         outputs.append(ViewChanged(phase=phase, seq=seq, current_id=message.id, status=message.status))
@@ -616,9 +634,7 @@ def _on_result(state: ClientState, event: ResultReceived) -> ClientTransition:
         if goal.goal.event_type == EventType.FINISHED and event.status is GoalStatus.SUCCEEDED:
             state = attrs.evolve(state, finished=True)
         elif goal.goal.event_type in (EventType.NEXT, EventType.CANCEL):
-            state = _seen_id(state, seq, result.id)
-            if state.ended_id is None or not id_not_after(result.id, state.ended_id):
-                state = attrs.evolve(state, ended_id=result.id)
+            state = _child_ended(_seen_id(state, seq, result.id), result.id)
     return ClientTransition(state, (outcome,))
 
 

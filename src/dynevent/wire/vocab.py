@@ -11,6 +11,7 @@ from __future__ import annotations
 import enum
 
 __all__ = [
+    "ENDED_CHILD_STATUSES",
     "TERMINAL_GOAL_STATUSES",
     "Compatibility",
     "DynamicState",
@@ -76,6 +77,20 @@ class Status(str, enum.Enum):
 
     def __str__(self) -> str:
         return self.value
+
+
+#: The statuses a child reports when it ends (R20.2): a RUNNING status message carrying one of them
+#: names a child that has ended (rmf_ros2 keeps publishing it while the robot waits, R17.4) or is
+#: about to.  ``error`` is not among them: a child reports it while it runs too.
+ENDED_CHILD_STATUSES = frozenset(
+    {
+        Status.COMPLETED.value,
+        Status.FAILED.value,
+        Status.SKIPPED.value,
+        Status.CANCELED.value,
+        Status.KILLED.value,
+    }
+)
 
 
 class GoalStatus(str, enum.Enum):
