@@ -19,14 +19,19 @@ from dynevent.ros import DynamicEventClient
 ROBOT = "serveRobot"
 
 
+#: Every flow of ``send`` runs against both of serve's modes: the spec's and rmf_ros2's (R17, R20.2).
+MODES = ("standard", "rmf_ros2")
+
+
 class Serve(Child):
     """A ``dynevent serve`` process and its live log."""
 
-    def __init__(self, *args: str) -> None:
+    def __init__(self, *args: str, mode: str = "standard") -> None:
         import tempfile
 
         self.tmp = tempfile.mkdtemp(prefix="dynevent-serve-")
-        super().__init__(["-m", "dynevent", "serve", "--robot", ROBOT, "--rebegin", "0", *args])
+        command = ["-m", "dynevent", "serve", "--robot", ROBOT, "--rebegin", "0", "--compatibility", mode]
+        super().__init__([*command, *args])
 
     def ready(self) -> Serve:
         """Wait (bounded) for the line serve prints once its robots are on the graph."""
@@ -45,6 +50,20 @@ def send(*args: str, timeout: float = 20.0) -> subprocess.CompletedProcess[str]:
     )
 
 
+@pytest.fixture(params=MODES)
+def mode(request: pytest.FixtureRequest) -> str:
+    return str(request.param)
+
+
+def waiting_after(watcher: DynamicEventClient, last_id: int) -> bool:
+    """The watcher sees the robot waiting with ``last_id`` the highest id used: a WAITING status, or
+    (rmf_ros2 mode) a RUNNING one that carries the child's final status (R20.2)."""
+    state = watcher.state
+    if state.current_id != last_id:
+        return False
+    return state.phase == 1 or (state.phase == 2 and state.ended_id == last_id)
+
+
 @pytest.fixture
 def watcher(graph: Graph) -> Iterator[DynamicEventClient]:
     client: DynamicEventClient = graph.node(
@@ -54,7 +73,9 @@ def watcher(graph: Graph) -> Iterator[DynamicEventClient]:
 
 
 @pytest.mark.spec("R21.1", "R21.2", "R21.3", "R20.1")
-def test_serve_and_send_survive_kill_9_in_the_middle_of_a_child(tmp_path: Path, watcher: Any) -> None:
+def test_serve_and_send_survive_kill_9_in_the_middle_of_a_child(
+    tmp_path: Path, watcher: Any, mode: str
+) -> None:
     config = tmp_path / "fleet.json"
     config.write_text(
         json.dumps(
@@ -63,15 +84,12 @@ def test_serve_and_send_survive_kill_9_in_the_middle_of_a_child(tmp_path: Path, 
         encoding="utf-8",
     )
     state = tmp_path / "state.db"
-    serve = Serve("--config", str(config), "--state", str(state)).ready()
+    serve = Serve("--config", str(config), "--state", str(state), mode=mode).ready()
     try:
         done = send("--place", "pantry")
         assert done.returncode == 0, done.stdout + done.stderr
         assert "outcome: completed" in done.stdout and "[id 2]" in done.stdout
-        assert (
-            wait_for(lambda: watcher.state.current_id == 2 and watcher.state.phase == 1, "WAITING id 2")
-            is None
-        )
+        wait_for(lambda: waiting_after(watcher, 2), "waiting, id 2")
         (tmp_path / "slow.json").write_text('{"category": "slow", "description": {}}', encoding="utf-8")
         slow = subprocess.Popen(
             [
@@ -95,7 +113,7 @@ def test_serve_and_send_survive_kill_9_in_the_middle_of_a_child(tmp_path: Path, 
         serve.process.send_signal(signal.SIGKILL)
         assert serve.stop() == -signal.SIGKILL
         assert slow.wait(timeout=30) == 1  # its server died: no answer within its bound
-        serve = Serve("--config", str(config), "--state", str(state)).ready()
+        serve = Serve("--config", str(config), "--state", str(state), mode=mode).ready()
         wait_for(lambda: serve.saw("restored: run 1, last id 3"), "the restore")
         wait_for(lambda: watcher.state.phase == 1 and watcher.state.current_id == 3, "WAITING id 3 again")
         assert watcher.state.seq == 1  # the same run goes on
@@ -121,8 +139,8 @@ def test_a_foreign_state_file_is_refused_and_left_as_it_was(tmp_path: Path) -> N
 
 
 @pytest.mark.spec("R4.13")
-def test_send_explains_and_exits_by_the_outcome(watcher: Any) -> None:
-    serve = Serve().ready()
+def test_send_explains_and_exits_by_the_outcome(watcher: Any, mode: str) -> None:
+    serve = Serve(mode=mode).ready()
     try:
         wait_for(lambda: watcher.state.phase == 1, "WAITING")
         idle = send("--cancel")
@@ -147,14 +165,14 @@ def test_send_explains_and_exits_by_the_outcome(watcher: Any) -> None:
 
 @pytest.mark.spec("R3.1", "R4.7")
 def test_serve_begins_on_command_and_send_explains_a_refusal_it_cannot_see(
-    graph: Graph, watcher: Any
+    graph: Graph, watcher: Any, mode: str
 ) -> None:
     from rmf_task_msgs.msg import DynamicEventDescription
 
     from dynevent.ros.serve import BEGIN_COMMAND_TOPIC
     from dynevent.ros.server import latched
 
-    serve = Serve().ready()
+    serve = Serve(mode=mode).ready()
     try:
         wait_for(lambda: watcher.state.phase == 1, "WAITING")
         assert send("--end").returncode == 0
@@ -176,8 +194,8 @@ def test_serve_begins_on_command_and_send_explains_a_refusal_it_cannot_see(
     assert code == 0, serve.output
 
 
-def _write(folder: Path, text: str) -> Path:
-    path = folder / "goal.json"
+def _write(folder: Path, text: str, name: str = "goal.json") -> Path:
+    path = folder / name
     path.write_text(text, encoding="utf-8")
     return path
 
@@ -215,6 +233,72 @@ def test_serve_runs_children_of_several_robots_at_once(graph: Graph) -> None:
             output, _ = send_process.communicate(timeout=60)
             assert send_process.returncode == 0, output
             assert "outcome: completed" in output
+    finally:
+        code = serve.stop()
+    assert code == 0, serve.output
+
+
+@pytest.mark.spec("R20.1", "R20.2", "R17.4", "R9.3", "R11.1", "R4.3")
+def test_send_drives_every_flow_of_a_run_in_both_modes(tmp_path: Path, watcher: Any, mode: str) -> None:
+    """Each goal from a fresh ``send`` process, which knows only the status topic: places one after
+    another (rmf_ros2's status says RUNNING with the child's final status after each), a failing place,
+    a perform_action from a file, a CANCEL of a running child from another process, FINISHED, and a
+    goal after the end."""
+    config = tmp_path / "fleet.json"
+    config.write_text(
+        json.dumps(
+            {
+                "categories": {
+                    "go_to_place": {"duration": 0.3, "report_every": 0.1, "fail_on": ["nowhere"]},
+                    "perform_action": {"duration": 0.3, "report_every": 0.1},
+                    "slow": {"duration": 60, "report_every": 0.2},
+                }
+            }
+        ),
+        encoding="utf-8",
+    )
+    serve = Serve("--config", str(config), mode=mode).ready()
+    try:
+        for place, child in (("pantry", 2), ("lobby", 3)):
+            done = send("--place", place)
+            assert done.returncode == 0, done.stdout + done.stderr
+            assert "outcome: completed" in done.stdout and f"[id {child}]" in done.stdout
+            wait_for(lambda last=child: waiting_after(watcher, last), f"waiting, id {child}")
+        failed = send("--place", "nowhere")
+        assert failed.returncode == 1 and "outcome: failed" in failed.stdout, failed.stdout
+        wait_for(lambda: waiting_after(watcher, 4), "waiting after the failed child")
+        action = _write(tmp_path, '{"category": "perform_action", "description": {"action": "clean"}}')
+        done = send("--file", str(action))
+        assert done.returncode == 0 and "outcome: completed" in done.stdout, done.stdout
+        slow = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "dynevent",
+                "send",
+                "--robot",
+                ROBOT,
+                "--timeout",
+                "30",
+                "--file",
+                str(_write(tmp_path, '{"category": "slow", "description": {}}', "slow.json")),
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            env=os.environ.copy(),
+        )
+        wait_for(lambda: watcher.state.phase == 2 and watcher.state.current_id == 6, "child 6 running")
+        cancel = send("--cancel")
+        assert cancel.returncode == 0, cancel.stdout + cancel.stderr
+        output, _ = slow.communicate(timeout=30)
+        assert slow.returncode == 1 and "outcome: canceled" in output, output
+        wait_for(lambda: waiting_after(watcher, 6), "waiting after the cancel")
+        ended = send("--end")
+        assert ended.returncode == 0, ended.stdout + ended.stderr
+        wait_for(lambda: watcher.state.phase == 0, "INACTIVE")
+        after = send("--place", "pantry")
+        assert after.returncode == 1 and "inactive" in after.stdout, after.stdout
     finally:
         code = serve.stop()
     assert code == 0, serve.output

@@ -196,6 +196,8 @@ def load_config(args: argparse.Namespace) -> ServeConfig:
         config = attrs.evolve(config, robots=tuple(args.robots))
     if args.rebegin is not None:
         config = attrs.evolve(config, rebegin=args.rebegin)
+    if getattr(args, "compatibility", None) is not None:
+        config = attrs.evolve(config, compatibility=args.compatibility)
     try:
         validate_token("fleet", config.fleet)
         for robot in config.robots:

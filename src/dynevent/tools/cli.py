@@ -286,6 +286,11 @@ def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         metavar="SECONDS",
         help="begin a new dynamic event this long after a run ends; 0 never (default 2)",
     )
+    parser.add_argument(
+        "--compatibility",
+        choices=("standard", "rmf_ros2"),
+        help="serve as the spec says (standard, the default) or as rmf_ros2 does where they differ",
+    )
     parser.add_argument("--seconds", type=float, metavar="SECONDS", help="stop after this long")
     parser.set_defaults(run=_serve)
 
