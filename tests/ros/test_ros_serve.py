@@ -14,7 +14,9 @@ from typing import Any
 import pytest
 from ros_support import START, Child, Graph, wait_for
 
+from dynevent import client as cl
 from dynevent.ros import DynamicEventClient
+from dynevent.wire.vocab import Failure, GoalStatus
 
 ROBOT = "serveRobot"
 
@@ -100,7 +102,7 @@ def test_serve_and_send_survive_kill_9_in_the_middle_of_a_child(
                 "--robot",
                 ROBOT,
                 "--timeout",
-                "6",
+                "40",
                 "--file",
                 str(tmp_path / "slow.json"),
             ],
@@ -112,8 +114,9 @@ def test_serve_and_send_survive_kill_9_in_the_middle_of_a_child(
         wait_for(lambda: watcher.state.phase == 2 and watcher.state.current_id == 3, "child 3 running")
         serve.process.send_signal(signal.SIGKILL)
         assert serve.stop() == -signal.SIGKILL
-        assert slow.wait(timeout=30) == 1  # its server died: no answer within its bound
         serve = Serve("--config", str(config), "--state", str(state), mode=mode).ready()
+        output, _ = slow.communicate(timeout=30)  # R21.4: it asks again and gets the restart's answer
+        assert slow.returncode == 1 and "server restarted" in output, output
         wait_for(lambda: serve.saw("restored: run 1, last id 3"), "the restore")
         wait_for(lambda: watcher.state.phase == 1 and watcher.state.current_id == 3, "WAITING id 3 again")
         assert watcher.state.seq == 1  # the same run goes on
@@ -300,5 +303,53 @@ def test_send_drives_every_flow_of_a_run_in_both_modes(tmp_path: Path, watcher: 
         after = send("--place", "pantry")
         assert after.returncode == 1 and "inactive" in after.stdout, after.stdout
     finally:
+        code = serve.stop()
+    assert code == 0, serve.output
+
+
+@pytest.mark.spec("R21.1", "R21.4")
+@pytest.mark.parametrize("point", ["requested", "started", "running", "answered"])
+def test_a_crash_at_any_point_of_a_goals_life_loses_no_answer(
+    tmp_path: Path, watcher: Any, mode: str, point: str
+) -> None:
+    """kill -9 of serve with a goal requested (the server frozen before it saw it), started (its child
+    started in the store, nothing sent), running, or answered (the answer kept, not sent): after the
+    restart the client that sent the goal gets its answer, within its bound, without sending again."""
+    config = tmp_path / "fleet.json"
+    config.write_text(
+        json.dumps({"categories": {"go_to_place": {"duration": 0.5 if point == "answered" else 60}}}),
+        encoding="utf-8",
+    )
+    state = tmp_path / "state.db"
+    args = ["--robot", ROBOT, "--rebegin", "0", "--compatibility", mode, "--config", str(config)]
+    if point in ("started", "answered"):
+        here = Path(__file__).parent
+        serve: Child = Child([str(here / "crashing_serve.py"), point, *args, "--state", str(state)])
+    else:
+        serve = Serve("--config", str(config), "--state", str(state), mode=mode)
+    serve.wait_line("serving ")
+    try:
+        wait_for(lambda: watcher.state.phase == 1, "WAITING")
+        if point == "requested":
+            serve.process.send_signal(signal.SIGSTOP)  # the request reaches no one
+        run = watcher.next("go_to_place", json.dumps({"one_of": ["pantry"]}))
+        if point == "running":
+            wait_for(lambda: watcher.state.phase == 2, "the child running")
+        if point in ("requested", "running"):
+            serve.process.send_signal(signal.SIGKILL)
+        assert serve.process.wait(timeout=START) == -signal.SIGKILL, serve.output
+        serve.stop()
+        serve = Serve("--config", str(config), "--state", str(state), mode=mode).ready()
+        outcome = run.wait(20.0)
+        assert isinstance(outcome, cl.Outcome), outcome
+        if point == "requested":  # the restarted server never knew the goal
+            assert outcome.execution_failure == Failure.LOST.value, outcome
+        elif point == "answered":  # the answer it had given, kept in the store
+            assert (outcome.kind, outcome.goal_status) == (cl.OutcomeKind.COMPLETED, GoalStatus.SUCCEEDED)
+        else:
+            assert outcome.execution_failure == Failure.RESTART.value, outcome
+            assert outcome.goal_status is GoalStatus.ABORTED
+    finally:
+        serve.process.send_signal(signal.SIGCONT)
         code = serve.stop()
     assert code == 0, serve.output

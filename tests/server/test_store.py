@@ -17,7 +17,10 @@ import pytest
 from dynevent.server import inputs as ins
 from dynevent.server import machine, snapshot
 from dynevent.server.machine import State
+from dynevent.server.outputs import AnswerGoal
 from dynevent.server.store import InvalidStore, StateStore
+from dynevent.wire.messages import Result
+from dynevent.wire.vocab import GoalStatus
 from scenario import CONFIG, next_goal, running, u, waiting
 
 
@@ -115,11 +118,83 @@ def test_another_format_or_version_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "state.db"
     StateStore(path).close()
     db = sqlite3.connect(path)
-    db.execute("UPDATE meta SET value = '2' WHERE key = 'version'")
+    db.execute("UPDATE meta SET value = '3' WHERE key = 'version'")
     db.commit()
     db.close()
-    with pytest.raises(InvalidStore, match="has version '2'"):
+    before = _digest(path)
+    with pytest.raises(InvalidStore, match="has version '3'; this dynevent reads 1 and 2"):
         StateStore(path)
+    assert _digest(path) == before
+
+
+def _answer(n: int, status: GoalStatus = GoalStatus.SUCCEEDED, failure: str = "") -> AnswerGoal:
+    return AnswerGoal(
+        goal_uuid=u(n), status=status, result=Result(execution_failure=failure, status="completed", id=n)
+    )
+
+
+@pytest.mark.spec("R21.1")
+def test_answers_are_kept_per_robot_and_the_first_answer_of_a_goal_wins(tmp_path: Path) -> None:
+    path = tmp_path / "state.db"
+    store = StateStore(path)
+    store.keep_answers("f", "r1", [_answer(1), _answer(2, GoalStatus.CANCELED)])
+    store.keep_answers("f", "r2", [_answer(3)])
+    store.keep_answers("f", "r1", [_answer(1, GoalStatus.ABORTED, "server restarted")])  # not kept
+    store.close()
+    reopened = StateStore(path)
+    assert reopened.answers("f", "r1") == {u(1): _answer(1), u(2): _answer(2, GoalStatus.CANCELED)}
+    assert reopened.answers("f", "r2") == {u(3): _answer(3)}
+    assert reopened.answers("f", "nobody") == {}
+
+
+def test_answers_older_than_the_retention_are_dropped(tmp_path: Path) -> None:
+    store = StateStore(tmp_path / "state.db", answer_retention=0.2)
+    store.keep_answers("f", "r", [_answer(1)])
+    assert list(store.answers("f", "r")) == [u(1)]
+    time.sleep(0.3)
+    assert store.answers("f", "r") == {}
+    store.keep_answers("f", "r", [_answer(2)])
+    rows = sqlite3.connect(tmp_path / "state.db").execute("SELECT goal_uuid FROM answers").fetchall()
+    assert rows == [(u(2),)]  # the old row is deleted, not only hidden
+
+
+def test_a_version_1_store_is_brought_to_version_2_and_keeps_its_states(tmp_path: Path) -> None:
+    path = tmp_path / "state.db"
+    state = running(child_id=8).state
+    store = StateStore(path)
+    store.save(state)
+    store.close()
+    db = sqlite3.connect(path)
+    db.execute("DROP TABLE answers")
+    db.execute("UPDATE meta SET value = '1' WHERE key = 'version'")
+    db.commit()
+    db.close()
+    upgraded = StateStore(path)
+    assert upgraded.load() == {(state.fleet, state.robot): state}
+    upgraded.keep_answers(state.fleet, state.robot, [_answer(1)])
+    assert list(upgraded.answers(state.fleet, state.robot)) == [u(1)]
+    version = sqlite3.connect(path).execute("SELECT value FROM meta WHERE key = 'version'").fetchone()
+    assert version == ("2",)
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "problem"),
+    [("status", "executing", "status 'executing'"), ("result", "{", "answer"), ("goal_uuid", "x", "'x'")],
+)
+def test_a_damaged_answer_is_refused_naming_the_robot(
+    tmp_path: Path, column: str, value: str, problem: str
+) -> None:
+    path = tmp_path / "state.db"
+    store = StateStore(path)
+    store.keep_answers("f", "r", [_answer(1)])
+    store.close()
+    db = sqlite3.connect(path)
+    db.execute(f"UPDATE answers SET {column} = ?", (value,))
+    db.commit()
+    db.close()
+    with pytest.raises(InvalidStore, match=r"robot f/r: ") as caught:
+        StateStore(path).answers("f", "r")
+    assert problem in str(caught.value)
 
 
 def test_a_corrupt_snapshot_is_refused_naming_the_robot(tmp_path: Path) -> None:

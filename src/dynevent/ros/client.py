@@ -10,17 +10,27 @@ topics, keeps a :class:`~dynevent.client.ClientState` from them, and turns
 would refuse the goal.  A run is awaitable inside the node's executor
 (``outcome = await run``) and can be waited on from another thread with a
 bound (:meth:`GoalRun.wait`).
+
+A server that restarts (R21) takes the pending requests of its goals with
+it.  While goals are open the client watches the robot's status publishers
+on the graph; when a new one appears (a new server process), it asks again
+for the result of every goal it sent before, once a second until each is
+answered (R21.4): a server that kept the answer gives it, one that does not
+know the goal ends it aborted with ``goal lost in a server restart``.  So a
+crash never leaves a goal waiting for an answer that cannot come.
 """
 
 from __future__ import annotations
 
 import os
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
 from action_msgs.msg import GoalStatus as RosGoalStatus
 from rclpy.action import ActionClient
+from rclpy.action.client import ClientGoalHandle
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.task import Future
 
@@ -33,6 +43,7 @@ from dynevent.ros import convert
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.server import latched
 from dynevent.server.inputs import NOW_RANGE
+from dynevent.wire.messages import Result
 from dynevent.wire.names import (
     ROBOT_BEGIN_TOPIC_DEPTH,
     STATUS_TOPIC_DEPTH,
@@ -40,7 +51,7 @@ from dynevent.wire.names import (
     begin_topic,
     status_topic,
 )
-from dynevent.wire.vocab import GoalStatus
+from dynevent.wire.vocab import Failure, GoalStatus
 
 __all__ = ["DynamicEventClient", "GoalRun", "GoalWaitTimeout"]
 
@@ -52,6 +63,8 @@ _TERMINAL = {
 
 #: How often the client machine's clock advances (its NEXT timeouts are checked then), in seconds.
 TICK_PERIOD = 0.1
+#: How often the client asks again for the results of goals a restarted server took, in seconds.
+ASK_AGAIN_PERIOD = 1.0
 
 
 class GoalRun:
@@ -126,6 +139,10 @@ class DynamicEventClient:
         )
         self._action = ActionClient(node, DynamicEvent, action_name(fleet, robot), callback_group=group)
         self._timer = node.create_timer(TICK_PERIOD, self._on_tick, callback_group=group)
+        self._status_topic = status_topic(fleet, robot)
+        self._servers: frozenset[bytes] | None = None  # the status publishers' GIDs last seen
+        self._orphans: set[str] = set()  # goals sent to a server process that has since been replaced
+        self._ask_again_at = 0.0
 
     # ---------------------------------------------------------------- views
 
@@ -250,10 +267,13 @@ class DynamicEventClient:
 
     def _on_result(self, uuid: str, future: Any) -> None:
         response = future.result()
-        status = _TERMINAL.get(response.status, GoalStatus.ABORTED)
-        self._step(
-            cl.ResultReceived(goal_uuid=uuid, status=status, result=convert.result_from_ros(response.result))
-        )
+        if response.status == RosGoalStatus.STATUS_UNKNOWN:  # a server that does not know the goal (R21.4)
+            status, result = GoalStatus.ABORTED, Result(execution_failure=Failure.LOST.value)
+        else:
+            status = _TERMINAL.get(response.status, GoalStatus.ABORTED)
+            result = convert.result_from_ros(response.result)
+        self._orphans.discard(uuid)
+        self._step(cl.ResultReceived(goal_uuid=uuid, status=status, result=result))
 
     def _on_feedback(self, uuid: str, message: Any) -> None:
         try:
@@ -282,8 +302,29 @@ class DynamicEventClient:
         self._step(cl.BeginReceived(message=begin))
 
     def _on_tick(self) -> None:
-        if self.state.goals:
+        goals = self.state.goals
+        if goals:
+            self._watch_server({goal.goal_uuid for goal in goals})
             self._step(cl.Tick(now=self.now()))
+        else:
+            self._servers, self._orphans = None, set()
+
+    def _watch_server(self, open_goals: set[str]) -> None:
+        """Ask again for the results of the goals a replaced server process took (R21.4)."""
+        infos = self._node.get_publishers_info_by_topic(self._status_topic)
+        servers = frozenset(bytes(info.endpoint_gid) for info in infos)
+        if self._servers is not None and servers - self._servers:
+            self._orphans |= open_goals  # sent before the new server process appeared
+            self._ask_again_at = 0.0
+        self._servers = servers
+        self._orphans &= open_goals
+        if not self._orphans or time.monotonic() < self._ask_again_at or not self._action.server_is_ready():
+            return
+        self._ask_again_at = time.monotonic() + ASK_AGAIN_PERIOD
+        for uuid in sorted(self._orphans):
+            response = DynamicEvent.Impl.SendGoalService.Response(accepted=True)
+            handle = ClientGoalHandle(self._action, convert.uuid_to_ros(uuid), response)
+            handle.get_result_async().add_done_callback(lambda done, uuid=uuid: self._on_result(uuid, done))
 
 
 def _nanoseconds(field: str, seconds: float) -> int:

@@ -290,7 +290,7 @@ class _Robots:
 
     def add(self, robot: str, restored: State | None) -> None:
         """Serve ``robot``, from its restored state if any; a robot with no active run begins one."""
-        fleet = self.config.fleet
+        fleet, store = self.config.fleet, self.store
         server = DynamicEventServer(
             self.node,
             fleet,
@@ -299,7 +299,9 @@ class _Robots:
             self.children,
             begin_publisher=self.begins,
             state=restored,
-            on_state=self.store.save if self.store is not None else None,
+            on_state=store.save if store is not None else None,
+            on_answers=(lambda answers: store.keep_answers(fleet, robot, answers)) if store else None,
+            answers=store.answers(fleet, robot) if store is not None else None,
             observer=self.observer(robot),
             on_finished=self.finished(robot),
         )

@@ -21,6 +21,11 @@ How rclpy's callbacks meet the machine (docs/ros.md has the whole story):
   rclpy has moved the goal to CANCELING, where ``canceled()`` is legal.
 - The execute callback of each goal awaits the machine's answer (an rclpy
   future completed by the outbox) and ends the goal with it.
+- A restarted server (R21) has no goal handle for the goals of the process
+  before it.  Their answers (``server restarted``, or the answer a goal got
+  just before the end, kept by ``on_answers``) are kept and given to a client
+  that asks for the goal's result again (R21.4): rclpy's action server would
+  answer such a request ``STATUS_UNKNOWN``.
 
 Time comes from the node's clock, so simulated time works.
 """
@@ -28,10 +33,12 @@ Time comes from the node's clock, so simulated time works.
 from __future__ import annotations
 
 import collections
+import contextlib
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any, Protocol
 
+from action_msgs.msg import GoalStatus as RosGoalStatus
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -170,6 +177,35 @@ class StubbornHolds(Protocol):
         """Release the hold."""
 
 
+_ROS_GOAL_STATUS = {
+    GoalStatus.SUCCEEDED: RosGoalStatus.STATUS_SUCCEEDED,
+    GoalStatus.CANCELED: RosGoalStatus.STATUS_CANCELED,
+    GoalStatus.ABORTED: RosGoalStatus.STATUS_ABORTED,
+}
+
+
+class _RecoveringActionServer(ActionServer):  # type: ignore[misc]  # rclpy is untyped here
+    """rclpy's action server, which also answers a result request for a goal of the process before a
+    restart with the answer kept for it (R21.4), where rclpy alone would answer ``STATUS_UNKNOWN``."""
+
+    def __init__(self, *args: Any, owed: Callable[[str], outs.AnswerGoal | None], **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._owed = owed
+
+    async def _execute_get_result_request(self, request_header_and_message: Any) -> None:
+        request_header, request = request_header_and_message
+        uuid = bytes(request.goal_id.uuid)
+        answer = None if uuid in self._goal_handles else self._owed(uuid.hex())
+        if answer is None:
+            await super()._execute_get_result_request(request_header_and_message)
+            return
+        response = self._action_type.Impl.GetResultService.Response()
+        response.status = _ROS_GOAL_STATUS[answer.status]
+        response.result = convert.result_to_ros(answer.result)
+        with getattr(self, "_lock", None) or contextlib.nullcontext():  # Jazzy's rclpy has no such lock
+            self._handle.send_result_response(request_header, response)
+
+
 class _Entities:
     """One robot's ROS 2 entities on a node: its status and begin topics, its action server, the
     stubborn-refresh timer, the wake-up guard condition and, when asked for, the description service.
@@ -195,7 +231,7 @@ class _Entities:
             begin_publisher if begin_publisher is not None else server.fleet_begin_publisher(node)
         )
         self.wake = node.create_guard_condition(server._drain, callback_group=group)
-        self.action = ActionServer(
+        self.action = _RecoveringActionServer(
             node,
             DynamicEvent,
             action_name(fleet, robot),
@@ -204,6 +240,7 @@ class _Entities:
             handle_accepted_callback=server._handle_accepted,
             cancel_callback=server._cancel_callback,
             callback_group=group,
+            owed=server._owed.get,
         )
         self.timer = node.create_timer(server.config.stubborn_refresh, server._refresh, callback_group=group)
         self.service = None
@@ -238,7 +275,11 @@ class DynamicEventServer:
     answers ``rmf_dynamic_event/description/<fleet>/<robot>`` with it.
     ``state`` starts the server from a restored state (then call
     :meth:`restart`); ``on_state(state)`` is called, under the server's lock,
-    after every step that changed the state (to store it); ``observer`` sees
+    after every step that changed the state (to store it);
+    ``on_answers(answers)`` before it, with the step's goal answers (to keep
+    them, :meth:`dynevent.server.store.StateStore.keep_answers`); ``answers``
+    are the answers kept before a restart, given to clients that ask for
+    their goals' results again (R21.4); ``observer`` sees
     every output as it is carried out and every refusal of a goal request.  The node must be spun
     by an executor (single- or multi-threaded); every method may be called
     from any thread.
@@ -259,6 +300,8 @@ class DynamicEventServer:
         description_service: Any | None = None,
         state: State | None = None,
         on_state: Callable[[State], None] | None = None,
+        on_answers: Callable[[tuple[outs.AnswerGoal, ...]], None] | None = None,
+        answers: Mapping[str, outs.AnswerGoal] | None = None,
         observer: Callable[[outs.Output | outs.Rejected], None] | None = None,
     ) -> None:
         self._node = node
@@ -268,6 +311,9 @@ class DynamicEventServer:
         self._on_finished = on_finished
         self._on_interrupt_confirmed = on_interrupt_confirmed
         self._on_state = on_state
+        self._on_answers = on_answers
+        #: answers of goals that have no handle here (a previous process's), by goal UUID (R21.4)
+        self._owed: dict[str, outs.AnswerGoal] = dict(answers or {})
         self._observer = observer
         self._state = state if state is not None else State.new(fleet, robot)
         if (self._state.fleet, self._state.robot) != (fleet, robot):
@@ -320,11 +366,15 @@ class DynamicEventServer:
 
     def _step(self, event: ins.Input) -> tuple[outs.Output, ...]:
         transition = machine.step(self._state, event, self._config)
-        self._keep(transition.state)
+        self._keep(transition.state, transition.outputs)
         self._outbox.extend(transition.outputs)
         return transition.outputs
 
-    def _keep(self, state: State) -> None:
+    def _keep(self, state: State, outputs: tuple[outs.Output, ...]) -> None:
+        if self._on_answers is not None:  # before the state: a state kept without its answer loses it
+            answers = tuple(output for output in outputs if isinstance(output, outs.AnswerGoal))
+            if answers:
+                self._on_answers(answers)
         changed = state is not self._state
         self._state = state
         if changed and self._on_state is not None:
@@ -415,7 +465,7 @@ class DynamicEventServer:
                 self._log.error(f"goal {uuid}: {first.why}; aborted")
                 goal_handle.execute(_abort_at_once(first.why))
                 return
-            self._keep(transition.state)
+            self._keep(transition.state, transition.outputs)
             self._answers[uuid] = Future()
             self._handles[uuid] = goal_handle
             goal_handle.execute()  # ExecuteGoal, R5.1: from EXECUTING every answer is legal
@@ -477,6 +527,8 @@ class DynamicEventServer:
             future = self._answers.get(output.goal_uuid)  # the goal's execute callback takes it
             if future is not None:
                 future.set_result(output)
+            else:  # a goal of the process before a restart (R21.1): kept for its client (R21.4)
+                self._owed.setdefault(output.goal_uuid, output)
         elif isinstance(output, outs.PublishBegin):
             message = convert.begin_to_ros(output.message)
             self._ros.begin.publish(message)

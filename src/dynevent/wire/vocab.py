@@ -164,6 +164,8 @@ class Failure(str, enum.Enum):
     PARSE = "Description parsing failure"
     NOT_RUNNING = "cancelled while not running"
     RESTART = "server restarted"
+    #: Not a server's: a client's, for a goal whose server restarted without knowing it (R21.4).
+    LOST = "goal lost in a server restart"
 
     def __str__(self) -> str:
         return self.value
@@ -188,6 +190,7 @@ _FAILURE_REASONS: dict[Failure, RejectReason | None] = {
     Failure.PARSE: RejectReason.DESCRIPTION_INVALID,
     Failure.NOT_RUNNING: None,
     Failure.RESTART: None,
+    Failure.LOST: None,
 }
 _FAILURES_BY_TEXT: dict[str, Failure] = {failure.value: failure for failure in Failure}
 
