@@ -1,17 +1,23 @@
-"""A fleet of simulated robots in one ``dynevent serve`` process, each taking one NEXT per second.
+"""A fleet of simulated robots in one ``dynevent serve`` process, beside a bare rclpy peer.
 
-``dynevent serve`` runs ``--robots`` robots whose ``go_to_place`` takes
-``--duration`` seconds with one progress report; a load process (one node,
-a plain rclpy action client per robot) sends each robot a NEXT (id 0, the
-server numbers it) once a second, the next one as soon as the previous
-answered and its second is over.  After ``--seconds`` it checks that every
-goal sent got exactly one result and that no goal failed, and reports the
-round trips (send to result, the child's simulated duration included) at the
-median and p99, goals per second, and the serve process's CPU time.
+Two servers, each in a process of its own, serve the same robots over real DDS on loopback:
+``dynevent`` (``dynevent serve``) and ``peer`` (bench/peers/ros_bare_fleet.py: bare rclpy action
+servers doing the same exchanges, with no protocol).  Two measurements:
+
+- ``--idle 1,100,1000``: each server with that many robots and nothing to do; its CPU over
+  ``--window`` seconds once it has started and settled, as a share of one core.
+- load (the default): a load process (one node, a plain rclpy action client per robot) sends each
+  robot a NEXT (id 0, the server numbers it) once a second, the next one as soon as the previous
+  answered and its second is over, for ``--seconds``; a child takes ``--duration`` seconds with one
+  progress report.  It checks that every goal got exactly one result and none failed, and reports
+  goals per second, goals per second per core of the server's CPU, and the answer's overhead: the
+  round trip (send to result) minus the child's own time, at the median and p99.
 
     python bench/ros_fleet.py [--robots 100] [--seconds 60] [--duration 0.2] [--write]
+    python bench/ros_fleet.py --idle 1,100,1000 [--window 20] [--write]
 
-``--write`` records the result as the ``ros-fleet`` section of bench/results.md.
+``--write`` records the result as the ``ros-fleet`` or ``ros-fleet-idle`` section of
+bench/results.md.
 """
 
 from __future__ import annotations
@@ -36,6 +42,10 @@ if str(ROOT) not in sys.path:  # run as a script: make `bench` importable
 from bench import results as recorded  # noqa: E402
 
 TICKS = os.sysconf("SC_CLK_TCK")
+SERVERS = {
+    "dynevent": lambda config: [sys.executable, "-m", "dynevent", "serve", "--config", str(config)],
+    "peer": lambda config: [sys.executable, str(ROOT / "bench" / "peers" / "ros_bare_fleet.py"), str(config)],
+}
 
 
 def _cpu_seconds(pid: int) -> float:
@@ -43,38 +53,85 @@ def _cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / TICKS  # utime + stime
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--robots", type=int, default=100)
-    parser.add_argument("--seconds", type=float, default=60.0)
-    parser.add_argument("--duration", type=float, default=0.2, help="a child's simulated duration (s)")
-    parser.add_argument("--write", action="store_true", help="record the result in bench/results.md")
-    args = parser.parse_args(argv)
-    os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 200)))
-    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    robots = [f"r{index:03d}" for index in range(args.robots)]
-    folder = Path(tempfile.mkdtemp(prefix="dynevent-fleet-"))
-    config = folder / "fleet.json"
-    spec = {"duration": args.duration, "report_every": args.duration / 2}
-    config.write_text(
-        json.dumps(
-            {"fleet": "benchFleet", "robots": robots, "rebegin": 0, "categories": {"go_to_place": spec}}
-        )
-    )
-    serve = subprocess.Popen(
-        [sys.executable, "-m", "dynevent", "serve", "--config", str(config)],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
+class Server:
+    """One server process of ``robots`` robots, started and ready (it printed ``serving``)."""
 
+    def __init__(self, kind: str, robots: list[str], duration: float, start_timeout: float = 600) -> None:
+        folder = Path(tempfile.mkdtemp(prefix="dynevent-fleet-"))
+        config = folder / "fleet.json"
+        spec = {"duration": duration, "report_every": duration / 2}
+        config.write_text(
+            json.dumps(
+                {"fleet": "benchFleet", "robots": robots, "rebegin": 0, "categories": {"go_to_place": spec}}
+            )
+        )
+        self.process = subprocess.Popen(
+            SERVERS[kind](config), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
+        )
+        ready = threading.Event()
+
+        def read() -> None:
+            assert self.process.stdout is not None
+            for line in self.process.stdout:  # drained to the end: a full pipe would stall the server
+                if line.startswith("serving "):
+                    ready.set()
+
+        threading.Thread(target=read, daemon=True).start()
+        if not ready.wait(start_timeout):
+            self.stop()
+            raise SystemExit(f"{kind}: not ready within {start_timeout:g} s")
+
+    def cpu(self) -> float:
+        return _cpu_seconds(self.process.pid)
+
+    def stop(self) -> None:
+        self.process.terminate()
+        try:
+            self.process.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.wait(timeout=30)
+
+
+def idle(counts: list[int], window: float, settle: float) -> list[str]:
+    rows = []
+    for count in counts:
+        robots = [f"r{index:04d}" for index in range(count)]
+        shares = {}
+        for kind in SERVERS:
+            server = Server(kind, robots, 1.0)
+            time.sleep(settle)
+            before = server.cpu()
+            time.sleep(window)
+            shares[kind] = 100 * (server.cpu() - before) / window
+            server.stop()
+        rows.append(f"| {count} | {shares['dynevent']:.2f}% | {shares['peer']:.2f}% |")
+        print(rows[-1], flush=True)
+    return [
+        "## ROS 2: an idle fleet in one process (bench/ros_fleet.py --idle)",
+        "",
+        f"CPU of the server process over {window:g} s, {settle:g} s after it is ready,",
+        "as a share of one core.",
+        "",
+        *recorded.machine_description(("dynevent", "rclpy")),
+        "",
+        "| robots | dynevent serve | bare rclpy peer |",
+        "|---|---|---|",
+        *rows,
+    ]
+
+
+def load(kind: str, robots: list[str], seconds: float, duration: float) -> tuple[list[str], bool]:
     import rclpy
     from rclpy.action import ActionClient
     from rclpy.executors import MultiThreadedExecutor
     from rmf_task_msgs.action import DynamicEvent
 
-    rclpy.init()
-    node = rclpy.create_node("bench_fleet_load")
-    executor = MultiThreadedExecutor(num_threads=2)
+    server = Server(kind, robots, duration)
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = rclpy.create_node("bench_fleet_load", context=context)
+    executor = MultiThreadedExecutor(num_threads=2, context=context)
     executor.add_node(node)
     threading.Thread(target=executor.spin, daemon=True).start()
     clients = {
@@ -88,7 +145,7 @@ def main(argv: list[str] | None = None) -> int:
     trips: list[float] = []
     results: dict[tuple[str, int], int] = {}
     problems: list[str] = []
-    stop_at = time.monotonic() + args.seconds
+    stop_at = time.monotonic() + seconds
 
     def drive(robot: str, client: Any) -> None:
         count = 0
@@ -127,41 +184,77 @@ def main(argv: list[str] | None = None) -> int:
                 trips.append(time.perf_counter() - started)
             time.sleep(max(second - time.monotonic(), 0.0))
 
-    cpu_before = _cpu_seconds(serve.pid)
+    cpu_before = server.cpu()
     wall = time.monotonic()
     threads = [threading.Thread(target=drive, args=item, daemon=True) for item in clients.items()]
     for thread in threads:
         thread.start()
     for thread in threads:
-        thread.join(timeout=args.seconds + 60)
+        thread.join(timeout=seconds + 60)
     wall = time.monotonic() - wall
-    cpu = _cpu_seconds(serve.pid) - cpu_before
-    serve.terminate()
-    serve.wait(timeout=30)
+    cpu = server.cpu() - cpu_before
+    server.stop()
     executor.shutdown(timeout_sec=2)
-    rclpy.try_shutdown()
+    for client in clients.values():
+        client.destroy()
+    node.destroy_node()
+    rclpy.try_shutdown(context=context)
     twice = [key for key, count in results.items() if count > 1]
-    ordered = sorted(trips) or [float("nan")]
-    lines = [
-        "## ROS 2: a simulated fleet in one `dynevent serve` (bench/ros_fleet.py)",
+    overheads = sorted(trip - duration for trip in trips) or [float("nan")]
+    rate = len(trips) / wall
+    p50, p99 = statistics.median(overheads), overheads[int(0.99 * (len(overheads) - 1))]
+    row = (
+        f"| {kind} | {rate:.1f} | {100 * cpu / wall:.0f}% | {rate / max(cpu / wall, 1e-9):.0f} | "
+        f"{p50 * 1e3:.1f} ms | {p99 * 1e3:.1f} ms | {len(twice)} | {len(problems)} |"
+    )
+    print(row, flush=True)
+    for problem in problems[:10]:
+        print(f"  - {problem}", flush=True)
+    return [row], not (twice or problems)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--robots", type=int, default=100)
+    parser.add_argument("--seconds", type=float, default=60.0)
+    parser.add_argument("--duration", type=float, default=0.2, help="a child's simulated duration (s)")
+    parser.add_argument("--idle", metavar="N,N,...", help="measure idle CPU for these fleet sizes")
+    parser.add_argument("--window", type=float, default=20.0, help="idle: seconds of CPU measured")
+    parser.add_argument("--settle", type=float, default=5.0, help="idle: seconds waited after ready")
+    parser.add_argument("--write", action="store_true", help="record the result in bench/results.md")
+    args = parser.parse_args(argv)
+    os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 200)))
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    if args.idle:
+        lines = idle([int(count) for count in args.idle.split(",")], args.window, args.settle)
+        print("\n".join(lines))
+        if args.write:
+            recorded.write_section("ros-fleet-idle", lines)
+        return 0
+    robots = [f"r{index:03d}" for index in range(args.robots)]
+    header = [
+        "## ROS 2: a simulated fleet in one process under load (bench/ros_fleet.py)",
         "",
         f"{args.robots} robots, each sent one NEXT a second for {args.seconds:g} s by a plain rclpy client;",
-        f"a child takes {args.duration:g} s (included in the round trip) with one progress report.",
+        f"a child takes {args.duration:g} s with one progress report.  Overhead: the round trip (send to",
+        "result) minus the child's own time.",
         "",
         *recorded.machine_description(("dynevent", "rclpy")),
         "",
-        f"- goals answered: {len(trips)} ({len(trips) / wall:.1f} per second)",
-        f"- round trip, send to result: median {statistics.median(ordered) * 1e3:.1f} ms, "
-        f"p99 {ordered[int(0.99 * (len(ordered) - 1))] * 1e3:.1f} ms",
-        f"- serve's CPU: {cpu:.1f} s in {wall:.1f} s, {100 * cpu / wall:.0f}% of one core",
-        f"- answered twice: {len(twice)}; lost, refused or failed: {len(problems)}",
-        *(f"  - {problem}" for problem in problems[:10]),
+        "| server | goals/s | server CPU | goals/s per core | overhead p50 | overhead p99 | answered twice "
+        "| lost, refused or failed |",
+        "|---|---|---|---|---|---|---|---|",
     ]
-    print("\n".join(lines))
-    if args.write and not (twice or problems):
-        recorded.write_section("ros-fleet", lines)
+    print("\n".join(header), flush=True)
+    rows, clean = [], True
+    for kind in SERVERS:
+        row, ok = load(kind, robots, args.seconds, args.duration)
+        rows.extend(row)
+        clean = clean and ok
+    if args.write and clean:
+        recorded.write_section("ros-fleet", header + rows)
         print(f"wrote {recorded.RESULTS}", file=sys.stderr)
-    return 1 if twice or problems else 0
+    return 0 if clean else 1
 
 
 if __name__ == "__main__":

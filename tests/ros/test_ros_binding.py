@@ -347,6 +347,28 @@ def test_a_clamped_stubborn_period(graph: Graph, robot: Robot) -> None:
     wait_for(lambda: ("begin", 2.0, "L1") in robot.adapter.holds, "stubbornness for 2 s")
 
 
+@pytest.mark.spec("R12.3")
+def test_a_robot_has_a_timer_only_while_a_stubbornness_holds(graph: Graph, robot: Robot) -> None:
+    """An idle robot costs no timer (each costs CPU at every executor wake-up); the stubborn refresh
+    runs from the hold's start to its end, and refreshes from the robot's new place."""
+    client = _client(graph)
+    _feedback_matched(robot)
+    assert list(robot.node.timers) == []
+    robot.server.update_position("L1", 1.0, 2.0)
+    run = client.next("go_to_place", '"a"', stubborn_period=5.0)
+    robot.adapter.child().finished()
+    _outcome(run)
+    wait_for(lambda: len(list(robot.node.timers)) == 1, "the refresh timer")
+    robot.server.update_position("L1", 9.0, 2.0)  # moved: the next refresh holds from here
+    wait_for(lambda: ("hold", 5.0, "L1") in robot.adapter.holds, "a refreshed hold (1 s period)", 5.0)
+    second = client.next("go_to_place", '"b"')  # its start ends the stubbornness
+    robot.adapter.child(1)
+    wait_for(lambda: ("end",) in robot.adapter.holds, "the hold's end")
+    wait_for(lambda: list(robot.node.timers) == [], "no timer after the hold")
+    robot.adapter.child(1).finished()
+    _outcome(second)
+
+
 @pytest.mark.spec("R15.1", "R19.1")
 def test_shutdown_answers_open_goals(graph: Graph) -> None:
     robot = Robot(graph)

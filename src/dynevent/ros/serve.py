@@ -27,7 +27,7 @@ from typing import Any
 
 import attrs
 import rclpy
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.logging import LoggingSeverity
 
 from dynevent.errors import (
@@ -334,7 +334,11 @@ def run(
     for robot in config.robots:
         robots.add(robot, stored.get((config.fleet, robot)))
     node.create_subscription(RosDescription, BEGIN_COMMAND_TOPIC, robots.on_begin_command, latched(10))
-    executor = MultiThreadedExecutor(num_threads=2)
+    # One thread: Python's GIL gives serve one core anyway, and a multi-threaded executor adds its
+    # own work on top.  rclpy's EventsExecutor (rclpy 9.1.2, rclpy.experimental) cannot serve the
+    # binding: it refuses guard conditions and hangs at 100% CPU on an action server whose execute
+    # callback is a coroutine (docs/performance.md).
+    executor = SingleThreadedExecutor()
     executor.add_node(node)
     stop = threading.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):

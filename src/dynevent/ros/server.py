@@ -208,8 +208,9 @@ class _RecoveringActionServer(ActionServer):  # type: ignore[misc]  # rclpy is u
 
 class _Entities:
     """One robot's ROS 2 entities on a node: its status and begin topics, its action server, the
-    stubborn-refresh timer, the wake-up guard condition and, when asked for, the description service.
-    Every callback runs in one mutually exclusive group: the server's steps never overlap."""
+    wake-up guard condition, the stubborn-refresh timer while a stubbornness holds (an idle robot has
+    no timer: every timer costs CPU at every executor wake-up) and, when asked for, the description
+    service.  Every callback runs in one mutually exclusive group: the server's steps never overlap."""
 
     def __init__(
         self,
@@ -221,6 +222,7 @@ class _Entities:
         description_service: Any | None,
     ) -> None:
         group = MutuallyExclusiveCallbackGroup()
+        self.node, self.group, self.server = node, group, server
         self.status = node.create_publisher(
             RosStatus, status_topic(fleet, robot), latched(STATUS_TOPIC_DEPTH)
         )
@@ -242,7 +244,7 @@ class _Entities:
             callback_group=group,
             owed=server._owed.get,
         )
-        self.timer = node.create_timer(server.config.stubborn_refresh, server._refresh, callback_group=group)
+        self.timer: Any = None
         self.service = None
         if description_service is not None:
             self.service = node.create_service(
@@ -252,9 +254,18 @@ class _Entities:
                 callback_group=group,
             )
 
+    def refresh(self, on: bool) -> None:
+        """Start or stop the stubborn-refresh timer."""
+        if on and self.timer is None:
+            period = self.server.config.stubborn_refresh
+            self.timer = self.node.create_timer(period, self.server._refresh, callback_group=self.group)
+        elif not on and self.timer is not None:
+            self.node.destroy_timer(self.timer)
+            self.timer = None
+
     def destroy(self, node: Any) -> None:
         self.action.destroy()
-        node.destroy_timer(self.timer)
+        self.refresh(False)
         node.destroy_publisher(self.status)
         node.destroy_publisher(self.begin)
         node.destroy_guard_condition(self.wake)
@@ -331,6 +342,7 @@ class DynamicEventServer:
         self._position: tuple[str, float, float] | None = None
         self._log = node.get_logger().get_child(f"{fleet}.{robot}")
         self._ros = _Entities(self, node, fleet, robot, begin_publisher, description_service)
+        self._ros.refresh(self._state.stubborn is not None)
         self._announce = True  # the status at the first drain, unless a step already queued one
         self._ros.wake.trigger()
 
@@ -556,6 +568,7 @@ class DynamicEventServer:
         holds = self._stubbornness
         if isinstance(output, outs.StubbornBegin):
             self._log.info(f"stubborn for {output.period:g} s")
+            self._ros.refresh(True)
             if holds is not None:
                 holds.begin(output.period, output.map_name, output.x, output.y)
         elif isinstance(output, outs.StubbornHold):
@@ -565,6 +578,7 @@ class DynamicEventServer:
             if holds is not None:
                 holds.delay(output.delay)
         elif isinstance(output, outs.StubbornEnd):
+            self._ros.refresh(False)
             if holds is not None:
                 holds.end()
         elif isinstance(output, outs.DynamicEventFinished):

@@ -1,0 +1,101 @@
+"""The bare rclpy peer of ``dynevent serve`` for bench/ros_fleet.py: the same exchanges, no protocol.
+
+Per robot one rclpy ``ActionServer`` of ``rmf_task_msgs/action/DynamicEvent`` and a transient-local
+status publisher (and the begin publishers serve makes), on one node spun by a single-threaded
+executor, as serve's are.  Each goal is accepted, publishes RUNNING and one ``underway`` feedback,
+runs a simulated child of ``DURATION`` seconds on a one-shot timer, then publishes WAITING and
+succeeds with ``completed``.  Nothing is checked: it is the least a server doing the same exchange
+does, the floor dynevent's binding is measured against.
+
+    python ros_bare_fleet.py CONFIG   (the JSON file serve reads: fleet, robots, categories)
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import signal
+import sys
+import threading
+from pathlib import Path
+from typing import Any
+
+import rclpy
+from rclpy.action import ActionServer
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.task import Future
+from rmf_task_msgs.action import DynamicEvent
+from rmf_task_msgs.msg import DynamicEventDescription, DynamicEventStatus
+
+
+def _latched(depth: int) -> QoSProfile:
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST,
+        depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL,
+    )
+
+
+class Robot:
+    def __init__(self, node: Any, fleet: str, robot: str, duration: float) -> None:
+        self.node, self.duration, self.last = node, duration, 1
+        self.status = node.create_publisher(
+            DynamicEventStatus, f"rmf/dynamic_event/status/{fleet}/{robot}", _latched(1)
+        )
+        self.begin = node.create_publisher(
+            DynamicEventDescription, f"rmf/dynamic_event/begin/{fleet}/{robot}", _latched(1)
+        )
+        self.action = ActionServer(
+            node, DynamicEvent, f"rmf/dynamic_event/command/{fleet}/{robot}", self.execute
+        )
+        self.status.publish(DynamicEventStatus(dynamic_event_seq=1, dynamic_state=1, status="standby", id=1))
+
+    async def execute(self, goal_handle: Any) -> Any:
+        self.last += 1
+        child = self.last
+        self.status.publish(
+            DynamicEventStatus(dynamic_event_seq=1, dynamic_state=2, status="underway", id=child)
+        )
+        goal_handle.publish_feedback(DynamicEvent.Feedback(status="underway", id=child))
+        ended: Future[None] = Future()
+        timer = None
+
+        def end() -> None:
+            self.node.destroy_timer(timer)
+            ended.set_result(None)
+
+        timer = self.node.create_timer(self.duration, end)
+        await ended
+        self.status.publish(
+            DynamicEventStatus(dynamic_event_seq=1, dynamic_state=1, status="standby", id=child)
+        )
+        goal_handle.succeed()
+        return DynamicEvent.Result(status="completed", id=child)
+
+
+def main() -> None:
+    config = json.loads(Path(sys.argv[1]).read_text(encoding="utf-8"))
+    duration = float(config["categories"]["go_to_place"]["duration"])
+    rclpy.init()
+    node = rclpy.create_node("bench_bare_fleet")
+    robots = [Robot(node, config["fleet"], robot, duration) for robot in config["robots"]]
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
+
+    def spin() -> None:
+        with contextlib.suppress(ExternalShutdownException):
+            executor.spin()
+
+    threading.Thread(target=spin, daemon=True).start()
+    print(f"serving {len(robots)} robot(s)", flush=True)
+    stop.wait()
+    executor.shutdown(timeout_sec=5)
+
+
+if __name__ == "__main__":
+    main()
