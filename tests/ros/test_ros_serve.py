@@ -15,6 +15,7 @@ import pytest
 from ros_support import START, Child, Graph, wait_for
 
 from dynevent import client as cl
+from dynevent.errors import ServeError
 from dynevent.ros import DynamicEventClient
 from dynevent.wire.vocab import Failure, GoalStatus
 
@@ -353,3 +354,69 @@ def test_a_crash_at_any_point_of_a_goals_life_loses_no_answer(
         serve.process.send_signal(signal.SIGCONT)
         code = serve.stop()
     assert code == 0, serve.output
+
+
+def test_a_sharded_fleet_is_served_by_its_processes_as_by_one(tmp_path: Path) -> None:
+    """``--shard K/N``: each process serves the robots whose names hash to its part, every robot is
+    served exactly once, and a client drives each robot as it would one process's."""
+    from dynevent.ros.serve import parse_shard, shard_of
+
+    robots = [f"shardRobot{index}" for index in range(6)]
+    parts = {robot: shard_of(robot, 2) for robot in robots}
+    assert set(parts.values()) == {1, 2}  # these names fall in both parts
+    shards = [
+        Child(
+            [
+                "-m",
+                "dynevent",
+                "serve",
+                "--rebegin",
+                "0",
+                "--shard",
+                f"{index}/2",
+                "--state",
+                str(tmp_path / f"shard{index}.db"),
+                *[f"--robot={robot}" for robot in robots],
+            ]
+        )
+        for index in (1, 2)
+    ]
+    try:
+        for index, shard in enumerate(shards, start=1):
+            shard.wait_line("serving ")
+            line = next(line for line in shard.lines if line.startswith("serving "))
+            mine = [robot for robot in robots if parts[robot] == index]
+            assert f"serving {len(mine)} robot(s) of fleet tinyRobot (shard {index}/2 of 6)" in line
+            assert all(robot in line for robot in mine)
+            assert not any(robot in line for robot in robots if robot not in mine)
+        sends = [
+            subprocess.Popen(
+                [
+                    sys.executable,
+                    "-m",
+                    "dynevent",
+                    "send",
+                    "--robot",
+                    robot,
+                    "--place",
+                    "pantry",
+                    "--timeout",
+                    "30",
+                ],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT,
+                text=True,
+                env=os.environ.copy(),
+            )
+            for robot in robots
+        ]
+        for send_process in sends:
+            output, _ = send_process.communicate(timeout=60)
+            assert send_process.returncode == 0 and "outcome: completed" in output, output
+    finally:
+        codes = [shard.stop() for shard in shards]
+    assert codes == [0, 0], [shard.output for shard in shards]
+    assert parse_shard("2/3") == (2, 3)
+    for bad in ("0/2", "3/2", "1", "a/b", "1/0", "-1/2"):
+        with pytest.raises(ServeError, match="expected K/N"):
+            parse_shard(bad)

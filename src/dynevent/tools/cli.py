@@ -291,6 +291,12 @@ def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         choices=("standard", "rmf_ros2"),
         help="serve as the spec says (standard, the default) or as rmf_ros2 does where they differ",
     )
+    parser.add_argument(
+        "--shard",
+        metavar="K/N",
+        help="serve only the robots whose names hash to part K of N: run N processes, 1/N to N/N, "
+        "for one fleet (each with its own --state file)",
+    )
     parser.add_argument("--seconds", type=float, metavar="SECONDS", help="stop after this long")
     parser.set_defaults(run=_serve)
 
