@@ -15,6 +15,7 @@ servers doing the same exchanges, with no protocol).  Two measurements:
 
     python bench/ros_fleet.py [--robots 100] [--seconds 60] [--duration 0.2] [--write]
     python bench/ros_fleet.py --idle 1,100,1000 [--window 20] [--write]
+    python bench/ros_fleet.py --robots 2000 --drive 200 --shards 1,2 [--write]
 
 ``--write`` records the result as the ``ros-fleet`` or ``ros-fleet-idle`` section of
 bench/results.md.
@@ -54,9 +55,12 @@ def _cpu_seconds(pid: int) -> float:
 
 
 class Server:
-    """One server process of ``robots`` robots, started and ready (it printed ``serving``)."""
+    """The server processes of ``robots`` robots (``shards`` of them, dynevent only), started and
+    ready (each printed ``serving``); ``started`` is how long that took, in seconds."""
 
-    def __init__(self, kind: str, robots: list[str], duration: float, start_timeout: float = 600) -> None:
+    def __init__(
+        self, kind: str, robots: list[str], duration: float, shards: int = 1, start_timeout: float = 900
+    ) -> None:
         folder = Path(tempfile.mkdtemp(prefix="dynevent-fleet-"))
         config = folder / "fleet.json"
         spec = {"duration": duration, "report_every": duration / 2}
@@ -65,32 +69,41 @@ class Server:
                 {"fleet": "benchFleet", "robots": robots, "rebegin": 0, "categories": {"go_to_place": spec}}
             )
         )
-        self.process = subprocess.Popen(
-            SERVERS[kind](config), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
-        )
-        ready = threading.Event()
+        began = time.monotonic()
+        parts = [[]] if shards == 1 else [["--shard", f"{index}/{shards}"] for index in range(1, shards + 1)]
+        self.processes = [
+            subprocess.Popen(
+                SERVERS[kind](config) + part, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
+            )
+            for part in parts
+        ]
+        ready = [threading.Event() for _ in self.processes]
 
-        def read() -> None:
-            assert self.process.stdout is not None
-            for line in self.process.stdout:  # drained to the end: a full pipe would stall the server
+        def read(process: Any, ready: threading.Event) -> None:
+            for line in process.stdout:  # drained to the end: a full pipe would stall the server
                 if line.startswith("serving "):
                     ready.set()
 
-        threading.Thread(target=read, daemon=True).start()
-        if not ready.wait(start_timeout):
-            self.stop()
-            raise SystemExit(f"{kind}: not ready within {start_timeout:g} s")
+        for process, event in zip(self.processes, ready, strict=True):
+            threading.Thread(target=read, args=(process, event), daemon=True).start()
+        for event in ready:
+            if not event.wait(max(start_timeout - (time.monotonic() - began), 0.0)):
+                self.stop()
+                raise SystemExit(f"{kind}: not ready within {start_timeout:g} s")
+        self.started = time.monotonic() - began
 
     def cpu(self) -> float:
-        return _cpu_seconds(self.process.pid)
+        return sum(_cpu_seconds(process.pid) for process in self.processes)
 
     def stop(self) -> None:
-        self.process.terminate()
-        try:
-            self.process.wait(timeout=60)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait(timeout=30)
+        for process in self.processes:
+            process.terminate()
+        for process in self.processes:
+            try:
+                process.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait(timeout=30)
 
 
 def idle(counts: list[int], window: float, settle: float) -> list[str]:
@@ -121,13 +134,15 @@ def idle(counts: list[int], window: float, settle: float) -> list[str]:
     ]
 
 
-def load(kind: str, robots: list[str], seconds: float, duration: float) -> tuple[list[str], bool]:
+def load(
+    kind: str, robots: list[str], seconds: float, duration: float, shards: int = 1, drive: int | None = None
+) -> tuple[list[str], bool]:
     import rclpy
     from rclpy.action import ActionClient
     from rclpy.executors import MultiThreadedExecutor
     from rmf_task_msgs.action import DynamicEvent
 
-    server = Server(kind, robots, duration)
+    server = Server(kind, robots, duration, shards)
     context = rclpy.Context()
     rclpy.init(context=context)
     node = rclpy.create_node("bench_fleet_load", context=context)
@@ -136,11 +151,14 @@ def load(kind: str, robots: list[str], seconds: float, duration: float) -> tuple
     threading.Thread(target=executor.spin, daemon=True).start()
     clients = {
         robot: ActionClient(node, DynamicEvent, f"rmf/dynamic_event/command/benchFleet/{robot}")
-        for robot in robots
+        for robot in robots[:drive]
     }
     for robot, client in clients.items():
         if not client.wait_for_server(timeout_sec=60):
             raise SystemExit(f"no server for {robot}")
+    # a server is "ready" once the client's endpoints match its own; its replies to this client match
+    # a moment later (a response sent before that is dropped by the DDS layer): let discovery settle
+    time.sleep(2.0)
     lock = threading.Lock()
     trips: list[float] = []
     results: dict[tuple[str, int], int] = {}
@@ -184,6 +202,7 @@ def load(kind: str, robots: list[str], seconds: float, duration: float) -> tuple
                 trips.append(time.perf_counter() - started)
             time.sleep(max(second - time.monotonic(), 0.0))
 
+    started = server.started
     cpu_before = server.cpu()
     wall = time.monotonic()
     threads = [threading.Thread(target=drive, args=item, daemon=True) for item in clients.items()]
@@ -203,8 +222,11 @@ def load(kind: str, robots: list[str], seconds: float, duration: float) -> tuple
     overheads = sorted(trip - duration for trip in trips) or [float("nan")]
     rate = len(trips) / wall
     p50, p99 = statistics.median(overheads), overheads[int(0.99 * (len(overheads) - 1))]
+    name = kind if shards == 1 else f"{kind}, {shards} processes"
+    if drive is not None:
+        name += f" ({len(robots)} robots, {started:.0f} s to start)"
     row = (
-        f"| {kind} | {rate:.1f} | {100 * cpu / wall:.0f}% | {rate / max(cpu / wall, 1e-9):.0f} | "
+        f"| {name} | {rate:.1f} | {100 * cpu / wall:.0f}% | {rate / max(cpu / wall, 1e-9):.0f} | "
         f"{p50 * 1e3:.1f} ms | {p99 * 1e3:.1f} ms | {len(twice)} | {len(problems)} |"
     )
     print(row, flush=True)
@@ -221,6 +243,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--idle", metavar="N,N,...", help="measure idle CPU for these fleet sizes")
     parser.add_argument("--window", type=float, default=20.0, help="idle: seconds of CPU measured")
     parser.add_argument("--settle", type=float, default=5.0, help="idle: seconds waited after ready")
+    parser.add_argument(
+        "--shards",
+        metavar="N,N,...",
+        help="load: dynevent serve split over each of these numbers of processes (--shard), no peer",
+    )
+    parser.add_argument("--drive", type=int, help="load: drive only this many of the robots")
     parser.add_argument("--write", action="store_true", help="record the result in bench/results.md")
     args = parser.parse_args(argv)
     os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 200)))
@@ -231,11 +259,12 @@ def main(argv: list[str] | None = None) -> int:
         if args.write:
             recorded.write_section("ros-fleet-idle", lines)
         return 0
-    robots = [f"r{index:03d}" for index in range(args.robots)]
+    robots = [f"r{index:04d}" for index in range(args.robots)]
     header = [
         "## ROS 2: a simulated fleet in one process under load (bench/ros_fleet.py)",
         "",
-        f"{args.robots} robots, each sent one NEXT a second for {args.seconds:g} s by a plain rclpy client;",
+        f"{args.robots} robots, {args.drive or args.robots} of them each sent one NEXT a second for "
+        f"{args.seconds:g} s by a plain rclpy client;",
         f"a child takes {args.duration:g} s with one progress report.  Overhead: the round trip (send to",
         "result) minus the child's own time.",
         "",
@@ -247,12 +276,13 @@ def main(argv: list[str] | None = None) -> int:
     ]
     print("\n".join(header), flush=True)
     rows, clean = [], True
-    for kind in SERVERS:
-        row, ok = load(kind, robots, args.seconds, args.duration)
+    runs = [("dynevent", int(count)) for count in args.shards.split(",")] if args.shards else []
+    for kind, shards in runs or [(kind, 1) for kind in SERVERS]:
+        row, ok = load(kind, robots, args.seconds, args.duration, shards, args.drive)
         rows.extend(row)
         clean = clean and ok
     if args.write and clean:
-        recorded.write_section("ros-fleet", header + rows)
+        recorded.write_section("ros-fleet-shards" if runs else "ros-fleet", header + rows)
         print(f"wrote {recorded.RESULTS}", file=sys.stderr)
     return 0 if clean else 1
 

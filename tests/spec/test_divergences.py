@@ -456,6 +456,21 @@ def test_rmf_ros2_mode_publishes_running_at_a_childs_end() -> None:
     assert run.request(u(2), next_goal(run.seq, 0)) == accepted(u(2))
 
 
+@pytest.mark.spec("R20.2", "R17.4")
+def test_dynevents_client_reads_rmf_ros2s_running_after_a_childs_end_as_waiting() -> None:
+    from dynevent import client
+
+    run = running(config=RMF_ROS2, uuid=u(1))
+    seen = run.child_end("completed")[-1]
+    assert isinstance(seen, outs.PublishStatus)
+    view = client.step(
+        client.ClientState.new("00000000000000cd"), client.StatusReceived(message=seen.message)
+    )
+    (send,) = client.request_next(view.state, "go_to_place", '"b"', now=T0).outputs
+    assert isinstance(send, client.SendGoal), send  # not refused locally as busy
+    assert run.request(u(2), send.goal) == accepted(u(2))
+
+
 @pytest.mark.spec("R20.1", "R2.2", "R6.2")
 def test_a_client_that_keeps_no_state_works_in_standard_mode() -> None:
     run = waiting(event_id=7)
