@@ -340,6 +340,7 @@ class DynamicEventServer:
         self._handles: dict[str, Any] = {}
         self._executions: dict[int, ChildExecution] = {}
         self._position: tuple[str, float, float] | None = None
+        self._converted: tuple[Any, Any] = (None, None)  # the goal callback's (request, goal)
         self._log = node.get_logger().get_child(f"{fleet}.{robot}")
         self._ros = _Entities(self, node, fleet, robot, begin_publisher, description_service)
         self._ros.refresh(self._state.stubborn is not None)
@@ -458,6 +459,9 @@ class DynamicEventServer:
             return GoalResponse.REJECT
         with self._lock:
             decision = machine.accept(self._state, goal, self._config)
+        # rclpy hands the same request object to the accepted callback right after this one, in the
+        # same callback of the group: its conversion is kept for it rather than done twice
+        self._converted = (request, goal)
         if isinstance(decision, outs.Rejected):
             self._log.info(f"goal refused: {decision.reason.value}: {decision.text}")
             if self._observer is not None:
@@ -467,7 +471,10 @@ class DynamicEventServer:
 
     def _handle_accepted(self, goal_handle: Any) -> None:
         uuid = convert.uuid_from_ros(goal_handle.goal_id)
-        goal = convert.goal_from_ros(goal_handle.request)  # it passed the goal callback's check
+        request, goal = self._converted
+        if request is not goal_handle.request:  # another path to the accepted callback: convert it
+            goal = convert.goal_from_ros(goal_handle.request)  # it passed the goal callback's check
+        self._converted = (None, goal)
         with self._lock:
             transition = machine.step(
                 self._state, ins.GoalSubmitted(goal_uuid=uuid, goal=goal, now=self.now()), self._config
