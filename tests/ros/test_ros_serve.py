@@ -420,3 +420,56 @@ def test_a_sharded_fleet_is_served_by_its_processes_as_by_one(tmp_path: Path) ->
     for bad in ("0/2", "3/2", "1", "a/b", "1/0", "-1/2"):
         with pytest.raises(ServeError, match="expected K/N"):
             parse_shard(bad)
+
+
+@pytest.mark.spec("R3.1")
+def test_a_fleet_larger_than_a_lane_is_served_by_every_lane(tmp_path: Path, graph: Graph) -> None:
+    """serve spreads its robots over lanes (a node and an executor thread each, LANE robots a lane):
+    a robot of the first lane and one of the last are both served, begins on command included."""
+    from rmf_task_msgs.msg import DynamicEventDescription
+
+    from dynevent.ros.serve import BEGIN_COMMAND_TOPIC, LANE
+    from dynevent.ros.server import latched
+
+    robots = [f"laneRobot{index:03d}" for index in range(LANE + 2)]
+    config = tmp_path / "fleet.json"
+    config.write_text(
+        json.dumps({"robots": robots, "rebegin": 0, "categories": {"go_to_place": {"duration": 0.2}}}),
+        encoding="utf-8",
+    )
+    serve = Child(["-m", "dynevent", "serve", "--config", str(config)])
+    serve.wait_line("serving ")
+    try:
+        first, last = robots[0], robots[-1]
+        for robot in (first, last):
+            done = subprocess.run(
+                [sys.executable, "-m", "dynevent", "send", "--robot", robot, "--end", "--timeout", "20"],
+                capture_output=True,
+                text=True,
+                timeout=40,
+                env=os.environ.copy(),
+                check=False,
+            )
+            assert done.returncode == 0, done.stdout + done.stderr
+        watcher: DynamicEventClient = graph.node(
+            "lane_watcher", lambda node: DynamicEventClient(node, "tinyRobot", last)
+        )
+        wait_for(lambda: watcher.state.phase == 0, "the last lane's robot INACTIVE")
+        publisher = graph.node(
+            "lane_commander",
+            lambda node: node.create_publisher(DynamicEventDescription, BEGIN_COMMAND_TOPIC, latched(10)),
+        )
+        publisher.publish(DynamicEventDescription(fleet="tinyRobot", robot=last, description="{}"))
+        wait_for(lambda: watcher.state.phase == 1 and watcher.state.seq == 2, "run 2 begun on command")
+        done = subprocess.run(
+            [sys.executable, "-m", "dynevent", "send", "--robot", last, "--place", "dock", "--timeout", "20"],
+            capture_output=True,
+            text=True,
+            timeout=40,
+            env=os.environ.copy(),
+            check=False,
+        )
+        assert done.returncode == 0 and "outcome: completed" in done.stdout, done.stdout + done.stderr
+    finally:
+        code = serve.stop()
+    assert code == 0, serve.output

@@ -269,26 +269,61 @@ def _config_from_dict(data: Any, source: str) -> ServeConfig:
     )
 
 
+#: Robots per lane: one node and one executor thread each.  rclpy's executor walks every entity of
+#: its nodes at each wake-up, so a wake-up costs in proportion to the robots it serves: 2,000 robots
+#: on one executor served 56 goals a second per core, in lanes of 64 several times more
+#: (docs/performance.md).  The lanes' threads share the GIL; a lane waits for DDS without it.
+LANE = 64
+
+
+class _Lane:
+    """A node, its own single-threaded executor and thread, and the simulated children of its robots."""
+
+    def __init__(self, name: str, config: ServeConfig, say: Callable[[str], None]) -> None:
+        self.node = rclpy.create_node(name)
+        self.node.get_logger().set_level(LoggingSeverity.WARN)  # the live log says the rest
+        self.children = SimulatedChildren(self.node, config.categories, say)
+        self.executor = SingleThreadedExecutor()
+        self.thread: threading.Thread | None = None
+
+    def spin(self) -> None:
+        self.executor.add_node(self.node)
+        self.thread = threading.Thread(target=_spin, args=(self.executor,), daemon=True)
+        self.thread.start()
+
+    def stop(self) -> None:
+        self.executor.shutdown(timeout_sec=5)
+        if self.thread is not None:
+            self.thread.join(timeout=5)
+
+
 class _Robots:
-    """The robots one ``dynevent serve`` node serves: their servers, their live log, their re-begins."""
+    """The robots one ``dynevent serve`` process serves: their servers, lanes, live log and re-begins."""
 
     def __init__(
         self,
-        node: Any,
         config: ServeConfig,
         machine_config: ServerConfig,
         store: StateStore | None,
         say: Callable[[str], None],
     ) -> None:
-        self.node = node
         self.config = config
         self.store = store
         self.say = say
         self.machine_config = machine_config
-        self.begins = DynamicEventServer.fleet_begin_publisher(node)
-        self.children = SimulatedChildren(node, config.categories, say)
+        index, count = config.shard
+        base = "dynevent_serve" if count == 1 else f"dynevent_serve_{index}_of_{count}"
+        robots = config.served()
+        self.lanes = [
+            _Lane(base if start == 0 else f"{base}_lane_{start // LANE}", config, say)
+            for start in range(0, max(len(robots), 1), LANE)
+        ]
+        self.lane_of = {robot: self.lanes[position // LANE] for position, robot in enumerate(robots)}
+        self.node = self.lanes[0].node  # the fleet-wide begin publisher and the begin commands
+        self.begins = DynamicEventServer.fleet_begin_publisher(self.node)
         self.servers: dict[str, DynamicEventServer] = {}
         self.rebegin_timers: dict[str, Any] = {}
+        self._timers_lock = threading.Lock()  # begin commands arrive on lane 0's thread
 
     def observer(self, robot: str) -> Callable[[outs.Output | outs.Rejected], None]:
         def observe(output: outs.Output | outs.Rejected) -> None:
@@ -301,26 +336,29 @@ class _Robots:
     def finished(self, robot: str) -> Callable[[str], None]:
         def rebegin_later(status: str) -> None:
             if self.config.rebegin > 0:
-                timer = self.node.create_timer(self.config.rebegin, lambda: self.begin_again(robot))
-                self.rebegin_timers[robot] = timer
+                node = self.lane_of[robot].node
+                timer = node.create_timer(self.config.rebegin, lambda: self.begin_again(robot))
+                with self._timers_lock:
+                    self.rebegin_timers[robot] = timer
 
         return rebegin_later
 
     def begin_again(self, robot: str, description: str = DEFAULT_DESCRIPTION) -> None:
-        timer = self.rebegin_timers.pop(robot, None)
+        with self._timers_lock:
+            timer = self.rebegin_timers.pop(robot, None)
         if timer is not None:
-            self.node.destroy_timer(timer)
+            self.lane_of[robot].node.destroy_timer(timer)
         self.servers[robot].begin(description, 1)
 
     def add(self, robot: str, restored: State | None) -> None:
         """Serve ``robot``, from its restored state if any; a robot with no active run begins one."""
-        fleet, store = self.config.fleet, self.store
+        fleet, store, lane = self.config.fleet, self.store, self.lane_of[robot]
         server = DynamicEventServer(
-            self.node,
+            lane.node,
             fleet,
             robot,
             self.machine_config,
-            self.children,
+            lane.children,
             begin_publisher=self.begins,
             state=restored,
             on_state=store.save if store is not None else None,
@@ -354,23 +392,19 @@ def run(
     log = LiveLog(say)
     index, count = config.shard
     rclpy.init()
-    node = rclpy.create_node("dynevent_serve" if count == 1 else f"dynevent_serve_{index}_of_{count}")
-    node.get_logger().set_level(LoggingSeverity.WARN)  # the live log says the rest
-    robots = _Robots(node, config, machine_config, store, log)
+    # Single-threaded executors, one per lane: a multi-threaded one adds its own work and Python's
+    # GIL runs one thread at a time anyway.  rclpy's EventsExecutor (rclpy 9.1.2, rclpy.experimental)
+    # cannot serve the binding: it refuses guard conditions and hangs at 100% CPU on an action server
+    # whose execute callback is a coroutine (docs/performance.md).
+    robots = _Robots(config, machine_config, store, log)
     for robot in config.served():
         robots.add(robot, stored.get((config.fleet, robot)))
-    node.create_subscription(RosDescription, BEGIN_COMMAND_TOPIC, robots.on_begin_command, latched(10))
-    # One thread: Python's GIL gives serve one core anyway, and a multi-threaded executor adds its
-    # own work on top.  rclpy's EventsExecutor (rclpy 9.1.2, rclpy.experimental) cannot serve the
-    # binding: it refuses guard conditions and hangs at 100% CPU on an action server whose execute
-    # callback is a coroutine (docs/performance.md).
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
+    robots.node.create_subscription(RosDescription, BEGIN_COMMAND_TOPIC, robots.on_begin_command, latched(10))
     stop = threading.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stop.set())
-    spinner = threading.Thread(target=_spin, args=(executor,), daemon=True)
-    spinner.start()
+    for lane in robots.lanes:
+        lane.spin()
     names = list(robots.servers)
     shown = ", ".join(names if len(names) <= 10 else [*names[:10], f"... ({len(names) - 10} more)"])
     part = "" if count == 1 else f" (shard {index}/{count} of {len(config.robots)})"
@@ -379,11 +413,12 @@ def run(
     for server in robots.servers.values():
         server.shutdown()
     time.sleep(0.2)  # let the shutdown answers go out before the node goes
-    executor.shutdown(timeout_sec=5)
-    spinner.join(timeout=5)
+    for lane in robots.lanes:
+        lane.stop()
     for server in robots.servers.values():
         server.destroy()
-    node.destroy_node()
+    for lane in robots.lanes:
+        lane.node.destroy_node()
     rclpy.try_shutdown()
     if store is not None:
         store.close()
