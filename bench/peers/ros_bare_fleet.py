@@ -23,19 +23,11 @@ from typing import Any
 import rclpy
 from rclpy.action import ActionServer
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 from rmf_task_msgs.action import DynamicEvent
 from rmf_task_msgs.msg import DynamicEventDescription, DynamicEventStatus
 
-
-def _latched(depth: int) -> QoSProfile:
-    return QoSProfile(
-        history=HistoryPolicy.KEEP_LAST,
-        depth=depth,
-        reliability=ReliabilityPolicy.RELIABLE,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL,
-    )
+from dynevent.ros.server import latched as _latched  # the same QoS as serve's topics
 
 
 class Robot:

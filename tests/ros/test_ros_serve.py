@@ -42,14 +42,26 @@ class Serve(Child):
         return self
 
 
-def send(*args: str, timeout: float = 20.0) -> subprocess.CompletedProcess[str]:
+def send(*args: str, timeout: float = 20.0, robot: str = ROBOT) -> subprocess.CompletedProcess[str]:
+    """``dynevent send`` to ``robot``, run to its end (bounded)."""
     return subprocess.run(
-        [sys.executable, "-m", "dynevent", "send", "--robot", ROBOT, "--timeout", str(timeout), *args],
+        [sys.executable, "-m", "dynevent", "send", "--robot", robot, "--timeout", str(timeout), *args],
         capture_output=True,
         text=True,
         timeout=timeout + 15,
         env=os.environ.copy(),
         check=False,
+    )
+
+
+def send_in_background(*args: str, timeout: float = 30.0, robot: str = ROBOT) -> subprocess.Popen[str]:
+    """``dynevent send`` to ``robot``, started; read it with ``communicate(timeout=...)``."""
+    return subprocess.Popen(
+        [sys.executable, "-m", "dynevent", "send", "--robot", robot, "--timeout", str(timeout), *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=os.environ.copy(),
     )
 
 
@@ -94,24 +106,7 @@ def test_serve_and_send_survive_kill_9_in_the_middle_of_a_child(
         assert "outcome: completed" in done.stdout and "[id 2]" in done.stdout
         wait_for(lambda: waiting_after(watcher, 2), "waiting, id 2")
         (tmp_path / "slow.json").write_text('{"category": "slow", "description": {}}', encoding="utf-8")
-        slow = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "dynevent",
-                "send",
-                "--robot",
-                ROBOT,
-                "--timeout",
-                "40",
-                "--file",
-                str(tmp_path / "slow.json"),
-            ],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-            env=os.environ.copy(),
-        )
+        slow = send_in_background("--file", str(tmp_path / "slow.json"), timeout=40)
         wait_for(lambda: watcher.state.phase == 2 and watcher.state.current_id == 3, "child 3 running")
         serve.process.send_signal(signal.SIGKILL)
         assert serve.stop() == -signal.SIGKILL
@@ -152,14 +147,7 @@ def test_send_explains_and_exits_by_the_outcome(watcher: Any, mode: str) -> None
         assert "cancel_idle" in idle.stdout
         usage = send("--cancel", "--end")
         assert usage.returncode == 2 and "exactly one of" in usage.stderr
-        missing = subprocess.run(
-            [sys.executable, "-m", "dynevent", "send", "--robot", "nobody", "--end", "--timeout", "2"],
-            capture_output=True,
-            text=True,
-            timeout=30,
-            env=os.environ.copy(),
-            check=False,
-        )
+        missing = send("--end", timeout=2, robot="nobody")
         assert missing.returncode == 2 and "no Dynamic Event server" in missing.stdout
         assert "Traceback" not in missing.stderr
     finally:
@@ -212,27 +200,7 @@ def test_serve_runs_children_of_several_robots_at_once(graph: Graph) -> None:
     serve = Child(["-m", "dynevent", "serve", "--rebegin", "0", *[f"--robot={robot}" for robot in robots]])
     serve.wait_line("serving ")
     try:
-        sends = [
-            subprocess.Popen(
-                [
-                    sys.executable,
-                    "-m",
-                    "dynevent",
-                    "send",
-                    "--robot",
-                    robot,
-                    "--place",
-                    "pantry",
-                    "--timeout",
-                    "30",
-                ],
-                stdout=subprocess.PIPE,
-                stderr=subprocess.STDOUT,
-                text=True,
-                env=os.environ.copy(),
-            )
-            for robot in robots
-        ]
+        sends = [send_in_background("--place", "pantry", timeout=30, robot=robot) for robot in robots]
         for send_process in sends:
             output, _ = send_process.communicate(timeout=60)
             assert send_process.returncode == 0, output
@@ -274,23 +242,10 @@ def test_send_drives_every_flow_of_a_run_in_both_modes(tmp_path: Path, watcher: 
         action = _write(tmp_path, '{"category": "perform_action", "description": {"action": "clean"}}')
         done = send("--file", str(action))
         assert done.returncode == 0 and "outcome: completed" in done.stdout, done.stdout
-        slow = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "dynevent",
-                "send",
-                "--robot",
-                ROBOT,
-                "--timeout",
-                "30",
-                "--file",
-                str(_write(tmp_path, '{"category": "slow", "description": {}}', "slow.json")),
-            ],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-            env=os.environ.copy(),
+        slow = send_in_background(
+            "--file",
+            str(_write(tmp_path, '{"category": "slow", "description": {}}', "slow.json")),
+            timeout=30,
         )
         wait_for(lambda: watcher.state.phase == 2 and watcher.state.current_id == 6, "child 6 running")
         cancel = send("--cancel")
@@ -389,27 +344,7 @@ def test_a_sharded_fleet_is_served_by_its_processes_as_by_one(tmp_path: Path) ->
             assert f"serving {len(mine)} robot(s) of fleet tinyRobot (shard {index}/2 of 6)" in line
             assert all(robot in line for robot in mine)
             assert not any(robot in line for robot in robots if robot not in mine)
-        sends = [
-            subprocess.Popen(
-                [
-                    sys.executable,
-                    "-m",
-                    "dynevent",
-                    "send",
-                    "--robot",
-                    robot,
-                    "--place",
-                    "pantry",
-                    "--timeout",
-                    "30",
-                ],
-                stdout=subprocess.PIPE,
-                stderr=subprocess.STDOUT,
-                text=True,
-                env=os.environ.copy(),
-            )
-            for robot in robots
-        ]
+        sends = [send_in_background("--place", "pantry", timeout=30, robot=robot) for robot in robots]
         for send_process in sends:
             output, _ = send_process.communicate(timeout=60)
             assert send_process.returncode == 0 and "outcome: completed" in output, output
@@ -442,14 +377,7 @@ def test_a_fleet_larger_than_a_lane_is_served_by_every_lane(tmp_path: Path, grap
     try:
         first, last = robots[0], robots[-1]
         for robot in (first, last):
-            done = subprocess.run(
-                [sys.executable, "-m", "dynevent", "send", "--robot", robot, "--end", "--timeout", "20"],
-                capture_output=True,
-                text=True,
-                timeout=40,
-                env=os.environ.copy(),
-                check=False,
-            )
+            done = send("--end", robot=robot)
             assert done.returncode == 0, done.stdout + done.stderr
         watcher: DynamicEventClient = graph.node(
             "lane_watcher", lambda node: DynamicEventClient(node, "tinyRobot", last)
@@ -461,14 +389,7 @@ def test_a_fleet_larger_than_a_lane_is_served_by_every_lane(tmp_path: Path, grap
         )
         publisher.publish(DynamicEventDescription(fleet="tinyRobot", robot=last, description="{}"))
         wait_for(lambda: watcher.state.phase == 1 and watcher.state.seq == 2, "run 2 begun on command")
-        done = subprocess.run(
-            [sys.executable, "-m", "dynevent", "send", "--robot", last, "--place", "dock", "--timeout", "20"],
-            capture_output=True,
-            text=True,
-            timeout=40,
-            env=os.environ.copy(),
-            check=False,
-        )
+        done = send("--place", "dock", robot=last)
         assert done.returncode == 0 and "outcome: completed" in done.stdout, done.stdout + done.stderr
     finally:
         code = serve.stop()

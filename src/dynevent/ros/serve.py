@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import os
 import queue
 import signal
 import threading
@@ -273,7 +274,7 @@ def _config_from_dict(data: Any, source: str) -> ServeConfig:
 #: its nodes at each wake-up, so a wake-up costs in proportion to the robots it serves: 2,000 robots
 #: on one executor served 56 goals a second per core, in lanes of 64 several times more
 #: (docs/performance.md).  The lanes' threads share the GIL; a lane waits for DDS without it.
-LANE = 64
+LANE = int(os.environ.get("DYNEVENT_SERVE_LANE", "64"))
 
 
 class _Lane:
