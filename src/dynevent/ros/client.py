@@ -251,6 +251,8 @@ class DynamicEventClient:
 
     def _send(self, send: cl.SendGoal) -> None:
         uuid = send.goal_uuid
+        if self._servers is None:  # the server processes this goal is sent to, to see a new one come
+            self._servers = self._server_processes()
         response = self._action.send_goal_async(
             convert.goal_to_ros(send.goal),
             feedback_callback=lambda message: self._on_feedback(uuid, message),
@@ -272,7 +274,8 @@ class DynamicEventClient:
         else:
             status = _TERMINAL.get(response.status, GoalStatus.ABORTED)
             result = convert.result_from_ros(response.result)
-        self._orphans.discard(uuid)
+        with self._lock:
+            self._orphans.discard(uuid)
         self._step(cl.ResultReceived(goal_uuid=uuid, status=status, result=result))
 
     def _on_feedback(self, uuid: str, message: Any) -> None:
@@ -307,21 +310,28 @@ class DynamicEventClient:
             self._watch_server({goal.goal_uuid for goal in goals})
             self._step(cl.Tick(now=self.now()))
         else:
-            self._servers, self._orphans = None, set()
+            self._servers = None  # the next goal's send looks again
+
+    def _server_processes(self) -> frozenset[bytes]:
+        """The GIDs of the robot's status publishers: one per server process on the graph."""
+        infos = self._node.get_publishers_info_by_topic(self._status_topic)
+        return frozenset(bytes(info.endpoint_gid) for info in infos)
 
     def _watch_server(self, open_goals: set[str]) -> None:
         """Ask again for the results of the goals a replaced server process took (R21.4)."""
-        infos = self._node.get_publishers_info_by_topic(self._status_topic)
-        servers = frozenset(bytes(info.endpoint_gid) for info in infos)
-        if self._servers is not None and servers - self._servers:
-            self._orphans |= open_goals  # sent before the new server process appeared
-            self._ask_again_at = 0.0
-        self._servers = servers
-        self._orphans &= open_goals
-        if not self._orphans or time.monotonic() < self._ask_again_at or not self._action.server_is_ready():
+        servers = self._server_processes()
+        with self._lock:
+            if self._servers is not None and servers - self._servers:
+                self._orphans |= open_goals  # sent before the new server process appeared
+                self._ask_again_at = 0.0
+            self._servers = servers
+            self._orphans &= open_goals
+            due = bool(self._orphans) and time.monotonic() >= self._ask_again_at
+            orphans = sorted(self._orphans) if due else []
+        if not orphans or not self._action.server_is_ready():
             return
         self._ask_again_at = time.monotonic() + ASK_AGAIN_PERIOD
-        for uuid in sorted(self._orphans):
+        for uuid in orphans:
             response = DynamicEvent.Impl.SendGoalService.Response(accepted=True)
             handle = ClientGoalHandle(self._action, convert.uuid_to_ros(uuid), response)
             handle.get_result_async().add_done_callback(lambda done, uuid=uuid: self._on_result(uuid, done))
