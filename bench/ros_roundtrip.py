@@ -248,7 +248,7 @@ def main(argv: list[str] | None = None) -> int:
         "|---|---|---|---|---|",
         *rows,
         "",
-        f"dynevent's cost on top of the bare round trip: **{extra:+.1%}** of it (target: under +10%);",
+        f"dynevent's cost on top of the bare round trip: **{extra:+.1%}** of it (target: within +5%);",
         f"on top of the peer that also publishes the two status messages: **{extra_status:+.1%}**.",
     ]
     print("\n".join(lines))
