@@ -3,9 +3,10 @@
 Two servers, each in a process of its own, serve the same action type
 (``rmf_task_msgs/action/DynamicEvent``) for one robot:
 
-- ``dynevent``: :class:`dynevent.ros.DynamicEventServer`, whose adapter reports
-  the child ``underway`` once and finishes it at once (the binding and the
-  machine, without ``dynevent serve``'s simulation timers);
+- ``dynevent``: :class:`dynevent.ros.DynamicEventServer`, whose adapter
+  finishes each child at once (the start feeds back ``underway``, R6.4: one
+  feedback, as the peers send; the binding and the machine, without
+  ``dynevent serve``'s simulation timers);
 - ``peer``: a bare rclpy ``ActionServer`` that accepts, executes, publishes one
   feedback and succeeds: the least a server doing the same exchange does;
 - ``peer_status``: the same, plus the two status messages the protocol
@@ -59,7 +60,7 @@ if kind == "dynevent":
 
     class Children:
         def start(self, execution):
-            execution.underway()
+            # the start already fed back "underway" (R6.4): one feedback, as the peers send
             execution.finished()
         def cancel(self, execution): execution.finished()
         def kill(self, execution): execution.finished()
