@@ -260,7 +260,7 @@ def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
     parser = commands.add_parser(
         "serve",
         help="a Dynamic Event server for a fleet of simulated robots, over ROS 2",
-        description="Serve the Dynamic Event protocol for every robot of a fleet on one ROS 2 node, "
+        description="Serve the Dynamic Event protocol for every robot of a fleet in one process, "
         "with simulated child events (go_to_place takes 3 s, reports each second, fails on the place "
         "'nowhere'; perform_action takes 2 s).  Each robot begins a dynamic event at start, again "
         "after a run ends, and when a DynamicEventDescription naming it arrives on "
