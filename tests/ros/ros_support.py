@@ -6,6 +6,7 @@ import contextlib
 import importlib.util
 import os
 import random
+import shutil
 import signal
 import subprocess
 import sys
@@ -27,6 +28,50 @@ WAIT = 15.0
 #: The bound on a child process's start (a Python interpreter importing rclpy, on a loaded machine):
 #: kept apart from WAIT so that a slow start is never mistaken for a discovery or protocol failure.
 START = 60.0
+
+
+def child_env() -> dict[str, str]:
+    """The environment of a process under test: this one's, with faulthandler on, so that a process
+    ended by :func:`stacks_of` prints every thread's Python stack."""
+    return {**os.environ, "PYTHONFAULTHANDLER": "1"}
+
+
+def stacks_of(process: subprocess.Popen[Any]) -> str:
+    """Every thread's stack of a process that did not end in time, native (gdb, when the machine has it)
+    and Python (faulthandler, which ``SIGABRT`` sets off: the process ends), for a failure message that
+    says where it hung rather than only that it did."""
+    native = ""
+    if shutil.which("gdb") is not None:
+        try:
+            traced = subprocess.run(
+                ["gdb", "-p", str(process.pid), "-batch", "-ex", "thread apply all bt"],
+                capture_output=True,
+                text=True,
+                timeout=WAIT * 4,
+                check=False,
+            )
+            native = traced.stdout[-30_000:]
+        except subprocess.TimeoutExpired:
+            native = "(gdb did not finish)"
+    if process.poll() is None:
+        process.send_signal(signal.SIGABRT)
+    return f"native stacks (gdb):\n{native}"
+
+
+def finish(process: subprocess.Popen[str], timeout: float) -> subprocess.CompletedProcess[str]:
+    """A process started with piped text output, once it ends (at most ``timeout`` seconds): its exit
+    code, standard output and error.  One that does not end fails the test with its output and
+    every thread's stack (:func:`stacks_of`)."""
+    try:
+        stdout, stderr = process.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        stacks = stacks_of(process)
+        stdout, stderr = process.communicate(timeout=WAIT)  # faulthandler's Python stacks at the end
+        command = " ".join(str(word) for word in process.args)  # type: ignore[union-attr]
+        raise AssertionError(
+            f"{command} did not end within {timeout:g} s; its output:\n{stdout}{stderr or ''}\n{stacks}"
+        ) from None
+    return subprocess.CompletedProcess(process.args, process.returncode, stdout, stderr or "")
 
 
 def keep_dds_local() -> None:
@@ -99,19 +144,12 @@ class Graph:
         gets to them: a later test's client would meet this test's action servers, still on the graph
         under the same names (the ROS tests' missed discoveries came from there).
         """
-        import rclpy
+        from dynevent.ros.spinning import close_down
 
         self._closing.set()
         self._thread.join(timeout=5)
         self.executor.shutdown(timeout_sec=5)
-        for node in self.nodes:
-            for waitable in list(node.waitables):
-                destroy = getattr(waitable, "destroy", None)
-                if destroy is not None:
-                    destroy()
-            node.destroy_node()
-        rclpy.shutdown(context=self.context)
-        self.context.destroy()
+        close_down(self.nodes, self.context)
         if self.died is not None:
             raise AssertionError(f"the executor thread died: {self.died!r}") from self.died
 
@@ -132,7 +170,7 @@ class Child:
             stdout=subprocess.PIPE,
             stderr=subprocess.STDOUT,
             text=True,
-            env=os.environ.copy(),
+            env=child_env(),
         )
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()

@@ -13,6 +13,7 @@ from __future__ import annotations
 import gc
 from typing import Any
 
+import pytest
 from rclpy.action import ActionServer
 from rmf_task_msgs.action import DynamicEvent
 from ros_support import Graph, wait_for
@@ -48,5 +49,47 @@ def test_a_closed_graph_leaves_no_entity_on_dds() -> None:
         finally:
             second.close()
             other.close()
+    finally:
+        gc.enable()
+
+
+def test_a_spinner_stops_between_waits_and_close_down_deletes_the_participant() -> None:
+    """``dynevent send`` and ``serve`` end through :class:`~dynevent.ros.spinning.Spinner` and
+    :func:`~dynevent.ros.spinning.close_down`: the spinning thread is out of rclpy before anything is
+    destroyed, and the process's DDS participant is deleted before the interpreter's exit, where a
+    participant left to Fast DDS's static destructors can hang the process (a CI run's ``send`` did)."""
+    import threading
+
+    import rclpy
+    from rclpy._rclpy_pybind11 import InvalidHandle
+    from rclpy.executors import SingleThreadedExecutor
+
+    from dynevent.ros import DynamicEventClient
+    from dynevent.ros.spinning import Spinner, close_down
+
+    gc.disable()
+    try:
+        context = rclpy.Context()
+        rclpy.init(context=context)
+        node = rclpy.create_node("spun_client", context=context)
+        DynamicEventClient(node, "graphTest", "spun")  # a timer, subscriptions and an action client
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(node)
+        spinner = Spinner(executor, "spinner-under-test")
+        spinner.start()
+        wait_for(lambda: any(t.name == "spinner-under-test" for t in threading.enumerate()), "spinning")
+        assert spinner.stop(timeout=5) is True
+        assert not any(t.name == "spinner-under-test" for t in threading.enumerate())
+        watcher = Graph()
+        try:
+            probe = watcher.node("probe")
+            wait_for(lambda: "spun_client" in probe.get_node_names(), "the spun client on the graph")
+            close_down([node], context)
+            wait_for(lambda: "spun_client" not in probe.get_node_names(), "the node gone")
+            # the participant is the context's: destroyed, not left for the interpreter's exit
+            with pytest.raises(InvalidHandle):
+                context.ok()
+        finally:
+            watcher.close()
     finally:
         gc.enable()

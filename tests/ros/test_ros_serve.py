@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -12,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from ros_support import START, Child, Graph, wait_for
+from ros_support import START, Child, Graph, child_env, finish, wait_for
 
 from dynevent import client as cl
 from dynevent.errors import ServeError
@@ -44,24 +43,21 @@ class Serve(Child):
 
 def send(*args: str, timeout: float = 20.0, robot: str = ROBOT) -> subprocess.CompletedProcess[str]:
     """``dynevent send`` to ``robot``, run to its end (bounded)."""
-    return subprocess.run(
-        [sys.executable, "-m", "dynevent", "send", "--robot", robot, "--timeout", str(timeout), *args],
-        capture_output=True,
-        text=True,
-        timeout=timeout + 15,
-        env=os.environ.copy(),
-        check=False,
-    )
+    return finish(_start_send(args, timeout, robot, stderr=subprocess.PIPE), timeout + 15)
 
 
 def send_in_background(*args: str, timeout: float = 30.0, robot: str = ROBOT) -> subprocess.Popen[str]:
-    """``dynevent send`` to ``robot``, started; read it with ``communicate(timeout=...)``."""
+    """``dynevent send`` to ``robot``, started, its errors in its output; end it with ``finish``."""
+    return _start_send(args, timeout, robot, stderr=subprocess.STDOUT)
+
+
+def _start_send(args: tuple[str, ...], timeout: float, robot: str, stderr: int) -> subprocess.Popen[str]:
     return subprocess.Popen(
         [sys.executable, "-m", "dynevent", "send", "--robot", robot, "--timeout", str(timeout), *args],
         stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
+        stderr=stderr,
         text=True,
-        env=os.environ.copy(),
+        env=child_env(),
     )
 
 
@@ -111,7 +107,7 @@ def test_serve_and_send_survive_kill_9_in_the_middle_of_a_child(
         serve.process.send_signal(signal.SIGKILL)
         assert serve.stop() == -signal.SIGKILL
         serve = Serve("--config", str(config), "--state", str(state), mode=mode).ready()
-        output, _ = slow.communicate(timeout=30)  # R21.4: it asks again and gets the restart's answer
+        output = finish(slow, 30).stdout  # R21.4: it asks again and gets the restart's answer
         assert slow.returncode == 1 and "server restarted" in output, output
         wait_for(lambda: serve.saw("restored: run 1, last id 3"), "the restore")
         wait_for(lambda: watcher.state.phase == 1 and watcher.state.current_id == 3, "WAITING id 3 again")
@@ -202,7 +198,7 @@ def test_serve_runs_children_of_several_robots_at_once(graph: Graph) -> None:
     try:
         sends = [send_in_background("--place", "pantry", timeout=30, robot=robot) for robot in robots]
         for send_process in sends:
-            output, _ = send_process.communicate(timeout=60)
+            output = finish(send_process, 60).stdout
             assert send_process.returncode == 0, output
             assert "outcome: completed" in output
     finally:
@@ -250,7 +246,7 @@ def test_send_drives_every_flow_of_a_run_in_both_modes(tmp_path: Path, watcher: 
         wait_for(lambda: watcher.state.phase == 2 and watcher.state.current_id == 6, "child 6 running")
         cancel = send("--cancel")
         assert cancel.returncode == 0, cancel.stdout + cancel.stderr
-        output, _ = slow.communicate(timeout=30)
+        output = finish(slow, 30).stdout
         assert slow.returncode == 1 and "outcome: canceled" in output, output
         wait_for(lambda: waiting_after(watcher, 6), "waiting after the cancel")
         ended = send("--end")
@@ -346,7 +342,7 @@ def test_a_sharded_fleet_is_served_by_its_processes_as_by_one(tmp_path: Path) ->
             assert not any(robot in line for robot in robots if robot not in mine)
         sends = [send_in_background("--place", "pantry", timeout=30, robot=robot) for robot in robots]
         for send_process in sends:
-            output, _ = send_process.communicate(timeout=60)
+            output = finish(send_process, 60).stdout
             assert send_process.returncode == 0 and "outcome: completed" in output, output
     finally:
         codes = [shard.stop() for shard in shards]

@@ -13,22 +13,20 @@ when no server or status was found within the timeout.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
-import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 
 from dynevent import client as cl
 from dynevent.errors import (
     SendError,  # defined there with every error; importable here too
 )
 from dynevent.ros.client import DynamicEventClient, GoalWaitTimeout
+from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.server import outputs as outs
 from dynevent.tools import explain
 from dynevent.wire.messages import DynamicEventStatus, Goal
@@ -88,7 +86,7 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
     client = DynamicEventClient(node, args.fleet, args.robot)
     executor = SingleThreadedExecutor()
     executor.add_node(node)
-    spinner = threading.Thread(target=_spin, args=(executor,), daemon=True)
+    spinner = Spinner(executor, "dynevent-send")
     spinner.start()
     try:
         if not client.wait_for_server(left()):
@@ -126,11 +124,10 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
             say(_why_refused(status, result.goal))
         return 0 if _succeeded(event_type, result) else 1
     finally:
-        executor.shutdown(timeout_sec=2)
-        spinner.join(timeout=5)
-        client.destroy()
-        node.destroy_node()
-        rclpy.try_shutdown()
+        with bounded_close():
+            spinner.stop()
+            client.destroy()
+            close_down([node])
 
 
 def _why_refused(status: DynamicEventStatus, goal: Goal) -> str:
@@ -150,8 +147,3 @@ def _status(client: DynamicEventClient) -> DynamicEventStatus:
     return DynamicEventStatus(
         dynamic_event_seq=state.seq, dynamic_state=state.phase, status=state.status, id=state.current_id
     )
-
-
-def _spin(executor: Any) -> None:
-    with contextlib.suppress(ExternalShutdownException):
-        executor.spin()

@@ -31,7 +31,7 @@ from typing import Any
 
 import attrs
 import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.logging import LoggingSeverity
 
 from dynevent.errors import (
@@ -41,6 +41,7 @@ from dynevent.errors import (
 )
 from dynevent.ros.convert import RosDescription
 from dynevent.ros.server import ChildExecution, DynamicEventServer, latched
+from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.server import outputs as outs
 from dynevent.server.machine import ServerConfig, State
 from dynevent.server.store import StateStore
@@ -286,17 +287,14 @@ class _Lane:
         self.node.get_logger().set_level(LoggingSeverity.WARN)  # the live log says the rest
         self.children = SimulatedChildren(self.node, config.categories, say)
         self.executor = SingleThreadedExecutor()
-        self.thread: threading.Thread | None = None
+        self.spinner = Spinner(self.executor, f"dynevent-serve-{name}")
 
     def spin(self) -> None:
         self.executor.add_node(self.node)
-        self.thread = threading.Thread(target=_spin, args=(self.executor,), daemon=True)
-        self.thread.start()
+        self.spinner.start()
 
     def stop(self) -> None:
-        self.executor.shutdown(timeout_sec=5)
-        if self.thread is not None:
-            self.thread.join(timeout=5)
+        self.spinner.stop()
 
 
 class _Robots:
@@ -415,13 +413,12 @@ def run(
     for server in robots.servers.values():
         server.shutdown()
     time.sleep(0.2)  # let the shutdown answers go out before the node goes
-    for lane in robots.lanes:
-        lane.stop()
-    for server in robots.servers.values():
-        server.destroy()
-    for lane in robots.lanes:
-        lane.node.destroy_node()
-    rclpy.try_shutdown()
+    with bounded_close():
+        for lane in robots.lanes:
+            lane.stop()
+        for server in robots.servers.values():
+            server.destroy()
+        close_down([lane.node for lane in robots.lanes])
     if store is not None:
         store.close()
     log.close()
@@ -466,8 +463,3 @@ def _machine_config(config: ServeConfig) -> ServerConfig:
     if config.compatibility == Compatibility.RMF_ROS2.value:
         return ServerConfig.rmf_ros2(validators)
     return ServerConfig(categories=validators, id_policy=IdPolicy.GOAL, compatibility=config.compatibility)
-
-
-def _spin(executor: Any) -> None:
-    with contextlib.suppress(ExternalShutdownException):
-        executor.spin()

@@ -1,0 +1,97 @@
+"""An executor on a thread of its own, and a process's ROS 2 closed down to its DDS participant.
+
+Both exist because rclpy's own ways of ending leave things running that a
+command line must not leave behind:
+
+- ``Executor.shutdown`` (rclpy 9.1.2) destroys the executor's guard condition
+  without waiting for the thread that spins it, which may be building a wait
+  set with it at that moment (rclpy issue #968). :class:`Spinner` instead
+  spins with a bounded wait and stops on a flag, so its thread is known to be
+  out of rclpy before anything is destroyed.
+- ``destroy_node`` leaves a node's action servers and clients alive, and
+  ``rclpy.shutdown`` leaves the context's DDS participant alive, until the
+  garbage collector or the interpreter's exit gets to them: a participant
+  deleted by a static destructor at exit can hang the process (Fast DDS), and
+  until it is deleted other processes still see its endpoints.
+  :func:`close_down` destroys all of it, in order, while the process is whole.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import faulthandler
+import threading
+from collections.abc import Iterable, Iterator
+from typing import Any
+
+from rclpy.executors import ExternalShutdownException
+
+__all__ = ["CLOSE_BOUND", "Spinner", "bounded_close", "close_down"]
+
+#: How long a Spinner's thread may keep spinning after a stop (its bounded wait, in seconds).
+SPIN_WAIT = 0.1
+#: The longest a process's ROS close-down may take (seconds); then it is ended with every thread's
+#: stack on standard error (:func:`bounded_close`).
+CLOSE_BOUND = 20.0
+
+
+class Spinner:
+    """``executor`` spun on a daemon thread named ``name`` until :meth:`stop`."""
+
+    def __init__(self, executor: Any, name: str) -> None:
+        self.executor = executor
+        self._stopping = threading.Event()
+        self._thread = threading.Thread(target=self._spin, daemon=True, name=name)
+
+    def start(self) -> None:
+        """Start spinning."""
+        self._thread.start()
+
+    def _spin(self) -> None:
+        with contextlib.suppress(ExternalShutdownException):
+            while not self._stopping.is_set():
+                self.executor.spin_once(timeout_sec=SPIN_WAIT)
+
+    def stop(self, timeout: float = 5.0) -> bool:
+        """Stop spinning and wait (at most ``timeout`` seconds) for the thread to leave; True if it did.
+        The executor is shut down only then, so nothing of it is destroyed under the thread."""
+        self._stopping.set()
+        self.executor.wake()
+        if self._thread.is_alive():
+            self._thread.join(timeout)
+        if self._thread.is_alive():
+            return False
+        self.executor.shutdown(timeout_sec=0)
+        return True
+
+
+def close_down(nodes: Iterable[Any], context: Any = None) -> None:
+    """Destroy ``nodes`` with their action servers and clients, then shut down and destroy ``context``
+    (the default context when None): its DDS participant is deleted here, not at the interpreter's exit.
+    Stop every :class:`Spinner` of these nodes first."""
+    import rclpy
+
+    for node in nodes:
+        for waitable in list(node.waitables):
+            destroy = getattr(waitable, "destroy", None)
+            if destroy is not None:
+                destroy()
+        node.destroy_node()
+    if context is None:
+        context = rclpy.get_default_context()
+    rclpy.try_shutdown(context=context)
+    destroy = getattr(context, "destroy", None)  # rclpy 9 (Kilted); older ones free it with the object
+    if destroy is not None:
+        destroy()
+
+
+@contextlib.contextmanager
+def bounded_close(bound: float = CLOSE_BOUND) -> Iterator[None]:
+    """Bound a close-down: if it has not ended after ``bound`` seconds, faulthandler writes every
+    thread's stack to standard error and ends the process (exit status 1).  The watch runs outside
+    Python's lock, so it fires even if the close-down hangs inside the middleware."""
+    faulthandler.dump_traceback_later(bound, exit=True)
+    try:
+        yield
+    finally:
+        faulthandler.cancel_dump_traceback_later()
