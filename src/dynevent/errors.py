@@ -16,6 +16,7 @@ __all__ = [
     "DyneventError",
     "GoalWaitTimeout",
     "ImplementationError",
+    "ImplementationGone",
     "InvalidConfig",
     "InvalidDescription",
     "InvalidMessage",
@@ -158,6 +159,11 @@ class InvalidVector(DyneventError):
 
 class ImplementationError(DyneventError):
     """The implementation under test broke the driver protocol (crashed, timed out, answered garbage)."""
+
+
+class ImplementationGone(ImplementationError):
+    """The implementation under test cannot go on (it will not start again, or it stopped answering):
+    the conformance run stops and reports the vectors left as not run."""
 
 
 class UnknownRobot(DyneventError, KeyError):

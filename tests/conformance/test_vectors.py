@@ -186,8 +186,11 @@ def test_a_broken_implementation_fails_with_a_diff() -> None:
     block = result.stdout.split("FAIL cancel-keeps-the-robot-running (conformance/09-cancel.json)", 1)[1]
     assert "step 5: outputs differ" in block
     assert '"type":"goal_started"' in block
-    assert '  + {"type":"answer_goal"' in block  # the one output too many, marked alone
-    assert "  - " not in block.split("FAIL", 1)[0]
+    # the outputs too many, each marked alone by its path; nothing expected is missing
+    account = block.split("FAIL", 1)[0]
+    assert "outputs[2]: not expected, got:" in account and '{"type":"answer_goal"' in account
+    assert "missing" not in account
+    assert all(len(line) <= 100 for line in result.stdout.splitlines())
     passed, failed = (int(number) for number in SUMMARY_LINE.findall(result.stdout)[0])
     assert passed > 0 and failed > 0
 
@@ -424,3 +427,150 @@ def test_a_sequence_diff_marks_one_extra_output_alone() -> None:
         ("=", {"type": "b"}),
     ]
     assert vectors.align([], []) == []
+
+
+# --------------------------------------------------------------------------- a driver that misbehaves
+
+MISBEHAVING = ROOT / "tests" / "misbehaving_driver.py"
+
+
+def _misbehaving(
+    tmp_path: Path, mode: str, at: int, *extra: str, once: bool = True
+) -> tuple[subprocess.CompletedProcess[str], float]:
+    command = f"{PYTHON} {MISBEHAVING} {mode} {at}" + (f" --once {tmp_path / 'once'}" if once else "")
+    started = time.monotonic()
+    result = _dynevent("--impl", command, "--timeout", "1", *extra)
+    return result, time.monotonic() - started
+
+
+@pytest.mark.parametrize(
+    ("mode", "at", "problem"),
+    [
+        ("exit", 2, "the driver ended (exit code 3); its standard error ended with:"),
+        ("exit", 20, "the driver ended (exit code 3)"),
+        ("late", 20, "the driver did not answer within 1 s"),
+        ("hang", 20, "the driver did not answer within 1 s"),
+        ("garbage", 20, "the driver answered with"),
+        ("flood", 20, "the driver answered with"),
+        ("huge", 20, "the driver answered a line above"),
+    ],
+)
+def test_a_driver_that_breaks_once_fails_one_vector_and_the_rest_run(
+    tmp_path: Path, shipped: list[vectors.Vector], mode: str, at: int, problem: str
+) -> None:
+    """Dies, stalls, answers late, answers garbage or floods: the vector it was answering fails, the
+    driver is restarted, and every other vector runs and passes (a late answer is never read as the
+    answer to a later request).  The report is whole and the exit status 1."""
+    result, took = _misbehaving(tmp_path, mode, at)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert SUMMARY_LINE.findall(result.stdout) == [(str(len(shipped) - 1), "1")], result.stdout
+    assert problem in " ".join(result.stdout.split()), result.stdout
+    assert "Traceback" not in result.stderr
+    assert took < 60  # at most one timeout (1 s) and one restart
+
+
+def test_a_driver_that_floods_its_standard_error_does_not_block_the_run(
+    tmp_path: Path, shipped: list[vectors.Vector]
+) -> None:
+    result, _ = _misbehaving(tmp_path, "stderr", 20)
+    assert result.returncode == 0, result.stdout + result.stderr[-500:]
+    assert SUMMARY_LINE.findall(result.stdout) == [(str(len(shipped)), "0")]
+
+
+def test_a_driver_that_always_hangs_costs_three_timeouts_and_the_rest_are_not_run(
+    tmp_path: Path, shipped: list[vectors.Vector]
+) -> None:
+    result, took = _misbehaving(tmp_path, "hang", 2, once=False)
+    assert result.returncode == 1, result.stdout + result.stderr
+    not_run = len(shipped) - vectors.MAX_STALLS
+    assert f"0 passed, {vectors.MAX_STALLS} failed, {not_run} not run" in result.stdout
+    assert f"{vectors.MAX_STALLS} vectors in a row timed out" in result.stdout
+    assert took < 40  # three 1 s timeouts, not one per vector
+
+
+def test_a_driver_that_always_dies_stops_the_run_with_the_report_kept(
+    tmp_path: Path, shipped: list[vectors.Vector]
+) -> None:
+    result, _ = _misbehaving(tmp_path, "exit", 2, "--json", once=False)
+    assert result.returncode == 1, result.stdout + result.stderr
+    records = [json.loads(line) for line in result.stdout.splitlines()]
+    summary = records[-1]
+    assert (summary["failed"], summary["not_run"]) == (vectors.MAX_BROKEN, len(shipped) - vectors.MAX_BROKEN)
+    assert all(record["not_run"] for record in records[vectors.MAX_BROKEN : -1])
+
+
+def test_a_driver_that_dies_at_hello_is_a_usage_error_naming_its_last_words(tmp_path: Path) -> None:
+    result, _ = _misbehaving(tmp_path, "exit", 1, once=False)
+    assert result.returncode == 2
+    assert "ended (exit code 3)" in result.stderr and "giving up here" in result.stderr
+    assert result.stdout == ""
+
+
+def test_max_failures_and_exitfirst_stop_the_run(shipped: list[vectors.Vector]) -> None:
+    broken = f"{PYTHON} {BROKEN_DRIVER}"
+    for flags, failed in ((["-x"], 1), (["--max-failures", "2"], 2)):
+        result = _dynevent("--impl", broken, *flags)
+        assert result.returncode == 1
+        found = re.search(r"^(\d+) passed, (\d+) failed, (\d+) not run$", result.stdout, re.MULTILINE)
+        assert found, result.stdout
+        assert int(found.group(2)) == failed
+        assert sum(int(number) for number in found.groups()) == len(shipped)
+        assert f"the run stopped after {failed} failed vector" in result.stdout
+    assert "--max-failures: expected a number above 0" in _dynevent("--max-failures", "0").stderr
+
+
+def test_junit_report_has_a_case_per_vector_with_the_failures(tmp_path: Path) -> None:
+    import xml.etree.ElementTree as ET
+
+    report = tmp_path / "vectors.xml"
+    result = _dynevent("--impl", f"{PYTHON} {BROKEN_DRIVER}", "--junit", str(report), "-x")
+    assert result.returncode == 1
+    suite = ET.parse(report).getroot().find("testsuite")
+    assert suite is not None
+    cases = suite.findall("testcase")
+    failures = [case for case in cases if case.find("failure") is not None]
+    skipped = [case for case in cases if case.find("skipped") is not None]
+    assert len(failures) == 1 and len(skipped) == int(suite.get("skipped", "-1")) > 0
+    failure = failures[0].find("failure")
+    assert failure is not None and failure.get("message", "").startswith("step ")
+    assert "outputs[" in (failure.text or "")
+    assert failures[0].get("classname", "").startswith("conformance/")
+    unwritable = _dynevent("--junit", str(tmp_path / "no" / "such" / "dir.xml"))
+    assert unwritable.returncode == 2 and "--junit" in unwritable.stderr
+
+
+def test_a_difference_is_reported_by_the_path_of_the_field() -> None:
+    expected = [
+        {"type": "execute_goal", "goal_uuid": "*"},
+        {"type": "answer_goal", "status": "aborted", "result": {"status": "", "id": 3}},
+        {"type": "publish_status", "id": 3},
+    ]
+    got = [
+        {"type": "execute_goal", "goal_uuid": "ab"},
+        {"type": "answer_goal", "status": "aborted", "result": {"status": "x", "id": 3}, "extra": 1},
+        {"type": "cancel_child", "id": 3},
+    ]
+    found = vectors.differences(expected, got, "outputs")
+    assert [(d.path, d.kind) for d in found] == [
+        ("outputs[1].result.status", "differs"),
+        ("outputs[1].extra", "unexpected"),
+        ("outputs[2]", "differs"),  # another kind of record: compared whole
+    ]
+    assert found[0].describe() == ['outputs[1].result.status: expected "", got "x"']
+    assert vectors.differences([{"type": "a"}], [], "outputs")[0].describe() == [
+        'outputs[0]: missing, expected: {"type":"a"}'
+    ]
+    long = vectors.Difference("outputs[0].text", "differs", "x" * 300, "y" * 300).describe(60)
+    assert all(len(line) <= 60 for line in long) and long[0] == "outputs[0].text:"
+    assert vectors.differences({"a": 1}, {"a": 1}, "view") == []
+
+
+def test_json_output_of_a_failure_carries_each_difference() -> None:
+    result = _dynevent("--impl", f"{PYTHON} {BROKEN_DRIVER}", "--json", "--filter", "cancel-keeps")
+    failing = json.loads(result.stdout.splitlines()[0])["failure"]
+    assert failing["differences"][0] == {
+        "path": "outputs[2]",
+        "kind": "unexpected",
+        "expected": None,
+        "got": failing["got"][2],
+    }

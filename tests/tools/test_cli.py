@@ -1,21 +1,19 @@
 """The ``dynevent`` command, run as a subprocess: every subcommand, ``--help``, exit codes, docs/cli.md.
 
-``DYNEVENT_UPDATE_CLI_DOC=1 python -m pytest tests/tools/test_cli.py`` rewrites the
-outputs in docs/cli.md from the commands (then review the diff).
+docs/cli.md's sessions run in tests/project/test_docs_examples.py, with every page's
+(``DYNEVENT_UPDATE_DOCS=1`` rewrites them from the commands; then review the diff).
 """
 
 from __future__ import annotations
 
 import json
-import os
-import re
-import shlex
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
+from doc_sessions import sessions
 from dynevent.tools import cli
 from dynevent.tools.diagram import render
 
@@ -167,69 +165,12 @@ def test_main_in_process_returns_the_exit_code(capsys: pytest.CaptureFixture[str
 
 
 # --------------------------------------------------------------------------- docs/cli.md
-
-_BLOCK = re.compile(r"```console\n(.*?)```", re.DOTALL)
-
-
-def _sessions(text: str) -> list[list[tuple[str, str]]]:
-    """Each console block as its ``(command, expected output)`` pairs."""
-    blocks = []
-    for body in _BLOCK.findall(text):
-        pairs: list[tuple[str, str]] = []
-        for line in body.splitlines(keepends=True):
-            if line.startswith("$ "):
-                pairs.append((line[2:].rstrip("\n"), ""))
-            else:
-                command, output = pairs[-1]
-                pairs[-1] = (command, output + line)
-        blocks.append(pairs)
-    return blocks
-
-
-def _run(command: str, previous: int) -> tuple[str, int]:
-    """The console output of one documented command (``echo $?`` echoes the previous exit status)."""
-    if command == "echo $?":
-        return f"{previous}\n", previous
-    stdin = None
-    if " < " in command:
-        command, path = command.split(" < ")
-        stdin = (ROOT / path.strip()).read_text(encoding="utf-8")
-    words = shlex.split(command)
-    assert words[0] == "dynevent", command
-    done = dynevent(*words[1:], stdin=stdin)
-    assert "Traceback" not in done.stderr
-    return done.stdout + done.stderr, done.returncode
-
-
-def _render(text: str) -> str:
-    def block(match: re.Match[str]) -> str:
-        previous = 0
-        parts = []
-        for command, _ in _sessions(match.group(0))[0]:
-            output, previous = _run(command, previous)
-            parts.append(f"$ {command}\n{output}")
-        return "```console\n" + "".join(parts) + "```"
-
-    return _BLOCK.sub(block, text)
-
-
-def test_cli_doc_shows_real_output() -> None:
-    text = CLI_DOC.read_text(encoding="utf-8")
-    if os.environ.get("DYNEVENT_UPDATE_CLI_DOC"):
-        CLI_DOC.write_text(_render(text), encoding="utf-8")
-        text = CLI_DOC.read_text(encoding="utf-8")
-    blocks = _sessions(text)
-    assert len(blocks) >= 8
-    for pairs in blocks:
-        previous = 0
-        for command, expected in pairs:
-            output, previous = _run(command, previous)
-            assert output == expected, f"docs/cli.md is stale for: $ {command}"
+# (its sessions run in tests/project/test_docs_examples.py, as every page's do)
 
 
 def test_cli_doc_covers_every_subcommand() -> None:
-    commands = [command for pairs in _sessions(CLI_DOC.read_text(encoding="utf-8")) for command, _ in pairs]
-    for sub in ("demo", "check", "explain", "diagram"):
+    commands = [command for pairs in sessions(CLI_DOC.read_text(encoding="utf-8")) for command, _ in pairs]
+    for sub in ("demo", "check", "explain", "diagram", "vectors"):
         assert any(command.startswith(f"dynevent {sub}") for command in commands), sub
 
 

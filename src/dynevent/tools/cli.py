@@ -7,6 +7,7 @@ import importlib
 import os
 import sys
 from collections.abc import Callable, Sequence
+from pathlib import Path
 
 from dynevent import DOCS, __version__
 from dynevent.tools.diagram import FORMATS
@@ -147,12 +148,18 @@ def _vectors(args: argparse.Namespace) -> int:
     progress = Progress("dynevent vectors", len(chosen))
     outcomes: list[vectors.Outcome] = []
     try:
-        for outcome in vectors.run_vectors(chosen, implementation):
+        for outcome in vectors.run_vectors(chosen, implementation, max_failures=args.max_failures):
             outcomes.append(outcome)
             progress.update(len(outcomes), f"({len(outcomes)} of {len(chosen)}: {outcome.vector.name})")
     finally:
         progress.close()
         implementation.close()
+    if args.junit is not None:
+        try:
+            Path(args.junit).write_text(vectors.junit_xml(outcomes, implementation.name), encoding="utf-8")
+        except OSError as exc:
+            print(f"dynevent vectors: --junit {args.junit}: {exc.strerror}", file=sys.stderr)
+            return 2
     if args.json:
         for outcome in outcomes:
             print(_json.dumps(vectors.outcome_record(outcome)))
@@ -160,6 +167,17 @@ def _vectors(args: argparse.Namespace) -> int:
     else:
         print(vectors.format_report(outcomes, implementation.name))
     return 0 if all(outcome.passed for outcome in outcomes) else 1
+
+
+def _count(text: str) -> int:
+    """``--max-failures``: a whole number above 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a number above 0, got {text}")
+    return value
 
 
 def _timeout(text: str) -> float:
@@ -181,7 +199,8 @@ def _add_vectors_command(commands: argparse._SubParsersAction[argparse.ArgumentP
         help="run the conformance vectors against an implementation",
         description="Run conformance vectors (the shipped ones, or FILEs) against dynevent in process "
         f"or against COMMAND, a program speaking the driver protocol of {DOCS}/conformance.md.  Exit status: "
-        "0 when every vector passes, 1 when one fails, 2 on a usage or vector-file error.",
+        "0 when every vector passes, 1 when one fails or is not run, 2 on a usage or vector-file error or an "
+        "implementation that cannot start.",
     )
     parser.add_argument(
         "files", nargs="*", metavar="FILE", help="vector files (default: the shipped vectors)"
@@ -202,8 +221,19 @@ def _add_vectors_command(commands: argparse._SubParsersAction[argparse.ArgumentP
         type=_timeout,
         default=10.0,
         metavar="SECONDS",
-        help="longest wait for one answer, in seconds (10)",
+        help="longest wait for one answer, in seconds (10); a driver that does not answer in time is "
+        "restarted for the next vector",
     )
+    parser.add_argument(
+        "--max-failures",
+        type=_count,
+        metavar="N",
+        help="stop after N failed vectors (the rest are reported as not run)",
+    )
+    parser.add_argument(
+        "-x", "--exitfirst", dest="max_failures", action="store_const", const=1, help="--max-failures 1"
+    )
+    parser.add_argument("--junit", metavar="FILE", help="also write the results to FILE as JUnit XML")
     parser.set_defaults(run=_vectors)
 
 
