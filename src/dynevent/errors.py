@@ -7,6 +7,14 @@ themselves never raise; every refusal there is a value.
 
 Every class here subclasses :class:`ValueError`, so ``except ValueError``
 keeps working for callers who do not know dynevent.
+
+Each error also says whose fault it is, as h11 separates its local and remote
+protocol errors: a :class:`LocalError` is this program's misuse of dynevent (a
+value it built, an argument, a configuration: fix the calling code), a
+:class:`RemoteError` is bad data from outside (a message received, a file, a
+store, another process: refuse it and carry on).  :class:`InvalidMessage`, the
+error of the wire mirrors, comes as :class:`InvalidValue` (built here) or
+:class:`MalformedMessage` (received).
 """
 
 from __future__ import annotations
@@ -24,11 +32,16 @@ __all__ = [
     "InvalidRecord",
     "InvalidSnapshot",
     "InvalidStore",
+    "InvalidValue",
     "InvalidVector",
+    "LocalError",
+    "MalformedMessage",
+    "RemoteError",
     "SendError",
     "ServeError",
     "TraceError",
     "UnknownRobot",
+    "WrongInput",
 ]
 
 _VALUE_REPR_LIMIT = 80
@@ -49,8 +62,20 @@ class DyneventError(ValueError):
     """Base class of every error dynevent raises on bad input."""
 
 
+class LocalError(DyneventError):
+    """This program used dynevent wrongly: a message, input, argument or configuration it built has a
+    value or type dynevent refuses.  The fix is in the calling code (as h11's ``LocalProtocolError``)."""
+
+
+class RemoteError(DyneventError):
+    """Data from outside this program was refused: a message received, a file, a store, another
+    process's answers.  Refusing it is right; the other side is at fault (as h11's
+    ``RemoteProtocolError``)."""
+
+
 class InvalidMessage(DyneventError):
-    """A wire message could not be built or parsed.
+    """A wire message or an input could not be built or parsed: :class:`InvalidValue` when this
+    program built it, :class:`MalformedMessage` when it came from outside.
 
     ``message`` is the class name (``"Goal"``), ``field`` the dotted path of the
     offending field (``"logs[2].seq"``; empty when the whole input is at fault)
@@ -66,7 +91,31 @@ class InvalidMessage(DyneventError):
         super().__init__(f"{where}: {problem} (got {short_repr(value)})")
 
 
-class InvalidConfig(DyneventError, TypeError):
+class InvalidValue(InvalidMessage, LocalError):
+    """A message or input built in this program has a value the wire cannot carry."""
+
+
+class MalformedMessage(InvalidMessage, RemoteError):
+    """A message received from outside (JSON text, a ROS message) has a value the wire cannot carry."""
+
+    @classmethod
+    def of(cls, error: InvalidMessage) -> MalformedMessage:
+        """The same fault, as found in a message received."""
+        return cls(error.message_type, error.field, error.value, error.problem)
+
+
+class WrongInput(LocalError, TypeError):
+    """A value of the wrong type was given where a machine takes one of its inputs (also a ``TypeError``)."""
+
+    def __init__(self, where: str, expected: str, value: object) -> None:
+        self.where = where
+        self.expected = expected
+        self.value = value
+        kind = type(value)
+        super().__init__(f"{where}: expected {expected}, got {kind.__module__}.{kind.__qualname__}")
+
+
+class InvalidConfig(LocalError, TypeError):
     """A server configuration field has a value the machine cannot work with.
 
     Also a :class:`TypeError`, as a wrong argument to a constructor is.
@@ -79,7 +128,7 @@ class InvalidConfig(DyneventError, TypeError):
         super().__init__(f"ServerConfig.{field}: {problem} (got {short_repr(value)})")
 
 
-class InvalidName(DyneventError):
+class InvalidName(LocalError):
     """A fleet or robot name is not a valid ROS 2 name token, or a name is none of the protocol's.
 
     ``field`` is ``"fleet"`` or ``"robot"`` for a bad token, ``"name"`` for a
@@ -97,7 +146,7 @@ class InvalidName(DyneventError):
         super().__init__(text)
 
 
-class InvalidDescription(DyneventError):
+class InvalidDescription(RemoteError):
     """A ``dynamic_event`` description could not be parsed.
 
     ``path`` locates the fault inside the JSON document (``"$.required[1].category"``).
@@ -109,7 +158,7 @@ class InvalidDescription(DyneventError):
         super().__init__(f"dynamic_event description at {path}: {problem}")
 
 
-class InvalidSnapshot(DyneventError):
+class InvalidSnapshot(RemoteError):
     """A snapshot of a state or a fleet could not be restored."""
 
     def __init__(self, path: str, problem: str) -> None:
@@ -118,7 +167,7 @@ class InvalidSnapshot(DyneventError):
         super().__init__(f"snapshot at {path}: {problem}")
 
 
-class TraceError(DyneventError):
+class TraceError(RemoteError):
     """A trace could not be read: ``source``, ``line`` (from 1) and ``field`` say where."""
 
     def __init__(self, source: str, line: int, field: str, problem: str) -> None:
@@ -129,7 +178,7 @@ class TraceError(DyneventError):
         super().__init__(f"{source}:{line}: {field}: {problem}")
 
 
-class InvalidRecord(DyneventError):
+class InvalidRecord(RemoteError):
     """A JSON record is not a valid input, output or configuration; ``path`` says where."""
 
     def __init__(self, path: str, problem: str) -> None:
@@ -138,7 +187,7 @@ class InvalidRecord(DyneventError):
         super().__init__(f"{path}: {problem}")
 
 
-class InvalidStore(DyneventError):
+class InvalidStore(RemoteError):
     """A state store that cannot be used: not SQLite, not dynevent's, or holding a bad snapshot."""
 
     def __init__(self, path: str, problem: str) -> None:
@@ -147,7 +196,7 @@ class InvalidStore(DyneventError):
         super().__init__(f"state store {path}: {problem}")
 
 
-class InvalidVector(DyneventError):
+class InvalidVector(RemoteError):
     """A vector file is malformed; the message names the file and the JSON path."""
 
     def __init__(self, source: str, path: str, problem: str) -> None:
@@ -157,7 +206,7 @@ class InvalidVector(DyneventError):
         super().__init__(f"{source}: {path}: {problem}")
 
 
-class ImplementationError(DyneventError):
+class ImplementationError(RemoteError):
     """The implementation under test broke the driver protocol (crashed, timed out, answered garbage)."""
 
 
@@ -166,7 +215,7 @@ class ImplementationGone(ImplementationError):
     the conformance run stops and reports the vectors left as not run."""
 
 
-class UnknownRobot(DyneventError, KeyError):
+class UnknownRobot(LocalError, KeyError):
     """No robot of that fleet and name is in the :class:`~dynevent.server.fleet.Fleet` (a ``KeyError``)."""
 
     def __init__(self, fleet: str, robot: str) -> None:
@@ -179,7 +228,7 @@ class UnknownRobot(DyneventError, KeyError):
         return str(self.args[0])
 
 
-class DuplicateRobot(DyneventError):
+class DuplicateRobot(LocalError):
     """A robot was added to a :class:`~dynevent.server.fleet.Fleet` that already holds it."""
 
     def __init__(self, fleet: str, robot: str) -> None:
@@ -192,9 +241,9 @@ class GoalWaitTimeout(DyneventError, TimeoutError):
     """:meth:`dynevent.ros.GoalRun.wait` reached its bound before the goal was over."""
 
 
-class SendError(DyneventError):
+class SendError(LocalError):
     """A bad ``dynevent send`` request: the message names the flag and the value."""
 
 
-class ServeError(DyneventError):
+class ServeError(LocalError):
     """A bad ``dynevent serve`` configuration."""

@@ -562,3 +562,18 @@ def test_a_goal_the_mirrors_refuse_is_rejected_with_its_reason_not_a_traceback(g
     assert convert.uuid_from_ros(list(range(16))) == bytes(range(16)).hex()
     with pytest.raises(InvalidMessage, match="16 bytes"):
         convert.uuid_from_ros([1, 2, 3])
+
+
+def test_a_received_message_the_mirror_refuses_is_the_senders_fault() -> None:
+    """Conversions of received ROS messages raise MalformedMessage (a RemoteError), never the
+    LocalError a value built here would; a goal UUID comes in rclpy's own shape (a uint8 array)."""
+    from unique_identifier_msgs.msg import UUID
+
+    from dynevent.errors import LocalError, MalformedMessage, RemoteError
+    from dynevent.ros import convert
+
+    with pytest.raises(MalformedMessage) as refused:
+        convert.uuid_from_ros(list(range(15)))  # the raw uint8 values of a UUID, one short
+    assert isinstance(refused.value, RemoteError) and not isinstance(refused.value, LocalError)
+    assert refused.value.field == "uuid", refused.value
+    assert convert.uuid_from_ros(UUID(uuid=list(range(16)))) == "000102030405060708090a0b0c0d0e0f"

@@ -10,7 +10,7 @@ from typing import Any, ClassVar, TypeAlias
 
 import attrs
 
-from dynevent.errors import InvalidMessage
+from dynevent.errors import InvalidValue
 from dynevent.server.inputs import NOW_RANGE, goal_uuid
 from dynevent.server.outputs import Rejected
 from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Feedback, Result
@@ -32,9 +32,9 @@ __all__ = [
 
 def _check_now(where: str, value: Any) -> int:
     if type(value) is not int:
-        raise InvalidMessage(where, "now", value, "expected integer nanoseconds")
+        raise InvalidValue(where, "now", value, "expected integer nanoseconds")
     if not NOW_RANGE[0] <= value <= NOW_RANGE[1]:
-        raise InvalidMessage(where, "now", value, "outside the range of builtin_interfaces/Time")
+        raise InvalidValue(where, "now", value, "outside the range of builtin_interfaces/Time")
     return value
 
 
@@ -42,7 +42,7 @@ def _uuid_converter(value: Any, instance: object, field: attrs.Attribute[Any]) -
     try:
         return goal_uuid(value)
     except ValueError as exc:
-        raise InvalidMessage(type(instance).__name__, field.name, value, str(exc)) from None
+        raise InvalidValue(type(instance).__name__, field.name, value, str(exc)) from None
 
 
 def _now_converter(value: Any, instance: object, field: attrs.Attribute[Any]) -> int:
@@ -59,7 +59,7 @@ def _typed(cls: type) -> Any:
 
     def check(value: Any, instance: object, field: attrs.Attribute[Any]) -> Any:
         if type(value) is not cls:
-            raise InvalidMessage(type(instance).__name__, field.name, value, f"expected a {cls.__name__}")
+            raise InvalidValue(type(instance).__name__, field.name, value, f"expected a {cls.__name__}")
         return value
 
     return _field(check)
@@ -93,7 +93,7 @@ class StatusReceived(_ClientInput):
 
 def _rejection(value: Any, instance: object, field: attrs.Attribute[Any]) -> Rejected | None:
     if value is not None and type(value) is not Rejected:
-        raise InvalidMessage(type(instance).__name__, field.name, value, "expected a Rejected or None")
+        raise InvalidValue(type(instance).__name__, field.name, value, "expected a Rejected or None")
     return value
 
 
@@ -113,7 +113,7 @@ class GoalResponse(_ClientInput):
 
     def __attrs_post_init__(self) -> None:
         if self.accepted and self.rejection is not None:
-            raise InvalidMessage("GoalResponse", "rejection", self.rejection, "an accepted goal has none")
+            raise InvalidValue("GoalResponse", "rejection", self.rejection, "an accepted goal has none")
 
 
 @attrs.frozen(kw_only=True)
@@ -131,7 +131,7 @@ def _terminal(value: Any, instance: object, field: attrs.Attribute[Any]) -> Goal
     except ValueError:
         status = None
     if status is None or not status.is_terminal:
-        raise InvalidMessage(
+        raise InvalidValue(
             type(instance).__name__, field.name, value, "expected succeeded, canceled or aborted"
         )
     return status

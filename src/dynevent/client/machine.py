@@ -89,7 +89,7 @@ from dynevent.client.outputs import (
     TimedOut,
     ViewChanged,
 )
-from dynevent.errors import InvalidMessage
+from dynevent.errors import InvalidValue, WrongInput
 from dynevent.server import machine
 from dynevent.server.machine import ServerConfig, State
 from dynevent.server.outputs import Rejected
@@ -127,7 +127,7 @@ _HEX = frozenset("0123456789abcdefABCDEF")
 
 def _prefix(value: Any) -> str:
     if type(value) is not str or len(value) != 16 or not all(ch in _HEX for ch in value):
-        raise InvalidMessage("ClientState", "uuid_prefix", value, "expected 16 hexadecimal digits")
+        raise InvalidValue("ClientState", "uuid_prefix", value, "expected 16 hexadecimal digits")
     return value.lower()
 
 
@@ -158,7 +158,7 @@ def _categories(value: Any) -> frozenset[str] | None:
         return None
     names = frozenset(value)
     if not all(isinstance(name, str) for name in names):
-        raise InvalidMessage("ClientState", "categories", value, "expected category names (str)")
+        raise InvalidValue("ClientState", "categories", value, "expected category names (str)")
     return names
 
 
@@ -358,9 +358,7 @@ def _check_timeout(value: Any) -> int | None:
     if value is None:
         return None
     if type(value) is not int or value <= 0:
-        raise InvalidMessage(
-            "request_next", "timeout", value, "expected positive integer nanoseconds or None"
-        )
+        raise InvalidValue("request_next", "timeout", value, "expected positive integer nanoseconds or None")
     return value
 
 
@@ -654,7 +652,8 @@ def _on_tick(state: ClientState, event: Tick) -> ClientTransition:
 
 
 def step(state: ClientState, event: ClientInput) -> ClientTransition:
-    """Apply one input to the client state: the new state and the outputs, in order.  Pure and total."""
+    """Apply one input to the client state: the new state and the outputs, in order.  Pure and total
+    over its inputs; a value of another type is refused with :class:`~dynevent.errors.WrongInput`."""
     if isinstance(event, BeginReceived):
         return _on_begin(state, event)
     if isinstance(event, StatusReceived):
@@ -665,4 +664,10 @@ def step(state: ClientState, event: ClientInput) -> ClientTransition:
         return _on_feedback(state, event)
     if isinstance(event, ResultReceived):
         return _on_result(state, event)
-    return _on_tick(state, event)
+    if isinstance(event, Tick) and isinstance(state, ClientState):
+        return _on_tick(state, event)
+    if not isinstance(state, ClientState):
+        raise WrongInput("client.step(state, ...)", "a dynevent.client.ClientState", state)
+    raise WrongInput(
+        "client.step(state, event)", "a client input of dynevent.client (StatusReceived, Tick, ...)", event
+    )

@@ -48,13 +48,12 @@ from dynevent.conformance.runner import (
     ExternalImplementation,
     Failure,
     Implementation,
-    ImplementationGone,
     InProcessImplementation,
     Outcome,
     run_vector,
     run_vectors,
 )
-from dynevent.errors import ImplementationError, InvalidVector
+from dynevent.errors import ImplementationError, ImplementationGone, InvalidVector
 
 __all__ = [
     "MAX_ANSWER_BYTES",

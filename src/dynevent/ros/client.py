@@ -38,6 +38,7 @@ from dynevent import client as cl
 from dynevent.errors import (
     GoalWaitTimeout,  # defined there with every error; importable here too
     InvalidMessage,
+    InvalidValue,
 )
 from dynevent.ros import convert
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
@@ -339,5 +340,5 @@ class DynamicEventClient:
 
 def _nanoseconds(field: str, seconds: float) -> int:
     if isinstance(seconds, bool) or not isinstance(seconds, (int, float)) or not 0 < seconds < 1e9:
-        raise InvalidMessage("DynamicEventClient", field, seconds, "expected positive seconds")
+        raise InvalidValue("DynamicEventClient", field, seconds, "expected positive seconds")
     return round(seconds * 1_000_000_000)

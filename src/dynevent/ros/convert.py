@@ -1,14 +1,17 @@
 """Conversions between dynevent's mirrors and the rosidl message classes of ``rmf_task_msgs``.
 
 Incoming messages go through the mirrors' checks: a goal that a mirror
-refuses raises :class:`~dynevent.errors.InvalidMessage` naming the field and
-the value, which the server turns into a refusal instead of a traceback in a
-callback.  Outgoing messages are built field by field from checked mirrors.
+refuses raises :class:`~dynevent.errors.MalformedMessage` (an ``InvalidMessage``
+that is the sender's fault) naming the field and the value, which the server
+turns into a refusal instead of a traceback in a callback.  Outgoing messages
+are built field by field from checked mirrors.
 """
 
 from __future__ import annotations
 
-from typing import Any
+import functools
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 from builtin_interfaces.msg import Time as RosTime
 from rmf_task_msgs.action import DynamicEvent
@@ -17,7 +20,7 @@ from rmf_task_msgs.msg import DynamicEventStatus as RosStatus
 from rmf_task_msgs.msg import LogEntry as RosLogEntry
 from unique_identifier_msgs.msg import UUID as RosUUID
 
-from dynevent.errors import InvalidMessage
+from dynevent.errors import InvalidMessage, MalformedMessage
 from dynevent.server.inputs import goal_uuid
 from dynevent.wire.messages import (
     DynamicEventDescription,
@@ -50,13 +53,33 @@ __all__ = [
 ]
 
 
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def _received(convert: _F) -> _F:
+    """A conversion of a message received: a value the mirror refuses is the sender's fault
+    (:class:`~dynevent.errors.MalformedMessage`), not a misuse of dynevent here."""
+
+    @functools.wraps(convert)
+    def received(*args: Any) -> Any:
+        try:
+            return convert(*args)
+        except MalformedMessage:
+            raise
+        except InvalidMessage as exc:
+            raise MalformedMessage.of(exc) from None
+
+    return received  # type: ignore[return-value]
+
+
+@_received
 def uuid_from_ros(value: Any) -> str:
     """A goal UUID (``unique_identifier_msgs/UUID`` or its 16 uint8 values) as 32 hex digits."""
     raw = getattr(value, "uuid", value)
     try:
         return goal_uuid(bytes(bytearray(raw)))
     except (TypeError, ValueError) as exc:
-        raise InvalidMessage("UUID", "uuid", raw, str(exc)) from None
+        raise MalformedMessage("UUID", "uuid", raw, str(exc)) from None
 
 
 def uuid_to_ros(value: str) -> Any:
@@ -69,10 +92,12 @@ def time_to_ros(time: Time) -> Any:
     return RosTime(sec=time.sec, nanosec=time.nanosec)
 
 
+@_received
 def _time_from_ros(message: Any) -> Time:
     return Time(sec=message.sec, nanosec=message.nanosec)
 
 
+@_received
 def goal_from_ros(message: Any) -> Goal:
     """The mirror of a received goal; raises :class:`InvalidMessage` for a value the mirror refuses."""
     return Goal(
@@ -102,6 +127,7 @@ def result_to_ros(result: Result) -> Any:
     return DynamicEvent.Result(execution_failure=result.execution_failure, status=result.status, id=result.id)
 
 
+@_received
 def result_from_ros(message: Any) -> Result:
     """The mirror of a received result."""
     return Result(execution_failure=message.execution_failure, status=message.status, id=message.id)
@@ -121,6 +147,7 @@ def feedback_to_ros(feedback: Feedback) -> Any:
     )
 
 
+@_received
 def feedback_from_ros(message: Any) -> Feedback:
     """The mirror of received feedback."""
     logs = tuple(
@@ -141,6 +168,7 @@ def status_to_ros(status: DynamicEventStatus) -> Any:
     )
 
 
+@_received
 def status_from_ros(message: Any) -> DynamicEventStatus:
     """The mirror of a received status message."""
     return DynamicEventStatus(
@@ -163,6 +191,7 @@ def begin_to_ros(begin: DynamicEventDescription) -> Any:
     )
 
 
+@_received
 def begin_from_ros(message: Any) -> DynamicEventDescription:
     """The mirror of a received begin message."""
     return DynamicEventDescription(

@@ -44,7 +44,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 
-from dynevent.errors import InvalidMessage
+from dynevent.errors import InvalidMessage, InvalidValue
 from dynevent.ros import convert
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.server import inputs as ins
@@ -328,7 +328,7 @@ class DynamicEventServer:
         self._observer = observer
         self._state = state if state is not None else State.new(fleet, robot)
         if (self._state.fleet, self._state.robot) != (fleet, robot):
-            raise InvalidMessage(
+            raise InvalidValue(
                 "DynamicEventServer",
                 "state",
                 f"{self._state.fleet}/{self._state.robot}",

@@ -14,12 +14,13 @@ lowercase hexadecimal digits.
 from __future__ import annotations
 
 import math
+import operator
 import uuid
 from typing import Any, ClassVar, TypeAlias
 
 import attrs
 
-from dynevent.errors import DyneventError, InvalidMessage
+from dynevent.errors import DyneventError, InvalidValue
 from dynevent.wire import _fields
 from dynevent.wire._fields import (
     FAST_KEY,
@@ -70,7 +71,9 @@ LOWER_HEX = frozenset("0123456789abcdef")
 
 
 def goal_uuid(value: object) -> str:
-    """Canonicalize a goal UUID: 16 bytes, a :class:`uuid.UUID`, 32 hex digits, or 8-4-4-4-12 hex digits.
+    """Canonicalize a goal UUID given in any of the shapes the wire and rclpy use: 32 hex digits (any
+    case), 8-4-4-4-12 hex digits, 16 bytes, 16 ints from 0 to 255 (a list, or the uint8 array of
+    ``goal_handle.goal_id.uuid``), or a :class:`uuid.UUID`.
 
     Returns 32 lowercase hexadecimal digits.  Raises ``ValueError`` (not the
     project's error: callers wrap it with their own location).
@@ -83,31 +86,49 @@ def goal_uuid(value: object) -> str:
             return lowered
     if isinstance(value, uuid.UUID):
         return value.hex
-    if isinstance(value, (bytes, bytearray)):
+    if isinstance(value, (bytes, bytearray, memoryview)):
         if len(value) != 16:
             raise ValueError(f"a goal UUID is 16 bytes, got {len(value)}")
         return bytes(value).hex()
+    if not isinstance(value, str) and hasattr(value, "__len__") and hasattr(value, "__iter__"):
+        return _from_octets(value)  # 16 ints: a list, or the uint8 array rclpy hands over
     if isinstance(value, str):  # the hyphenated form, 8-4-4-4-12 (uuid.UUID would also take "_", "+", spaces)
         if len(value) == 36 and all(value[index] == "-" for index in (8, 13, 18, 23)):
             compact = value.replace("-", "").lower()
             if len(compact) == 32 and LOWER_HEX.issuperset(compact):
                 return compact
         raise ValueError("expected 32 hexadecimal digits")
-    raise ValueError("expected 16 bytes, a uuid.UUID or 32 hexadecimal digits")
+    raise ValueError("expected 32 hexadecimal digits, 16 bytes, 16 ints from 0 to 255 or a uuid.UUID")
+
+
+def _from_octets(value: Any) -> str:
+    """16 integers from 0 to 255 (ints, or integer scalars such as numpy's) as 32 hex digits."""
+    if len(value) != 16:
+        raise ValueError(f"a goal UUID is 16 octets, got {len(value)}")
+    octets = []
+    for item in value:
+        try:
+            octet = operator.index(item)
+        except TypeError:
+            raise ValueError(f"a goal UUID's octets are integers, got {item!r}") from None
+        if isinstance(item, bool) or not 0 <= octet <= 255:
+            raise ValueError(f"a goal UUID's octets are integers from 0 to 255, got {item!r}")
+        octets.append(octet)
+    return bytes(octets).hex()
 
 
 def _uuid(value: Any, instance: object, field: attrs.Attribute[Any]) -> str:
     try:
         return goal_uuid(value)
     except ValueError as exc:
-        raise InvalidMessage(type(instance).__name__, field.name, value, str(exc)) from None
+        raise InvalidValue(type(instance).__name__, field.name, value, str(exc)) from None
 
 
 def _now(value: Any, instance: object, field: attrs.Attribute[Any]) -> int:
     if type(value) is not int:
-        raise InvalidMessage(type(instance).__name__, field.name, value, "expected integer nanoseconds")
+        raise InvalidValue(type(instance).__name__, field.name, value, "expected integer nanoseconds")
     if not NOW_RANGE[0] <= value <= NOW_RANGE[1]:
-        raise InvalidMessage(
+        raise InvalidValue(
             type(instance).__name__, field.name, value, "outside the range of builtin_interfaces/Time"
         )
     return value
@@ -117,7 +138,7 @@ def _one_of(allowed: frozenset[str], what: str) -> attrs.Converter[Any, Any]:
     def convert(value: Any, instance: object, field: attrs.Attribute[Any]) -> str:
         plain = value.value if isinstance(value, (Status, Tier)) else value
         if type(plain) is not str or plain not in allowed:  # the type first: a dict is unhashable
-            raise InvalidMessage(
+            raise InvalidValue(
                 type(instance).__name__, field.name, value, f"expected one of the {what}: {sorted(allowed)}"
             )
         return plain
@@ -130,7 +151,7 @@ def _log_text(value: Any, instance: object, field: attrs.Attribute[Any]) -> str 
         return None
     text: str = _fields.check_string(value, instance, field)
     if len(text) > MAX_LOG_TEXT_LENGTH:
-        raise InvalidMessage(
+        raise InvalidValue(
             type(instance).__name__,
             field.name,
             value,
@@ -141,13 +162,13 @@ def _log_text(value: Any, instance: object, field: attrs.Attribute[Any]) -> str 
 
 def _finite(value: Any, instance: object, field: attrs.Attribute[Any]) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InvalidMessage(type(instance).__name__, field.name, value, "expected a number")
+        raise InvalidValue(type(instance).__name__, field.name, value, "expected a number")
     try:
         number = float(value)
     except OverflowError:
         number = math.inf
     if not math.isfinite(number):
-        raise InvalidMessage(type(instance).__name__, field.name, value, "expected a finite number")
+        raise InvalidValue(type(instance).__name__, field.name, value, "expected a finite number")
     return number
 
 
@@ -156,13 +177,13 @@ def _begin_description(value: Any, instance: object, field: attrs.Attribute[Any]
     try:
         EventDescription.from_json(text)
     except DyneventError as exc:
-        raise InvalidMessage(type(instance).__name__, field.name, value, str(exc)) from None
+        raise InvalidValue(type(instance).__name__, field.name, value, str(exc)) from None
     return text
 
 
 def _goal(value: Any, instance: object, field: attrs.Attribute[Any]) -> Goal:
     if type(value) is not Goal:
-        raise InvalidMessage(type(instance).__name__, field.name, value, "expected a Goal")
+        raise InvalidValue(type(instance).__name__, field.name, value, "expected a Goal")
     return value
 
 

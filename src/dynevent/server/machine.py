@@ -15,12 +15,13 @@ against the behaviour by the test suite.
 from __future__ import annotations
 
 import math
+import typing
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, TypeAlias
 
 import attrs
 
-from dynevent.errors import InvalidConfig
+from dynevent.errors import InvalidConfig, WrongInput
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.wire import _json
@@ -692,6 +693,8 @@ def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
     The checks run in the order of docs/spec.md section 4 and the first that
     fails decides.  Usable as it is in a ROS ``handle_goal`` callback.
     """
+    if not isinstance(goal, Goal):
+        raise WrongInput("accept(state, goal, ...)", "a dynevent.wire.messages.Goal", goal)
     return _decide(state, goal, config)[0]
 
 
@@ -1405,12 +1408,38 @@ TRANSITIONS: tuple[Edge, ...] = (
 )
 
 
+#: Input class -> its handler (the lookup :func:`step` makes; a class, not a kind, so that another
+#: machine's input of the same kind, the client's ``Tick``, is refused rather than taken).
+_BY_CLASS: dict[type, _Handler] = {cls: HANDLERS[cls.KIND] for cls in typing.get_args(ins.Input)}
+
+
 def step(state: State, event: ins.Input, config: ServerConfig) -> Transition:
     """Apply one input to the state: the new state and the outputs, in order.
 
-    Pure and total: any well-typed input in any state yields a transition.
+    Pure and total: any well-typed input in any state yields a transition.  A
+    value of another type than the three parameters name is refused with
+    :class:`~dynevent.errors.WrongInput` (a ``TypeError``).
     """
-    return HANDLERS[event.KIND](state, event, config)
+    handler = _BY_CLASS.get(event.__class__)
+    if handler is None or state.__class__ is not State or config.__class__ is not ServerConfig:
+        handler = _checked(state, event, config)
+    return handler(state, event, config)
+
+
+def _checked(state: object, event: object, config: object) -> _Handler:
+    """The handler of an input given as a subclass; :class:`WrongInput` for a value of a wrong type."""
+    if not isinstance(state, State):
+        raise WrongInput("step(state, ...)", "a dynevent.server.machine.State", state)
+    if not isinstance(config, ServerConfig):
+        raise WrongInput("step(..., config)", "a dynevent.server.machine.ServerConfig", config)
+    for cls, handler in _BY_CLASS.items():
+        if isinstance(event, cls):
+            return handler
+    raise WrongInput(
+        "step(state, event, ...)",
+        "a server input of dynevent.server.inputs (Begin, GoalRequested, ...)",
+        event,
+    )
 
 
 def allowed_targets(source: DynamicState, kind: str) -> frozenset[DynamicState]:

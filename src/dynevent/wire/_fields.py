@@ -17,7 +17,7 @@ from typing import Any, TypeVar, cast
 
 import attrs
 
-from dynevent.errors import InvalidMessage
+from dynevent.errors import InvalidValue
 
 #: The largest uint32: run seqs and log seqs wrap from it to 0.
 U32_MAX = 2**32 - 1
@@ -54,10 +54,10 @@ def _integer(low: int, high: int, wire: str) -> attrs.Converter[Any, Any]:
     def convert(value: Any, instance: object, field: attrs.Attribute[Any]) -> int:
         if type(value) is not int:
             if isinstance(value, bool) or not isinstance(value, int):
-                raise InvalidMessage(_owner(instance), field.name, value, f"expected an integer ({wire})")
+                raise InvalidValue(_owner(instance), field.name, value, f"expected an integer ({wire})")
             value = int(value)  # an IntEnum member is stored as its plain value
         if not low <= value <= high:
-            raise InvalidMessage(
+            raise InvalidValue(
                 _owner(instance), field.name, value, f"out of range for {wire} [{low}, {high}]"
             )
         checked: int = value
@@ -68,11 +68,11 @@ def _integer(low: int, high: int, wire: str) -> attrs.Converter[Any, Any]:
 
 def _float32(value: Any, instance: object, field: attrs.Attribute[Any]) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InvalidMessage(_owner(instance), field.name, value, "expected a number (float32)")
+        raise InvalidValue(_owner(instance), field.name, value, "expected a number (float32)")
     try:
         rounded: float = _F32.unpack(_F32.pack(value))[0]
     except (OverflowError, struct.error):
-        raise InvalidMessage(
+        raise InvalidValue(
             _owner(instance), field.name, value, "out of range for float32 (magnitude above 3.4028235e38)"
         ) from None
     return CANONICAL_NAN if math.isnan(rounded) else rounded
@@ -94,24 +94,24 @@ def check_string(value: Any, instance: object, field: attrs.Attribute[Any]) -> s
     """Check ``value`` as a wire string for ``field`` of ``instance``; return it as a plain ``str``."""
     if type(value) is not str:
         if not isinstance(value, str):
-            raise InvalidMessage(_owner(instance), field.name, value, "expected a string")
+            raise InvalidValue(_owner(instance), field.name, value, "expected a string")
         value = value.value if isinstance(value, Enum) else str.__str__(value)
     problem = string_problem(value)
     if problem is not None:
-        raise InvalidMessage(_owner(instance), field.name, value, problem)
+        raise InvalidValue(_owner(instance), field.name, value, problem)
     return cast(str, value)
 
 
 def _boolean(value: Any, instance: object, field: attrs.Attribute[Any]) -> bool:
     if type(value) is not bool:
-        raise InvalidMessage(_owner(instance), field.name, value, "expected a bool")
+        raise InvalidValue(_owner(instance), field.name, value, "expected a bool")
     return value
 
 
 def _nested(cls: type[Any]) -> attrs.Converter[Any, Any]:
     def convert(value: Any, instance: object, field: attrs.Attribute[Any]) -> Any:
         if type(value) is not cls:
-            raise InvalidMessage(_owner(instance), field.name, value, f"expected a {cls.__name__}")
+            raise InvalidValue(_owner(instance), field.name, value, f"expected a {cls.__name__}")
         return value
 
     return attrs.Converter(convert, takes_self=True, takes_field=True)
@@ -121,13 +121,13 @@ def _array(cls: type[Any]) -> attrs.Converter[Any, Any]:
     def convert(value: Any, instance: object, field: attrs.Attribute[Any]) -> tuple[Any, ...]:
         if type(value) is not tuple:
             if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Iterable):
-                raise InvalidMessage(
+                raise InvalidValue(
                     _owner(instance), field.name, value, f"expected a sequence of {cls.__name__}"
                 )
             value = tuple(value)
         for index, item in enumerate(value):
             if type(item) is not cls:
-                raise InvalidMessage(
+                raise InvalidValue(
                     _owner(instance), f"{field.name}[{index}]", item, f"expected a {cls.__name__}"
                 )
         return cast("tuple[Any, ...]", value)

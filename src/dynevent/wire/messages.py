@@ -35,7 +35,7 @@ from typing import Any, ClassVar, TypeVar
 
 import attrs
 
-from dynevent.errors import InvalidMessage
+from dynevent.errors import InvalidMessage, MalformedMessage
 from dynevent.wire import _json
 from dynevent.wire._fields import (
     SECOND,
@@ -115,38 +115,41 @@ class WireMessage:
         """Build a message from a dict keyed by ROS field name.
 
         Missing fields take their ROS default; unknown fields are refused.
-        Every fault raises :class:`~dynevent.errors.InvalidMessage` naming the
-        class and the (dotted) field.
+        Every fault raises :class:`~dynevent.errors.MalformedMessage` (an
+        ``InvalidMessage`` from outside) naming the class and the (dotted) field.
         """
         name = cls.__name__
         if not isinstance(data, dict):
-            raise InvalidMessage(name, "", data, "expected a JSON object")
+            raise MalformedMessage(name, "", data, "expected a JSON object")
         plan = _PLANS.get(cls) or _plan(cls)
         values: dict[str, Any] = {}
         for key, raw in data.items():
             step = plan.get(key) if isinstance(key, str) else None
             if step is None:
-                raise InvalidMessage(name, str(key), raw, "unknown field")
+                raise MalformedMessage(name, str(key), raw, "unknown field")
             how, wire = step
             if how is _AS_IS:
                 values[key] = raw
             elif how is _INTEGER:
                 if type(raw) is not int:
-                    raise InvalidMessage(name, key, raw, f"expected an integer ({wire})")
+                    raise MalformedMessage(name, key, raw, f"expected an integer ({wire})")
                 values[key] = raw
             elif how is _NESTED:
                 values[key] = _decode_nested(name, key, wire, raw)
             else:
                 values[key] = _decode_array(name, key, wire, raw)
-        return cls(**values)
+        try:
+            return cls(**values)
+        except InvalidMessage as exc:  # the constructor's check, of a value that came from outside
+            raise MalformedMessage.of(exc) from None
 
     @classmethod
     def from_json(cls: type[_M], text: str | bytes | bytearray) -> _M:
-        """Parse JSON text into a message; every fault raises ``InvalidMessage``."""
+        """Parse JSON text into a message; every fault raises :class:`~dynevent.errors.MalformedMessage`."""
         try:
             data = _json.parse(text)
         except _json.JsonProblem as exc:
-            raise InvalidMessage(cls.__name__, "", text, str(exc)) from None
+            raise MalformedMessage(cls.__name__, "", text, str(exc)) from None
         return cls.from_dict(data)
 
 
@@ -177,12 +180,12 @@ def _decode_nested(owner: str, key: str, cls: type[WireMessage], raw: object) ->
         return cls.from_dict(raw)
     except InvalidMessage as exc:
         inner = f"{key}.{exc.field}" if exc.field else key
-        raise InvalidMessage(owner, inner, exc.value, exc.problem) from None
+        raise MalformedMessage(owner, inner, exc.value, exc.problem) from None
 
 
 def _decode_array(owner: str, key: str, cls: type[WireMessage], raw: object) -> tuple[WireMessage, ...]:
     if not isinstance(raw, list):
-        raise InvalidMessage(owner, key, raw, f"expected an array of {cls.__name__}")
+        raise MalformedMessage(owner, key, raw, f"expected an array of {cls.__name__}")
     return tuple(_decode_nested(owner, f"{key}[{index}]", cls, item) for index, item in enumerate(raw))
 
 
