@@ -549,8 +549,13 @@ def resync_child_started(state: State, *, resumed: bool = False) -> State:
 
 
 def resync_start_dropped(state: State) -> State:
-    """The server evidently dropped the running goal whose child's start was deferred (it answered it)."""
-    return _replace_state(state, running=None, status=Status.STANDBY.value)
+    """The server evidently dropped the running goal whose child's start was deferred (it answered it).
+
+    No CANCEL waits for a deferred child (R9.4 answers it at once), and none can wait once the
+    running goal is gone: any still held are dropped with it, so the state keeps its invariants
+    whatever state it is given.
+    """
+    return _replace_state(state, running=None, cancels=(), status=Status.STANDBY.value)
 
 
 def resync_running_goal(state: State, goal_uuid: str) -> State:
