@@ -55,6 +55,7 @@ _HOMES: dict[str, str] = {
     ),
     **dict.fromkeys(("action_name", "begin_topic", "description_service", "status_topic"), "wire.names"),
     "EventDescription": "wire.description",
+    **dict.fromkeys(("MAX_DURATION", "MILLISECOND", "SECOND"), "wire.units"),
     **dict.fromkeys(
         ("ServerConfig", "State", "Transition", "accept", "accept_any", "status_message", "step"),
         "server.machine",
@@ -104,6 +105,9 @@ _MODULES: dict[str, str] = {
 __all__ = [
     "DOCS",
     "HOME",
+    "MAX_DURATION",
+    "MILLISECOND",
+    "SECOND",
     "Compatibility",
     "DescriptionRequest",
     "DescriptionResponse",
@@ -234,6 +238,7 @@ if TYPE_CHECKING:  # what type checkers and editors see, without importing anyth
         Time,
     )
     from dynevent.wire.names import action_name, begin_topic, description_service, status_topic
+    from dynevent.wire.units import MAX_DURATION, MILLISECOND, SECOND
     from dynevent.wire.vocab import (
         Compatibility,
         DynamicState,

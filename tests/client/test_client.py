@@ -177,8 +177,8 @@ def test_commands_check_their_arguments_at_the_edge() -> None:
     state = waiting()
     with pytest.raises(InvalidMessage, match="timeout"):
         client.request_next(state, "go_to_place", '"a"', timeout=0, now=0)
-    with pytest.raises(InvalidMessage, match="timeout"):
-        client.request_next(state, "go_to_place", '"a"', timeout=1.5, now=0)  # type: ignore[arg-type]
+    with pytest.raises(InvalidMessage, match=r"timeout.*is this nanoseconds"):
+        client.request_next(state, "go_to_place", '"a"', timeout=60 * SECOND, now=0)  # a duration is seconds
     with pytest.raises(InvalidMessage, match="now"):
         client.request_finish(state, now=1.0)  # type: ignore[arg-type]
     with pytest.raises(InvalidMessage, match="now"):
@@ -594,7 +594,7 @@ def test_feedback_is_progress() -> None:
 
 
 def test_timeout_cancels_a_running_child_and_reports_timeout() -> None:
-    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', timeout=10, now=100))
+    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', timeout=10e-9, now=100))  # 10 ns
     assert client.next_deadline(state) == 110
     state, outputs = feed(
         state,
@@ -615,7 +615,7 @@ def test_timeout_cancels_a_running_child_and_reports_timeout() -> None:
 
 
 def test_timeout_waits_until_the_child_is_known_to_run() -> None:
-    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', timeout=SECOND, now=0))
+    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', timeout=1, now=0))
     state, outputs = feed(state, Tick(now=SECOND))
     assert [type(output) for output in outputs] == [TimedOut]
     state, outputs = feed(
@@ -625,7 +625,7 @@ def test_timeout_waits_until_the_child_is_known_to_run() -> None:
 
 
 def test_timeout_uses_the_running_status_when_feedback_was_lost() -> None:
-    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', timeout=SECOND, now=0))
+    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', timeout=1, now=0))
     state, outputs = feed(state, Tick(now=SECOND), status(1, RUNNING, 6, "underway"))
     assert not any(isinstance(output, SendGoal) for output in outputs)  # not known to be ours yet
     state, outputs = feed(state, GoalResponse(goal_uuid=send.goal_uuid, accepted=True))
@@ -634,7 +634,7 @@ def test_timeout_uses_the_running_status_when_feedback_was_lost() -> None:
 
 
 def test_timeout_does_not_add_a_cancel_to_ours() -> None:
-    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', timeout=SECOND, now=0))
+    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', timeout=1, now=0))
     state, _ = feed(
         state, FeedbackReceived(goal_uuid=send.goal_uuid, feedback=Feedback(status="underway", id=6))
     )
@@ -644,7 +644,7 @@ def test_timeout_does_not_add_a_cancel_to_ours() -> None:
 
 
 def test_timeout_after_the_run_ended_sends_nothing() -> None:
-    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', timeout=SECOND, now=0))
+    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', timeout=1, now=0))
     state, _ = feed(state, status(1, INACTIVE), Tick(now=SECOND))
     state, outputs = feed(
         state, FeedbackReceived(goal_uuid=send.goal_uuid, feedback=Feedback(status="queued", id=6))
@@ -654,7 +654,7 @@ def test_timeout_after_the_run_ended_sends_nothing() -> None:
 
 def test_a_rejected_timed_out_goal_is_rejected() -> None:
     state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', timeout=1, now=0))
-    state, _ = feed(state, Tick(now=5))
+    state, _ = feed(state, Tick(now=5 * SECOND))
     _, outputs = feed(state, GoalResponse(goal_uuid=send.goal_uuid, accepted=False))
     assert only_outcome(outputs).kind is OutcomeKind.REJECTED
 
@@ -732,7 +732,7 @@ def _book_step(state: ClientState, item: Any, uuid: str) -> client.ClientTransit
         return client.request_cancel(state, now=0)
     if item[0] == "finish":
         return client.request_finish(state, now=0)
-    timeout = SECOND if item[0] == "next_timeout" else None
+    timeout = 1 if item[0] == "next_timeout" else None
     return client.request_next(state, "go_to_place", '"a"', timeout=timeout, now=0)
 
 

@@ -66,6 +66,10 @@ from dynevent.wire.vocab import EventType, GoalStatus, RejectReason
 UUID = "a" * 32
 
 
+#: One nanosecond, in the seconds durations are given in: these tests count deadlines in nanoseconds.
+NS = 1e-9
+
+
 def refusal(transition: ClientTransition) -> outs.Rejected:
     (output,) = transition.outputs
     assert isinstance(output, Refused), output
@@ -438,14 +442,20 @@ def test_commands_name_themselves_in_now_errors(
     assert (error.message_type, error.field, error.problem) == (name, "now", problem)
 
 
-@pytest.mark.parametrize("timeout", [0, -1, 1.5, True, "1"])
-def test_timeout_error(timeout: Any) -> None:
+@pytest.mark.parametrize(
+    ("timeout", "problem"),
+    [
+        (0, "expected a finite duration in seconds, above 0"),
+        (-1, "expected a finite duration in seconds, above 0"),
+        (float("nan"), "expected a finite duration in seconds, above 0"),
+        (True, "expected a duration in seconds (an int or a float)"),
+        ("1", "expected a duration in seconds (an int or a float)"),
+        (60 * SECOND, "durations are in seconds, at most 604800 (a week): is this nanoseconds?"),
+    ],
+)
+def test_timeout_error(timeout: Any, problem: str) -> None:
     error = _invalid(lambda: client.request_next(waiting(), "go_to_place", '"a"', timeout=timeout, now=0))
-    assert (error.message_type, error.field, error.problem) == (
-        "request_next",
-        "timeout",
-        "expected positive integer nanoseconds or None",
-    )
+    assert (error.message_type, error.field, error.problem) == ("request_next", "timeout", problem)
 
 
 # --------------------------------------------------------------------------- defaults
@@ -492,7 +502,7 @@ def test_a_sent_goal_is_open_and_unanswered() -> None:
     assert opened.child_status == ""
     assert opened.deadline is None
     assert client.next_deadline(state) is None
-    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', timeout=7, now=3))
+    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', timeout=7 * NS, now=3))
     assert state.goals[0].deadline == 10
     assert client.next_deadline(state) == 10
 
@@ -778,7 +788,7 @@ def test_result_sentences() -> None:
 
 
 def test_timeout_sentence() -> None:
-    state, send = sent(next_a(waiting(), timeout=10))
+    state, send = sent(next_a(waiting(), timeout=10 * NS))
     state, _ = feed(state, Tick(now=10))
     _, outputs = feed(state, answer(send.goal_uuid, GoalStatus.ABORTED, "canceled", 6))
     outcome = only(outputs, Outcome)
@@ -818,7 +828,7 @@ def test_an_older_runs_result_teaches_nothing_about_the_new_run() -> None:
 
 
 def test_a_running_status_sends_the_timeout_cancel() -> None:
-    state, send = sent(next_a(waiting(), timeout=10))
+    state, send = sent(next_a(waiting(), timeout=10 * NS))
     state, _ = feed(state, GoalResponse(goal_uuid=send.goal_uuid, accepted=True))
     state, outputs = feed(state, Tick(now=10))
     assert outputs == [TimedOut(goal_uuid=send.goal_uuid, id=6, deadline=10)]  # no child known yet
@@ -829,7 +839,7 @@ def test_a_running_status_sends_the_timeout_cancel() -> None:
 
 def test_timed_out_names_the_child_feedback_named() -> None:
     # under id policy "adapter" the server numbers the child itself
-    state, send = sent(next_a(waiting(), timeout=10))
+    state, send = sent(next_a(waiting(), timeout=10 * NS))
     assert send.goal.id == 6
     state, _ = feed(
         state, FeedbackReceived(goal_uuid=send.goal_uuid, feedback=Feedback(status="underway", id=9))
@@ -842,7 +852,7 @@ def test_timed_out_names_the_child_feedback_named() -> None:
 def test_a_goal_without_deadline_does_not_stop_the_tick() -> None:
     state, first = sent(next_a(waiting(seq=1)))  # no timeout; its answer never arrives
     state, _ = feed(state, status(1, INACTIVE), begin(2), status(2, WAITING, 3))
-    state, second = sent(next_a(state, timeout=10))
+    state, second = sent(next_a(state, timeout=10 * NS))
     assert [goal.goal_uuid for goal in state.goals] == [first.goal_uuid, second.goal_uuid]
     assert client.next_deadline(state) == 10
     _, outputs = feed(state, Tick(now=10))
@@ -850,9 +860,9 @@ def test_a_goal_without_deadline_does_not_stop_the_tick() -> None:
 
 
 def test_an_already_timed_out_goal_does_not_stop_the_tick() -> None:
-    state, first = sent(next_a(waiting(seq=1), timeout=5))
+    state, first = sent(next_a(waiting(seq=1), timeout=5 * NS))
     state, _ = feed(state, Tick(now=5), status(1, INACTIVE), begin(2), status(2, WAITING, 3))
-    state, second = sent(next_a(state, timeout=10))
+    state, second = sent(next_a(state, timeout=10 * NS))
     _, outputs = feed(state, Tick(now=10))
     assert outputs == [TimedOut(goal_uuid=second.goal_uuid, id=4, deadline=10)]
     assert first.goal_uuid != second.goal_uuid

@@ -33,7 +33,10 @@ from doc_sessions import CONSOLE, sessions
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 PAGES = [ROOT / "README.md", *sorted(DOCS.glob("*.md"))]
-PYTHON_PAGES = ["testing-your-implementation.md", "client.md", "fleet.md"]
+PYTHON_PAGES = [
+    ROOT / "README.md",
+    *(DOCS / name for name in ("testing-your-implementation.md", "client.md", "fleet.md")),
+]
 ROS_COMMANDS = ("dynevent serve", "dynevent send")
 
 
@@ -132,11 +135,9 @@ def _claims(tree: ast.Module, lines: list[str], comments: dict[int, str]) -> dic
 
 
 EXAMPLES = [
-    (page, index, block)
+    (page.name, index, block)
     for page in PYTHON_PAGES
-    for index, block in enumerate(
-        re.findall(r"```python\n(.*?)```", (DOCS / page).read_text(encoding="utf-8"), re.S)
-    )
+    for index, block in enumerate(re.findall(r"```python\n(.*?)```", page.read_text(encoding="utf-8"), re.S))
 ]
 
 

@@ -24,7 +24,9 @@ from dynevent.wire.vocab import Compatibility, DynamicState, EventType, IdPolicy
 PREFIX = "0123456789abcdef"
 U32 = 2**32 - 1
 U64 = 2**64 - 1
-MS = 1_000_000
+MS = 1_000_000  # a millisecond on the session's clock (instants are nanoseconds)
+#: A millisecond as a duration: durations are seconds (dynevent.wire.units).
+D_MS = 0.001
 CATEGORIES = ("go_to_place", "perform_action")
 CONFIG = machine.ServerConfig(categories=dict.fromkeys(CATEGORIES, machine.accept_any))
 
@@ -94,9 +96,9 @@ def test_a_late_client_gets_the_transient_local_begin_and_status() -> None:
 def test_sessions_replay_exactly_from_their_seed() -> None:
     def play(seed: int) -> str:
         lb = started(
-            session(seed=seed, delay=(0, 20 * MS), start_delay=(0, 20 * MS), reorder=True, drop_feedback=0.5)
+            session(seed=seed, delay=(0, 0.02), start_delay=(0, 0.02), reorder=True, drop_feedback=0.5)
         )
-        lb.request_next("go_to_place", '"a"', timeout=SECOND)
+        lb.request_next("go_to_place", '"a"', timeout=1)
         lb.send_foreign(
             Goal(
                 dynamic_event_seq=1,
@@ -106,7 +108,7 @@ def test_sessions_replay_exactly_from_their_seed() -> None:
                 id=50,
             )
         )
-        lb.advance(300 * MS)
+        lb.advance(300 * D_MS)
         lb.request_cancel()
         lb.run()
         lb.request_finish()
@@ -118,7 +120,7 @@ def test_sessions_replay_exactly_from_their_seed() -> None:
 
 
 def test_timeline_as_json_lines_and_text() -> None:
-    lb = started(session(delay=(MS, 2 * MS)))
+    lb = started(session(delay=(D_MS, 2 * D_MS)))
     lb.request_next("go_to_place", '"a"', stubborn_period=math.nan)
     lb.request_next("go_to_place", '"a"', stubborn_period=1.0)
     lb.run()
@@ -158,23 +160,29 @@ def test_run_limit_and_pending() -> None:
 def test_options_and_scripts_check_their_values() -> None:
     with pytest.raises(ValueError, match="low <= high"):
         Options(delay=(5, 1))
-    with pytest.raises(ValueError, match="low <= high"):
+    with pytest.raises(ValueError, match=r"start_delay: expected a finite duration in seconds, 0 or more"):
         Options(start_delay=(-1, 1))
+    with pytest.raises(ValueError, match=r"Options.delay: .* is this nanoseconds\?"):
+        Options(delay=(1_000_000, 3_000_000))  # 1 to 3 ms, in nanoseconds: refused, not taken as days
+    with pytest.raises(ValueError, match=r"Loopback.advance.duration"):
+        started(session()).advance(SECOND)
     with pytest.raises(ValueError, match="probability"):
         Options(drop_feedback=1.5)
     with pytest.raises(ValueError, match="task statuses"):
         ChildScript(final_status="done")
     with pytest.raises(ValueError, match="duration"):
         ChildScript(cancel_after=-1)
-    with pytest.raises(ValueError, match="duration"):
-        ChildScript(reports=((0.5, "underway"),))
+    with pytest.raises(ValueError, match=r"ChildScript.reports\[0\]: durations are in seconds"):
+        ChildScript(reports=((60 * SECOND, "underway"),))  # nanoseconds, not seconds
+    with pytest.raises(ValueError, match=r"ChildScript.cancel_after: durations are in seconds"):
+        ChildScript(cancel_after=SECOND // 5)
     with pytest.raises(ValueError, match="ChildScript"):
         Adapter(scripts=[1])  # type: ignore[list-item]
     assert ChildScript(final_status=Status.FAILED).final_status == "failed"
 
 
 def test_stubbornness_is_recorded_as_adapter_effects() -> None:
-    lb = started(session(delay=(MS, MS)))
+    lb = started(session(delay=(D_MS, D_MS)))
     lb.request_next("go_to_place", '"a"', stubborn_period=1.0)
     lb.run()
     lb.server_input(ins.Tick(now=lb.now + SECOND, map_name="L1"))
@@ -201,7 +209,7 @@ def test_adapter_scripts_follow_the_order_children_start() -> None:
 def test_stale_adapter_inputs_are_dropped_not_delivered() -> None:
     lb = started(session(scripts=(ChildScript(cancel_after=0),)))
     lb.request_next("go_to_place", '"a"')
-    lb.advance(10 * MS)
+    lb.advance(10 * D_MS)
     lb.request_cancel()
     lb.run()
     stale = [item for item in lb.timeline if item.decision.startswith("stale")]
@@ -236,7 +244,7 @@ def test_child_final_statuses(final: str, kind: OutcomeKind) -> None:
 def test_canceled_by_our_cancel() -> None:
     lb = started(session(scripts=(ChildScript(finish_after=None),)))
     lb.request_next("go_to_place", '"a"')
-    lb.advance(MS)
+    lb.advance(D_MS)
     lb.request_cancel()
     lb.run()
     assert outcome_kinds(lb) == [
@@ -247,9 +255,9 @@ def test_canceled_by_our_cancel() -> None:
 
 
 def test_killed_when_the_task_is_killed() -> None:
-    lb = started(session(scripts=(ChildScript(finish_after=None, kill_after=MS),)))
+    lb = started(session(scripts=(ChildScript(finish_after=None, kill_after=D_MS),)))
     lb.request_next("go_to_place", '"a"')
-    lb.advance(MS)
+    lb.advance(D_MS)
     lb.task_kill()
     lb.run()
     assert outcome_kinds(lb) == [(EventType.NEXT, OutcomeKind.KILLED)]
@@ -257,8 +265,8 @@ def test_killed_when_the_task_is_killed() -> None:
 
 
 def test_timeout_cancels_and_reports_timeout() -> None:
-    lb = started(session(scripts=(ChildScript(finish_after=None),), delay=(MS, 3 * MS)))
-    lb.request_next("go_to_place", '"a"', timeout=SECOND)
+    lb = started(session(scripts=(ChildScript(finish_after=None),), delay=(D_MS, 3 * D_MS)))
+    lb.request_next("go_to_place", '"a"', timeout=1)
     lb.run()
     assert outcome_kinds(lb) == [
         (EventType.NEXT, OutcomeKind.TIMEOUT),
@@ -271,7 +279,7 @@ def test_timeout_cancels_and_reports_timeout() -> None:
 def test_timeout_of_a_deferred_child_with_all_feedback_lost() -> None:
     lb = started(session(drop_feedback=1.0))
     lb.interrupt()
-    lb.request_next("go_to_place", '"a"', timeout=SECOND)
+    lb.request_next("go_to_place", '"a"', timeout=1)
     lb.run()
     assert any(item.decision == "dropped" for item in lb.timeline)
     assert outcome_kinds(lb) == [
@@ -284,7 +292,7 @@ def test_timeout_of_a_deferred_child_with_all_feedback_lost() -> None:
 def test_execution_failure_race_with_another_client() -> None:
     kinds = set()
     for seed in range(12):
-        lb = started(session(seed=seed, start_delay=(0, 10 * MS), reorder=True))
+        lb = started(session(seed=seed, start_delay=(0, 10 * D_MS), reorder=True))
         lb.request_next("go_to_place", '"a"')
         foreign = Goal(
             dynamic_event_seq=1, event_type=EventType.NEXT, category="go_to_place", description='"b"', id=100
@@ -301,11 +309,11 @@ def test_execution_failure_race_with_another_client() -> None:
 
 @pytest.mark.parametrize("ros", [False, True])
 def test_rejected_when_the_view_is_behind(ros: bool) -> None:
-    lb = started(session(delay=(10 * MS, 10 * MS), ros_rejections=ros))
+    lb = started(session(delay=(10 * D_MS, 10 * D_MS), ros_rejections=ros))
     lb.send_foreign(
         Goal(dynamic_event_seq=1, event_type=EventType.NEXT, category="go_to_place", description='"b"', id=6)
     )
-    lb.advance(15 * MS)  # the foreign child runs; its status is still on its way
+    lb.advance(15 * D_MS)  # the foreign child runs; its status is still on its way
     assert lb.client.phase is DynamicState.WAITING and lb.server.phase is DynamicState.RUNNING
     lb.request_next("go_to_place", '"a"')
     lb.run()
@@ -315,9 +323,9 @@ def test_rejected_when_the_view_is_behind(ros: bool) -> None:
 
 
 def test_superseded_when_a_new_run_began_before_the_goal_started() -> None:
-    lb = started(session(start_delay=(SECOND, SECOND)))
+    lb = started(session(start_delay=(1, 1)))
     lb.request_next("go_to_place", '"a"')
-    lb.advance(10 * MS)
+    lb.advance(10 * D_MS)
     lb.task_cancel()
     lb.begin(event_id=20)
     lb.run()
@@ -327,7 +335,7 @@ def test_superseded_when_a_new_run_began_before_the_goal_started() -> None:
 
 
 def test_superseded_when_the_request_arrives_in_the_next_run() -> None:
-    lb = started(session(delay=(5 * MS, 5 * MS)))
+    lb = started(session(delay=(5 * D_MS, 5 * D_MS)))
     lb.request_next("go_to_place", '"a"')
     lb.task_cancel()
     lb.begin(event_id=20)  # both runs change before the request arrives
@@ -339,7 +347,7 @@ def test_superseded_when_the_request_arrives_in_the_next_run() -> None:
 def test_shutdown_answers_with_execution_failure() -> None:
     lb = started(session(scripts=(ChildScript(finish_after=None),)))
     lb.request_next("go_to_place", '"a"')
-    lb.advance(MS)
+    lb.advance(D_MS)
     lb.shutdown()
     lb.run()
     (outcome,) = lb.outcomes
@@ -358,7 +366,7 @@ def test_seq_wrap_is_followed() -> None:
 
 
 def test_next_right_after_an_outcome_is_accepted() -> None:
-    lb = started(session(delay=(MS, 5 * MS), seed=4))
+    lb = started(session(delay=(D_MS, 5 * D_MS), seed=4))
     outcomes_seen = 0
     lb.request_next("go_to_place", '"a"')
     while lb.step():
@@ -377,7 +385,7 @@ NEXT = st.tuples(
     st.sampled_from((*CATEGORIES, *CATEGORIES, "teleport")),
     st.sampled_from(('"pantry"', '{"place": "L1"}', '"lobby"', "[1,")),
     st.sampled_from((0.0, 0.0, 1.0, 3.0, math.nan)),
-    st.sampled_from((None, None, SECOND // 4, SECOND, 5 * SECOND)),
+    st.sampled_from((None, None, 0.25, 1, 5)),  # seconds
 )
 BEGIN = st.tuples(st.just("begin"), st.sampled_from((0, 5, 1000, U64 - 1, U64)))
 # one_of draws its branches evenly: repeating a branch weighs it
@@ -403,20 +411,25 @@ ACTIONS = st.one_of(
         )
     ),
 )
+
+
+def SECONDS(most: float) -> st.SearchStrategy[float]:
+    """Durations from 0 to ``most`` seconds, in whole nanoseconds."""
+    return st.integers(0, round(most * SECOND)).map(lambda nanoseconds: nanoseconds / SECOND)
+
+
 SCRIPTS = st.builds(
     ChildScript,
-    reports=st.lists(
-        st.tuples(st.integers(0, 2 * SECOND), st.sampled_from(("underway", "delayed", "blocked"))), max_size=2
-    ),
-    finish_after=st.one_of(st.none(), st.integers(0, 3 * SECOND)),
+    reports=st.lists(st.tuples(SECONDS(2), st.sampled_from(("underway", "delayed", "blocked"))), max_size=2),
+    finish_after=st.one_of(st.none(), SECONDS(3)),
     final_status=st.sampled_from([status.value for status in Status]),
-    cancel_after=st.integers(0, SECOND),
-    kill_after=st.integers(0, SECOND // 2),
+    cancel_after=SECONDS(1),
+    kill_after=SECONDS(0.5),
 )
 OPTIONS = st.builds(
     Options,
-    delay=st.sampled_from(((0, 0), (0, 5 * MS), (MS, 50 * MS))),
-    start_delay=st.sampled_from(((0, 0), (0, 20 * MS))),
+    delay=st.sampled_from(((0, 0), (0, 5 * D_MS), (D_MS, 50 * D_MS))),
+    start_delay=st.sampled_from(((0, 0), (0, 20 * D_MS))),
     reorder=st.booleans(),
     drop_feedback=st.sampled_from((0.0, 0.5, 1.0)),
     ros_rejections=st.booleans(),
@@ -581,14 +594,14 @@ def test_agreement_example_with_a_race_and_a_timeout() -> None:
         machine.State.new("f", "r"),
         CONFIG,
         adapter=Adapter(scripts=(ChildScript(finish_after=None),)),
-        options=Options(delay=(MS, 5 * MS), start_delay=(0, 20 * MS), reorder=True),
+        options=Options(delay=(D_MS, 5 * D_MS), start_delay=(0, 20 * D_MS), reorder=True),
         seed=11,
     )
     agreement = Agreement(lb)
     for action in [
         ("begin", 5),
         ("wait", SECOND),
-        ("next", "go_to_place", '"a"', 0.0, SECOND),
+        ("next", "go_to_place", '"a"', 0.0, 1),  # a 1 s timeout
         ("foreign_next",),
         ("wait", 3 * SECOND),
         ("next_plain",),

@@ -97,6 +97,7 @@ from dynevent.wire._fields import SECOND as _SECOND_NS
 from dynevent.wire._fields import U64_MAX, id_not_after, seq_after
 from dynevent.wire.description import DEFAULT_CATEGORY
 from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.units import to_nanoseconds
 from dynevent.wire.vocab import (
     ENDED_CHILD_STATUSES,
     DynamicState,
@@ -119,7 +120,8 @@ __all__ = [
     "step",
 ]
 
-#: One second in the client's unit of time (integer nanoseconds), e.g. ``timeout=30 * SECOND``.
+#: One second in the unit of instants (integer nanoseconds), e.g. ``now + 30 * SECOND``
+#: (:mod:`dynevent.wire.units`: durations, such as ``timeout``, are seconds).
 SECOND = _SECOND_NS
 
 _HEX = frozenset("0123456789abcdefABCDEF")
@@ -355,11 +357,8 @@ def _refusal(state: ClientState, goal: Goal) -> Rejected | None:
 
 
 def _check_timeout(value: Any) -> int | None:
-    if value is None:
-        return None
-    if type(value) is not int or value <= 0:
-        raise InvalidValue("request_next", "timeout", value, "expected positive integer nanoseconds or None")
-    return value
+    """A timeout in seconds as nanoseconds (None: no timeout)."""
+    return None if value is None else to_nanoseconds("request_next", "timeout", value, zero=False)
 
 
 def _send(state: ClientState, goal: Goal, deadline: int | None = None) -> ClientTransition:
@@ -381,18 +380,20 @@ def request_next(
     description: str,
     *,
     stubborn_period: float = 0.0,
-    timeout: int | None = None,
+    timeout: float | None = None,
     now: int,
 ) -> ClientTransition:
     """Ask the robot to run the next event: a NEXT goal, or a local refusal.
 
     The goal's id is one more than the highest id seen in the run.
-    ``timeout`` (integer nanoseconds, e.g. ``30 * SECOND``) makes the client
-    cancel the child if the goal is still open at ``now + timeout``.  Values
-    the wire cannot carry (a category holding NUL, a stubborn period beyond
-    float32) raise :class:`~dynevent.errors.InvalidMessage`, as does a
-    timeout that is not a positive integer; NaN and infinite stubborn periods
-    are wire-legal and refused locally, as the server would.
+    ``timeout`` (seconds, as every duration: :mod:`dynevent.wire.units`) makes
+    the client cancel the child if the goal is still open ``timeout`` after
+    ``now`` (integer nanoseconds, as every instant).  Values the wire cannot
+    carry (a category holding NUL, a stubborn period beyond float32) raise
+    :class:`~dynevent.errors.InvalidValue`, as does a timeout that is not a
+    positive number of seconds up to a week (``30 * SECOND`` is refused: that
+    is nanoseconds); NaN and infinite stubborn periods are wire-legal and
+    refused locally, as the server would.
     """
     now = _check_now("request_next", now)
     timeout = _check_timeout(timeout)

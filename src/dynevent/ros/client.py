@@ -38,7 +38,6 @@ from dynevent import client as cl
 from dynevent.errors import (
     GoalWaitTimeout,  # defined there with every error; importable here too
     InvalidMessage,
-    InvalidValue,
 )
 from dynevent.ros import convert
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
@@ -186,10 +185,9 @@ class DynamicEventClient:
         on_progress: Callable[[cl.Progress], None] | None = None,
     ) -> GoalRun:
         """Ask the robot to run the next event (a NEXT goal); ``timeout`` seconds cancels it when due."""
-        deadline = None if timeout is None else _nanoseconds("timeout", timeout)
         return self._command(
             lambda state, now: cl.request_next(
-                state, category, description, stubborn_period=stubborn_period, timeout=deadline, now=now
+                state, category, description, stubborn_period=stubborn_period, timeout=timeout, now=now
             ),
             on_progress,
         )
@@ -336,9 +334,3 @@ class DynamicEventClient:
             response = DynamicEvent.Impl.SendGoalService.Response(accepted=True)
             handle = ClientGoalHandle(self._action, convert.uuid_to_ros(uuid), response)
             handle.get_result_async().add_done_callback(lambda done, uuid=uuid: self._on_result(uuid, done))
-
-
-def _nanoseconds(field: str, seconds: float) -> int:
-    if isinstance(seconds, bool) or not isinstance(seconds, (int, float)) or not 0 < seconds < 1e9:
-        raise InvalidValue("DynamicEventClient", field, seconds, "expected positive seconds")
-    return round(seconds * 1_000_000_000)

@@ -44,8 +44,7 @@ from dynevent.wire.vocab import EventType, Failure, Status
 
 __all__ = ["STEPS", "WIDTH", "mermaid", "run_demo", "session_events", "summary"]
 
-_MS = 1_000_000
-_SECOND = cl.SECOND
+_SECOND = cl.SECOND  # instants (event.time) are nanoseconds; durations below are seconds
 
 #: The captions of the demo's steps, in order.
 STEPS = (
@@ -67,11 +66,11 @@ def _config() -> machine.ServerConfig:
 
 def _adapter() -> Adapter:
     progress = ChildScript(
-        reports=((300 * _MS, Status.UNDERWAY), (900 * _MS, Status.UNDERWAY), (1500 * _MS, Status.DELAYED)),
-        finish_after=2 * _SECOND,
+        reports=((0.3, Status.UNDERWAY), (0.9, Status.UNDERWAY), (1.5, Status.DELAYED)),
+        finish_after=2,
     )
-    short = ChildScript(reports=((400 * _MS, Status.UNDERWAY),), finish_after=_SECOND)
-    endless = ChildScript(reports=((300 * _MS, Status.UNDERWAY),), finish_after=None, cancel_after=250 * _MS)
+    short = ChildScript(reports=((0.4, Status.UNDERWAY),), finish_after=1)
+    endless = ChildScript(reports=((0.3, Status.UNDERWAY),), finish_after=None, cancel_after=0.25)
     return Adapter(scripts=(progress, short, endless), default=short)
 
 
@@ -177,7 +176,7 @@ class _Script:
             machine.State.new("tinyRobot", "tinyRobot1"),
             _config(),
             adapter=_adapter(),
-            options=Options(delay=(1 * _MS, 4 * _MS), start_delay=(5 * _MS, 15 * _MS), reorder=True),
+            options=Options(delay=(0.001, 0.004), start_delay=(0.005, 0.015), reorder=True),
             seed=seed,
         )
         self.tagged: list[tuple[int, TimelineEvent]] = []
@@ -212,12 +211,12 @@ class _Script:
         self.session.request_next("go_to_place", '{"place": "lobby"}', stubborn_period=0.5)
         self.session.run()
         for x in (4.0, 4.02, 5.5, 5.5):  # held still, a small drift, a move: re-anchored, then held
-            self.session.advance(_SECOND)
+            self.session.advance(1)
             self.tick(x)
 
     def wrong_cancel(self) -> None:
         self.session.request_next("go_to_place", '"charger"')
-        self.session.advance(500 * _MS)
+        self.session.advance(0.5)
         running = self.session.server.running
         wrong = (running.child_id if running is not None else 0) + 40
         seq = self.session.client.seq

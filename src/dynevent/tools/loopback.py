@@ -52,6 +52,7 @@ import attrs
 
 from dynevent import client as cl
 from dynevent.client import SECOND, ClientOutput, ClientState, ClientTransition, Outcome
+from dynevent.errors import InvalidValue
 from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
@@ -60,6 +61,7 @@ from dynevent.wire import _json
 from dynevent.wire._codec import encode
 from dynevent.wire._text import answer_text, goal_text, status_text
 from dynevent.wire.messages import DynamicEventDescription, Goal, Time
+from dynevent.wire.units import to_nanoseconds
 from dynevent.wire.vocab import Status
 
 __all__ = [
@@ -82,27 +84,29 @@ def _status(value: Any) -> str:
     return str(plain)
 
 
-def _reports(value: Any) -> tuple[tuple[int, str], ...]:
+def _reports(value: Any) -> tuple[tuple[float, str], ...]:
     result = []
-    for item in value:
+    for index, item in enumerate(value):
         delay, status = item
-        result.append((_duration(delay), _status(status)))
+        to_nanoseconds("ChildScript", f"reports[{index}]", delay)
+        result.append((delay, _status(status)))
     return tuple(result)
 
 
-def _duration(value: Any) -> int:
-    if type(value) is not int or value < 0:
-        raise ValueError(f"expected a duration in non-negative integer nanoseconds, got {value!r}")
-    return value
+def _seconds(instance: object, attribute: attrs.Attribute[Any], value: Any) -> None:
+    """A duration in seconds (:mod:`dynevent.wire.units`); None where the field allows it."""
+    if value is not None:
+        to_nanoseconds(type(instance).__name__, attribute.name, value)
 
 
-def _optional_duration(value: Any) -> int | None:
-    return None if value is None else _duration(value)
+def _ns(seconds: float) -> int:
+    """A checked duration as the nanoseconds of the session's clock."""
+    return round(seconds * SECOND)
 
 
 @attrs.frozen(kw_only=True)
 class ChildScript:
-    """How one child event behaves, in nanoseconds after the moment it is told something.
+    """How one child event behaves, in seconds after the moment it is told something.
 
     ``reports`` are ``(delay after start, status)`` progress reports, each
     with a log line; the child ends ``final_status`` ``finish_after`` its
@@ -111,13 +115,13 @@ class ChildScript:
     ``kill_after`` later.  Whichever end comes first counts.
     """
 
-    reports: tuple[tuple[int, str], ...] = attrs.field(
-        default=((SECOND // 2, Status.UNDERWAY.value),), converter=_reports
+    reports: tuple[tuple[float, str], ...] = attrs.field(
+        default=((0.5, Status.UNDERWAY.value),), converter=_reports
     )
-    finish_after: int | None = attrs.field(default=2 * SECOND, converter=_optional_duration)
+    finish_after: float | None = attrs.field(default=2.0, validator=_seconds)
     final_status: str = attrs.field(default=Status.COMPLETED.value, converter=_status)
-    cancel_after: int = attrs.field(default=SECOND // 10, converter=_duration)
-    kill_after: int = attrs.field(default=0, converter=_duration)
+    cancel_after: float = attrs.field(default=0.1, validator=_seconds)
+    kill_after: float = attrs.field(default=0.0, validator=_seconds)
 
 
 def _scripts(value: Iterable[ChildScript]) -> tuple[ChildScript, ...]:
@@ -149,27 +153,27 @@ class Adapter:
         if isinstance(output, outs.StartChild):
             planned: list[tuple[int, ins.Input]] = []
             for delay, status in script.reports:
-                at = now + delay
+                at = now + _ns(delay)
                 text = f"child {output.id}: {status}"
                 planned.append((at, ins.ChildProgress(status=status, log_text=text, now=at)))
             if script.finish_after is not None:
-                at = now + script.finish_after
+                at = now + _ns(script.finish_after)
                 planned.append((at, ins.ChildFinished(status=script.final_status, now=at)))
             return tuple(planned)
         if isinstance(output, outs.CancelChild):
-            at = now + script.cancel_after
+            at = now + _ns(script.cancel_after)
             return ((at, ins.ChildFinished(status=Status.CANCELED, now=at)),)
         if isinstance(output, outs.KillChild):
-            at = now + script.kill_after
+            at = now + _ns(script.kill_after)
             return ((at, ins.ChildFinished(status=Status.KILLED, now=at)),)
         return ()
 
 
-def _range(value: Any) -> tuple[int, int]:
+def _range(instance: object, attribute: attrs.Attribute[Any], value: Any) -> None:
     low, high = value
-    if type(low) is not int or type(high) is not int or not 0 <= low <= high:
-        raise ValueError(f"expected (low, high) integer nanoseconds with 0 <= low <= high, got {value!r}")
-    return (low, high)
+    owner = type(instance).__name__
+    if to_nanoseconds(owner, attribute.name, low) > to_nanoseconds(owner, attribute.name, high):
+        raise InvalidValue(owner, attribute.name, value, "expected (low, high) seconds with low <= high")
 
 
 def _probability(value: Any) -> float:
@@ -183,15 +187,15 @@ class Options:
     """How the loopback's network behaves; every random draw comes from the loopback's seed.
 
     ``delay``: each message takes a uniformly drawn ``[low, high]``
-    nanoseconds.  ``start_delay``: an accepted goal starts that long after
+    seconds (drawn in whole nanoseconds).  ``start_delay``: an accepted goal starts that long after
     its acceptance.  ``reorder``: goal requests and goal starts may overtake
     each other (they keep their order otherwise).  ``drop_feedback``: the
     probability that a feedback message is lost.  ``ros_rejections``:
     rejections reach the client without a reason, as over ROS.
     """
 
-    delay: tuple[int, int] = attrs.field(default=(0, 0), converter=_range)
-    start_delay: tuple[int, int] = attrs.field(default=(0, 0), converter=_range)
+    delay: tuple[float, float] = attrs.field(default=(0, 0), validator=_range)
+    start_delay: tuple[float, float] = attrs.field(default=(0, 0), validator=_range)
     reorder: bool = False
     drop_feedback: float = attrs.field(default=0.0, converter=_probability)
     ros_rejections: bool = False
@@ -397,8 +401,9 @@ class _Wire:
         self._order = itertools.count()
         self._channels: dict[str, int] = {}
 
-    def draw(self, bounds: tuple[int, int]) -> int:
-        low, high = bounds
+    def draw(self, bounds: tuple[float, float]) -> int:
+        """A delay in nanoseconds, drawn from ``bounds`` in seconds."""
+        low, high = _ns(bounds[0]), _ns(bounds[1])
         return low if low == high else self.rng.randint(low, high)
 
     def schedule(self, at: int, delivery: _Delivery, channel: str | None, shuffle: bool = False) -> None:
@@ -411,7 +416,7 @@ class _Wire:
         heapq.heappush(self._queue, (at, tiebreak, next(self._order), delivery))
 
     def send(
-        self, now: int, delay: tuple[int, int], delivery: _Delivery, channel: str, shuffle: bool = False
+        self, now: int, delay: tuple[float, float], delivery: _Delivery, channel: str, shuffle: bool = False
     ) -> None:
         """Queue ``delivery`` a drawn ``delay`` after ``now``."""
         self.schedule(now + self.draw(delay), delivery, channel, shuffle)
@@ -538,7 +543,7 @@ class Loopback:
         description: str,
         *,
         stubborn_period: float = 0.0,
-        timeout: int | None = None,
+        timeout: float | None = None,
     ) -> tuple[ClientOutput, ...]:
         """:func:`dynevent.client.request_next` now; a goal it sends is put on the wire."""
         transition = cl.request_next(
@@ -722,9 +727,9 @@ class Loopback:
         if until is not None:
             self.now = max(self.now, until)
 
-    def advance(self, duration: int) -> None:
-        """Let ``duration`` nanoseconds pass, delivering what falls due."""
-        self.run(self.now + duration)
+    def advance(self, duration: float) -> None:
+        """Let ``duration`` seconds pass, delivering what falls due."""
+        self.run(self.now + to_nanoseconds("Loopback.advance", "duration", duration))
 
     # ------------------------------------------------------------------ inspection
 
