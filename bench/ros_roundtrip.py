@@ -55,7 +55,7 @@ kind, fleet, robot = sys.argv[1:4]
 rclpy.init()
 node = rclpy.create_node("bench_server_" + kind)
 if kind == "dynevent":
-    from dynevent.server.machine import ServerConfig, accept_any
+    from dynevent.server.machine import ServerConfig, any_description
     from dynevent.ros import DynamicEventServer
 
     class Children:
@@ -67,7 +67,7 @@ if kind == "dynevent":
         def interrupt(self, execution): pass
         def resume(self, execution): pass
 
-    config = ServerConfig(categories={"go_to_place": accept_any})
+    config = ServerConfig(categories={"go_to_place": any_description})
     server = DynamicEventServer(node, fleet, robot, config, Children())
     server.begin("{}", 0)
 else:

@@ -27,7 +27,7 @@ _MS = 1_000_000
 
 def cycle_lines(cycles: int) -> Iterator[str]:
     """The JSON lines of a trace of ``cycles`` child cycles (7 records, about 1.1 KB, each)."""
-    config = machine.ServerConfig(categories={"go_to_place": machine.accept_any})
+    config = machine.ServerConfig(categories={"go_to_place": machine.any_description})
     state = machine.State.new(FLEET, ROBOT)
     yield _json.dumps(CONFIG) + "\n"
     now = 1_000 * _MS

@@ -136,7 +136,7 @@ _CONFIG_FIELDS = tuple(
 
 def _server_config(value: Any) -> object:
     kwargs = {key: item for key, item in value.items() if key in _CONFIG_FIELDS}
-    kwargs["categories"] = {"go_to_place": machine.accept_any}
+    kwargs["categories"] = {"go_to_place": machine.any_description}
     return _run(machine.ServerConfig(**kwargs))
 
 

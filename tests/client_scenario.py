@@ -29,7 +29,7 @@ PREFIX = "00000000000000ab"
 U32 = 2**32 - 1
 U64 = 2**64 - 1
 WAITING, RUNNING, INACTIVE = DynamicState.WAITING, DynamicState.RUNNING, DynamicState.INACTIVE
-CONFIG = machine.ServerConfig(categories={"go_to_place": machine.accept_any})
+CONFIG = machine.ServerConfig(categories={"go_to_place": machine.any_description})
 
 
 def status(seq: int, phase: DynamicState, id: int = 0, text: str = "standby") -> StatusReceived:

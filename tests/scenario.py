@@ -25,7 +25,7 @@ import attrs
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.holder import LockedRobotServer, RobotServer
-from dynevent.server.machine import ServerConfig, State, Validator, accept, accept_any, step
+from dynevent.server.machine import ServerConfig, State, Validator, accept, any_description, step
 from dynevent.wire.messages import DynamicEventStatus, Feedback, Goal, LogEntry, Result, Time
 from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, IdPolicy, RejectReason, Status
 
@@ -78,7 +78,7 @@ def go_to_place(category: str, description: Any) -> Sequence[str]:
     return ("expected a place name or an object with a string 'place'",)
 
 
-CATEGORIES: Mapping[str, Validator] = {"go_to_place": go_to_place, "perform_action": accept_any}
+CATEGORIES: Mapping[str, Validator] = {"go_to_place": go_to_place, "perform_action": any_description}
 CONFIG = ServerConfig(categories=CATEGORIES)
 RMF_ROS2 = ServerConfig.rmf_ros2(CATEGORIES)
 

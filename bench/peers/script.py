@@ -30,7 +30,7 @@ import attrs
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.holder import RobotServer
-from dynevent.server.machine import ServerConfig, accept_any
+from dynevent.server.machine import ServerConfig, any_description
 from dynevent.wire._fields import ANNOTATION
 from dynevent.wire.messages import Goal
 
@@ -51,7 +51,7 @@ __all__ = [
 ]
 
 #: The categories every robot of the workloads supports, each with dynevent's accept-everything validator.
-CATEGORIES = {"go_to_place": accept_any, "perform_action": accept_any}
+CATEGORIES = {"go_to_place": any_description, "perform_action": any_description}
 #: A small JSON description of a NEXT goal.
 DESCRIPTION = '{"place": "pantry", "orientation": 1.57}'
 #: The ``dynamic_event`` description the begin events carry.

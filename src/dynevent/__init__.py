@@ -57,7 +57,7 @@ _HOMES: dict[str, str] = {
     "EventDescription": "wire.description",
     **dict.fromkeys(("MAX_DURATION", "MILLISECOND", "SECOND"), "wire.units"),
     **dict.fromkeys(
-        ("ServerConfig", "State", "Transition", "accept", "accept_any", "status_message", "step"),
+        ("ServerConfig", "State", "Transition", "accept", "any_description", "status_message", "step"),
         "server.machine",
     ),
     **dict.fromkeys(("LockedRobotServer", "RobotServer"), "server.holder"),
@@ -154,8 +154,8 @@ __all__ = [
     "WrongInput",
     "__version__",
     "accept",
-    "accept_any",
     "action_name",
+    "any_description",
     "begin_topic",
     "client",
     "description_service",
@@ -173,8 +173,21 @@ __all__ = [
 ]
 
 
+#: Names kept for one release, each with its new name (CHANGELOG.md).
+_DEPRECATED = {"accept_any": "any_description"}
+
+
 def __getattr__(name: str) -> Any:
-    """Import a public name's module on first use (PEP 562)."""
+    """Import a public name's module on first use (PEP 562); a deprecated name warns."""
+    if name in _DEPRECATED:
+        import warnings
+
+        warnings.warn(
+            f"dynevent.{name} is deprecated: use dynevent.{_DEPRECATED[name]}",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return __getattr__(_DEPRECATED[name])
     if name in _MODULES:
         value = importlib.import_module(f"{__name__}.{_MODULES[name]}")
     elif name in _HOMES:
@@ -219,7 +232,7 @@ if TYPE_CHECKING:  # what type checkers and editors see, without importing anyth
         State,
         Transition,
         accept,
-        accept_any,
+        any_description,
         status_message,
         step,
     )

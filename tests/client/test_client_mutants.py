@@ -672,7 +672,7 @@ def test_not_json_sentence_matches_the_server() -> None:
     server = machine.step(
         server, ins.Begin(description="{}", event_id=5, now=0), machine.ServerConfig()
     ).state
-    config = machine.ServerConfig(categories={"go_to_place": machine.accept_any})
+    config = machine.ServerConfig(categories={"go_to_place": machine.any_description})
     decision = machine.accept(
         server,
         Goal(dynamic_event_seq=1, event_type=EventType.NEXT, category="go_to_place", description="[1,", id=6),
@@ -888,7 +888,7 @@ def test_a_state_with_a_view_but_no_run_heard_of() -> None:
 
 def _wrapped_adapter_run() -> tuple[ClientState, machine.State, machine.ServerConfig]:
     """rmf_ros2 ids: our NEXT took child 2**64 - 1 and ended; a foreign NEXT then got child 0 (R6.2)."""
-    config = machine.ServerConfig.rmf_ros2({"go_to_place": machine.accept_any})
+    config = machine.ServerConfig.rmf_ros2({"go_to_place": machine.any_description})
     server = machine.step(
         machine.State.new("f", "r"), ins.Begin(description="{}", event_id=U64 - 1, now=0), config
     ).state

@@ -117,7 +117,7 @@ def _running(config: machine.ServerConfig) -> machine.State:
 def test_the_running_goal_and_the_waiting_cancels_are_answered_under_their_own_rules() -> None:
     from dynevent.server import inputs as ins
 
-    config = machine.ServerConfig(categories={"go": machine.accept_any})
+    config = machine.ServerConfig(categories={"go": machine.any_description})
     state = _running(config)
     cancel = Goal(dynamic_event_seq=1, event_type=2, id=2)
     state = machine.step(state, ins.GoalSubmitted(goal_uuid="b" * 32, goal=cancel, now=4), config).state
@@ -138,7 +138,7 @@ def test_an_execution_failure_is_read_back_with_its_reason() -> None:
 
 @pytest.mark.spec("R5.2")
 def test_race_lost_says_how() -> None:
-    config = machine.ServerConfig(categories={"go": machine.accept_any})
+    config = machine.ServerConfig(categories={"go": machine.any_description})
     state = _running(config)
     stale = Goal(dynamic_event_seq=0, event_type=3)
     assert machine.race_lost(state, stale, config) == "its seq 0 is no longer the run's seq 1"

@@ -83,7 +83,7 @@ def test_wire_messages_refuse_hostile_text(cls: Any, text: str | bytes) -> None:
 def test_ten_megabyte_string_fields_are_carried_or_refused_by_limit() -> None:
     goal = Goal.from_json(json.dumps({"event_type": 1, "description": TEN_MB}))
     assert len(goal.description) == 10_000_000
-    config = machine.ServerConfig(categories={"go_to_place": machine.accept_any})
+    config = machine.ServerConfig(categories={"go_to_place": machine.any_description})
     state = machine.step(
         machine.State.new("tinyRobot", "r1"), ins.Begin(description="{}", event_id=1, now=0), config
     ).state

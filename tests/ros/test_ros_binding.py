@@ -21,11 +21,11 @@ from ros_support import WAIT, Child, Graph, wait_for
 from dynevent import client as cl
 from dynevent.ros import ChildExecution, DynamicEventClient, DynamicEventServer
 from dynevent.ros.server import latched
-from dynevent.server.machine import ServerConfig, accept_any
+from dynevent.server.machine import ServerConfig, any_description
 from dynevent.wire.names import action_name, status_topic
 
 FLEET, ROBOT = "tinyRobot", "tinyRobot1"
-CONFIG = ServerConfig(categories={"go_to_place": accept_any, "perform_action": accept_any})
+CONFIG = ServerConfig(categories={"go_to_place": any_description, "perform_action": any_description})
 SUCCEEDED, CANCELED, ABORTED = 4, 5, 6  # action_msgs/GoalStatus
 
 

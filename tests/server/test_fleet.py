@@ -17,7 +17,7 @@ from dynevent.errors import DyneventError, InvalidName, InvalidSnapshot
 from dynevent.server import inputs as ins
 from dynevent.server import machine, snapshot
 from dynevent.server.fleet import FORMAT, VERSION, DuplicateRobot, Fleet, RobotKey, Routed, UnknownRobot
-from dynevent.server.machine import ServerConfig, State, accept_any
+from dynevent.server.machine import ServerConfig, State, any_description
 from dynevent.server.outputs import Accepted, GoalAccepted, GoalRejected, Rejected, StartChild
 from dynevent.wire.messages import Goal
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, build_name, parse_name
@@ -34,9 +34,9 @@ def _needs_place(category: str, description: Any) -> Sequence[str]:
     return () if isinstance(description, dict) and "place" in description else ("no place",)
 
 
-GO = ServerConfig(categories={"go_to_place": accept_any})
-ACT = ServerConfig(categories={"perform_action": accept_any}, stubborn_minimum=3.0)
-STRICT = ServerConfig.rmf_ros2({"go_to_place": _needs_place, "perform_action": accept_any})
+GO = ServerConfig(categories={"go_to_place": any_description})
+ACT = ServerConfig(categories={"perform_action": any_description}, stubborn_minimum=3.0)
+STRICT = ServerConfig.rmf_ros2({"go_to_place": _needs_place, "perform_action": any_description})
 
 
 def _begin(now: int = 0, event_id: int = 10) -> ins.Begin:
@@ -181,7 +181,7 @@ def test_configs_must_be_server_configs() -> None:
     with pytest.raises(InvalidName):
         Fleet(fleet_configs={"al pha": GO})
     with pytest.raises(TypeError):
-        Fleet().add("alpha", "r1", {"go_to_place": accept_any})  # type: ignore[arg-type]
+        Fleet().add("alpha", "r1", {"go_to_place": any_description})  # type: ignore[arg-type]
 
 
 def test_each_robot_decides_with_its_own_config() -> None:

@@ -52,10 +52,10 @@ def attrs_replace(state: State, **changes: object) -> State:
 WRITER = """
 import sys
 from dynevent.server import inputs as ins, machine
-from dynevent.server.machine import ServerConfig, State, accept_any
+from dynevent.server.machine import ServerConfig, State, any_description
 from dynevent.server.store import StateStore
 store = StateStore(sys.argv[1])
-config = ServerConfig(categories={"go_to_place": accept_any})
+config = ServerConfig(categories={"go_to_place": any_description})
 state = State.new("fleet", "robot")
 state = machine.step(state, ins.Begin(description="{}", event_id=0, now=0), config).state
 n = 0

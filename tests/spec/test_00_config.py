@@ -23,7 +23,7 @@ from dynevent.server.machine import (
     State,
     Stubbornness,
     Transition,
-    accept_any,
+    any_description,
 )
 from dynevent.wire.vocab import DynamicState
 from scenario import (
@@ -66,7 +66,7 @@ def test_categories_must_be_a_mapping(value: Any) -> None:
 @pytest.mark.parametrize(
     ("categories", "key"),
     [
-        ({1: accept_any}, 1),  # a callable validator under a non-str name
+        ({1: any_description}, 1),  # a callable validator under a non-str name
         ({"dock": "not callable"}, "dock"),  # a str name mapped to a non-callable
         ({b"dock": None}, b"dock"),
     ],
@@ -82,9 +82,9 @@ def test_each_category_maps_a_str_to_a_callable(categories: Mapping[Any, Any], k
 
 
 def test_categories_are_copied() -> None:
-    categories = {"dock": accept_any}
+    categories = {"dock": any_description}
     config = ServerConfig(categories=categories)
-    categories["other"] = accept_any
+    categories["other"] = any_description
     assert set(config.categories) == {"dock"}
 
 
@@ -122,7 +122,7 @@ def test_small_positive_periods_are_kept(field: str, value: float) -> None:
 
 def test_server_config_is_keyword_only() -> None:
     with pytest.raises(TypeError):
-        ServerConfig({"dock": accept_any})  # type: ignore[call-arg]
+        ServerConfig({"dock": any_description})  # type: ignore[call-arg]
 
 
 def test_server_config_compares_and_hashes_by_identity() -> None:
@@ -211,7 +211,7 @@ def test_new_state_names_the_bad_token(fleet: str, robot: str, field: str, value
 
 def test_the_dynamic_event_category_is_refused_naming_the_field() -> None:
     with pytest.raises(InvalidConfig) as caught:
-        ServerConfig(categories={"dynamic_event": machine.accept_any})
+        ServerConfig(categories={"dynamic_event": machine.any_description})
     assert caught.value.field == "categories" and caught.value.value == "dynamic_event"
     assert caught.value.problem == (
         "'dynamic_event' can never be a child category: a nested run would break the outer one"
@@ -251,7 +251,7 @@ def test_stubborn_settings_must_be_numbers_the_machine_can_run(field: str, value
 @pytest.mark.parametrize("refresh", [0.001, 86_400.0])
 def test_the_extreme_refresh_periods_run(refresh: float) -> None:
     config = ServerConfig(
-        categories={"go_to_place": accept_any}, stubborn_refresh=refresh, stubborn_minimum=86_400
+        categories={"go_to_place": any_description}, stubborn_refresh=refresh, stubborn_minimum=86_400
     )
     run = running(config=config, stubborn=1.0)
     run.child_end()

@@ -21,7 +21,7 @@ from dynevent.server import outputs as outs
 from dynevent.server.machine import (
     QueuedGoal,
     ServerConfig,
-    accept_any,
+    any_description,
 )
 from dynevent.wire.description import MAX_DESCRIPTION_BYTES, EventDescription
 from dynevent.wire.messages import Goal
@@ -239,7 +239,9 @@ def test_busy_comes_before_the_next_checks() -> None:
 
 @pytest.mark.spec("R4.7")
 def test_unsupported_category_lists_the_supported_ones_sorted() -> None:
-    config = ServerConfig(categories={"zeta": accept_any, "alpha": accept_any, "mid": accept_any})
+    config = ServerConfig(
+        categories={"zeta": any_description, "alpha": any_description, "mid": any_description}
+    )
     run = waiting(config=config)
     assert run.request(u(9), next_goal(1, 2, category="go_to_place")) == (
         rejected(u(9), R.UNSUPPORTED_CATEGORY, categories=("alpha", "mid", "zeta")),
@@ -289,7 +291,7 @@ def test_description_limit_counts_utf8_bytes_as_the_begin_limit_does() -> None:
 @pytest.mark.spec("R4.8", "R1.5")
 def test_a_next_description_never_exceeds_what_a_begin_accepts() -> None:
     with pytest.raises(InvalidConfig) as caught:
-        ServerConfig(categories={"dance": accept_any}, max_description_length=MAX_DESCRIPTION_BYTES + 1)
+        ServerConfig(categories={"dance": any_description}, max_description_length=MAX_DESCRIPTION_BYTES + 1)
     assert caught.value.field == "max_description_length"
     run = waiting()
     at_limit = '"' + "é" * ((MAX_DESCRIPTION_BYTES - 2) // 2) + '"'

@@ -16,7 +16,7 @@ from dynevent.server import snapshot
 from dynevent.server.machine import (
     RunningGoal,
     ServerConfig,
-    accept_any,
+    any_description,
 )
 from scenario import (
     ADAPTER,
@@ -95,7 +95,7 @@ def test_description_length_is_checked_again_at_start() -> None:
 def test_a_next_whose_category_is_no_longer_configured_is_answered() -> None:
     run = waiting()
     run.request(u(1), next_goal(1, 5))
-    run.config = ServerConfig(categories={"perform_action": accept_any})
+    run.config = ServerConfig(categories={"perform_action": any_description})
     outputs = run.start(u(1))  # the machine never raises (R19.7)
     assert outputs == (execute(u(1)), aborted(u(1), ANY_TEXT))
     assert run.phase is WAITING
@@ -105,7 +105,7 @@ def test_a_next_whose_category_is_no_longer_configured_is_answered() -> None:
 def test_a_category_dropped_before_the_start_aborts_with_one_error_line() -> None:
     run = waiting()
     run.request(u(1), next_goal(1, 5))
-    run.config = ServerConfig(categories={"perform_action": accept_any, "dock": accept_any})
+    run.config = ServerConfig(categories={"perform_action": any_description, "dock": any_description})
     assert run.start(u(1)) == (
         outs.ExecuteGoal(goal_uuid=u(1)),
         aborted(

@@ -11,7 +11,7 @@ import pytest
 from dynevent.server import outputs as outs
 from dynevent.server.machine import (
     ServerConfig,
-    accept_any,
+    any_description,
 )
 from scenario import (
     INACTIVE,
@@ -160,7 +160,7 @@ def test_a_deferred_child_whose_description_no_longer_parses_still_starts() -> N
 
 @pytest.mark.spec("R14.5")
 def test_a_deferred_child_with_a_null_description_starts_with_none() -> None:
-    run = waiting(config=ServerConfig(categories={"perform_action": accept_any}))
+    run = waiting(config=ServerConfig(categories={"perform_action": any_description}))
     run.interrupt()
     run.submit(u(1), next_goal(1, 5, category="perform_action", description="null"))
     outputs = run.resume()

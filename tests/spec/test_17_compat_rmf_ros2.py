@@ -128,7 +128,7 @@ def test_the_other_checks_still_apply_in_rmf_ros2_mode() -> None:
 def test_an_acceptance_names_the_rule_that_lets_the_goal_in(
     event_type: int, id: int, running: bool, rule: str
 ) -> None:
-    config = ServerConfig.rmf_ros2({"go_to_place": machine.accept_any})
+    config = ServerConfig.rmf_ros2({"go_to_place": machine.any_description})
     state = _rmf_state(running)
     goal = Goal(
         dynamic_event_seq=state.seq, event_type=event_type, id=id, category="go_to_place", description="1"

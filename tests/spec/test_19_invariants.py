@@ -33,7 +33,7 @@ from dynevent.server import inputs as ins
 from dynevent.server import machine, snapshot
 from dynevent.server import outputs as outs
 from dynevent.server.fleet import Fleet
-from dynevent.server.machine import QueuedGoal, ServerConfig, State, accept_any
+from dynevent.server.machine import QueuedGoal, ServerConfig, State, any_description
 from dynevent.testing import (
     DEFAULT_CONFIG,
     DyneventServer,
@@ -451,10 +451,10 @@ def test_determinism_snapshots_transitions_and_status_on_the_kits_runs(config: d
 
 
 OTHER_CONFIGS = {
-    "fewer_categories": ServerConfig(categories={"go_to_place": accept_any}),
+    "fewer_categories": ServerConfig(categories={"go_to_place": any_description}),
     "no_categories": ServerConfig(),
     "stricter": ServerConfig(
-        categories={"perform_action": accept_any}, stubborn_minimum=5.0, max_description_length=4
+        categories={"perform_action": any_description}, stubborn_minimum=5.0, max_description_length=4
     ),
     "rmf_ros2": CONFIGS["rmf_ros2"],
 }
@@ -486,8 +486,8 @@ def _next(seq: int, category: str, child: int) -> Goal:
 @pytest.mark.spec("R19.7", "R6.1")
 def test_a_goal_whose_category_left_the_configuration_is_aborted_at_start() -> None:
     # Found while writing the kit: this start raised KeyError before R6.1 re-checked R4.7.
-    before = ServerConfig(categories={"go_to_place": accept_any, "perform_action": accept_any})
-    after = ServerConfig(categories={"go_to_place": accept_any})
+    before = ServerConfig(categories={"go_to_place": any_description, "perform_action": any_description})
+    after = ServerConfig(categories={"go_to_place": any_description})
     state = State.new("fleet", "robot")
     state = machine.step(state, ins.Begin(description="{}", event_id=1, now=SECOND), before).state
     request = ins.GoalRequested(goal_uuid=UUIDS[0], goal=_next(1, "perform_action", 2), now=SECOND)

@@ -132,7 +132,7 @@ _STATUSES = [
 
 def _random_session(rng: random.Random, steps: int) -> list[dict[str, Any]]:
     """Records of a server driven by random inputs, as a tap at the server writes them."""
-    config = machine.ServerConfig(categories={"go_to_place": machine.accept_any})
+    config = machine.ServerConfig(categories={"go_to_place": machine.any_description})
     state = machine.State.new("tinyRobot", "tinyRobot1")
     rows: list[dict[str, Any]] = []
     now = 0

@@ -179,7 +179,7 @@ def test_explain_never_raises_and_its_advice_is_accepted(
     json.dumps(explanation.to_dict())
     if explanation.instead is not None and not explanation.inconsistency:
         state = state_from_status(status)
-        strict = machine.ServerConfig(categories=dict.fromkeys([goal.category], machine.accept_any))
+        strict = machine.ServerConfig(categories=dict.fromkeys([goal.category], machine.any_description))
         assert isinstance(machine.accept(state, explanation.instead, strict), outs.Accepted)
     assert explanation.accepted == (
         isinstance(explanation.decision, outs.Accepted) and not explanation.aborted_at_start

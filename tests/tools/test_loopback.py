@@ -28,7 +28,7 @@ MS = 1_000_000  # a millisecond on the session's clock (instants are nanoseconds
 #: A millisecond as a duration: durations are seconds (dynevent.wire.units).
 D_MS = 0.001
 CATEGORIES = ("go_to_place", "perform_action")
-CONFIG = machine.ServerConfig(categories=dict.fromkeys(CATEGORIES, machine.accept_any))
+CONFIG = machine.ServerConfig(categories=dict.fromkeys(CATEGORIES, machine.any_description))
 
 
 def session(
@@ -437,7 +437,7 @@ OPTIONS = st.builds(
 CONFIGS = {
     "standard": CONFIG,
     "adapter_ids": attrs.evolve(CONFIG, id_policy=IdPolicy.ADAPTER),
-    "rmf_ros2": machine.ServerConfig.rmf_ros2(dict.fromkeys(CATEGORIES, machine.accept_any)),
+    "rmf_ros2": machine.ServerConfig.rmf_ros2(dict.fromkeys(CATEGORIES, machine.any_description)),
 }
 
 

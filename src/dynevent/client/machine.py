@@ -61,7 +61,7 @@ is known to run) and reported ``timeout`` when it ends.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from typing import Any
 
 import attrs
@@ -205,10 +205,15 @@ class ClientState:
 
 @attrs.frozen
 class ClientTransition:
-    """What one command or step did: the new client state and the outputs, in order."""
+    """What one command or step did: the new client state and the outputs, in order.  A pair:
+    ``state, outputs = client.step(...)``."""
 
     state: ClientState
     outputs: tuple[ClientOutput, ...]
+
+    def __iter__(self) -> Iterator[Any]:
+        """The state, then the outputs, so that a transition unpacks as the pair it is."""
+        return iter((self.state, self.outputs))
 
 
 # --------------------------------------------------------------------------- knowledge
@@ -314,7 +319,9 @@ def _projection(state: ClientState, event_type: int) -> State:
 def _config(state: ClientState, category: str) -> ServerConfig:
     """The configuration a local check assumes: the robot's categories if known, else the goal's own."""
     names = state.categories if state.categories is not None else (category,)
-    return ServerConfig(categories={name: machine.accept_any for name in names if name != DEFAULT_CATEGORY})
+    return ServerConfig(
+        categories={name: machine.any_description for name in names if name != DEFAULT_CATEGORY}
+    )
 
 
 def _refusal(state: ClientState, goal: Goal) -> Rejected | None:

@@ -10,7 +10,7 @@ from typing import ClassVar, TypeAlias
 
 import attrs
 
-from dynevent.server.outputs import Rejected
+from dynevent.server.outputs import Ignored, Rejected  # one Ignored: the server's notice, also the client's
 from dynevent.wire.messages import Goal, LogEntry, Result
 from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReason, Status
 
@@ -170,15 +170,6 @@ class TimedOut(_ClientOutput):
     goal_uuid: str
     id: int
     deadline: int
-
-
-@attrs.frozen(kw_only=True)
-class Ignored(_ClientOutput):
-    """Notice: the input had no effect, and why (a stale status, an answer for an unknown goal...)."""
-
-    KIND: ClassVar[str] = "ignored"
-    input: str
-    why: str
 
 
 #: Any output of the client machine.

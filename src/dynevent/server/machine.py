@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import math
 import typing
-from collections.abc import Callable, Iterable, Mapping, Sequence
+import warnings
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any, TypeAlias
 
 import attrs
@@ -69,7 +70,7 @@ __all__ = [
     "Transition",
     "Validator",
     "accept",
-    "accept_any",
+    "any_description",
     "phase_of",
     "race_lost",
     "reported_id",
@@ -115,9 +116,24 @@ _PARSE_FAILURE = Failure.PARSE.value
 _UNCHECKED: Any = object()
 
 
-def accept_any(category: str, description: Any) -> Sequence[str]:
-    """A validator that accepts every description of its category."""
+def any_description(category: str, description: Any) -> Sequence[str]:
+    """A category's validator that takes every description (its JSON is still checked, R4.9)."""
     return ()
+
+
+#: Names kept for one release, each with its new name (CHANGELOG.md).
+_DEPRECATED = {"accept_any": "any_description"}
+
+
+def __getattr__(name: str) -> Any:
+    """A deprecated name: the object of its new name, with a ``DeprecationWarning``."""
+    if name in _DEPRECATED:
+        new = _DEPRECATED[name]
+        warnings.warn(
+            f"dynevent.server.machine.{name} is deprecated: use {new}", DeprecationWarning, stacklevel=2
+        )
+        return globals()[new]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _categories(value: Mapping[str, Validator]) -> Mapping[str, Validator]:
@@ -377,10 +393,14 @@ _replace_stubborn = replacer(Stubbornness)
 @fast_init
 @attrs.frozen
 class Transition:
-    """What one step did: the new state and the outputs, in order."""
+    """What one step did: the new state and the outputs, in order.  A pair: ``state, outputs = step(...)``."""
 
     state: State
     outputs: tuple[outs.Output, ...]
+
+    def __iter__(self) -> Iterator[Any]:
+        """The state, then the outputs, so that a transition unpacks as the pair it is."""
+        return iter((self.state, self.outputs))
 
 
 def _time(now: int) -> Time:

@@ -659,7 +659,7 @@ class _Part:
         """The configuration; without a config record, every category a goal names is taken as supported."""
         if self.config_known or goal.event_type != EventType.NEXT or goal.category in self.config.categories:
             return self.config
-        categories = {**self.config.categories, goal.category: machine.accept_any}
+        categories = {**self.config.categories, goal.category: machine.any_description}
         return attrs.evolve(self.config, categories=categories)
 
     def learn(self, goal: Goal) -> None:

@@ -316,7 +316,7 @@ def explain(
     )
     state = state_from_status(fallback)
     names = categories if categories is not None else ((goal.category,) if goal.category else ())
-    validators = dict.fromkeys(names, machine.accept_any)
+    validators = dict.fromkeys(names, machine.any_description)
     if compatibility is Compatibility.RMF_ROS2:
         config = ServerConfig.rmf_ros2(validators)
     else:

@@ -40,11 +40,25 @@ class EventType(enum.IntEnum):
 
 
 class DynamicState(enum.IntEnum):
-    """``DynamicEventStatus.dynamic_state`` constants (a ``uint8`` on the wire)."""
+    """``DynamicEventStatus.dynamic_state`` constants (a ``uint8`` on the wire).
+
+    An ``int`` on the wire and in comparisons; printed by name (``WAITING``), as a
+    reader of a state or a log wants it.  ``int(phase)`` or ``f"{phase:d}"`` gives the number.
+    """
 
     INACTIVE = 0
     WAITING = 1
     RUNNING = 2
+
+    def __str__(self) -> str:
+        return self.name
+
+    def __format__(self, spec: str) -> str:
+        return (
+            self.name.__format__(spec)
+            if not spec or spec[-1] not in "bcdoxXn"
+            else int.__format__(self, spec)
+        )
 
 
 class Tier(str, enum.Enum):
