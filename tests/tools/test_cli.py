@@ -248,3 +248,64 @@ def test_help_imports_no_protocol_module() -> None:
         [sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, check=False
     )
     assert done.stdout.strip().endswith("HEAVY [] False"), done.stdout[-300:] + done.stderr
+
+
+# --------------------------------------------------------------------------- serve and send without ROS
+
+
+def _without_ros(*args: str) -> subprocess.CompletedProcess[str]:
+    """The command line in a Python where rmf_task_msgs cannot be imported (whatever this one has)."""
+    launcher = (
+        "import sys; sys.modules['rmf_task_msgs'] = None; "
+        "from dynevent.tools.cli import main; sys.exit(main(sys.argv[1:]))"
+    )
+    return subprocess.run(
+        [sys.executable, "-c", launcher, *args],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=60,
+        check=False,
+    )
+
+
+@pytest.mark.parametrize(
+    ("args", "problem"),
+    [
+        (
+            ["send", "--cancel", "--end"],
+            "dynevent send: give exactly one of --place, --cancel, --end, --file",
+        ),
+        (["send", "--file", "no/such.json"], "dynevent send: --file no/such.json:"),
+        (["send", "--end", "--timeout", "0"], "dynevent send: --timeout: expected positive seconds"),
+        (["serve", "--shard", "3/2"], "dynevent serve: --shard '3/2': expected K/N"),
+        (["serve", "--robot", "bad name"], "dynevent serve:"),
+    ],
+)
+def test_serve_and_send_check_their_own_input_before_they_need_ros(args: list[str], problem: str) -> None:
+    done = _without_ros(*args)
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.startswith(problem), done.stderr
+    assert "needs ROS" not in done.stderr and "Traceback" not in done.stderr
+
+
+@pytest.mark.parametrize("args", [["send", "--end"], ["serve", "--seconds", "1"]])
+def test_serve_and_send_without_ros_say_what_is_missing_and_how_to_get_it_in_two_lines(
+    args: list[str],
+) -> None:
+    done = _without_ros(*args)
+    assert done.returncode == 2 and done.stdout == ""
+    lines = done.stderr.splitlines()
+    assert len(lines) == 2, done.stderr
+    assert (
+        lines[0] == f"dynevent {args[0]}: needs ROS 2 (rclpy, rmf_task_msgs); rmf_task_msgs is not importable"
+    )
+    script = Path(lines[1].split("bash ", 1)[1].split(" ", 1)[0])
+    assert script.is_file() and script.name == "setup-ros-env.sh"
+    assert script.is_relative_to(Path(dynevent_package_dir()))  # shipped in the package, so in the wheel
+
+
+def dynevent_package_dir() -> str:
+    import dynevent
+
+    return str(Path(dynevent.__file__).parent)

@@ -21,7 +21,8 @@ except ImportError as exc:  # pragma: no cover - depends on the environment
     raise ImportError(
         f"dynevent.ros needs ROS 2 (rclpy) and the rmf_task_msgs interfaces: {exc}. "
         "Source a ROS 2 environment (Jazzy or newer) that provides both; "
-        "tests/ros/setup-ros-env.sh builds one from the registry's wheels."
+        "dynevent/ros/setup/setup-ros-env.sh (in this package) builds one from the registry's wheels.",
+        name=exc.name,
     ) from exc
 
 from dynevent.ros.client import DynamicEventClient, GoalRun

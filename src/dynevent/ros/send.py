@@ -13,10 +13,8 @@ when no server or status was found within the timeout.
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from collections.abc import Callable
-from pathlib import Path
 
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
@@ -29,35 +27,11 @@ from dynevent.ros.client import DynamicEventClient, GoalWaitTimeout
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.server import outputs as outs
 from dynevent.tools import explain
+from dynevent.tools.send_request import goal_request
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import EventType, GoalStatus
 
 __all__ = ["SendError", "goal_request", "run"]
-
-
-def goal_request(args: argparse.Namespace) -> tuple[EventType, str, str]:
-    """The goal the flags ask for: (event type, category, description)."""
-    chosen = [name for name in ("place", "cancel", "end", "file") if getattr(args, name)]
-    if len(chosen) != 1:
-        raise SendError("give exactly one of --place, --cancel, --end, --file")
-    if args.place:
-        return EventType.NEXT, "go_to_place", json.dumps({"one_of": list(args.place)})
-    if args.cancel:
-        return EventType.CANCEL, "", ""
-    if args.end:
-        return EventType.FINISHED, "", ""
-    try:
-        data = json.loads(Path(args.file).read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise SendError(f"--file {args.file}: {exc}") from None
-    if not isinstance(data, dict) or not isinstance(data.get("category"), str) or "description" not in data:
-        raise SendError(f'--file {args.file}: expected {{"category": "...", "description": ...}}')
-    description = data["description"]
-    return (
-        EventType.NEXT,
-        data["category"],
-        description if isinstance(description, str) else json.dumps(description),
-    )
 
 
 def _succeeded(event_type: EventType, outcome: cl.Outcome) -> bool:
@@ -74,7 +48,7 @@ def _progress_line(progress: cl.Progress) -> list[str]:
 
 def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
     """Send the goal; 0, 1 or 2 as the module docs say."""
-    event_type, category, description = goal_request(args)
+    event_type, category, description = goal_request(args)  # checked by the command line already
     timeout = float(args.timeout)
     started = time.monotonic()
 

@@ -8,6 +8,7 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 from dynevent import DOCS, __version__
 from dynevent.tools.diagram import FORMATS
@@ -258,10 +259,20 @@ def _add_diagram_command(commands: argparse._SubParsersAction[argparse.ArgumentP
     parser.set_defaults(run=_diagram)
 
 
-_NO_ROS = (
-    "dynevent {command} needs ROS 2 (rclpy) and the rmf_task_msgs interfaces: {problem}.  Source a "
-    "ROS 2 environment that has both (the project's tests/ros/setup-ros-env.sh builds one)."
-)
+def _ros_module(command: str) -> Any:
+    """``dynevent.ros.<command>``, or None after two lines on standard error: what is missing, and
+    how to get it (the setup script ships in the package: ``dynevent/ros/setup/setup-ros-env.sh``)."""
+    try:
+        return importlib.import_module(f"dynevent.ros.{command}")
+    except ImportError as exc:
+        missing = (exc.name or "rclpy").split(".")[0]  # the package to install, not its submodule
+        script = Path(__file__).resolve().parent.parent / "ros" / "setup" / "setup-ros-env.sh"
+        print(
+            f"dynevent {command}: needs ROS 2 (rclpy, rmf_task_msgs); {missing} is not importable",
+            file=sys.stderr,
+        )
+        print(f"  get it: bash {script} VENV OUT, then . OUT/env.sh and use VENV's python", file=sys.stderr)
+        return None
 
 
 def _say(line: str) -> None:
@@ -271,16 +282,19 @@ def _say(line: str) -> None:
 
 
 def _serve(args: argparse.Namespace) -> int:
-    try:
-        from dynevent.ros import serve
-    except ImportError as exc:
-        print(_NO_ROS.format(command="serve", problem=exc), file=sys.stderr)
-        return 2
     from dynevent.errors import DyneventError
+    from dynevent.tools.serve_config import load_config
 
     try:
-        config = serve.load_config(args)
-        return serve.run(config, args.state, args.seconds, _say)
+        config = load_config(args)  # its own input first: a mistake there needs no ROS to be told
+    except DyneventError as exc:
+        print(f"dynevent serve: {exc}", file=sys.stderr)
+        return 2
+    serve = _ros_module("serve")
+    if serve is None:
+        return 2
+    try:
+        return int(serve.run(config, args.state, args.seconds, _say))
     except DyneventError as exc:
         print(f"dynevent serve: {exc}", file=sys.stderr)
         return 2
@@ -332,18 +346,21 @@ def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
 
 
 def _send(args: argparse.Namespace) -> int:
-    try:
-        from dynevent.ros import send
-    except ImportError as exc:
-        print(_NO_ROS.format(command="send", problem=exc), file=sys.stderr)
-        return 2
     from dynevent.errors import DyneventError
+    from dynevent.tools.send_request import goal_request
 
-    if not 0 < args.timeout < 1e6:
-        print(f"dynevent send: --timeout: expected positive seconds (got {args.timeout})", file=sys.stderr)
+    try:
+        if not 0 < args.timeout < 1e6:
+            raise DyneventError(f"--timeout: expected positive seconds (got {args.timeout})")
+        goal_request(args)  # its own input first: a mistake there needs no ROS to be told
+    except DyneventError as exc:
+        print(f"dynevent send: {exc}", file=sys.stderr)
+        return 2
+    send = _ros_module("send")
+    if send is None:
         return 2
     try:
-        return send.run(args, _say)
+        return int(send.run(args, _say))
     except DyneventError as exc:
         print(f"dynevent send: {exc}", file=sys.stderr)
         return 2
