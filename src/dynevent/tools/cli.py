@@ -281,23 +281,28 @@ def _say(line: str) -> None:
     sys.stdout.flush()
 
 
-def _serve(args: argparse.Namespace) -> int:
+def _ros_command(command: str, check: Callable[[], Any], run: Callable[[Any, Any], int]) -> int:
+    """A ROS command: ``check()`` its own input first (a mistake there needs no ROS to be told), then
+    ``run(module, checked)`` with ``dynevent.ros.<command>``; a DyneventError is one line, exit 2."""
     from dynevent.errors import DyneventError
-    from dynevent.tools.serve_config import load_config
 
     try:
-        config = load_config(args)  # its own input first: a mistake there needs no ROS to be told
+        checked = check()
+        module = _ros_module(command)
+        return 2 if module is None else int(run(module, checked))
     except DyneventError as exc:
-        print(f"dynevent serve: {exc}", file=sys.stderr)
+        print(f"dynevent {command}: {exc}", file=sys.stderr)
         return 2
-    serve = _ros_module("serve")
-    if serve is None:
-        return 2
-    try:
-        return int(serve.run(config, args.state, args.seconds, _say))
-    except DyneventError as exc:
-        print(f"dynevent serve: {exc}", file=sys.stderr)
-        return 2
+
+
+def _serve(args: argparse.Namespace) -> int:
+    from dynevent.tools.serve_config import load_config
+
+    return _ros_command(
+        "serve",
+        lambda: load_config(args),
+        lambda serve, config: serve.run(config, args.state, args.seconds, _say),
+    )
 
 
 def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -346,24 +351,15 @@ def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
 
 
 def _send(args: argparse.Namespace) -> int:
-    from dynevent.errors import DyneventError
+    from dynevent.errors import SendError
     from dynevent.tools.send_request import goal_request
 
-    try:
+    def check() -> None:
         if not 0 < args.timeout < 1e6:
-            raise DyneventError(f"--timeout: expected positive seconds (got {args.timeout})")
-        goal_request(args)  # its own input first: a mistake there needs no ROS to be told
-    except DyneventError as exc:
-        print(f"dynevent send: {exc}", file=sys.stderr)
-        return 2
-    send = _ros_module("send")
-    if send is None:
-        return 2
-    try:
-        return int(send.run(args, _say))
-    except DyneventError as exc:
-        print(f"dynevent send: {exc}", file=sys.stderr)
-        return 2
+            raise SendError(f"--timeout: expected positive seconds (got {args.timeout})")
+        goal_request(args)
+
+    return _ros_command("send", check, lambda send, _: send.run(args, _say))
 
 
 def _add_send_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
