@@ -72,3 +72,14 @@ def test_the_top_level_keeps_the_query_and_the_validator_apart() -> None:
     assert "accept" in dynevent.__all__ and "any_description" in dynevent.__all__
     assert dynevent.accept.__module__ == "dynevent.server.machine"
     assert any_description("go_to_place", {"anything": 1}) == ()
+
+
+def test_the_observers_resync_operations_live_in_one_module_and_the_old_names_warn() -> None:
+    from dynevent.server import machine, resync
+
+    assert not [name for name in machine.__all__ if name.startswith("resync_")]
+    with pytest.warns(DeprecationWarning, match="use dynevent.server.resync.seq"):
+        old = machine.resync_seq  # type: ignore[attr-defined]
+    assert old is resync.seq
+    with pytest.raises(AttributeError):
+        machine.resync_nothing  # type: ignore[attr-defined]  # noqa: B018

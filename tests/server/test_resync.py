@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import attrs
 
-from dynevent.server import machine
+from dynevent.server import machine, resync
 from dynevent.server.machine import UNKNOWN_GOAL, QueuedGoal, State
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import DynamicState, EventType, Status
@@ -27,58 +27,58 @@ def _changes(before: State, after: State) -> dict[str, object]:
 
 
 def test_seq_and_the_next_run() -> None:
-    assert _changes(FRESH, machine.resync_seq(FRESH, 7)) == {"seq": 7}
-    assert machine.resync_seq(FRESH, 2**32 + 3).seq == 3  # a seq is a uint32
-    assert _changes(FRESH, machine.resync_next_run(FRESH, 7)) == {"seq": 6}
-    assert machine.resync_next_run(FRESH, 0).seq == 2**32 - 1  # the run before 0 wraps
+    assert _changes(FRESH, resync.seq(FRESH, 7)) == {"seq": 7}
+    assert resync.seq(FRESH, 2**32 + 3).seq == 3  # a seq is a uint32
+    assert _changes(FRESH, resync.next_run(FRESH, 7)) == {"seq": 6}
+    assert resync.next_run(FRESH, 0).seq == 2**32 - 1  # the run before 0 wraps
 
 
 def test_serving_again_after_a_shutdown() -> None:
     shut = attrs.evolve(FRESH, shutdown=True)
-    assert _changes(shut, machine.resync_serving(shut)) == {"shutdown": False}
+    assert _changes(shut, resync.serving(shut)) == {"shutdown": False}
 
 
 def test_a_dropped_run_keeps_its_seq_and_ids() -> None:
     before = running(child_id=5).state
-    after = machine.resync_run_dropped(before)
+    after = resync.run_dropped(before)
     assert _changes(before, after) == {"active": False, "running": None}
     held = stubborn().state
-    assert _changes(held, machine.resync_run_dropped(held)) == {"active": False, "stubborn": None}
+    assert _changes(held, resync.run_dropped(held)) == {"active": False, "stubborn": None}
 
 
 def test_the_event_id_raises_the_highest_id_unless_a_child_runs() -> None:
     before = waiting(event_id=1).state
-    assert _changes(before, machine.resync_event_id(before, 9)) == {"event_id": 9, "last_id": 9}
-    assert _changes(before, machine.resync_event_id(before, 0)) == {"event_id": 0}
+    assert _changes(before, resync.event_id(before, 9)) == {"event_id": 9, "last_id": 9}
+    assert _changes(before, resync.event_id(before, 0)) == {"event_id": 0}
     busy = running(child_id=5).state
-    assert _changes(busy, machine.resync_event_id(busy, 9)) == {"event_id": 9}
+    assert _changes(busy, resync.event_id(busy, 9)) == {"event_id": 9}
 
 
 def test_a_goal_queued_and_dropped() -> None:
     before = waiting().state
     goal = Goal(dynamic_event_seq=before.seq, event_type=EventType.NEXT, id=3)
-    queued = machine.resync_queued(before, u(4), goal)
+    queued = resync.queued(before, u(4), goal)
     assert _changes(before, queued) == {"queued": (QueuedGoal(goal_uuid=u(4), goal=goal),)}
-    assert machine.resync_dropped(queued, u(4)) == before
-    assert machine.resync_dropped(queued, u(5)) == queued
+    assert resync.dropped(queued, u(4)) == before
+    assert resync.dropped(queued, u(5)) == queued
     waiting_cancel = attrs.evolve(running().state, cancels=(u(6), u(7)))
-    assert machine.resync_dropped(waiting_cancel, u(6)).cancels == (u(7),)
+    assert resync.dropped(waiting_cancel, u(6)).cancels == (u(7),)
 
 
 def test_a_deferred_child_started() -> None:
     before = deferred(child_id=5).state
     assert before.interrupted
-    started = machine.resync_child_started(before)
+    started = resync.child_started(before)
     assert started.running is not None and started.running.started and started.interrupted
-    resumed = machine.resync_child_started(before, resumed=True)
+    resumed = resync.child_started(before, resumed=True)
     assert resumed.running is not None and resumed.running.started and not resumed.interrupted
     idle = waiting().state
-    assert machine.resync_child_started(idle, resumed=True) is idle
+    assert resync.child_started(idle, resumed=True) is idle
 
 
 def test_a_deferred_start_dropped() -> None:
     before = deferred().state
-    assert _changes(before, machine.resync_start_dropped(before)) == {
+    assert _changes(before, resync.start_dropped(before)) == {
         "running": None,
         "status": Status.STANDBY.value,
     }
@@ -90,23 +90,23 @@ def test_the_unknown_running_goal_named() -> None:
     )
     before = machine.state_from_status(status)
     assert before.running is not None and before.running.goal_uuid == UNKNOWN_GOAL
-    after = machine.resync_running_goal(before, u(9))
+    after = resync.running_goal(before, u(9))
     assert after.running == attrs.evolve(before.running, goal_uuid=u(9))
-    assert machine.resync_running_goal(FRESH, u(9)) is FRESH
+    assert resync.running_goal(FRESH, u(9)) is FRESH
 
 
 def test_the_running_child_renumbered() -> None:
     before = running(child_id=5).state
-    after = machine.resync_child_id(before, 12)
+    after = resync.child_id(before, 12)
     assert after.running is not None and after.running.child_id == 12 and after.last_id == 12
-    assert machine.resync_child_id(FRESH, 12) is FRESH
+    assert resync.child_id(FRESH, 12) is FRESH
 
 
 def test_a_next_forced_to_run() -> None:
     before = running(child_id=5, uuid=u(1)).state
     goal = Goal(dynamic_event_seq=before.seq, event_type=EventType.NEXT, id=6)
-    queued = machine.resync_queued(machine.resync_queued(before, u(2), goal), u(3), goal)
-    after = machine.resync_running(queued, u(2), goal, 6, "underway", [u(1)])
+    queued = resync.queued(resync.queued(before, u(2), goal), u(3), goal)
+    after = resync.running(queued, u(2), goal, 6, "underway", [u(1)])
     assert after.running == machine.RunningGoal(
         goal_uuid=u(2), goal=goal, child_id=6, child_status="underway", started=True
     )
@@ -119,7 +119,7 @@ def test_a_next_forced_to_run() -> None:
         True,
     )
     assert not after.interrupted
-    held = machine.resync_running(queued, u(2), goal, 6, Status.QUEUED.value, [u(1)])
+    held = resync.running(queued, u(2), goal, 6, Status.QUEUED.value, [u(1)])
     assert held.running is not None and not held.running.started and held.interrupted
 
 

@@ -30,7 +30,7 @@ from dynevent.conformance.records import config_from_json, output_to_json
 from dynevent.conformance.vectors import InProcessImplementation
 from dynevent.errors import InvalidSnapshot
 from dynevent.server import inputs as ins
-from dynevent.server import machine, snapshot
+from dynevent.server import machine, resync, snapshot
 from dynevent.server import outputs as outs
 from dynevent.server.fleet import Fleet
 from dynevent.server.machine import QueuedGoal, ServerConfig, State, any_description
@@ -106,18 +106,18 @@ def _resyncs(state: State, uuid: str, number: int, status: str) -> dict[str, Sta
     goal = Goal(dynamic_event_seq=state.seq, event_type=EventType.NEXT, id=number)
     displaced = [item.goal_uuid for item in state.queued][:1]
     return {
-        "seq": machine.resync_seq(state, number) if not state.active else state,
-        "next_run": machine.resync_next_run(state, number) if not state.active else state,
-        "serving": machine.resync_serving(state) if not state.active else state,
-        "run_dropped": machine.resync_run_dropped(state),
-        "event_id": machine.resync_event_id(state, number) if state.active else state,
-        "queued": machine.resync_queued(state, uuid, goal) if state.active else state,
-        "dropped": machine.resync_dropped(state, (*displaced, uuid)[0]),
-        "child_started": machine.resync_child_started(state, resumed=True),
-        "start_dropped": machine.resync_start_dropped(state) if state.running is not None else state,
-        "running_goal": machine.resync_running_goal(state, uuid),
-        "child_id": machine.resync_child_id(state, max(number, state.last_id)),
-        "running": machine.resync_running(state, uuid, goal, max(number, state.last_id), status, displaced)
+        "seq": resync.seq(state, number) if not state.active else state,
+        "next_run": resync.next_run(state, number) if not state.active else state,
+        "serving": resync.serving(state) if not state.active else state,
+        "run_dropped": resync.run_dropped(state),
+        "event_id": resync.event_id(state, number) if state.active else state,
+        "queued": resync.queued(state, uuid, goal) if state.active else state,
+        "dropped": resync.dropped(state, (*displaced, uuid)[0]),
+        "child_started": resync.child_started(state, resumed=True),
+        "start_dropped": resync.start_dropped(state) if state.running is not None else state,
+        "running_goal": resync.running_goal(state, uuid),
+        "child_id": resync.child_id(state, max(number, state.last_id)),
+        "running": resync.running(state, uuid, goal, max(number, state.last_id), status, displaced)
         if state.active and not state.shutdown
         else state,
     }

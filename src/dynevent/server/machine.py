@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 import typing
 import warnings
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any, TypeAlias
 
 import attrs
@@ -74,18 +74,6 @@ __all__ = [
     "phase_of",
     "race_lost",
     "reported_id",
-    "resync_child_id",
-    "resync_child_started",
-    "resync_dropped",
-    "resync_event_id",
-    "resync_next_run",
-    "resync_queued",
-    "resync_run_dropped",
-    "resync_running",
-    "resync_running_goal",
-    "resync_seq",
-    "resync_serving",
-    "resync_start_dropped",
     "state_from_status",
     "status_message",
     "status_of",
@@ -126,13 +114,26 @@ _DEPRECATED = {"accept_any": "any_description"}
 
 
 def __getattr__(name: str) -> Any:
-    """A deprecated name: the object of its new name, with a ``DeprecationWarning``."""
+    """A deprecated name: the object of its new name, with a ``DeprecationWarning``.  The observer's
+    ``resync_*`` operations moved to :mod:`dynevent.server.resync` (``resync_seq`` is ``resync.seq``)."""
     if name in _DEPRECATED:
         new = _DEPRECATED[name]
         warnings.warn(
             f"dynevent.server.machine.{name} is deprecated: use {new}", DeprecationWarning, stacklevel=2
         )
         return globals()[new]
+    if name.startswith("resync_"):
+        from dynevent.server import resync
+
+        operation = getattr(resync, name.removeprefix("resync_"), None)
+        if operation is not None:
+            warnings.warn(
+                f"dynevent.server.machine.{name} is deprecated: use dynevent.server.resync."
+                f"{operation.__name__}",
+                DeprecationWarning,
+                stacklevel=2,
+            )
+            return operation
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
@@ -505,123 +506,6 @@ def state_from_status(
             interrupted=not running.started,  # only an interruption defers a child's start (R6.3)
         )
     raise ValueError(f"dynamic_state {phase} is none of INACTIVE (0), WAITING (1), RUNNING (2)")
-
-
-# --------------------------------------------------------------------------- resync
-
-# An observer that replays what it saw of a server (``dynevent check``) keeps a state of the machine.
-# When the server evidently did something the rules do not allow, the observer reports it, then
-# brings its state into agreement with what the server did, so that one fault is reported once.
-# These are the only ways it may change a state besides ``step``: each keeps the state one the
-# machine can hold (tests/spec/test_19_invariants.py runs them on reachable states).
-
-
-def resync_seq(state: State, seq: int) -> State:
-    """The server's current (or last) run is evidently ``seq``."""
-    return _replace_state(state, seq=seq & U32_MAX)
-
-
-def resync_next_run(state: State, seq: int) -> State:
-    """The server's next begin evidently opens run ``seq``: the last run was the one before it."""
-    return _replace_state(state, seq=(seq - 1) & U32_MAX)
-
-
-def resync_serving(state: State) -> State:
-    """The server evidently serves again after its shutdown (it published a begin)."""
-    return _replace_state(state, shutdown=False)
-
-
-def resync_run_dropped(state: State) -> State:
-    """The server evidently dropped its active run, with its goals (it began another)."""
-    return _replace_state(state, active=False, running=None, queued=(), cancels=(), stubborn=None)
-
-
-def resync_event_id(state: State, event_id: int) -> State:
-    """The dynamic event's own id is evidently ``event_id`` (a status or a FINISHED's answer said); it
-    is the highest id used unless a higher one was, or a child runs (whose id is then the highest)."""
-    last_id = state.last_id if state.running is not None else max(state.last_id, event_id)
-    return _replace_state(state, event_id=event_id, last_id=last_id)
-
-
-def resync_queued(state: State, goal_uuid: str, goal: Goal) -> State:
-    """The server evidently accepted this goal (the rules refuse it): it waits to start."""
-    return _replace_state(state, queued=(*state.queued, QueuedGoal(goal_uuid=goal_uuid, goal=goal)))
-
-
-def resync_dropped(state: State, goal_uuid: str) -> State:
-    """The server evidently no longer holds this accepted goal (waiting, or a CANCEL waiting for a
-    child's end): it answered it early."""
-    return _replace_state(
-        state,
-        queued=tuple(item for item in state.queued if item.goal_uuid != goal_uuid),
-        cancels=tuple(other for other in state.cancels if other != goal_uuid),
-    )
-
-
-def resync_child_started(state: State, *, resumed: bool = False) -> State:
-    """The running goal's child has evidently started (its start was not deferred, R6.3); with
-    ``resumed``, the server is no longer interrupted either.  No running goal: unchanged."""
-    running = state.running
-    if running is None:
-        return state
-    interrupted = False if resumed else state.interrupted
-    return _replace_state(state, running=_replace_running(running, started=True), interrupted=interrupted)
-
-
-def resync_start_dropped(state: State) -> State:
-    """The server evidently dropped the running goal whose child's start was deferred (it answered it).
-
-    No CANCEL waits for a deferred child (R9.4 answers it at once), and none can wait once the
-    running goal is gone: any still held are dropped with it, so the state keeps its invariants
-    whatever state it is given.
-    """
-    return _replace_state(state, running=None, cancels=(), status=Status.STANDBY.value)
-
-
-def resync_running_goal(state: State, goal_uuid: str) -> State:
-    """The running goal, unknown so far (:data:`UNKNOWN_GOAL`), is evidently ``goal_uuid``."""
-    running = state.running
-    if running is None:
-        return state
-    return _replace_state(state, running=_replace_running(running, goal_uuid=goal_uuid))
-
-
-def resync_child_id(state: State, child_id: int) -> State:
-    """The running child evidently has the id ``child_id`` (its feedback said), now the highest used."""
-    running = state.running
-    if running is None:
-        return state
-    return _replace_state(state, running=_replace_running(running, child_id=child_id), last_id=child_id)
-
-
-def resync_running(
-    state: State, goal_uuid: str, goal: Goal, child_id: int, child_status: str, displaced: Iterable[str]
-) -> State:
-    """The server evidently runs this NEXT goal's child (its feedback said), whatever the rules say.
-
-    The goals in ``displaced`` (the running one, CANCELs waiting for it) are no longer held; the run
-    is active, with no stubborn hold.  A child that reports ``queued`` is taken as not started yet,
-    deferred by an interruption (only an interruption defers a start, R6.3).
-    """
-    gone = {goal_uuid, *displaced}
-    running = RunningGoal(
-        goal_uuid=goal_uuid,
-        goal=goal,
-        child_id=child_id,
-        child_status=child_status,
-        started=child_status != Status.QUEUED.value,
-    )
-    return _replace_state(
-        state,
-        queued=tuple(item for item in state.queued if item.goal_uuid not in gone),
-        running=running,
-        cancels=(),
-        status=child_status,
-        last_id=child_id,
-        stubborn=None,
-        active=True,
-        interrupted=state.interrupted or not running.started,
-    )
 
 
 # --------------------------------------------------------------------------- accept

@@ -41,7 +41,7 @@ import itertools
 import math
 import os
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 import attrs
@@ -52,7 +52,7 @@ from dynevent.errors import (
     TraceError,  # defined there with every error; importable here too
 )
 from dynevent.server import inputs as ins
-from dynevent.server import machine
+from dynevent.server import machine, resync
 from dynevent.server import outputs as outs
 from dynevent.server.machine import (
     UNKNOWN_GOAL,
@@ -615,23 +615,19 @@ def abduce(
     return exact[0] if exact else near
 
 
-class _Part:
-    """What every part of the observer shares: the state, what is owed, the goals seen, the findings."""
+class _Books:
+    """The observer's books, which its parts share: the state, what is owed, the goals seen, the time and
+    line, the findings, and the operations on them.  What only one part needs, that part keeps."""
 
     def __init__(self, header: _Header) -> None:
         self.config_known = header.config is not None
         self.config = header.config if header.config is not None else ServerConfig()
-        self.names = (header.fleet, header.robot) if header.fleet or header.robot else None
         self.state: State | None = None
         self.owed: list[_Owed] = []
         self.goals: dict[str, _GoalSeen] = {}
         self.findings: list[Finding] = []
-        self.log_seq: int | None = None
-        self.event_id_pending = False
         self.now = ins.NOW_RANGE[0]
         self.line = 0
-        self.duplicates: set[str] = set()
-        self.last_end: tuple[int, Result] | None = None
         self.partial = False  # the trace begins mid-way: goals it never showed may be open
         self.upcoming: Record | None = None  # the record after the one being judged
         self.lookahead: tuple[Record, ...] = ()  # the LOOKAHEAD records after it
@@ -708,7 +704,7 @@ class _Part:
             seen = _GoalSeen(goal=Goal(), line=0, responded=True, accepted=True, owed=True)
             self.goals[uuid] = seen
             return seen
-        self.state = machine.resync_running_goal(self.st, uuid)
+        self.state = resync.running_goal(self.st, uuid)
         seen = _GoalSeen(goal=running.goal, line=0, responded=True, accepted=True)
         self.goals[uuid] = seen
         return seen
@@ -722,7 +718,7 @@ class _Part:
         if found is not None and _exact(found[3].output, record) and self.confirmed(found):
             return found
         saved = self.st
-        self.state = machine.resync_child_started(saved, resumed=True)
+        self.state = resync.child_started(saved, resumed=True)
         other = self.abduce(record)
         found_exact = found is not None and _exact(found[3].output, record)
         if (
@@ -743,61 +739,65 @@ class _Part:
         return None
 
 
-class _Requests(_Part):
+class _Requests:
     """Goal requests, their responses and action-level cancels: the machine's ``accept``, compared."""
 
+    def __init__(self, books: _Books) -> None:
+        self.books = books
+        self.duplicates: set[str] = set()  # goal UUIDs requested again while open
+
     def on_goal(self, record: Record) -> None:
-        seen = self.goals.get(record.goal_uuid)
+        seen = self.books.goals.get(record.goal_uuid)
         if seen is not None and seen.answered is None and (not seen.responded or seen.accepted):
-            self.flag(
+            self.books.flag(
                 Violation.GOAL_UUID_REUSED,
                 f"goal {record.goal_uuid} requested again while it is open (since line {seen.line})",
                 "a fresh goal UUID for every goal",
             )
             self.duplicates.add(record.goal_uuid)
             return
-        self.goals[record.goal_uuid] = _GoalSeen(goal=record.message, line=record.line)
+        self.books.goals[record.goal_uuid] = _GoalSeen(goal=record.message, line=record.line)
 
     def on_goal_response(self, record: Record) -> None:
         if record.goal_uuid in self.duplicates:
             self.duplicates.discard(record.goal_uuid)
             return
-        seen = self.goals.get(record.goal_uuid)
+        seen = self.books.goals.get(record.goal_uuid)
         if seen is None or seen.responded:
             raise _Unreadable("goal_uuid", "no goal record with this uuid awaits a response")
         seen.responded, seen.accepted = True, record.accepted
         goal = seen.goal
-        decision = machine.accept(self.st, goal, self.config_for(goal))
+        decision = machine.accept(self.books.st, goal, self.books.config_for(goal))
         if not self.agrees(decision, record):
             self.explain_response(goal, record)
-            decision = machine.accept(self.st, goal, self.config_for(goal))
+            decision = machine.accept(self.books.st, goal, self.books.config_for(goal))
         if record.accepted:
-            self.learn(goal)
+            self.books.learn(goal)
         if isinstance(decision, outs.Accepted) == record.accepted:
             if isinstance(decision, outs.Rejected) and not self.same_reason(decision, record):
-                self.differs(
+                self.books.differs(
                     decision.rule,
                     "wrong_reason",
                     f"{goal_text(goal)} rejected as {record.reason}",
                     f"rejected as {decision.reason.value}, the first check that fails: {decision.text}",
                 )
             if record.accepted:
-                event = ins.GoalRequested(goal_uuid=record.goal_uuid, goal=goal, now=self.now)
-                self.commit(*self.simulate([event]))
+                event = ins.GoalRequested(goal_uuid=record.goal_uuid, goal=goal, now=self.books.now)
+                self.books.commit(*self.books.simulate([event]))
             return
         if isinstance(decision, outs.Rejected):  # accepted, but the rules refuse it
-            self.differs(
+            self.books.differs(
                 decision.rule,
                 f"accepted_{decision.reason.value}",
                 f"{goal_text(goal)} accepted",
                 f"rejected: {decision.reason.value} ({decision.text})",
             )
-            self.state = machine.resync_queued(self.st, record.goal_uuid, goal)
+            self.books.state = resync.queued(self.books.st, record.goal_uuid, goal)
             return
         if self.unknowable(goal, record):
             return
         said = f" as {record.reason.value}" if record.reason is not None else ""
-        self.flag(
+        self.books.flag(
             Violation.REJECTED_ACCEPTABLE,
             f"{goal_text(goal)} rejected{said}",
             "accepted: the goal passes every check of R4",
@@ -813,41 +813,41 @@ class _Requests(_Part):
         if reason is None or reason is decision.reason:
             return True
         return (
-            not self.config_known
+            not self.books.config_known
             and reason in _CONFIG_REASONS
             and _REASON_ORDER[reason] < _REASON_ORDER[decision.reason]
         )
 
     def unknowable(self, goal: Goal, record: Record) -> bool:
         """Could an unknown configuration have refused this NEXT?"""
-        if self.config_known or goal.event_type != EventType.NEXT:
+        if self.books.config_known or goal.event_type != EventType.NEXT:
             return False
         return record.reason is None or record.reason in _CONFIG_REASONS
 
     def explain_response(self, goal: Goal, record: Record) -> None:
         """The response may follow starts of accepted goals whose outputs come later: try them."""
         events: list[ins.Input] = []
-        for queued in self.st.queued:
-            events.append(ins.GoalStarted(goal_uuid=queued.goal_uuid, now=self.now))
-            state, owed = self.simulate(events)
-            decision = machine.accept(state, goal, self.config_for(goal))
+        for queued in self.books.st.queued:
+            events.append(ins.GoalStarted(goal_uuid=queued.goal_uuid, now=self.books.now))
+            state, owed = self.books.simulate(events)
+            decision = machine.accept(state, goal, self.books.config_for(goal))
             if self.agrees(decision, record):
-                self.commit(state, owed)
+                self.books.commit(state, owed)
                 return
         if record.reason is RejectReason.SHUTTING_DOWN:
-            state, owed = self.simulate([ins.Shutdown(now=self.now)])
-            self.commit(state, owed)
+            state, owed = self.books.simulate([ins.Shutdown(now=self.books.now)])
+            self.books.commit(state, owed)
 
     def on_cancel_request(self, record: Record) -> None:
-        if self.partial and record.goal_uuid not in self.goals:
+        if self.books.partial and record.goal_uuid not in self.books.goals:
             return  # a goal from before the trace, maybe: its response tells (on_cancel_response)
-        seen = self.goals.get(record.goal_uuid)
+        seen = self.books.goals.get(record.goal_uuid)
         if seen is not None and seen.owed:
             return  # a goal the state no longer follows: its cancel is not judged either
-        running = self.st.running
-        if self.start_uncertain and running is not None and running.goal_uuid == record.goal_uuid:
+        running = self.books.st.running
+        if self.books.start_uncertain and running is not None and running.goal_uuid == record.goal_uuid:
             # a deferred child is cancelled at once (R10.4); a started one ends later (R10.3)
-            answer = self.ahead(record.goal_uuid)  # at once: within the next two records
+            answer = self.books.ahead(record.goal_uuid)  # at once: within the next two records
             deferred = (
                 answer is not None
                 and answer.kind == "result"
@@ -855,35 +855,37 @@ class _Requests(_Part):
                 and answer.message.status == Status.CANCELED.value
             )
             if not deferred:
-                self.state = machine.resync_child_started(self.st)
-            self.start_uncertain = False
-        self.commit(*self.simulate([ins.CancelRequested(goal_uuid=record.goal_uuid, now=self.now)]))
+                self.books.state = resync.child_started(self.books.st)
+            self.books.start_uncertain = False
+        self.books.commit(
+            *self.books.simulate([ins.CancelRequested(goal_uuid=record.goal_uuid, now=self.books.now)])
+        )
 
     def on_cancel_response(self, record: Record) -> None:
         channel = f"cancel:{record.goal_uuid}"
-        if not any(item.channel == channel for item in self.owed):
-            if self.partial and record.goal_uuid not in self.goals:
+        if not any(item.channel == channel for item in self.books.owed):
+            if self.books.partial and record.goal_uuid not in self.books.goals:
                 if not record.accepted:
                     return  # a goal unknown to the server as well
-                upcoming = self.upcoming
+                upcoming = self.books.upcoming
                 queued = (
                     upcoming is not None
                     and upcoming.kind == "result"
                     and upcoming.goal_uuid == record.goal_uuid
                     and _first_line(upcoming.message.execution_failure) == Failure.NOT_RUNNING.value
                 )
-                self.bind_unknown(record.goal_uuid, running_goal=not queued)
+                self.books.bind_unknown(record.goal_uuid, running_goal=not queued)
                 if queued:
                     return  # an accepted goal that had not started (R10.1, R10.2)
             self.on_cancel_request(record)
-        index = next((i for i, item in enumerate(self.owed) if item.channel == channel), None)
+        index = next((i for i, item in enumerate(self.books.owed) if item.channel == channel), None)
         if index is None:
             return
-        owed = self.owed.pop(index)
+        owed = self.books.owed.pop(index)
         assert isinstance(owed.output, outs.CancelResponse)
         if owed.output.accepted != record.accepted:
             word = {True: "accepted", False: "rejected"}
-            self.differs(
+            self.books.differs(
                 owed.rule,
                 "cancel_response",
                 f"cancel of goal {record.goal_uuid} {word[record.accepted]}",
@@ -891,32 +893,39 @@ class _Requests(_Part):
             )
 
 
-class _Runs(_Part):
+class _Runs:
     """Begin and status messages: runs, their seq, the dynamic event's id and the status topic."""
+
+    def __init__(self, books: _Books, header: _Header) -> None:
+        self.books = books
+        self.names = (header.fleet, header.robot) if header.fleet or header.robot else None
+        self.event_id_pending = False
 
     def sync(self, record: Record) -> bool:
         """Set the starting state from the first record; True when the record is used up."""
         base = State.new("fleet", "robot")
-        self.partial = record.kind == "status" or (
+        self.books.partial = record.kind == "status" or (
             record.kind == "begin" and record.message.dynamic_event_seq != 1
         )
         if record.kind == "status":
             message: DynamicEventStatus = record.message
             try:
-                self.state = state_from_status(message)
+                self.books.state = state_from_status(message)
                 # a status names the highest id used (R2.2), not the dynamic event's own id
-                self.event_id_unknown = message.dynamic_state != DynamicState.INACTIVE
-                self.start_uncertain = self.st.running is not None and not self.st.running.started
+                self.books.event_id_unknown = message.dynamic_state != DynamicState.INACTIVE
+                self.books.start_uncertain = (
+                    self.books.st.running is not None and not self.books.st.running.started
+                )
             except ValueError as exc:
-                self.state = machine.resync_seq(base, message.dynamic_event_seq)
-                self.flag(
+                self.books.state = resync.seq(base, message.dynamic_event_seq)
+                self.books.flag(
                     Violation.STATUS_PHASE, f"status {status_text(message)}: {exc}", "dynamic_state 0, 1 or 2"
                 )
             return True
         if record.kind == "begin":
-            self.state = machine.resync_next_run(base, record.message.dynamic_event_seq)
+            self.books.state = resync.next_run(base, record.message.dynamic_event_seq)
             return False
-        self.state = base  # a trace from the server's start
+        self.books.state = base  # a trace from the server's start
         return False
 
     def on_begin(self, record: Record) -> None:
@@ -925,17 +934,19 @@ class _Runs(_Part):
         if self.names is None:
             self.names = names
         elif names != self.names:
-            self.flag(
+            self.books.flag(
                 Violation.BEGIN_NAMES,
                 f"begin names {message.fleet}/{message.robot}",
                 f"the robot of this trace, {self.names[0]}/{self.names[1]}",
             )
-        state = self.st
+        state = self.books.st
         if state.shutdown:
-            self.flag(Violation.BEGIN_AFTER_SHUTDOWN, f"begin of run {message.dynamic_event_seq}", "nothing")
-            state = machine.resync_serving(state)
+            self.books.flag(
+                Violation.BEGIN_AFTER_SHUTDOWN, f"begin of run {message.dynamic_event_seq}", "nothing"
+            )
+            state = resync.serving(state)
         if state.active:
-            self.flag(
+            self.books.flag(
                 Violation.BEGIN_WHILE_ACTIVE,
                 f"begin of run {message.dynamic_event_seq} while run {state.seq} is active",
                 "the end of the run first: FINISHED, a task cancel or kill, with an INACTIVE status",
@@ -943,33 +954,33 @@ class _Runs(_Part):
             open_goals = [queued.goal_uuid for queued in state.queued] + list(state.cancels)
             if state.running is not None:
                 open_goals.append(state.running.goal_uuid)
-            self.displace(open_goals)
-            state = machine.resync_run_dropped(state)
+            self.books.displace(open_goals)
+            state = resync.run_dropped(state)
         expected = (state.seq + 1) & U32_MAX
         if message.dynamic_event_seq != expected:
-            self.flag(
+            self.books.flag(
                 Violation.BEGIN_SEQ,
                 f"begin of run {message.dynamic_event_seq}",
                 f"seq {expected}, one above the previous run's {state.seq}",
             )
-            state = machine.resync_next_run(state, message.dynamic_event_seq)
+            state = resync.next_run(state, message.dynamic_event_seq)
         try:
-            event = ins.Begin(description=message.description, event_id=0, now=self.now)
+            event = ins.Begin(description=message.description, event_id=0, now=self.books.now)
         except InvalidMessage as exc:
-            self.flag(
+            self.books.flag(
                 Violation.BEGIN_DESCRIPTION,
                 f"begin description: {exc.problem}",
                 "a dynamic_event description",
             )
-            event = ins.Begin(description="{}", event_id=0, now=self.now)
-        self.state = state
-        self.commit(*self.simulate([event]))
+            event = ins.Begin(description="{}", event_id=0, now=self.books.now)
+        self.books.state = state
+        self.books.commit(*self.books.simulate([event]))
         self.event_id_pending = True
-        self.event_id_unknown = self.start_uncertain = False
+        self.books.event_id_unknown = self.books.start_uncertain = False
 
     def adopt_event_id(self, message: DynamicEventStatus) -> None:
         """The begin did not say the dynamic event's id; the WAITING status that follows does."""
-        state = self.st
+        state = self.books.st
         if not (
             self.event_id_pending
             and message.dynamic_state == DynamicState.WAITING
@@ -979,9 +990,9 @@ class _Runs(_Part):
         ):
             return
         self.event_id_pending = False
-        self.state = machine.resync_event_id(state, message.id)
+        self.books.state = resync.event_id(state, message.id)
         patched = []
-        for item in self.owed:
+        for item in self.books.owed:
             output = item.output
             if (
                 isinstance(output, outs.PublishStatus)
@@ -992,36 +1003,36 @@ class _Runs(_Part):
                 patched.append(attrs.evolve(item, output=fixed))
             else:
                 patched.append(item)
-        self.owed = patched
+        self.books.owed = patched
 
     def on_status(self, record: Record) -> None:
         message: DynamicEventStatus = record.message
         if message.dynamic_state not in (0, 1, 2):
-            self.flag(
+            self.books.flag(
                 Violation.STATUS_PHASE,
                 f"status with dynamic_state {message.dynamic_state}",
                 "dynamic_state 0 (INACTIVE), 1 (WAITING) or 2 (RUNNING)",
             )
             return
         self.adopt_event_id(message)
-        statuses = [index for index, item in enumerate(self.owed) if item.channel == "status"]
+        statuses = [index for index, item in enumerate(self.books.owed) if item.channel == "status"]
         for index in statuses:
-            output = self.owed[index].output
+            output = self.books.owed[index].output
             assert isinstance(output, outs.PublishStatus)
             if _same_status(output.message, message):
                 # a status topic keeps one message: earlier ones may be overwritten unseen
-                self.owed = [
-                    item for i, item in enumerate(self.owed) if i > index or item.channel != "status"
+                self.books.owed = [
+                    item for i, item in enumerate(self.books.owed) if i > index or item.channel != "status"
                 ]
                 return
-        current = machine.status_message(self.st, self.now)
+        current = machine.status_message(self.books.st, self.books.now)
         if _same_status(current, message):
             return  # a repeat of the state's status (e.g. the latched message, read again)
         # in the server's order a step's answers and feedback come before its status: prefer a
         # candidate that owes none, then accept one whose other outputs are still to come
         found: tuple[State, list[_Owed]] | None = None
-        for events in candidates(self.st, record, self.now):
-            state, owed = self.simulate(events)
+        for events in candidates(self.books.st, record, self.books.now):
+            state, owed = self.books.simulate(events)
             published = [item.output for item in owed if isinstance(item.output, outs.PublishStatus)]
             if not published or not _same_status(published[-1].message, message):
                 continue
@@ -1032,26 +1043,30 @@ class _Runs(_Part):
                 found = (state, owed)
         if found is not None:
             state, owed = found
-            self.commit(state, [item for item in owed if item.channel != "status"])
-            self.owed = [item for item in self.owed if item.channel != "status"]
+            self.books.commit(state, [item for item in owed if item.channel != "status"])
+            self.books.owed = [item for item in self.books.owed if item.channel != "status"]
             return
-        self.owed = [item for item in self.owed if item.channel != "status"]
-        self.flag(
+        self.books.owed = [item for item in self.books.owed if item.channel != "status"]
+        self.books.flag(
             Violation.STATUS_MISMATCH,
             f"status {status_text(message)}",
             f"{status_text(current)}, the state's status",
         )
 
 
-class _Feedback(_Part):
+class _Feedback:
     """Feedback: a child's start and progress, abduced, compared, and corrected when it disagrees."""
+
+    def __init__(self, books: _Books) -> None:
+        self.books = books
+        self.log_seq: int | None = None  # the robot's last log seq seen
 
     def check_logs(self, feedback: Feedback) -> None:
         for entry in feedback.logs:
             last = self.log_seq
             if last is not None and not seq_after(entry.seq, last):
                 how = "repeats" if entry.seq == last else "goes backwards"
-                self.flag(
+                self.books.flag(
                     Violation.LOG_SEQ,
                     f"LogEntry.seq {entry.seq} after {last}: the log seq {how}",
                     f"a LogEntry.seq above {last}: every entry takes the robot's next log seq",
@@ -1062,20 +1077,22 @@ class _Feedback(_Part):
         feedback: Feedback = record.message
         self.check_logs(feedback)
         uuid = record.goal_uuid
-        seen = self.bind_unknown(uuid)
+        seen = self.books.bind_unknown(uuid)
         label = f"feedback {feedback.status} id={feedback.id} for goal {uuid}"
         if seen is None or not seen.accepted:
             what = "never requested in this trace" if seen is None else "rejected"
-            self.flag(Violation.FEEDBACK_NOT_RUNNING, f"{label}, {what}", "no feedback: no goal of it runs")
+            self.books.flag(
+                Violation.FEEDBACK_NOT_RUNNING, f"{label}, {what}", "no feedback: no goal of it runs"
+            )
             return
         if seen.answered is not None:
-            self.flag(
+            self.books.flag(
                 Violation.AFTER_ANSWER,
                 f"{label} after its terminal answer (line {seen.answered})",
                 "nothing after a goal's terminal answer",
             )
             return
-        state = self.st
+        state = self.books.st
         if seen.line == 0 and seen.owed and state.active and state.running is None:
             # a NEXT accepted before the trace began starts now
             seen.owed = False
@@ -1085,20 +1102,20 @@ class _Feedback(_Part):
         if seen.owed:
             return
         channel = f"goal:{uuid}"
-        for index, item in enumerate(self.owed):
+        for index, item in enumerate(self.books.owed):
             if item.channel != channel:
                 continue
             if not isinstance(item.output, outs.PublishFeedback):
                 break
             if item.output.feedback.status == feedback.status and item.output.feedback.id == feedback.id:
-                del self.owed[index]
+                del self.books.owed[index]
                 self.check_clamp(item, feedback)
                 return
-        found = self.abduce_uncertain(record)
+        found = self.books.abduce_uncertain(record)
         if found is not None:
             events, state, owed, first = found
             owed.remove(first)
-            self.commit(state, owed)
+            self.books.commit(state, owed)
             self.compare_feedback(first, feedback, events)
             return
         self.unexplained_feedback(record, seen)
@@ -1108,22 +1125,24 @@ class _Feedback(_Part):
         expected = owed.output.feedback
         if expected.id != feedback.id:
             if isinstance(events[-1], (ins.GoalStarted, ins.Resume)):
-                policy = "the NEXT goal's id" if self.config.id_policy is IdPolicy.GOAL else "the next id"
-                self.flag(
+                policy = (
+                    "the NEXT goal's id" if self.books.config.id_policy is IdPolicy.GOAL else "the next id"
+                )
+                self.books.flag(
                     Violation.CHILD_ID,
                     f"the child started for goal {owed.output.goal_uuid} has id {feedback.id}",
                     f"id {expected.id}, {policy}",
                 )
                 self.patch_child_id(feedback.id)
             else:
-                self.differs(
+                self.books.differs(
                     owed.rule,
                     "feedback_id",
                     f"feedback id={feedback.id} for goal {owed.output.goal_uuid}",
                     f"id={expected.id}, the running child's",
                 )
         if expected.status != feedback.status:
-            self.differs(
+            self.books.differs(
                 owed.rule,
                 "feedback_status",
                 f"feedback {feedback.status} for goal {owed.output.goal_uuid}",
@@ -1140,61 +1159,61 @@ class _Feedback(_Part):
             return
         warnings = [entry for entry in output.feedback.logs if entry.tier == Tier.WARNING.value]
         if warnings and not any(entry.tier == Tier.WARNING.value for entry in feedback.logs):
-            self.flag(
+            self.books.flag(
                 Violation.CLAMP_NOT_REPORTED,
                 f"the start feedback of goal {output.goal_uuid} carries no warning",
                 f"a warning log entry: {warnings[0].text}",
             )
 
     def patch_child_id(self, child_id: int) -> None:
-        running = self.st.running
+        running = self.books.st.running
         if running is None:
             return
-        self.state = machine.resync_child_id(self.st, child_id)
-        current = machine.status_message(self.st, self.now)
-        self.owed = [
+        self.books.state = resync.child_id(self.books.st, child_id)
+        current = machine.status_message(self.books.st, self.books.now)
+        self.books.owed = [
             attrs.evolve(item, output=outs.PublishStatus(message=current))
             if isinstance(item.output, outs.PublishStatus)
             and item.output.message.dynamic_state == DynamicState.RUNNING
             else item
-            for item in self.owed
+            for item in self.books.owed
         ]
 
     def unexplained_feedback(self, record: Record, seen: _GoalSeen) -> None:
         feedback: Feedback = record.message
         uuid = record.goal_uuid
         label = f"feedback {feedback.status} id={feedback.id} for goal {uuid}"
-        state = self.st
+        state = self.books.st
         goal = seen.goal
         queued = any(item.goal_uuid == uuid for item in state.queued)
         pending = next(
             (
                 item
-                for item in self.owed
+                for item in self.books.owed
                 if item.channel == f"goal:{uuid}" and isinstance(item.output, outs.AnswerGoal)
             ),
             None,
         )
         if queued and goal.event_type == EventType.NEXT:
-            _, owed = self.simulate([ins.GoalStarted(goal_uuid=uuid, now=self.now)])
+            _, owed = self.books.simulate([ins.GoalStarted(goal_uuid=uuid, now=self.books.now)])
             answer = next((item for item in owed if isinstance(item.output, outs.AnswerGoal)), None)
             if answer is not None and _failure(answer.output) is Failure.RACE:
-                race = machine.race_lost(state, goal, self.config_for(goal))
-                self.flag(
+                race = machine.race_lost(state, goal, self.books.config_for(goal))
+                self.books.flag(
                     Violation.RACE_NOT_LOST,
                     f"{label}: its NEXT ({goal_text(goal)}) started a child",
                     f"aborted: {Failure.RACE.value!r}, as {race}",
                 )
             elif answer is not None and isinstance(answer.output, outs.AnswerGoal):
                 expected = answer_text(answer.output.status.value, answer.output.result, first_line=True)
-                self.differs(
+                self.books.differs(
                     answer.rule, "feedback_not_running", f"{label}: its NEXT started a child", expected
                 )
             self.force_start(uuid, goal, feedback)
             return
         if pending is not None:
             assert isinstance(pending.output, outs.AnswerGoal)
-            self.differs(
+            self.books.differs(
                 pending.rule,
                 "feedback_not_running",
                 f"{label}, whose event has ended",
@@ -1202,11 +1221,13 @@ class _Feedback(_Part):
             )
             return
         kind = EventType(goal.event_type).name if goal.event_type <= 3 else f"event_type {goal.event_type}"
-        self.flag(Violation.FEEDBACK_NOT_RUNNING, f"{label}, a {kind} goal that runs no child", "no feedback")
+        self.books.flag(
+            Violation.FEEDBACK_NOT_RUNNING, f"{label}, a {kind} goal that runs no child", "no feedback"
+        )
 
     def force_start(self, uuid: str, goal: Goal, feedback: Feedback) -> None:
         """The server runs this NEXT, whatever the rules say: make it the running goal."""
-        state = self.st
+        state = self.books.st
         displaced = list(state.cancels)
         if state.running is not None:
             displaced.append(state.running.goal_uuid)
@@ -1217,29 +1238,33 @@ class _Feedback(_Part):
                 for item in state.queued
                 if item.goal.event_type == EventType.CANCEL and item.goal.id == old
             )
-        self.displace(displaced)
-        self.state = machine.resync_running(state, uuid, goal, feedback.id, feedback.status, displaced)
-        self.owed = [item for item in self.owed if item.channel != "status"]
+        self.books.displace(displaced)
+        self.books.state = resync.running(state, uuid, goal, feedback.id, feedback.status, displaced)
+        self.books.owed = [item for item in self.books.owed if item.channel != "status"]
 
 
-class _Answers(_Part):
+class _Answers:
     """Terminal answers: the end of a goal, abduced or owed, compared with the machine's."""
+
+    def __init__(self, books: _Books) -> None:
+        self.books = books
+        self.last_end: tuple[int, Result] | None = None  # the last child end: its line and result
 
     def on_result(self, record: Record) -> None:
         result: Result = record.message
         uuid = record.goal_uuid
         # the running goal is answered at its child's end, or at shutdown
         failure = _first_line(result.execution_failure)
-        seen = self.bind_unknown(uuid, failure in ("", Failure.SHUTDOWN.value))
+        seen = self.books.bind_unknown(uuid, failure in ("", Failure.SHUTDOWN.value))
         label = f"answer {answer_text(record.status, result, first_line=True)} for goal {uuid}"
         if seen is None or not seen.accepted:
             what = "never requested in this trace" if seen is None else "rejected"
-            self.flag(
+            self.books.flag(
                 Violation.ANSWER_NOT_ACCEPTED, f"{label}, {what}", "no answer: the goal was never accepted"
             )
             return
         if seen.answered is not None:
-            self.flag(
+            self.books.flag(
                 Violation.SECOND_ANSWER,
                 f"{label}: a second terminal answer (the first on line {seen.answered})",
                 "exactly one terminal answer per goal",
@@ -1252,21 +1277,21 @@ class _Answers(_Part):
         pending = next(
             (
                 item
-                for item in self.owed
+                for item in self.books.owed
                 if item.channel == channel and isinstance(item.output, outs.AnswerGoal)
             ),
             None,
         )
         if pending is not None:
-            self.forget_channel(channel)
+            self.books.forget_channel(channel)
             self.compare_answer(pending, record)
             return
         if self.started_unseen(record):
             return
-        found = self.abduce_uncertain(record)
+        found = self.books.abduce_uncertain(record)
         if found is not None:
             events, state, owed, first = found
-            self.commit(state, [item for item in owed if item.channel != channel])
+            self.books.commit(state, [item for item in owed if item.channel != channel])
             self.compare_answer(first, record)
             if isinstance(events[-1], ins.ChildFinished) and isinstance(first.output, outs.AnswerGoal):
                 self.last_end = (record.line, first.output.result)
@@ -1275,10 +1300,10 @@ class _Answers(_Part):
 
     def started_unseen(self, record: Record) -> bool:
         """A CANCEL's start shows nothing on the wire: its answer may say it waited for the last child."""
-        state = self.st
+        state = self.books.st
         uuid = record.goal_uuid
         queued = next((item for item in state.queued if item.goal_uuid == uuid), None)
-        seen = self.goals.get(uuid)
+        seen = self.books.goals.get(uuid)
         if queued is None or queued.goal.event_type != EventType.CANCEL or self.last_end is None:
             return False
         line, result = self.last_end
@@ -1286,7 +1311,7 @@ class _Answers(_Part):
             return False
         if record.message != result:
             return False
-        self.state = machine.resync_dropped(state, uuid)
+        self.books.state = resync.dropped(state, uuid)
         return True
 
     def compare_answer(self, owed: _Owed, record: Record) -> None:
@@ -1296,28 +1321,30 @@ class _Answers(_Part):
         expected, observed = output.result, result
         label = f"goal {record.goal_uuid} answered {answer_text(record.status, result, first_line=True)}"
         want = answer_text(output.status.value, expected, first_line=True)
-        seen = self.goals.get(record.goal_uuid)
+        seen = self.books.goals.get(record.goal_uuid)
         early = {record.status, output.status.value} == {GoalStatus.ABORTED.value, GoalStatus.CANCELED.value}
         if early and seen is not None and seen.line == 0:
             pass  # a goal from before the trace: whether it was cancelled through the action is not known
         elif record.status != output.status.value:
-            self.differs(owed.rule, "goal_status", label, f"{want} ({owed.rule})")
-        elif owed.rule == machine.FINISHED_RULE and self.event_id_unknown:
-            self.event_id_unknown = False  # the first FINISHED of a run joined late names its own id
-            self.state = machine.resync_event_id(self.st, observed.id)
+            self.books.differs(owed.rule, "goal_status", label, f"{want} ({owed.rule})")
+        elif owed.rule == machine.FINISHED_RULE and self.books.event_id_unknown:
+            self.books.event_id_unknown = False  # the first FINISHED of a run joined late names its own id
+            self.books.state = resync.event_id(self.books.st, observed.id)
         elif expected.id != observed.id:
             rule = _result_rule(owed.rule)
-            self.differs(rule, "result_id", f"{label}: the result id does not match", f"{want} ({rule})")
+            self.books.differs(
+                rule, "result_id", f"{label}: the result id does not match", f"{want} ({rule})"
+            )
         elif (_first_line(expected.execution_failure), expected.status) != (
             _first_line(observed.execution_failure),
             observed.status,
         ):
             rule = _result_rule(owed.rule)
-            self.differs(rule, "result", label, f"{want} ({rule})")
+            self.books.differs(rule, "result", label, f"{want} ({rule})")
 
     def unexplained_answer(self, record: Record, seen: _GoalSeen) -> None:
         uuid = record.goal_uuid
-        state = self.st
+        state = self.books.st
         label = f"goal {uuid} answered {answer_text(record.status, record.message, first_line=True)}"
         running = state.running
         queued = next((item for item in state.queued if item.goal_uuid == uuid), None)
@@ -1325,39 +1352,59 @@ class _Answers(_Part):
             queued is not None and queued.goal.event_type == EventType.CANCEL and running
         ):
             child = running.child_id if running is not None else 0
-            self.flag(
+            self.books.flag(
                 Violation.CANCEL_ANSWERED_EARLY,
                 f"{label} while child {child} still runs",
                 f"the CANCEL waits for child {child} to end, then is answered with its result (R8.3)",
             )
-            self.state = machine.resync_dropped(state, uuid)
+            self.books.state = resync.dropped(state, uuid)
             return
         if queued is not None:
             start = "its child starts" if queued.goal.event_type == EventType.NEXT else "it runs"
-            self.flag(Violation.ANSWER_BEFORE_START, label, f"no answer yet: {start}")
-            self.state = machine.resync_dropped(state, uuid)
+            self.books.flag(Violation.ANSWER_BEFORE_START, label, f"no answer yet: {start}")
+            self.books.state = resync.dropped(state, uuid)
             return
         if running is not None and running.goal_uuid == uuid:
-            self.flag(Violation.ANSWER_WHILE_DEFERRED, label, "no answer while the child's start is deferred")
-            self.state = machine.resync_start_dropped(state)
+            self.books.flag(
+                Violation.ANSWER_WHILE_DEFERRED, label, "no answer while the child's start is deferred"
+            )
+            self.books.state = resync.start_dropped(state)
             return
-        self.flag(Violation.ANSWER_NOT_OPEN, label, "no answer: the goal is not open")
+        self.books.flag(Violation.ANSWER_NOT_OPEN, label, "no answer: the goal is not open")
 
 
-class _Observer(_Requests, _Runs, _Feedback, _Answers):
-    """Observer mode (see the module docs): each record goes to the part that reads its kind."""
+class _Observer:
+    """Observer mode (see the module docs): each record goes to the part that reads its kind.
 
-    # ------------------------------------------------------------------ feeding
+    The parts share the books (:class:`_Books`) and keep what only they need; none calls another.
+    """
+
+    def __init__(self, header: _Header) -> None:
+        self.books = _Books(header)
+        self.requests = _Requests(self.books)
+        self.runs = _Runs(self.books, header)
+        self.feedback = _Feedback(self.books)
+        self.answers = _Answers(self.books)
+        self._handlers: dict[str, Callable[[Record], None]] = {
+            "goal": self.requests.on_goal,
+            "goal_response": self.requests.on_goal_response,
+            "cancel_request": self.requests.on_cancel_request,
+            "cancel_response": self.requests.on_cancel_response,
+            "begin": self.runs.on_begin,
+            "status": self.runs.on_status,
+            "feedback": self.feedback.on_feedback,
+            "result": self.answers.on_result,
+        }
 
     def feed(self, record: Record) -> None:
-        self.line = record.line
-        self.now = max(self.now, record.time)
-        if self.state is None and self.sync(record):
+        books = self.books
+        books.line = record.line
+        books.now = max(books.now, record.time)
+        if books.state is None and self.runs.sync(record):
             return
-        handler = getattr(self, f"on_{record.kind}")
-        handler(record)
+        self._handlers[record.kind](record)
         if record.kind == "result":
-            seen = self.goals.get(record.goal_uuid)
+            seen = books.goals.get(record.goal_uuid)
             if seen is not None and seen.answered is not None:
                 seen.goal = _ANSWERED  # what is judged after its answer is the line: memory stays flat
 
@@ -1387,14 +1434,14 @@ def check_records(header: _Header, records: Iterable[Record], source: str = "<tr
         if not window:
             break
         record = window.popleft()
-        observer.lookahead = tuple(window)
-        observer.upcoming = window[0] if window else None
+        observer.books.lookahead = tuple(window)
+        observer.books.upcoming = window[0] if window else None
         try:
             observer.feed(record)
         except _Unreadable as exc:
             raise TraceError(source, record.line, exc.field, exc.problem) from None
         count += 1
-    return Report(source=source, records=count, findings=tuple(observer.findings))
+    return Report(source=source, records=count, findings=tuple(observer.books.findings))
 
 
 def check_trace(text: str | Iterable[str], source: str = "<trace>") -> Report:
