@@ -511,7 +511,7 @@ def test_check_reads_a_trace_as_a_stream_holding_a_few_records(monkeypatch: pyte
     import sys
     from pathlib import Path
 
-    from dynevent.tools import check
+    from dynevent.tools.check import observer
 
     root = str(Path(__file__).resolve().parents[2])
     if root not in sys.path:
@@ -527,13 +527,13 @@ def test_check_reads_a_trace_as_a_stream_holding_a_few_records(monkeypatch: pyte
             produced += 1
             yield line
 
-    feed = check._Observer.feed
+    feed = observer._Observer.feed
 
     def counting_feed(self: Any, record: Any) -> None:
         ahead.append(produced - record.line)
         feed(self, record)
 
-    monkeypatch.setattr(check._Observer, "feed", counting_feed)
+    monkeypatch.setattr(observer._Observer, "feed", counting_feed)
     report = check_trace(lines(), "long")
     assert report.clean and report.records == len(ahead) == 2102
-    assert max(ahead) == check.LOOKAHEAD
+    assert max(ahead) == observer.LOOKAHEAD

@@ -1,0 +1,161 @@
+"""``dynevent check``: replay an observed trace of one robot against the machine, in observer mode.
+
+A trace (docs/trace-format.md) is what was seen on the wire for one robot:
+begin and status messages, goal requests with their UUIDs, goal responses,
+feedback, terminal answers and action-level cancels, each with its time.
+The observer keeps a server state (:class:`dynevent.server.machine.State`) and
+infers the server's inputs from what it sees:
+
+- a ``begin`` is a ``Begin`` input (the event id arrives with the status
+  message that follows);
+- a ``goal`` and its ``goal_response`` are a ``GoalRequested`` input: the
+  machine's decision is compared with the response;
+- every other observation must be an output of the machine.  An
+  observation the machine already owes (an output of an inferred step not
+  seen yet) is compared with it.  Otherwise the observer *abduces* the
+  input that produced it from a short, fixed list of candidates: the start
+  of an accepted goal (``GoalStarted``), a child's progress (``ChildProgress``,
+  from feedback), a child's end (``ChildFinished``, from the running goal's
+  answer), a task cancel or kill, an interruption or a resume, a shutdown.
+  The first candidate whose first output on the action (or whose status
+  message) is the observation is taken; its other outputs are owed.
+
+When no candidate explains an observation, or the machine's output differs
+from it, the observer reports a :class:`Finding` (line, docs/spec.md rule,
+code, what was seen, what was expected), then resynchronises with the
+smallest change that makes the state agree with what the server evidently
+did (it queues a goal the server accepted, starts a NEXT whose feedback
+shows it running, forgets goals the server displaced), so that one fault is
+reported once and later records are judged against the server's real
+condition.
+
+:func:`check_trace` is the API; :func:`read_trace` parses a trace and raises
+:class:`TraceError` (naming the source, line and field) on unreadable input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Iterable, Iterator
+from typing import Any
+
+from dynevent.errors import (
+    TraceError,  # defined there with every error; importable here too
+)
+from dynevent.tools._progress import Progress
+from dynevent.tools.check.observer import check_records
+from dynevent.tools.check.trace import (
+    RECORD_TYPES,
+    Finding,
+    Record,
+    Report,
+    read_trace,
+    step_records,
+    stream_trace,
+)
+from dynevent.wire import _json
+
+__all__ = [
+    "RECORD_TYPES",
+    "Finding",
+    "Record",
+    "Report",
+    "TraceError",
+    "check_records",
+    "check_trace",
+    "format_report",
+    "read_trace",
+    "step_records",
+    "trace_records",
+]
+
+
+def check_trace(text: str | Iterable[str], source: str = "<trace>") -> Report:
+    """Check a trace (its text, or its lines) in observer mode; each violation is a :class:`Finding`.
+
+    Raises :class:`TraceError` (naming ``source``, the line and the field)
+    when the trace cannot be read.
+    """
+    lines = text.splitlines() if isinstance(text, str) else text
+    header, records = stream_trace(lines, source)
+    return check_records(header, records, source)
+
+
+def format_report(report: Report) -> str:
+    """The findings as text, one per line with what was expected, then a summary line."""
+    lines = []
+    for finding in report.findings:
+        lines.append(f"{report.source}:{finding.line}: {finding.rule} {finding.code}: {finding.message}")
+        lines.append(f"    expected: {finding.expected}")
+    count = len(report.findings)
+    noun = "violation" if count == 1 else "violations"
+    summary = f"{report.source}: {report.records} records, {count or 'no'} {noun}"
+    lines.append(summary)
+    return "\n".join(lines) + "\n"
+
+
+def trace_records(report: Report) -> list[dict[str, Any]]:
+    """The JSON lines of ``dynevent check --json``: one object per finding, then a summary."""
+    rows: list[dict[str, Any]] = [
+        {"type": "violation", "file": report.source, **finding.to_dict()} for finding in report.findings
+    ]
+    rows.append(
+        {
+            "type": "summary",
+            "file": report.source,
+            "records": report.records,
+            "violations": len(report.findings),
+        }
+    )
+    return rows
+
+
+def _run(args: argparse.Namespace) -> int:
+    source = args.trace
+    try:
+        if source == "-":
+            report = _check_stream(sys.stdin.buffer, "<stdin>")
+        else:
+            with open(source, "rb") as stream:
+                report = _check_stream(stream, source)
+    except OSError as exc:
+        print(f"dynevent check: {source}: cannot read: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except TraceError as exc:
+        print(f"dynevent check: {exc}", file=sys.stderr)
+        return 2
+    if report.records == 0:
+        print(f"dynevent check: {report.source}: nothing to check: no record in it", file=sys.stderr)
+        return 2
+    if args.json:
+        for row in trace_records(report):
+            print(_json.dumps(row))
+    else:
+        print(format_report(report), end="")
+    return 0 if report.clean else 1
+
+
+def _check_stream(stream: Any, source: str) -> Report:
+    """Check a trace read line by line from a binary stream, with a progress line on a terminal."""
+    try:
+        size: int | None = os.fstat(stream.fileno()).st_size or None
+    except (OSError, ValueError, AttributeError):
+        size = None
+    progress = Progress(f"dynevent check: {source}", size)
+    try:
+        return check_trace(_text_lines(stream, source, progress), source)
+    finally:
+        progress.close()
+
+
+def _text_lines(stream: Any, source: str, progress: Progress) -> Iterator[str]:
+    done = 0
+    for number, raw in enumerate(stream, start=1):
+        done += len(raw)
+        progress.update(done, f"(line {number:,})")
+        try:
+            yield raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise TraceError(source, number, "$", f"not UTF-8 text (byte {exc.start} of the line)") from None
