@@ -93,3 +93,36 @@ def test_a_spinner_stops_between_waits_and_close_down_deletes_the_participant() 
             watcher.close()
     finally:
         gc.enable()
+
+
+def test_a_spinner_of_an_idle_node_waits_without_a_timeout_and_still_stops() -> None:
+    """serve's lanes have no timer while idle: the spinning thread waits with no timeout (an idle fleet
+    costs nothing), and a stop must still end it, through its wait condition, not a timeout."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    from dynevent.ros.spinning import Spinner, close_down
+
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = rclpy.create_node("idle_lane", context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    waits: list[tuple[object, ...]] = []
+    original = executor._spin_once_impl
+
+    def counting(*args: object) -> None:
+        waits.append(args)
+        original(*args)
+
+    executor._spin_once_impl = counting  # type: ignore[method-assign]
+    spinner = Spinner(executor, "idle-spinner")
+    spinner.start()
+    try:
+        wait_for(lambda: len(waits) == 1, "the first wait")
+        __import__("threading").Event().wait(0.5)
+        assert waits[0][0] is None  # no timeout on the wait
+        assert len(waits) == 1  # and nothing woke it while idle
+    finally:
+        assert spinner.stop(timeout=2) is True  # woken by the stop, well within the bound
+        close_down([node], context)

@@ -6,8 +6,8 @@ command line must not leave behind:
 - ``Executor.shutdown`` (rclpy 9.1.2) destroys the executor's guard condition
   without waiting for the thread that spins it, which may be building a wait
   set with it at that moment (rclpy issue #968). :class:`Spinner` instead
-  spins with a bounded wait and stops on a flag, so its thread is known to be
-  out of rclpy before anything is destroyed.
+  stops on a flag, woken by the executor's guard condition, so its thread is
+  known to be out of rclpy before anything is destroyed.
 - ``destroy_node`` leaves a node's action servers and clients alive, and
   ``rclpy.shutdown`` leaves the context's DDS participant alive, until the
   garbage collector or the interpreter's exit gets to them: a participant
@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import faulthandler
 import threading
+import time
 from collections.abc import Iterable, Iterator
 from typing import Any
 
@@ -28,8 +29,8 @@ from rclpy.executors import ExternalShutdownException
 
 __all__ = ["CLOSE_BOUND", "Spinner", "bounded_close", "close_down"]
 
-#: How long a Spinner's thread may keep spinning after a stop (its bounded wait, in seconds).
-SPIN_WAIT = 0.1
+#: How often :meth:`Spinner.stop` wakes the spinning thread while it waits for it to leave (seconds).
+WAKE_EVERY = 0.1
 #: The longest a process's ROS close-down may take (seconds); then it is ended with every thread's
 #: stack on standard error (:func:`bounded_close`).
 CLOSE_BOUND = 20.0
@@ -48,17 +49,26 @@ class Spinner:
         self._thread.start()
 
     def _spin(self) -> None:
+        # No timeout on the wait: an idle executor must cost nothing (a timed wait wakes, rebuilds its
+        # wait set from every entity, and makes a timer, each time).  The executor's own wake-up (its
+        # guard condition) only makes it look again, so the stop flag is its wait condition: rclpy's
+        # single-threaded executor checks it each time its wait returns.
+        spin_once = getattr(self.executor, "_spin_once_impl", None)
         with contextlib.suppress(ExternalShutdownException):
             while not self._stopping.is_set():
-                self.executor.spin_once(timeout_sec=SPIN_WAIT)
+                if spin_once is not None:
+                    spin_once(None, self._stopping.is_set)
+                else:  # an executor without it: a bounded wait, looked at once a second
+                    self.executor.spin_once(timeout_sec=1.0)
 
     def stop(self, timeout: float = 5.0) -> bool:
         """Stop spinning and wait (at most ``timeout`` seconds) for the thread to leave; True if it did.
         The executor is shut down only then, so nothing of it is destroyed under the thread."""
         self._stopping.set()
-        self.executor.wake()
-        if self._thread.is_alive():
-            self._thread.join(timeout)
+        deadline = time.monotonic() + timeout
+        while self._thread.is_alive() and time.monotonic() < deadline:
+            self.executor.wake()  # its guard condition: the wait returns, the loop sees the flag
+            self._thread.join(WAKE_EVERY)
         if self._thread.is_alive():
             return False
         self.executor.shutdown(timeout_sec=0)
