@@ -27,6 +27,7 @@ __all__ = [
     "ImplementationGone",
     "InvalidConfig",
     "InvalidDescription",
+    "InvalidEventDescription",
     "InvalidMessage",
     "InvalidName",
     "InvalidRecord",
@@ -36,10 +37,12 @@ __all__ = [
     "InvalidVector",
     "LocalError",
     "MalformedMessage",
+    "MissingExtra",
     "RemoteError",
     "SendError",
     "ServeError",
     "TraceError",
+    "UnknownCategory",
     "UnknownRobot",
     "WrongInput",
 ]
@@ -121,11 +124,11 @@ class InvalidConfig(LocalError, TypeError):
     Also a :class:`TypeError`, as a wrong argument to a constructor is.
     """
 
-    def __init__(self, field: str, value: object, problem: str) -> None:
+    def __init__(self, field: str, value: object, problem: str, *, owner: str = "ServerConfig") -> None:
         self.field = field
         self.value = value
         self.problem = problem
-        super().__init__(f"ServerConfig.{field}: {problem} (got {short_repr(value)})")
+        super().__init__(f"{owner}.{field}: {problem} (got {short_repr(value)})")
 
 
 class InvalidName(LocalError):
@@ -156,6 +159,18 @@ class InvalidDescription(RemoteError):
         self.path = path
         self.problem = problem
         super().__init__(f"dynamic_event description at {path}: {problem}")
+
+
+class InvalidEventDescription(RemoteError):
+    """A child's description that its category's schema, or the robot, does not accept.
+
+    ``errors`` are the lines :mod:`dynevent.descriptions` gives, each with its JSON pointer.
+    """
+
+    def __init__(self, category: str, errors: tuple[str, ...]) -> None:
+        self.category = category
+        self.errors = errors
+        super().__init__(f"{category} description refused: " + "; ".join(errors))
 
 
 class InvalidSnapshot(RemoteError):
@@ -226,6 +241,28 @@ class UnknownRobot(LocalError, KeyError):
     def __str__(self) -> str:
         # KeyError would print the repr of the message
         return str(self.args[0])
+
+
+class UnknownCategory(LocalError, KeyError):
+    """A category that :mod:`dynevent.descriptions` has no schema for (a ``KeyError``)."""
+
+    def __init__(self, category: object, known: tuple[str, ...]) -> None:
+        self.category = category
+        self.known = known
+        names = ", ".join(known)
+        super().__init__(f"no description schema for category {short_repr(category)}: known are {names}")
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+class MissingExtra(LocalError):
+    """A feature needs a package that an optional extra of dynevent installs, and it is not installed."""
+
+    def __init__(self, extra: str, package: str, purpose: str) -> None:
+        self.extra = extra
+        self.package = package
+        super().__init__(f"{package} is not installed; it {purpose}: pip install 'dynevent[{extra}]'")
 
 
 class DuplicateRobot(LocalError):

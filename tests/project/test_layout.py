@@ -1,4 +1,5 @@
-"""The package layout is the architecture: imports go one way, wire <- server <- client/conformance <- tools.
+"""The package layout is the architecture: imports go one way,
+wire <- server <- client/descriptions <- conformance <- tools.
 
 Every import in ``src/dynevent`` (at module level or inside a function) is read from the source, so a
 lazy import that crosses a layer the wrong way fails here as a module-level one would.
@@ -22,9 +23,10 @@ ALLOWED: dict[str, frozenset[str]] = {
     "wire": frozenset({"errors"}),
     "server": frozenset({"errors", "wire"}),
     "client": frozenset({"errors", "wire", "server"}),
-    "conformance": frozenset({"errors", "wire", "server"}),
-    "tools": frozenset({"errors", "wire", "server", "client", "conformance", "ros"}),
-    "ros": frozenset({"errors", "wire", "server", "client", "tools"}),
+    "conformance": frozenset({"errors", "wire", "server", "descriptions"}),
+    "descriptions": frozenset({"errors", "wire", "server"}),
+    "tools": frozenset({"errors", "wire", "server", "client", "conformance", "descriptions", "ros"}),
+    "ros": frozenset({"errors", "wire", "server", "client", "descriptions", "tools"}),
     "testing": frozenset({"errors", "wire", "server", "conformance"}),
 }
 

@@ -1,0 +1,111 @@
+"""Why a description fails its schema: the ``jsonschema`` package's errors, as short lines with paths.
+
+Each line is ``<JSON pointer>: <what is wrong>`` (``/one_of/1: 5.5 is not a
+place``; the description itself is ``/``).  Where a ``oneOf`` fails, the line
+follows the one form that got furthest (its errors all lie deeper than the
+``oneOf``): ``{"place": "A", "followed_by": [1.5]}`` is explained at
+``/followed_by/0``, not as "not a go_to_place description".  When no form got
+further than another, the line names what was expected: the schema's title.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable, Iterator, Sequence
+from typing import Any
+
+__all__ = ["explain", "pointer", "render"]
+
+#: Values longer than this are shortened in an error line.
+_LONGEST_VALUE = 48
+
+_ARTICLES = {
+    "object": "an object",
+    "array": "an array",
+    "string": "a string",
+    "integer": "an integer",
+    "number": "a number",
+    "boolean": "a boolean",
+    "null": "null",
+}
+
+
+def pointer(path: Iterable[Any]) -> str:
+    """The JSON pointer of a path (``/`` for the description itself)."""
+    parts = [str(part).replace("~", "~0").replace("/", "~1") for part in path]
+    return "/" + "/".join(parts)
+
+
+def render(value: Any) -> str:
+    """A value as compact JSON, shortened past :data:`_LONGEST_VALUE` characters."""
+    if isinstance(value, float) and not math.isfinite(value):
+        text = "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
+    else:
+        try:
+            text = json.dumps(value, ensure_ascii=False, separators=(", ", ": "), allow_nan=True)
+        except (TypeError, ValueError):  # not JSON (never from a parsed description)
+            text = repr(value)
+    return text if len(text) <= _LONGEST_VALUE else text[: _LONGEST_VALUE - 1] + "…"
+
+
+def _title(schema: Any, fallback: str) -> str:
+    title = schema.get("title") if isinstance(schema, dict) else None
+    return title if isinstance(title, str) else fallback
+
+
+def _line(error: Any) -> str:
+    """One error as ``<pointer>: <text>`` (a ``oneOf``/``anyOf`` is handled by :func:`_explain_one`)."""
+    where = pointer(error.absolute_path)
+    value = render(error.instance)
+    kind = error.validator
+    if kind == "type":
+        expected = error.validator_value
+        names = [expected] if isinstance(expected, str) else list(expected)
+        return f"{where}: {value} is not {' or '.join(_ARTICLES.get(name, name) for name in names)}"
+    if kind == "required":
+        missing = [name for name in error.validator_value if name not in error.instance]
+        return f"{where}: {', '.join(json.dumps(name) for name in missing)} is required"
+    if kind == "minItems":
+        count = error.validator_value
+        return f"{where}: {value} has fewer than {count} item{'s' if count != 1 else ''}"
+    if kind == "minimum":
+        return f"{where}: {value} is less than {error.validator_value}"
+    return f"{where}: {error.message}"
+
+
+def _explain_one(error: Any) -> Iterator[str]:
+    if error.validator not in ("oneOf", "anyOf"):
+        yield _line(error)
+        return
+    where = pointer(error.absolute_path)
+    title = _title(error.schema, "any of its forms")
+    if not error.context:  # a oneOf that more than one form matched
+        yield f"{where}: {render(error.instance)} is not {title}: it fits more than one of its forms"
+        return
+    depth = len(error.absolute_path)
+    branches: dict[Any, list[Any]] = {}
+    for sub in error.context:
+        branches.setdefault(sub.relative_schema_path[0], []).append(sub)
+    further = [
+        errors for errors in branches.values() if all(len(sub.absolute_path) > depth for sub in errors)
+    ]
+    if len(further) == 1:
+        yield from explain(further[0])
+    else:
+        yield f"{where}: {render(error.instance)} is not {title}"
+
+
+def explain(errors: Iterable[Any]) -> tuple[str, ...]:
+    """The lines of a description's errors (``jsonschema`` ``ValidationError``\\ s), each once, in order."""
+    lines: dict[str, None] = {}
+    for error in errors:
+        for line in _explain_one(error):
+            lines.setdefault(line, None)
+    return tuple(lines)
+
+
+def prefixed(prefix: Sequence[Any], lines: Iterable[str]) -> tuple[str, ...]:
+    """``lines`` of a nested description, their pointers moved under ``prefix``."""
+    head = pointer(prefix)
+    return tuple(head + line if not line.startswith("/:") else head + line[1:] for line in lines)

@@ -1,0 +1,91 @@
+"""The field's event description schemas, and a description's shape judged by them.
+
+The schemas (``dynevent/descriptions/schemas/*.json``, JSON Schema draft
+2020-12) are the project's own text of the shapes the deployed fleet adapter
+accepts for each category a dynamic event's child may use: ``go_to_place``,
+``perform_action``, ``sequence``, ``clean``, ``pickup`` and ``dropoff``, with
+``place.json`` and ``payload_transfer.json`` shared.  :func:`conforms` gives
+the verdict (a compiled predicate, :mod:`dynevent.descriptions._compile`);
+:func:`shape_errors` says why a description fails, one line per fault with its
+JSON pointer, from the ``jsonschema`` package (the ``descriptions`` extra).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+from collections.abc import Mapping
+from importlib import resources
+from typing import Any
+
+from dynevent.descriptions import _compile, _explain
+from dynevent.errors import MissingExtra, UnknownCategory
+
+__all__ = ["CATEGORIES", "conforms", "schema", "schemas", "shape_errors"]
+
+#: The categories whose descriptions the schemas define, in the order the docs present them.
+CATEGORIES: tuple[str, ...] = ("go_to_place", "perform_action", "sequence", "clean", "pickup", "dropoff")
+
+#: Schemas other schemas refer to; not categories of their own.
+_SHARED = ("place", "payload_transfer")
+
+
+@functools.cache
+def schemas() -> Mapping[str, Mapping[str, Any]]:
+    """Every schema by its ``$id`` (``"go_to_place.json"``, ``"place.json"``...), as parsed JSON."""
+    folder = resources.files("dynevent.descriptions") / "schemas"
+    loaded = {}
+    for name in (*CATEGORIES, *_SHARED):
+        document = json.loads((folder / f"{name}.json").read_text(encoding="utf-8"))
+        loaded[document["$id"]] = document
+    return loaded
+
+
+def schema(category: str) -> Mapping[str, Any]:
+    """The schema of ``category``'s descriptions; raises :class:`~dynevent.errors.UnknownCategory`."""
+    return schemas()[_document(category)]
+
+
+def _document(category: str) -> str:
+    if category not in CATEGORIES:
+        raise UnknownCategory(category, CATEGORIES)
+    return f"{category}.json"
+
+
+@functools.cache
+def _predicate(category: str) -> _compile.Predicate:
+    return _compile.compile_schema(_document(category), schemas())
+
+
+def conforms(category: str, description: Any) -> bool:
+    """Whether ``description`` (parsed JSON) has a shape ``category``'s schema accepts."""
+    return _predicate(category)(description)
+
+
+@functools.cache
+def _validator(category: str) -> Any:
+    try:
+        import jsonschema
+        import referencing
+    except ImportError as exc:  # pragma: no cover - the extra is part of the test install
+        raise MissingExtra("descriptions", "jsonschema", "explains why a description was refused") from exc
+    registry: Any = referencing.Registry().with_resources(
+        (name, referencing.Resource.from_contents(document)) for name, document in schemas().items()
+    )
+    return jsonschema.Draft202012Validator(schemas()[_document(category)], registry=registry)
+
+
+def shape_errors(category: str, description: Any) -> tuple[str, ...]:
+    """Why ``description`` fails ``category``'s schema, one line per fault (none when it conforms).
+
+    Each line is ``<JSON pointer>: <fault>``, e.g. ``/one_of/1: 5.5 is not a place``; the
+    description itself is ``/``.  The explanation needs the ``jsonschema`` package (the
+    ``descriptions`` extra): without it a failing description raises
+    :class:`~dynevent.errors.MissingExtra`.
+    """
+    if conforms(category, description):
+        return ()
+    lines = _explain.explain(_validator(category).iter_errors(description))
+    # The compiled verdict and the package agree on every instance (tests/descriptions); were
+    # they ever to differ, the refusal still says so rather than refusing without a reason.
+    return lines or (f"/: {_explain.render(description)} is not {schema(category).get('title', category)}",)
