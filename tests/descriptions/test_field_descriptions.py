@@ -393,6 +393,10 @@ def test_a_sequence_may_use_the_servers_other_categories() -> None:
     assert sequence("sequence", [{"category": "patrol", "description": "A"}]) == (
         "/0/description: expected a list of places",
     )
+    # a line without a pointer is put at the activity's description
+    assert descriptions.Robot().validators({"patrol": lambda category, description: ["no"]})["sequence"](
+        "sequence", {"activities": [{"category": "patrol", "description": 1}]}
+    ) == ("/activities/0/description: no",)
 
 
 @pytest.mark.spec("R4.10", "R4.18")

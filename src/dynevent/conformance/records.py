@@ -22,7 +22,10 @@ A description rule is a small, language-neutral validator: ``{"accept":
 "array"}`` or ``{"accept": "object", "required": ["place", ...]}``, or a list
 of rules of which one must fit (``[{"accept": "string"}, {"accept": "object",
 "required": ["place"]}]``).  Its errors are sentences; their wording is not
-normative.
+normative.  ``{"accept": "field"}``, for a category of
+:mod:`dynevent.descriptions`, is the field's check of R4.18 (the category's
+schema, then the robot), with optional ``places`` (the map: waypoint names
+by index, ``null`` for an unnamed one) and ``actions``.
 """
 
 from __future__ import annotations
@@ -30,7 +33,9 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from dynevent import descriptions
 from dynevent.errors import (
+    InvalidConfig,
     InvalidRecord,  # defined there with every error; importable here too
 )
 from dynevent.server import inputs as ins
@@ -99,7 +104,25 @@ _JSON_TYPES: Mapping[str, tuple[type, ...]] = {
 }
 
 
+_FIELD_KEYS = {"accept", "places", "actions"}
+
+
+def _check_field_rule(rule: dict[str, Any], path: str) -> None:
+    extra = set(rule) - _FIELD_KEYS
+    if extra:
+        raise InvalidRecord(path, f"unknown keys {sorted(extra)}")
+    for key in ("places", "actions"):
+        if key in rule and not isinstance(rule[key], list):
+            raise InvalidRecord(f"{path}.{key}", "expected a list")
+
+
 def _check_rule(rule: object, path: str) -> None:
+    if isinstance(rule, dict) and rule.get("accept") == "field":
+        name = path.rsplit(".", maxsplit=1)[-1]
+        if name not in descriptions.CATEGORIES:
+            raise InvalidRecord(path, f"a field rule is for the categories {list(descriptions.CATEGORIES)}")
+        _check_field_rule(rule, path)
+        return
     if isinstance(rule, list):
         if not rule:
             raise InvalidRecord(path, "a list of description rules must not be empty")
@@ -147,6 +170,33 @@ def rule_validator(rule: object, path: str = "$") -> Validator:
     return validate
 
 
+def _is_field(rule: object) -> bool:
+    return isinstance(rule, dict) and rule.get("accept") == "field"
+
+
+def _validators(categories: dict[str, Any], path: str) -> dict[str, Validator]:
+    """Each category's validator: its rule's, or for a field rule the robot's (whose sequences may
+    use every category of the configuration)."""
+    plain = {
+        name: rule_validator(rule, f"{path}.{name}")
+        for name, rule in categories.items()
+        if not _is_field(rule)
+    }
+    field = [name for name, rule in categories.items() if _is_field(rule)]
+    validators = dict(plain)
+    for name in field:
+        rule = categories[name]
+        _check_rule(rule, f"{path}.{name}")
+        try:
+            robot = descriptions.Robot(
+                places=rule.get("places"), actions=rule.get("actions"), categories=field
+            )
+        except InvalidConfig as exc:
+            raise InvalidRecord(f"{path}.{name}", str(exc)) from None
+        validators[name] = robot.validators(plain)[name]
+    return validators
+
+
 def config_from_json(data: object, path: str = "$") -> ServerConfig:
     """A :class:`~dynevent.server.machine.ServerConfig` from its JSON form."""
     if not isinstance(data, dict):
@@ -166,11 +216,7 @@ def config_from_json(data: object, path: str = "$") -> ServerConfig:
     categories = data.get("categories", {})
     if not isinstance(categories, dict):
         raise InvalidRecord(f"{path}.categories", "expected an object of category -> description rule")
-    values: dict[str, Any] = {
-        "categories": {
-            name: rule_validator(rule, f"{path}.categories.{name}") for name, rule in categories.items()
-        }
-    }
+    values: dict[str, Any] = {"categories": _validators(categories, f"{path}.categories")}
     values.update({key: value for key, value in data.items() if key != "categories"})
     try:
         return ServerConfig(**values)

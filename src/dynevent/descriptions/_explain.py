@@ -106,6 +106,15 @@ def explain(errors: Iterable[Any]) -> tuple[str, ...]:
 
 
 def prefixed(prefix: Sequence[Any], lines: Iterable[str]) -> tuple[str, ...]:
-    """``lines`` of a nested description, their pointers moved under ``prefix``."""
+    """``lines`` of a nested description, their pointers moved under ``prefix`` (a line of another
+    validator that has no pointer is put at the nested description itself)."""
     head = pointer(prefix)
-    return tuple(head + line if not line.startswith("/:") else head + line[1:] for line in lines)
+    return tuple(_under(head, str(line)) for line in lines)
+
+
+def _under(head: str, line: str) -> str:
+    if line.startswith("/:"):
+        return head + line[1:]
+    if line.startswith("/"):
+        return head + line
+    return f"{head}: {line}"
