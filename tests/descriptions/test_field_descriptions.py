@@ -23,6 +23,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dynevent import ServerConfig, descriptions
+from dynevent import client as cl
 from dynevent.descriptions import _compile, shapes
 from dynevent.errors import (
     InvalidConfig,
@@ -33,8 +34,9 @@ from dynevent.errors import (
 )
 from dynevent.server import inputs, machine
 from dynevent.server import outputs as outs
-from dynevent.wire.messages import Goal
-from dynevent.wire.vocab import EventType, RejectReason
+from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.vocab import DynamicState, EventType, RejectReason
+from field_cases import EVERYDAY_GO_TO_PLACE, EVERYDAY_PERFORM_ACTION
 
 FIELD = Path(__file__).resolve().parents[1] / "data" / "field-schemas"
 FIELD_SCHEMAS = {path.stem: json.loads(path.read_text()) for path in FIELD.glob("*.json")}
@@ -63,23 +65,6 @@ def own_valid(category: str, description: Any) -> bool:
 
 
 # --------------------------------------------------------------------------- the issue's table
-
-
-#: Everyday go_to_place descriptions and what the fleet adapter's schema says of them.
-EVERYDAY_GO_TO_PLACE = [
-    ("A", True),
-    (3, True),
-    ({"waypoint": "A"}, True),
-    ({"waypoint": 3, "orientation": 1.57}, True),
-    ({"place": "A"}, True),
-    ({"place": {"waypoint": "A", "orientation": 1.5}}, True),
-    ({"place": 4}, True),
-    ({"one_of": ["A", "B"]}, True),
-    ({"one_of": [{"waypoint": 2}]}, True),
-    ({"one_of": ["A", 5.5]}, False),
-    ({"place": "A", "followed_by": [1.5]}, False),
-    ({"place": "A", "start_at_departure": "x"}, False),
-]
 
 
 @pytest.mark.spec("R4.18")
@@ -462,3 +447,44 @@ def test_the_compiler_refuses_a_keyword_it_cannot_judge() -> None:
         _compile.compile_schema("s.json", {"s.json": {"type": "string", "pattern": "^a"}})
     with pytest.raises(InvalidConfig, match="not in the registry"):
         _compile.compile_schema("s.json", {"s.json": {"$ref": "other.json"}})
+
+
+@pytest.mark.spec("R4.18")
+@pytest.mark.parametrize(("description", "valid"), EVERYDAY_PERFORM_ACTION, ids=json.dumps)
+def test_everyday_perform_action_descriptions_get_the_field_schemas_verdict(
+    description: Any, valid: bool
+) -> None:
+    assert field_valid("perform_action", description) is valid
+    assert (descriptions.Robot().check("perform_action", description) == ()) is valid
+
+
+# --------------------------------------------------------------------------- the client side
+
+
+@pytest.mark.spec("R4.18", "R20.1")
+@pytest.mark.parametrize("category", descriptions.CATEGORIES)
+@given(data=st.data())
+def test_a_client_with_the_validators_refuses_exactly_what_the_server_would(
+    category: str, data: st.DataObject
+) -> None:
+    """The client machine, given the robot's validators, refuses locally the very descriptions the
+    server refuses, with the same reason and errors; and sends every other."""
+    robot = descriptions.Robot(places=["pantry", None, "lounge"], actions=["wave"])
+    config = ServerConfig(categories=robot.validators())
+    server, _ = machine.step(
+        machine.State.new("f", "r"), inputs.Begin(description="{}", event_id=1, now=1), config
+    )
+    client = cl.ClientState.new("0" * 16, validators=robot.validators())
+    status = DynamicEventStatus(
+        dynamic_event_seq=1, dynamic_state=DynamicState.WAITING, status="standby", id=1
+    )
+    client, _ = cl.step(client, cl.StatusReceived(message=status))
+    text = json.dumps(data.draw(drawn(category)))
+    _, (sent,) = cl.request_next(client, category, text, now=3)
+    goal = Goal(dynamic_event_seq=1, event_type=EventType.NEXT, category=category, description=text, id=2)
+    decision = machine.accept(server, goal, config)
+    if isinstance(decision, outs.Accepted):
+        assert isinstance(sent, cl.SendGoal) and sent.goal == goal
+    else:
+        assert isinstance(sent, cl.Refused)
+        assert (sent.rejection.reason, sent.rejection.errors) == (decision.reason, decision.errors)

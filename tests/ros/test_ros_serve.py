@@ -235,7 +235,10 @@ def test_send_drives_every_flow_of_a_run_in_both_modes(tmp_path: Path, watcher: 
         failed = send("--place", "nowhere")
         assert failed.returncode == 1 and "outcome: failed" in failed.stdout, failed.stdout
         wait_for(lambda: waiting_after(watcher, 4), "waiting after the failed child")
-        action = _write(tmp_path, '{"category": "perform_action", "description": {"action": "clean"}}')
+        action = _write(
+            tmp_path,
+            '{"category": "perform_action", "description": {"category": "clean", "description": {}}}',
+        )
         done = send("--file", str(action))
         assert done.returncode == 0 and "outcome: completed" in done.stdout, done.stdout
         slow = send_in_background(

@@ -275,9 +275,15 @@ def _without_ros(*args: str, blocked: str = "rclpy") -> subprocess.CompletedProc
     [
         (
             ["send", "--cancel", "--end"],
-            "dynevent send: give exactly one of --place, --cancel, --end, --file",
+            "dynevent send: give exactly one of --place, --cancel, --end, --file, --description",
         ),
         (["send", "--file", "no/such.json"], "dynevent send: --file no/such.json:"),
+        (["send", "--description", "{nope"], "dynevent send: --description: not JSON: Expecting"),
+        (["send", "--description", "@no/such.json"], "dynevent send: --description @no/such.json: [Errno 2]"),
+        (
+            ["serve", "--config", "tests/data/serve-bad-places.json"],
+            "dynevent serve: Robot.places: waypoint 1: a name",
+        ),
         (["send", "--end", "--timeout", "0"], "dynevent send: --timeout: expected positive seconds"),
         (["serve", "--shard", "3/2"], "dynevent serve: --shard '3/2': expected K/N"),
         (["serve", "--robot", "bad name"], "dynevent serve:"),

@@ -61,7 +61,7 @@ is known to run) and reported ``timeout`` when it ends.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from typing import Any
 
 import attrs
@@ -91,7 +91,7 @@ from dynevent.client.outputs import (
 )
 from dynevent.errors import InvalidValue, WrongInput
 from dynevent.server import machine
-from dynevent.server.machine import ServerConfig, State
+from dynevent.server.machine import ServerConfig, State, Validator
 from dynevent.server.outputs import Rejected
 from dynevent.wire._fields import SECOND as _SECOND_NS
 from dynevent.wire._fields import U64_MAX, id_not_after, seq_after
@@ -155,6 +155,16 @@ class OpenGoal:
     timed_out: bool = False
 
 
+def _validators(value: Any) -> Mapping[str, Validator] | None:
+    if value is None:
+        return None
+    if not isinstance(value, Mapping) or not all(
+        isinstance(name, str) and callable(check) for name, check in value.items()
+    ):
+        raise InvalidValue("ClientState", "validators", value, "expected a mapping of category to validator")
+    return dict(value)
+
+
 def _categories(value: Any) -> frozenset[str] | None:
     if value is None:
         return None
@@ -176,12 +186,19 @@ class ClientState:
     it, ``finished`` whether this client's FINISHED ended it.  ``goals`` are
     the open goals, in the order they were sent; ``counter`` numbers the goal
     UUIDs (``uuid_prefix`` followed by the counter as 16 hex digits).
-    ``categories``, when given, are the robot's supported categories.
+    ``categories``, when given, are the robot's supported categories;
+    ``validators``, when given, check the descriptions of the categories they
+    name as the server would (``dynevent.descriptions.Robot().validators()``:
+    the field's schemas), so that a description the server would refuse is
+    refused here, with the same errors, and never sent.
     """
 
     uuid_prefix: str = attrs.field(converter=_prefix)
     counter: int = 0
     categories: frozenset[str] | None = attrs.field(default=None, converter=_categories)
+    validators: Mapping[str, Validator] | None = attrs.field(
+        default=None, converter=_validators, eq=False, repr=False
+    )
     phase: DynamicState = DynamicState.INACTIVE
     seq: int = 0
     current_id: int = 0
@@ -194,9 +211,15 @@ class ClientState:
     goals: tuple[OpenGoal, ...] = ()
 
     @classmethod
-    def new(cls, uuid_prefix: str, *, categories: Iterable[str] | None = None) -> ClientState:
+    def new(
+        cls,
+        uuid_prefix: str,
+        *,
+        categories: Iterable[str] | None = None,
+        validators: Mapping[str, Validator] | None = None,
+    ) -> ClientState:
         """A client that has heard nothing yet; ``uuid_prefix`` is 16 hexadecimal digits."""
-        return cls(uuid_prefix=uuid_prefix, categories=categories)
+        return cls(uuid_prefix=uuid_prefix, categories=categories, validators=validators)
 
     def goal(self, uuid: str) -> OpenGoal | None:
         """The open goal named ``uuid``, if any."""
@@ -317,10 +340,14 @@ def _projection(state: ClientState, event_type: int) -> State:
 
 
 def _config(state: ClientState, category: str) -> ServerConfig:
-    """The configuration a local check assumes: the robot's categories if known, else the goal's own."""
+    """The configuration a local check assumes: the robot's categories if known, else the goal's own,
+    each checked by its validator when the client has one, else taking any description."""
     names = state.categories if state.categories is not None else (category,)
+    known = state.validators or {}
     return ServerConfig(
-        categories={name: machine.any_description for name in names if name != DEFAULT_CATEGORY}
+        categories={
+            name: known.get(name, machine.any_description) for name in names if name != DEFAULT_CATEGORY
+        }
     )
 
 

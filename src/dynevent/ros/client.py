@@ -110,15 +110,27 @@ class GoalRun:
 
 
 class DynamicEventClient:
-    """A Dynamic Event client of one robot on ``node``, which an executor must spin."""
+    """A Dynamic Event client of one robot on ``node``, which an executor must spin.
+
+    ``categories`` (the robot's, when known) and ``validators`` (e.g.
+    ``dynevent.descriptions.Robot().validators()``) let the client refuse, without
+    sending it, a goal the server would refuse (:class:`dynevent.client.ClientState`).
+    """
 
     def __init__(
-        self, node: Any, fleet: str, robot: str, *, categories: Any = None, uuid_prefix: str | None = None
+        self,
+        node: Any,
+        fleet: str,
+        robot: str,
+        *,
+        categories: Any = None,
+        validators: Any = None,
+        uuid_prefix: str | None = None,
     ) -> None:
         self._node = node
         self._lock = threading.Lock()
         prefix = uuid_prefix if uuid_prefix is not None else os.urandom(8).hex()
-        self._state = cl.ClientState.new(prefix, categories=categories)
+        self._state = cl.ClientState.new(prefix, categories=categories, validators=validators)
         self._runs: dict[str, GoalRun] = {}
         self._views = threading.Condition(self._lock)
         self._status_seen = False

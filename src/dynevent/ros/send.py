@@ -20,6 +20,7 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 
 from dynevent import client as cl
+from dynevent import descriptions
 from dynevent.errors import (
     SendError,  # defined there with every error; importable here too
 )
@@ -57,7 +58,9 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
 
     rclpy.init()
     node = rclpy.create_node("dynevent_send")
-    client = DynamicEventClient(node, args.fleet, args.robot)
+    # the field's categories are checked here as any server checks them (R4.18): a description the
+    # robot would refuse for its shape is refused here, with the server's errors, and never sent
+    client = DynamicEventClient(node, args.fleet, args.robot, validators=descriptions.Robot().validators())
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     spinner = Spinner(executor, "dynevent-send")

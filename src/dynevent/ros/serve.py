@@ -16,7 +16,9 @@ A readable live log of goals and answers goes to standard output.
 
 from __future__ import annotations
 
+import bisect
 import contextlib
+import itertools
 import os
 import queue
 import signal
@@ -43,10 +45,10 @@ from dynevent.tools.serve_config import (
     CategorySpec,
     ServeConfig,
     load_config,
-    place_of,
-    validator,
+    machine_config,
+    plan,
 )
-from dynevent.wire.vocab import Compatibility, IdPolicy, Status
+from dynevent.wire.vocab import Status
 
 __all__ = ["BEGIN_COMMAND_TOPIC", "CategorySpec", "ServeConfig", "ServeError", "load_config", "run"]
 
@@ -56,38 +58,48 @@ DEFAULT_DESCRIPTION = '{"category": "dynevent_serve", "detail": "a simulated dyn
 
 
 class SimulatedChildren:
-    """Children that run on the node's timers, as the categories say."""
+    """Children that run on the node's timers, doing what their descriptions say (:func:`plan`)."""
 
-    def __init__(self, node: Any, categories: dict[str, CategorySpec], say: Callable[[str], None]) -> None:
+    def __init__(self, node: Any, config: ServeConfig, say: Callable[[str], None]) -> None:
         self._node = node
-        self._categories = categories
+        self._config = config
         self._say = say
         self._timers: dict[ChildExecution, Any] = {}  # by execution: the robots share child ids
         self._lock = threading.Lock()
 
     def start(self, execution: ChildExecution) -> None:
-        spec = self._categories.get(execution.category, CategorySpec())
-        place = place_of(execution.parsed)
+        spec = self._config.categories.get(execution.category, CategorySpec())
+        steps = plan(execution.category, execution.parsed, self._config)
+        ends = list(itertools.accumulate(step.duration for step in steps))
         began = time.monotonic()
-        label = f"{execution.category} {place}" if place else execution.category
+        told = [0]  # the last step told of (the first is told by the progress lines)
 
         def report() -> None:
             if execution.done:
                 return self._forget(execution)
+            elapsed = time.monotonic() - began + 1e-3
             if execution.stopping is not None:
                 execution.finished()
-            elif place is not None and place in spec.fail_on:
-                execution.error(f"{place}: no such place")
+                return self._forget(execution)
+            current = min(bisect.bisect_right(ends, elapsed), len(steps) - 1)
+            while told[0] < current and steps[told[0]].failure is None:  # every step is told of
+                told[0] += 1
+                execution.underway(f"now {steps[told[0]].label}")
+            step = steps[told[0]]
+            if step.failure is not None:
+                execution.error(step.failure)
                 execution.finished(Status.FAILED)
-            elif time.monotonic() - began + 1e-3 >= spec.duration:
+            elif elapsed >= ends[-1]:
                 execution.finished()
             else:
-                execution.underway(f"{label}: {time.monotonic() - began:.0f} of {spec.duration:g} s")
+                into = elapsed - (ends[told[0]] - step.duration)
+                execution.underway(f"{step.label}: {into:.0f} of {step.duration:g} s")
             if execution.done:
                 self._forget(execution)
 
+        period = min(spec.report_every, *(step.duration for step in steps))
         with self._lock:
-            self._timers[execution] = self._node.create_timer(min(spec.report_every, spec.duration), report)
+            self._timers[execution] = self._node.create_timer(max(period, 0.001), report)
 
     def _forget(self, execution: ChildExecution) -> None:
         with self._lock:
@@ -146,7 +158,7 @@ class _Lane:
     def __init__(self, name: str, config: ServeConfig, say: Callable[[str], None]) -> None:
         self.node = rclpy.create_node(name)
         self.node.get_logger().set_level(LoggingSeverity.WARN)  # the live log says the rest
-        self.children = SimulatedChildren(self.node, config.categories, say)
+        self.children = SimulatedChildren(self.node, config, say)
         self.executor = SingleThreadedExecutor()
         self.spinner = Spinner(self.executor, f"dynevent-serve-{name}")
 
@@ -247,7 +259,7 @@ def run(
     store = StateStore(state_path) if state_path is not None else None  # InvalidStore: nothing written
     stored = store.load() if store is not None else {}
     try:
-        machine_config = _machine_config(config)
+        checking = machine_config(config)
     except InvalidConfig as exc:
         raise ServeError(str(exc)) from None
     log = LiveLog(say)
@@ -257,7 +269,7 @@ def run(
     # GIL runs one thread at a time anyway.  rclpy's EventsExecutor (rclpy 9.1.2, rclpy.experimental)
     # cannot serve the binding: it refuses guard conditions and hangs at 100% CPU on an action server
     # whose execute callback is a coroutine (docs/performance.md).
-    robots = _Robots(config, machine_config, store, log)
+    robots = _Robots(config, checking, store, log)
     for robot in config.served():
         robots.add(robot, stored.get((config.fleet, robot)))
     robots.node.create_subscription(RosDescription, BEGIN_COMMAND_TOPIC, robots.on_begin_command, latched(10))
@@ -317,10 +329,3 @@ class LiveLog:
         """Write what is queued, then stop the writer (bounded: 5 s)."""
         self._lines.put(None)
         self._writer.join(timeout=5)
-
-
-def _machine_config(config: ServeConfig) -> ServerConfig:
-    validators = {name: validator(spec) for name, spec in config.categories.items()}
-    if config.compatibility == Compatibility.RMF_ROS2.value:
-        return ServerConfig.rmf_ros2(validators)
-    return ServerConfig(categories=validators, id_policy=IdPolicy.GOAL, compatibility=config.compatibility)

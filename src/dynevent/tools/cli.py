@@ -380,6 +380,18 @@ def _add_send_command(commands: argparse._SubParsersAction[argparse.ArgumentPars
         "--file", metavar="FILE", help='NEXT from a JSON file {"category": ..., "description": ...}'
     )
     parser.add_argument(
+        "--description",
+        metavar="JSON",
+        help='NEXT with this description: JSON text, or @FILE for a file\'s (e.g. 3, \'{"waypoint": "A"}\', '
+        '\'{"category": "wave", "description": {}}\' with --category perform_action)',
+    )
+    parser.add_argument(
+        "--category",
+        default="go_to_place",
+        help="the category of --description (default go_to_place; the field's categories are "
+        "checked here first as the server checks them: docs/descriptions.md)",
+    )
+    parser.add_argument(
         "--stubbornness",
         type=float,
         default=0.0,

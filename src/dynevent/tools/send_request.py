@@ -18,11 +18,13 @@ __all__ = ["goal_request"]
 
 def goal_request(args: argparse.Namespace) -> tuple[EventType, str, str]:
     """The goal the flags ask for: (event type, category, description)."""
-    chosen = [name for name in ("place", "cancel", "end", "file") if getattr(args, name)]
+    chosen = [name for name in ("place", "cancel", "end", "file", "description") if getattr(args, name, None)]
     if len(chosen) != 1:
-        raise SendError("give exactly one of --place, --cancel, --end, --file")
+        raise SendError("give exactly one of --place, --cancel, --end, --file, --description")
     if args.place:
         return EventType.NEXT, "go_to_place", json.dumps({"one_of": list(args.place)})
+    if args.description:
+        return EventType.NEXT, args.category, _description(args.description)
     if args.cancel:
         return EventType.CANCEL, "", ""
     if args.end:
@@ -39,3 +41,19 @@ def goal_request(args: argparse.Namespace) -> tuple[EventType, str, str]:
         data["category"],
         description if isinstance(description, str) else json.dumps(description),
     )
+
+
+def _description(text: str) -> str:
+    """``--description``'s JSON text (``@FILE``: the file's), checked to be JSON."""
+    source = "--description"
+    if text.startswith("@"):
+        source = f"--description {text}"
+        try:
+            text = Path(text[1:]).read_text(encoding="utf-8")
+        except OSError as exc:
+            raise SendError(f"{source}: {exc}") from None
+    try:
+        json.loads(text)
+    except ValueError as exc:
+        raise SendError(f"{source}: not JSON: {exc}") from None
+    return text.strip()
