@@ -488,3 +488,12 @@ def test_a_client_with_the_validators_refuses_exactly_what_the_server_would(
     else:
         assert isinstance(sent, cl.Refused)
         assert (sent.rejection.reason, sent.rejection.errors) == (decision.reason, decision.errors)
+
+
+def test_the_modules_own_example_runs() -> None:
+    import doctest
+
+    import dynevent.descriptions
+
+    failed, attempted = doctest.testmod(dynevent.descriptions, raise_on_error=False)
+    assert attempted >= 4 and failed == 0

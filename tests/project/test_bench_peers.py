@@ -257,3 +257,15 @@ def test_results_sections_are_replaced_in_place_and_kept_by_a_rewrite(tmp_path: 
     rewritten = results.keep_sections("# new tables\n", path)
     assert rewritten.startswith("# new tables\n")
     assert results.sections(rewritten) == results.sections(text)
+
+
+def test_the_description_checks_beside_dynevent_give_its_verdicts() -> None:
+    """bench/descriptions.py times jsonschema and fastjsonschema only where each gives dynevent's
+    verdict on every description (its ``honest``); no timing here."""
+    bench = importlib.import_module("bench.descriptions")
+    checks = bench.available()
+    assert {"dynevent", "jsonschema", "fastjsonschema"} <= set(checks)
+    bench.honest(checks)
+    lying = dict(checks, jsonschema=lambda category, description: True)
+    with pytest.raises(AssertionError):
+        bench.honest(lying)

@@ -35,7 +35,7 @@ DOCS = ROOT / "docs"
 PAGES = [ROOT / "README.md", *sorted(DOCS.glob("*.md"))]
 PYTHON_PAGES = [
     ROOT / "README.md",
-    *(DOCS / name for name in ("testing-your-implementation.md", "client.md", "fleet.md")),
+    *(DOCS / name for name in ("testing-your-implementation.md", "client.md", "fleet.md", "descriptions.md")),
 ]
 ROS_COMMANDS = ("dynevent serve", "dynevent send")
 

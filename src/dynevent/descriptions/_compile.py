@@ -78,12 +78,16 @@ class _Compiler:
 
     def _resolve(self, document: str, pointer: str) -> Any:
         if document not in self._registry:
-            raise InvalidConfig("schema", document, "a $ref names a schema that is not in the registry")
+            raise InvalidConfig(
+                "schema", document, "a $ref names a schema that is not in the registry", owner="descriptions"
+            )
         node: Any = self._registry[document]
         for escaped in filter(None, pointer.split("/")):
             part = escaped.replace("~1", "/").replace("~0", "~")
             if not isinstance(node, dict) or part not in node:
-                raise InvalidConfig("schema", f"{document}#{pointer}", "a $ref points at nothing")
+                raise InvalidConfig(
+                    "schema", f"{document}#{pointer}", "a $ref points at nothing", owner="descriptions"
+                )
             node = node[part]
         return node
 
@@ -94,10 +98,17 @@ class _Compiler:
         if schema is False:
             return lambda value: False
         if not isinstance(schema, dict):
-            raise InvalidConfig("schema", schema, "expected a schema (an object or a boolean)")
+            raise InvalidConfig(
+                "schema", schema, "expected a schema (an object or a boolean)", owner="descriptions"
+            )
         unknown = set(schema) - _ANNOTATIONS - set(_KEYWORDS) - {"$defs"}
         if unknown:
-            raise InvalidConfig("schema", sorted(unknown), f"keywords {base} uses and this compiler has not")
+            raise InvalidConfig(
+                "schema",
+                sorted(unknown),
+                f"keywords {base} uses and this compiler has not",
+                owner="descriptions",
+            )
         checks = [
             _KEYWORDS[keyword](self, base, schema[keyword], schema)
             for keyword in _KEYWORDS
@@ -114,7 +125,9 @@ def _type(compiler: _Compiler, base: str, names: Any, schema: Mapping[str, Any])
     listed = [names] if isinstance(names, str) else list(names)
     unknown = [name for name in listed if name not in _TYPES]
     if unknown:
-        raise InvalidConfig("schema", unknown, f"types {base} uses that JSON Schema has not")
+        raise InvalidConfig(
+            "schema", unknown, f"types {base} uses that JSON Schema has not", owner="descriptions"
+        )
     if len(listed) == 1:
         return _TYPES[listed[0]]
     predicates = tuple(_TYPES[name] for name in listed)

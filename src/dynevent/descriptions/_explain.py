@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 __all__ = ["explain", "pointer", "render"]
@@ -54,55 +54,58 @@ def _title(schema: Any, fallback: str) -> str:
     return title if isinstance(title, str) else fallback
 
 
-def _line(error: Any) -> str:
-    """One error as ``<pointer>: <text>`` (a ``oneOf``/``anyOf`` is handled by :func:`_explain_one`)."""
-    where = pointer(error.absolute_path)
+Line = tuple[tuple[Any, ...], str]  # (the path of the value at fault, what is wrong with it)
+
+
+def _line(error: Any) -> Line:
+    """One error (a ``oneOf``/``anyOf`` is handled by :func:`_explain_one`)."""
+    path = tuple(error.absolute_path)
     value = render(error.instance)
     kind = error.validator
     if kind == "type":
         expected = error.validator_value
         names = [expected] if isinstance(expected, str) else list(expected)
-        return f"{where}: {value} is not {' or '.join(_ARTICLES.get(name, name) for name in names)}"
+        return path, f"{value} is not {' or '.join(_ARTICLES.get(name, name) for name in names)}"
     if kind == "required":
         missing = [name for name in error.validator_value if name not in error.instance]
-        return f"{where}: {', '.join(json.dumps(name) for name in missing)} is required"
+        return path, f"{', '.join(json.dumps(name) for name in missing)} is required"
     if kind == "minItems":
         count = error.validator_value
-        return f"{where}: {value} has fewer than {count} item{'s' if count != 1 else ''}"
+        return path, f"{value} has fewer than {count} item{'s' if count != 1 else ''}"
     if kind == "minimum":
-        return f"{where}: {value} is less than {error.validator_value}"
-    return f"{where}: {error.message}"
+        return path, f"{value} is less than {error.validator_value}"
+    return path, error.message
 
 
-def _explain_one(error: Any) -> Iterator[str]:
+def _explain_one(error: Any) -> list[Line]:
     if error.validator not in ("oneOf", "anyOf"):
-        yield _line(error)
-        return
-    where = pointer(error.absolute_path)
+        return [_line(error)]
+    path = tuple(error.absolute_path)
     title = _title(error.schema, "any of its forms")
     if not error.context:  # a oneOf that more than one form matched
-        yield f"{where}: {render(error.instance)} is not {title}: it fits more than one of its forms"
-        return
-    depth = len(error.absolute_path)
+        return [(path, f"{render(error.instance)} is not {title}: it fits more than one of its forms")]
     branches: dict[Any, list[Any]] = {}
     for sub in error.context:
         branches.setdefault(sub.relative_schema_path[0], []).append(sub)
-    further = [
-        errors for errors in branches.values() if all(len(sub.absolute_path) > depth for sub in errors)
-    ]
+    # a form "got further" when everything wrong with the value under it lies deeper than the value
+    explained = [_explain_all(errors) for errors in branches.values()]
+    further = [lines for lines in explained if all(len(where) > len(path) for where, _ in lines)]
     if len(further) == 1:
-        yield from explain(further[0])
-    else:
-        yield f"{where}: {render(error.instance)} is not {title}"
+        return further[0]
+    return [(path, f"{render(error.instance)} is not {title}")]
+
+
+def _explain_all(errors: Iterable[Any]) -> list[Line]:
+    lines: dict[Line, None] = {}
+    for error in errors:
+        for line in _explain_one(error):
+            lines.setdefault(line, None)
+    return list(lines)
 
 
 def explain(errors: Iterable[Any]) -> tuple[str, ...]:
     """The lines of a description's errors (``jsonschema`` ``ValidationError``\\ s), each once, in order."""
-    lines: dict[str, None] = {}
-    for error in errors:
-        for line in _explain_one(error):
-            lines.setdefault(line, None)
-    return tuple(lines)
+    return tuple(f"{pointer(path)}: {text}" for path, text in _explain_all(errors))
 
 
 def prefixed(prefix: Sequence[Any], lines: Iterable[str]) -> tuple[str, ...]:

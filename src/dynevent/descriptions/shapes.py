@@ -12,6 +12,7 @@ JSON pointer, from the ``jsonschema`` package (the ``descriptions`` extra).
 
 from __future__ import annotations
 
+import copy
 import functools
 import json
 from collections.abc import Mapping
@@ -30,9 +31,14 @@ CATEGORIES: tuple[str, ...] = ("go_to_place", "perform_action", "sequence", "cle
 _SHARED = ("place", "payload_transfer")
 
 
+def schemas() -> dict[str, dict[str, Any]]:
+    """Every schema by its ``$id`` (``"go_to_place.json"``, ``"place.json"``...), as parsed JSON: a
+    copy of its own, which the caller may change (some validators rewrite the references they read)."""
+    return {name: copy.deepcopy(dict(document)) for name, document in _schemas().items()}
+
+
 @functools.cache
-def schemas() -> Mapping[str, Mapping[str, Any]]:
-    """Every schema by its ``$id`` (``"go_to_place.json"``, ``"place.json"``...), as parsed JSON."""
+def _schemas() -> Mapping[str, Mapping[str, Any]]:
     folder = resources.files("dynevent.descriptions") / "schemas"
     loaded = {}
     for name in (*CATEGORIES, *_SHARED):
@@ -41,9 +47,10 @@ def schemas() -> Mapping[str, Mapping[str, Any]]:
     return loaded
 
 
-def schema(category: str) -> Mapping[str, Any]:
-    """The schema of ``category``'s descriptions; raises :class:`~dynevent.errors.UnknownCategory`."""
-    return schemas()[_document(category)]
+def schema(category: str) -> dict[str, Any]:
+    """The schema of ``category``'s descriptions (a copy of its own); raises
+    :class:`~dynevent.errors.UnknownCategory`."""
+    return copy.deepcopy(dict(_schemas()[_document(category)]))
 
 
 def _document(category: str) -> str:
@@ -54,7 +61,7 @@ def _document(category: str) -> str:
 
 @functools.cache
 def _predicate(category: str) -> _compile.Predicate:
-    return _compile.compile_schema(_document(category), schemas())
+    return _compile.compile_schema(_document(category), _schemas())
 
 
 def conforms(category: str, description: Any) -> bool:
@@ -70,9 +77,9 @@ def _validator(category: str) -> Any:
     except ImportError as exc:  # pragma: no cover - the extra is part of the test install
         raise MissingExtra("descriptions", "jsonschema", "explains why a description was refused") from exc
     registry: Any = referencing.Registry().with_resources(
-        (name, referencing.Resource.from_contents(document)) for name, document in schemas().items()
+        (name, referencing.Resource.from_contents(document)) for name, document in _schemas().items()
     )
-    return jsonschema.Draft202012Validator(schemas()[_document(category)], registry=registry)
+    return jsonschema.Draft202012Validator(_schemas()[_document(category)], registry=registry)
 
 
 def shape_errors(category: str, description: Any) -> tuple[str, ...]:
@@ -88,4 +95,5 @@ def shape_errors(category: str, description: Any) -> tuple[str, ...]:
     lines = _explain.explain(_validator(category).iter_errors(description))
     # The compiled verdict and the package agree on every instance (tests/descriptions); were
     # they ever to differ, the refusal still says so rather than refusing without a reason.
-    return lines or (f"/: {_explain.render(description)} is not {schema(category).get('title', category)}",)
+    title = _schemas()[_document(category)].get("title", category)
+    return lines or (f"/: {_explain.render(description)} is not {title}",)

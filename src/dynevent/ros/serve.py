@@ -4,11 +4,13 @@ A stand-in for a fleet adapter that client authors can run in a minute: one
 process hosting :class:`~dynevent.ros.server.DynamicEventServer` for each
 robot (in lanes of :data:`LANE` robots, a node and an executor thread each;
 ``--shard K/N`` serves one part of the fleet), whose children are simulated
-(per category: a duration, a progress report with a log line every so often,
-places on which a ``go_to_place`` fails). Every robot begins a dynamic event
-at start, again some seconds after a run ends (``--rebegin``), and whenever a
-``rmf_task_msgs/DynamicEventDescription`` naming it arrives on
-``dynevent/serve/begin``. With ``--state FILE`` every robot's state is kept in
+doing what their descriptions say (:func:`~dynevent.tools.serve_config.plan`;
+per category a duration, a progress report with a log line every so often,
+places on which it fails), every description checked as the fleet adapter
+checks it (:mod:`dynevent.descriptions`, with the configured map and actions).
+Every robot begins a dynamic event at start, again some seconds after a run
+ends (``--rebegin``), and whenever a ``rmf_task_msgs/DynamicEventDescription``
+naming it arrives on ``dynevent/serve/begin``. With ``--state FILE`` every robot's state is kept in
 a SQLite store (:mod:`dynevent.server.store`); a restart on the same file
 continues every run and gives every goal of the dead process its answer (R21).
 A readable live log of goals and answers goes to standard output.

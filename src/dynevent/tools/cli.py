@@ -310,10 +310,12 @@ def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         "serve",
         help="a Dynamic Event server for a fleet of simulated robots, over ROS 2",
         description="Serve the Dynamic Event protocol for every robot of a fleet in one process, "
-        "with simulated child events (go_to_place takes 3 s, reports each second, fails on the place "
-        "'nowhere'; perform_action takes 2 s).  Each robot begins a dynamic event at start, again "
-        "after a run ends, and when a DynamicEventDescription naming it arrives on "
-        "dynevent/serve/begin.  With --state, every robot's state is kept in a SQLite file and a "
+        "with simulated child events that do what their descriptions say (every category of the "
+        "deployed system, each description checked by its schema and the robots' map and actions: "
+        "docs/descriptions.md; go_to_place takes 3 s, reports each second, fails on the place "
+        "'nowhere'; perform_action takes 2 s or its duration estimate).  Each robot begins a "
+        "dynamic event at start, again after a run ends, and when a DynamicEventDescription naming "
+        "it arrives on dynevent/serve/begin.  With --state, every robot's state is kept in a SQLite file and a "
         "restart continues every run.  Prints a live log.  Runs until Ctrl-C.  Exit status: 0, or 2 "
         "for a bad configuration or state file (the file is then left as it was).",
     )
