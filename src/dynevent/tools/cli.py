@@ -316,8 +316,9 @@ def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         "'nowhere'; perform_action takes 2 s or its duration estimate).  Each robot begins a "
         "dynamic event at start, again after a run ends, and when a DynamicEventDescription naming "
         "it arrives on dynevent/serve/begin.  With --state, every robot's state is kept in a "
-        "SQLite file and a restart continues every run.  Prints a live log.  Runs until Ctrl-C.  Exit status: 0, or 2 "
-        "for a bad configuration or state file (the file is then left as it was).",
+        "SQLite file and a restart continues every run.  Prints a live log.  Runs until Ctrl-C.  "
+        "Exit status: 0, or 2 for a bad configuration or state file (the file is then left as it "
+        "was).",
     )
     parser.add_argument("--fleet", help="the fleet's name (default tinyRobot)")
     parser.add_argument(
