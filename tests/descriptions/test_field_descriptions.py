@@ -497,3 +497,10 @@ def test_the_modules_own_example_runs() -> None:
 
     failed, attempted = doctest.testmod(dynevent.descriptions, raise_on_error=False)
     assert attempted >= 4 and failed == 0
+
+
+def test_a_robot_knows_its_waypoints_by_name_and_index() -> None:
+    robot = descriptions.Robot(places=["pantry", None])
+    assert robot.knows("pantry") and robot.knows(0) and robot.knows(1)
+    assert not robot.knows("attic") and not robot.knows(2)
+    assert descriptions.Robot().knows("anything") and descriptions.Robot().knows(10**9)

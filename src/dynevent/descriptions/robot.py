@@ -100,14 +100,14 @@ class Robot:
         index = {name: number for number, name in enumerate(self.places or ()) if name is not None}
         object.__setattr__(self, "_index", index)
 
-    def waypoint(self, waypoint: str | int) -> int | None:
-        """The index of a waypoint named or numbered so on this robot's map, or ``None`` when it is not
-        there (with no map given, every name and index is there: a name has no index, ``-1``)."""
+    def knows(self, waypoint: str | int) -> bool:
+        """Whether a waypoint of that name or index is on this robot's map (with no map given,
+        every one is)."""
         if self.places is None:
-            return waypoint if isinstance(waypoint, int) else -1
+            return True
         if isinstance(waypoint, str):
-            return self._index.get(waypoint)
-        return waypoint if 0 <= waypoint < len(self.places) else None
+            return waypoint in self._index
+        return 0 <= waypoint < len(self.places)
 
     def check(self, category: str, description: Any) -> tuple[str, ...]:
         """Why this robot refuses ``description`` (parsed JSON) of ``category``: the schema's faults,
@@ -153,7 +153,7 @@ class Robot:
         if isinstance(place, dict):
             place, path = place["waypoint"], [*path, "waypoint"]
         waypoint = place if isinstance(place, str) else int(place)
-        if self.waypoint(waypoint) is not None:
+        if self.knows(waypoint):
             return ()
         where = pointer(path)
         if isinstance(waypoint, str):

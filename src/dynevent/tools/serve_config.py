@@ -150,7 +150,7 @@ class Step:
     failure: str | None = None
 
 
-def plan(category: str, description: Any, config: ServeConfig, depth: int = 0) -> list[Step]:
+def plan(category: str, description: Any, config: ServeConfig) -> list[Step]:
     """What a simulated child of ``category`` does with its (accepted, parsed) description: its steps,
     in order; a sequence's activities one after another."""
     spec = config.categories.get(category, CategorySpec())
@@ -172,7 +172,7 @@ def plan(category: str, description: Any, config: ServeConfig, depth: int = 0) -
     if isinstance(reading, descriptions.Sequence):
         steps = []
         for number, activity in enumerate(reading.activities, start=1):
-            for step in plan(activity.category, activity.description, config, depth + 1):
+            for step in plan(activity.category, activity.description, config):
                 label = f"activity {number} of {len(reading.activities)}: {step.label}"
                 steps.append(attrs.evolve(step, label=label))
         return steps or [Step(f"{category} (no activities)", 0.001)]
