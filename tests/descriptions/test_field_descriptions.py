@@ -100,7 +100,7 @@ def test_perform_action_wants_an_object_with_category_and_description() -> None:
         (
             "go_to_place",
             {"place": {"waypoint": -2}},
-            ["/place/waypoint: -2 is not a waypoint (a name, or an index from 0)"],
+            ["/place/waypoint: -2 is less than 0"],
         ),
         ("sequence", [{"category": "clean"}], ['/0: "description" is required']),
         ("sequence", {"activities": "x"}, ['/activities: "x" is not an array']),
@@ -110,6 +110,13 @@ def test_perform_action_wants_an_object_with_category_and_description() -> None:
             ["/payload/0/quantity: 1.5 is not an integer"],
         ),
         ("clean", {"zone": 3}, ["/zone: 3 is not a string"]),
+        # the form whose kind the value has explains it: an item that lacks a key, not "not a payload"
+        ("pickup", {"place": "A", "payload": {"sku": "s"}}, ['/payload: "quantity" is required']),
+        (
+            "go_to_place",
+            {"place": {"waypoint": 2.5}},
+            ["/place/waypoint: 2.5 is not a waypoint (a name, or an index from 0)"],
+        ),
         (
             "go_to_place",
             {"waypoint": "A", "place": "B"},
@@ -504,3 +511,49 @@ def test_a_robot_knows_its_waypoints_by_name_and_index() -> None:
     assert robot.knows("pantry") and robot.knows(0) and robot.knows(1)
     assert not robot.knows("attic") and not robot.knows(2)
     assert descriptions.Robot().knows("anything") and descriptions.Robot().knows(10**9)
+
+
+@pytest.mark.spec("R4.18")
+def test_a_clients_validators_leave_the_servers_own_categories_to_the_server() -> None:
+    """A client cannot know the categories a server adds (serve's ``patrol``): a sequence's activity
+    of one passes, while an activity of a field category is still checked by its schema."""
+    check = descriptions.shape_validators()["sequence"]
+    assert check("sequence", [{"category": "patrol", "description": {}}]) == ()
+    assert check("sequence", [{"category": "go_to_place", "description": 5.5}]) == (
+        '/0/description: 5.5 is not a go_to_place description (a place, {"place": ...} or {"one_of": [...]})',
+    )
+    assert descriptions.Robot().check("sequence", [{"category": "patrol", "description": {}}]) != ()
+
+
+@pytest.mark.spec("R4.18")
+@pytest.mark.parametrize(
+    ("description", "place", "faults"),
+    [
+        ({"place": "A", "one_of": [5.5]}, "A", ()),  # the {"place"} form, with a key of its own
+        ({"place": "attic", "one_of": []}, None, ('/place: "attic" is not a waypoint on this robot\'s map',)),
+        ({"place": "A", "one_of": False}, "A", ()),
+        ({"waypoint": "A", "one_of": 7}, "A", ()),  # a place (a waypoint object), not a one_of
+        ({"waypoint": "B", "place": 1.5}, "B", ()),
+    ],
+)
+def test_a_go_to_place_is_read_by_the_form_it_fits_not_by_its_keys(
+    description: Any, place: str | None, faults: tuple[str, ...]
+) -> None:
+    robot = descriptions.Robot(places=["A", "B"])
+    assert robot.check("go_to_place", description) == faults
+    if place is not None:
+        assert descriptions.read("go_to_place", description).one_of == (descriptions.Place(place),)
+
+
+def test_numbers_beyond_a_float_are_read_as_infinite() -> None:
+    huge = int("1" + "0" * 400)
+    assert (
+        descriptions.read("go_to_place", {"waypoint": "A", "orientation": -huge}).one_of[0].orientation
+        == -math.inf
+    )
+    action = descriptions.read("perform_action", {"category": "a", "description": 1,
+                                                  "unix_millis_action_duration_estimate": huge})  # fmt: skip
+    assert isinstance(action, descriptions.PerformAction) and action.duration_estimate == math.inf
+    assert descriptions.Robot(places=["A"]).check("go_to_place", huge) == (
+        f"/: waypoint {str(huge)[:47]}… is not on this robot's map (its waypoints are 0 to 0)",
+    )

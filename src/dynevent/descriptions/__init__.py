@@ -36,7 +36,7 @@ from dynevent.descriptions.reading import (
     Sequence,
     read,
 )
-from dynevent.descriptions.robot import Robot
+from dynevent.descriptions.robot import Robot, shape_validators
 from dynevent.descriptions.shapes import CATEGORIES, conforms, schema, shape_errors
 
 __all__ = [
@@ -55,4 +55,5 @@ __all__ = [
     "read",
     "schema",
     "shape_errors",
+    "shape_validators",
 ]

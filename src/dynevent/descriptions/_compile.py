@@ -84,11 +84,14 @@ class _Compiler:
         node: Any = self._registry[document]
         for escaped in filter(None, pointer.split("/")):
             part = escaped.replace("~1", "/").replace("~0", "~")
-            if not isinstance(node, dict) or part not in node:
+            if isinstance(node, list) and part.isdigit() and int(part) < len(node):
+                node = node[int(part)]
+            elif isinstance(node, dict) and part in node:
+                node = node[part]
+            else:
                 raise InvalidConfig(
                     "schema", f"{document}#{pointer}", "a $ref points at nothing", owner="descriptions"
                 )
-            node = node[part]
         return node
 
     def schema(self, base: str, schema: Any) -> Predicate:
@@ -213,6 +216,8 @@ _KEYWORDS: Mapping[str, _Keyword] = {
 
 
 def compile_schema(name: str, registry: Mapping[str, Mapping[str, Any]]) -> Predicate:
-    """The predicate of the schema whose ``$id`` is ``name``, its references read from ``registry``
-    (``$id`` to schema); raises :class:`~dynevent.errors.InvalidConfig` for a keyword it cannot judge."""
-    return _Compiler(registry).reference(name, "")
+    """The predicate of the schema whose ``$id`` is ``name`` (or of a part of it:
+    ``"go_to_place.json#/oneOf/1"``), its references read from ``registry`` (``$id`` to schema);
+    raises :class:`~dynevent.errors.InvalidConfig` for a keyword it cannot judge."""
+    document, _, pointer = name.partition("#")
+    return _Compiler(registry).reference(document, "#" + pointer)

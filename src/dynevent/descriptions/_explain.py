@@ -54,7 +54,9 @@ def _title(schema: Any, fallback: str) -> str:
     return title if isinstance(title, str) else fallback
 
 
-Line = tuple[tuple[Any, ...], str]  # (the path of the value at fault, what is wrong with it)
+#: (the path of the value at fault, what is wrong with it, whether it is the value's very kind that is
+#: wrong: a type, or none of a ``oneOf``'s forms)
+Line = tuple[tuple[Any, ...], str, bool]
 
 
 def _line(error: Any) -> Line:
@@ -65,16 +67,16 @@ def _line(error: Any) -> Line:
     if kind == "type":
         expected = error.validator_value
         names = [expected] if isinstance(expected, str) else list(expected)
-        return path, f"{value} is not {' or '.join(_ARTICLES.get(name, name) for name in names)}"
+        return path, f"{value} is not {' or '.join(_ARTICLES.get(name, name) for name in names)}", True
     if kind == "required":
         missing = [name for name in error.validator_value if name not in error.instance]
-        return path, f"{', '.join(json.dumps(name) for name in missing)} is required"
+        return path, f"{', '.join(json.dumps(name) for name in missing)} is required", False
     if kind == "minItems":
         count = error.validator_value
-        return path, f"{value} has fewer than {count} item{'s' if count != 1 else ''}"
+        return path, f"{value} has fewer than {count} item{'s' if count != 1 else ''}", False
     if kind == "minimum":
-        return path, f"{value} is less than {error.validator_value}"
-    return path, error.message
+        return path, f"{value} is less than {error.validator_value}", False
+    return path, error.message, False
 
 
 def _explain_one(error: Any) -> list[Line]:
@@ -83,16 +85,20 @@ def _explain_one(error: Any) -> list[Line]:
     path = tuple(error.absolute_path)
     title = _title(error.schema, "any of its forms")
     if not error.context:  # a oneOf that more than one form matched
-        return [(path, f"{render(error.instance)} is not {title}: it fits more than one of its forms")]
+        return [(path, f"{render(error.instance)} is not {title}: it fits more than one of its forms", False)]
     branches: dict[Any, list[Any]] = {}
     for sub in error.context:
         branches.setdefault(sub.relative_schema_path[0], []).append(sub)
-    # a form "got further" when everything wrong with the value under it lies deeper than the value
     explained = [_explain_all(errors) for errors in branches.values()]
-    further = [lines for lines in explained if all(len(where) > len(path) for where, _ in lines)]
+    # The form to explain by: the one that got further (all that is wrong lies deeper than the
+    # value), else the one whose kind the value has (what is wrong is not the value's kind).
+    further = [lines for lines in explained if all(len(where) > len(path) for where, _, _ in lines)]
     if len(further) == 1:
         return further[0]
-    return [(path, f"{render(error.instance)} is not {title}")]
+    kind = [lines for lines in explained if not any(wrong and where == path for where, _, wrong in lines)]
+    if not further and len(kind) == 1:
+        return kind[0]
+    return [(path, f"{render(error.instance)} is not {title}", True)]
 
 
 def _explain_all(errors: Iterable[Any]) -> list[Line]:
@@ -105,7 +111,7 @@ def _explain_all(errors: Iterable[Any]) -> list[Line]:
 
 def explain(errors: Iterable[Any]) -> tuple[str, ...]:
     """The lines of a description's errors (``jsonschema`` ``ValidationError``\\ s), each once, in order."""
-    return tuple(f"{pointer(path)}: {text}" for path, text in _explain_all(errors))
+    return tuple(f"{pointer(path)}: {text}" for path, text, _ in _explain_all(errors))
 
 
 def prefixed(prefix: Sequence[Any], lines: Iterable[str]) -> tuple[str, ...]:

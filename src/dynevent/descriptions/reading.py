@@ -10,6 +10,7 @@ or :class:`PayloadTransfer`.  It is what a fleet adapter's child (or
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import attrs
@@ -115,18 +116,31 @@ def place(value: Any) -> Place:
     """A place of a conforming description: ``"A"``, ``3`` or ``{"waypoint": ..., "orientation": ...}``."""
     if isinstance(value, dict):
         orientation = value.get("orientation")
-        return Place(_waypoint(value["waypoint"]), None if orientation is None else float(orientation))
+        return Place(_waypoint(value["waypoint"]), None if orientation is None else _float(orientation))
     return Place(_waypoint(value))
+
+
+def _float(value: int | float) -> float:
+    """A JSON number as a float; an integer too large for one is infinite, as JSON readers read it."""
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf if value > 0 else -math.inf
 
 
 def _waypoint(value: Any) -> str | int:
     return value if isinstance(value, str) else int(value)  # 3.0 is the index 3
 
 
+#: The forms of a go_to_place description, by the index of its schema's ``oneOf`` branch.
+PLACE_FORM, PLACE_OBJECT_FORM, ONE_OF_FORM = 0, 1, 2
+
+
 def _go_to_place(description: Any) -> GoToPlace:
-    if isinstance(description, dict) and "one_of" in description:
+    form = shapes.form("go_to_place", description)  # by the form it fits, not by the keys it has
+    if form == ONE_OF_FORM:
         choices = tuple(place(choice) for choice in description["one_of"])
-    elif isinstance(description, dict) and "place" in description:
+    elif form == PLACE_OBJECT_FORM:
         choices = (place(description["place"]),)
     else:
         return GoToPlace((place(description),))
@@ -143,7 +157,7 @@ def _perform_action(description: Any) -> PerformAction:
     return PerformAction(
         action=description["category"],
         description=description["description"],
-        duration_estimate=None if millis is None else int(millis) / 1000,
+        duration_estimate=None if millis is None else _float(int(millis)) / 1000,
         use_tool_sink=bool(description.get("use_tool_sink", False)),
         expected_finish_location=None if finish is None else place(finish),
     )

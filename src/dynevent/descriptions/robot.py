@@ -17,12 +17,12 @@ from typing import Any
 
 import attrs
 
-from dynevent.descriptions import shapes
+from dynevent.descriptions import reading, shapes
 from dynevent.descriptions._explain import pointer, prefixed, render
 from dynevent.errors import InvalidConfig
 from dynevent.server.machine import Validator
 
-__all__ = ["Robot"]
+__all__ = ["Robot", "shape_validators"]
 
 
 def _places(value: Any) -> tuple[str | None, ...] | None:
@@ -94,6 +94,9 @@ class Robot:
     places: tuple[str | None, ...] | None = attrs.field(default=None, converter=_places)
     actions: frozenset[str] | None = attrs.field(default=None, converter=_actions)
     categories: tuple[str, ...] = attrs.field(default=shapes.CATEGORIES, converter=_categories)
+    #: Whether a sequence's activity of a category this robot does not know passes (its description
+    #: unchecked): for a client, which cannot know the categories a server adds (:func:`shape_validators`).
+    open_sequences: bool = False
     _index: Mapping[str, int] = attrs.field(init=False, eq=False, repr=False)
 
     def __attrs_post_init__(self) -> None:
@@ -162,12 +165,13 @@ class Robot:
             return (f"{where}: {render(waypoint)} is not a waypoint on this robot's map{hint}",)
         count = len(self.places or ())
         span = f"its waypoints are 0 to {count - 1}" if count else "it has no waypoints"
-        return (f"{where}: waypoint {waypoint} is not on this robot's map ({span})",)
+        return (f"{where}: waypoint {render(waypoint)} is not on this robot's map ({span})",)
 
     def _go_to_place(self, description: Any) -> tuple[str, ...]:
-        if isinstance(description, dict) and "one_of" in description:
+        form = shapes.form("go_to_place", description)  # by the form it fits, not by the keys it has
+        if form == reading.ONE_OF_FORM:
             places = [(place, ["one_of", number]) for number, place in enumerate(description["one_of"])]
-        elif isinstance(description, dict) and "place" in description:
+        elif form == reading.PLACE_OBJECT_FORM:
             places = [(description["place"], ["place"])]
             places += [
                 (place, ["followed_by", n]) for n, place in enumerate(description.get("followed_by", ()))
@@ -197,6 +201,8 @@ class Robot:
             at = ["activities", number] if nested else [number]
             category = activity["category"]
             validate = supported.get(category)
+            if validate is None and self.open_sequences:
+                continue
             if validate is None:
                 faults.append(
                     f"{pointer([*at, 'category'])}: {render(category)} is not a category this robot "
@@ -205,3 +211,11 @@ class Robot:
                 continue
             faults.extend(prefixed([*at, "description"], validate(category, activity["description"])))
         return tuple(faults)
+
+
+def shape_validators() -> dict[str, Validator]:
+    """Validators that refuse only what every server refuses: a description of a field category that
+    its schema does not accept (in a sequence, each activity of a field category by its own schema;
+    an activity of another category is the server's to judge).  What a client that knows nothing of
+    the robot checks before it sends a goal (``dynevent send``)."""
+    return Robot(open_sequences=True).validators()

@@ -22,7 +22,7 @@ from typing import Any
 from dynevent.descriptions import _compile, _explain
 from dynevent.errors import MissingExtra, UnknownCategory
 
-__all__ = ["CATEGORIES", "conforms", "schema", "schemas", "shape_errors"]
+__all__ = ["CATEGORIES", "conforms", "form", "schema", "schemas", "shape_errors"]
 
 #: The categories whose descriptions the schemas define, in the order the docs present them.
 CATEGORIES: tuple[str, ...] = ("go_to_place", "perform_action", "sequence", "clean", "pickup", "dropoff")
@@ -62,6 +62,25 @@ def _document(category: str) -> str:
 @functools.cache
 def _predicate(category: str) -> _compile.Predicate:
     return _compile.compile_schema(_document(category), _schemas())
+
+
+@functools.cache
+def _forms(category: str) -> tuple[_compile.Predicate, ...]:
+    document = _document(category)
+    count = len(_schemas()[document].get("oneOf", ()))
+    return tuple(
+        _compile.compile_schema(f"{document}#/oneOf/{number}", _schemas()) for number in range(count)
+    )
+
+
+def form(category: str, description: Any) -> int | None:
+    """Which form of ``category``'s schema a conforming description takes: the index of the one
+    branch of its top-level ``oneOf`` that it fits (``go_to_place``: 0 a place, 1 ``{"place": ...}``,
+    2 ``{"one_of": [...]}``), or ``None`` for a schema without forms or a description that does
+    not conform.  Keys do not tell: ``{"place": "A", "one_of": 5}`` is of the second form."""
+    if not conforms(category, description):
+        return None
+    return next((number for number, fits in enumerate(_forms(category)) if fits(description)), None)
 
 
 def conforms(category: str, description: Any) -> bool:

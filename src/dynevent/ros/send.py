@@ -58,9 +58,9 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
 
     rclpy.init()
     node = rclpy.create_node("dynevent_send")
-    # the field's categories are checked here as any server checks them (R4.18): a description the
-    # robot would refuse for its shape is refused here, with the server's errors, and never sent
-    client = DynamicEventClient(node, args.fleet, args.robot, validators=descriptions.Robot().validators())
+    # a description of the field's categories is checked here as every server checks its shape
+    # (R4.18): one the robot would refuse is refused here, with the server's errors, and never sent
+    client = DynamicEventClient(node, args.fleet, args.robot, validators=descriptions.shape_validators())
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     spinner = Spinner(executor, "dynevent-send")

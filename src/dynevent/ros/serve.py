@@ -46,6 +46,7 @@ from dynevent.server.store import StateStore
 from dynevent.tools.serve_config import (
     CategorySpec,
     ServeConfig,
+    Step,
     load_config,
     machine_config,
     plan,
@@ -71,7 +72,12 @@ class SimulatedChildren:
 
     def start(self, execution: ChildExecution) -> None:
         spec = self._config.categories.get(execution.category, CategorySpec())
-        steps = plan(execution.category, execution.parsed, self._config)
+        try:
+            steps = plan(execution.category, execution.parsed, self._config)
+        except Exception as exc:  # a defect here must end this child, never the lane's thread
+            steps = [
+                Step(execution.category, 0.001, f"the simulation cannot run it: {type(exc).__name__}: {exc}")
+            ]
         ends = list(itertools.accumulate(step.duration for step in steps))
         began = time.monotonic()
         told = [0]  # the last step told of (the first is told by the progress lines)
@@ -99,7 +105,9 @@ class SimulatedChildren:
             if execution.done:
                 self._forget(execution)
 
-        period = min(spec.report_every, *(step.duration for step in steps))
+        # the child's own report period, shorter only for a child shorter than it: a sequence's brief
+        # activities are each told of at the next report, not by reporting as often as the briefest
+        period = min(spec.report_every, ends[-1])
         with self._lock:
             self._timers[execution] = self._node.create_timer(max(period, 0.001), report)
 
