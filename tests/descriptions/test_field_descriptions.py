@@ -557,3 +557,28 @@ def test_numbers_beyond_a_float_are_read_as_infinite() -> None:
     assert descriptions.Robot(places=["A"]).check("go_to_place", huge) == (
         f"/: waypoint {str(huge)[:47]}… is not on this robot's map (its waypoints are 0 to 0)",
     )
+
+
+def test_without_jsonschema_the_verdict_stands_and_the_line_says_how_to_learn_more() -> None:
+    import subprocess
+    import sys
+
+    script = (
+        "import sys; sys.modules['jsonschema'] = None\n"
+        "from dynevent import descriptions\n"
+        "from dynevent.descriptions import shapes\n"
+        "print(descriptions.Robot().check('go_to_place', {'one_of': ['A', 5.5]}))\n"
+        "print(descriptions.Robot().check('go_to_place', {'one_of': ['A']}))\n"
+        "try:\n    shapes.require_explanations()\n"
+        "except Exception as exc:\n    print(type(exc).__name__, exc)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60, check=True
+    )
+    assert done.stdout.splitlines() == [
+        '(\'/: {"one_of": ["A", 5.5]} is not a go_to_place description (a place, {"place": ...} or '
+        "{\"one_of\": [...]}) (pip install \\'dynevent[descriptions]\\' to be told where)',)",
+        "()",
+        "MissingExtra jsonschema is not installed; it says where a refused description goes wrong: "
+        "pip install 'dynevent[descriptions]'",
+    ]

@@ -22,7 +22,7 @@ from typing import Any
 from dynevent.descriptions import _compile, _explain
 from dynevent.errors import MissingExtra, UnknownCategory
 
-__all__ = ["CATEGORIES", "conforms", "form", "schema", "schemas", "shape_errors"]
+__all__ = ["CATEGORIES", "conforms", "form", "require_explanations", "schema", "schemas", "shape_errors"]
 
 #: The categories whose descriptions the schemas define, in the order the docs present them.
 CATEGORIES: tuple[str, ...] = ("go_to_place", "perform_action", "sequence", "clean", "pickup", "dropoff")
@@ -90,29 +90,41 @@ def conforms(category: str, description: Any) -> bool:
 
 @functools.cache
 def _validator(category: str) -> Any:
+    """The ``jsonschema`` validator of ``category``, or ``None`` without the package."""
     try:
         import jsonschema
         import referencing
-    except ImportError as exc:  # pragma: no cover - the extra is part of the test install
-        raise MissingExtra("descriptions", "jsonschema", "explains why a description was refused") from exc
+    except ImportError:
+        return None
     registry: Any = referencing.Registry().with_resources(
         (name, referencing.Resource.from_contents(document)) for name, document in _schemas().items()
     )
     return jsonschema.Draft202012Validator(_schemas()[_document(category)], registry=registry)
 
 
+def require_explanations() -> None:
+    """Raise :class:`~dynevent.errors.MissingExtra` unless the ``jsonschema`` package is there to say
+    where a description goes wrong (what a server that client authors develop against must say)."""
+    if _validator("go_to_place") is None:
+        raise MissingExtra("descriptions", "jsonschema", "says where a refused description goes wrong")
+
+
 def shape_errors(category: str, description: Any) -> tuple[str, ...]:
     """Why ``description`` fails ``category``'s schema, one line per fault (none when it conforms).
 
     Each line is ``<JSON pointer>: <fault>``, e.g. ``/one_of/1: 5.5 is not a place``; the
-    description itself is ``/``.  The explanation needs the ``jsonschema`` package (the
-    ``descriptions`` extra): without it a failing description raises
-    :class:`~dynevent.errors.MissingExtra`.
+    description itself is ``/``.  The lines come from the ``jsonschema`` package (the
+    ``descriptions`` extra); without it the verdict is the same and the one line says only
+    that the description is not of the category, and how to learn where.
     """
     if conforms(category, description):
         return ()
-    lines = _explain.explain(_validator(category).iter_errors(description))
+    title = _schemas()[_document(category)].get("title", category)
+    validator = _validator(category)
+    if validator is None:
+        hint = "pip install 'dynevent[descriptions]' to be told where"
+        return (f"/: {_explain.render(description)} is not {title} ({hint})",)
+    lines = _explain.explain(validator.iter_errors(description))
     # The compiled verdict and the package agree on every instance (tests/descriptions); were
     # they ever to differ, the refusal still says so rather than refusing without a reason.
-    title = _schemas()[_document(category)].get("title", category)
     return lines or (f"/: {_explain.render(description)} is not {title}",)

@@ -18,6 +18,7 @@ from typing import Any
 import attrs
 
 from dynevent import descriptions
+from dynevent.descriptions import shapes
 from dynevent.errors import InvalidConfig, InvalidName, MissingExtra, ServeError
 from dynevent.server.machine import ServerConfig, Validator, any_description
 from dynevent.wire.names import validate_token
@@ -120,7 +121,7 @@ def load_config(args: argparse.Namespace) -> ServeConfig:
         raise ServeError(f"robots: a robot is named twice in {list(config.robots)}")
     try:
         machine_config(config)
-        descriptions.shape_errors("go_to_place", None)  # the explanations need the extra: now, not later
+        shapes.require_explanations()  # a client author is told where a description goes wrong
     except (InvalidConfig, MissingExtra) as exc:
         raise ServeError(str(exc)) from None
     return config
