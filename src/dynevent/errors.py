@@ -38,6 +38,7 @@ __all__ = [
     "LocalError",
     "MalformedMessage",
     "MissingExtra",
+    "ProbeError",
     "RemoteError",
     "SendError",
     "ServeError",
@@ -284,3 +285,7 @@ class SendError(LocalError):
 
 class ServeError(LocalError):
     """A bad ``dynevent serve`` configuration."""
+
+
+class ProbeError(LocalError):
+    """A bad ``dynevent probe`` request: the message names the flag and the value."""

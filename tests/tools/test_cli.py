@@ -286,6 +286,8 @@ def _without_ros(*args: str, blocked: str = "rclpy") -> subprocess.CompletedProc
         ),
         (["send", "--end", "--timeout", "0"], "dynevent send: --timeout: expected positive seconds"),
         (["serve", "--shard", "3/2"], "dynevent serve: --shard '3/2': expected K/N"),
+        (["probe", "--cases", "nothing"], "dynevent probe: --cases nothing: no case matches"),
+        (["probe", "--timeout", "0"], "dynevent probe: --timeout: expected positive seconds"),
         (["serve", "--robot", "bad name"], "dynevent serve:"),
     ],
 )
@@ -297,7 +299,7 @@ def test_serve_and_send_check_their_own_input_before_they_need_ros(args: list[st
 
 
 @pytest.mark.parametrize("blocked", ["rclpy", "rmf_task_msgs"])
-@pytest.mark.parametrize("args", [["send", "--end"], ["serve", "--seconds", "1"]])
+@pytest.mark.parametrize("args", [["send", "--end"], ["serve", "--seconds", "1"], ["probe"]])
 def test_without_ros_serve_and_send_say_what_is_missing_and_how_to_get_it(
     args: list[str], blocked: str
 ) -> None:
@@ -318,3 +320,10 @@ def dynevent_package_dir() -> str:
     import dynevent
 
     return str(Path(dynevent.__file__).parent)
+
+
+def test_probe_lists_its_cases_without_ros() -> None:
+    done = _without_ros("probe", "--list", "--cases", "R4.2")
+    assert done.returncode == 0 and done.stderr == ""
+    assert done.stdout.splitlines()[-1] == "2 case(s)"
+    assert done.stdout.startswith("request.seq_stale")

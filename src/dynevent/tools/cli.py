@@ -365,6 +365,61 @@ def _send(args: argparse.Namespace) -> int:
     return _ros_command("send", check, lambda send, _: send.run(args, _say))
 
 
+def _probe(args: argparse.Namespace) -> int:
+    from dynevent.errors import ProbeError
+    from dynevent.tools import probe_cases
+
+    def check() -> list[probe_cases.Case]:
+        cases = probe_cases.select(args.cases)
+        if not cases:
+            raise ProbeError(f"--cases {' '.join(args.cases)}: no case matches (see dynevent probe --list)")
+        if not 0 < args.timeout < 1e6:
+            raise ProbeError(f"--timeout: expected positive seconds (got {args.timeout})")
+        return cases
+
+    if args.list:
+        try:
+            sys.stdout.write(probe_cases.format_list(check()))
+        except ProbeError as exc:
+            print(f"dynevent probe: {exc}", file=sys.stderr)
+            return 2
+        return 0
+    return _ros_command("probe", check, lambda probe, cases: probe.main(args, cases, _say))
+
+
+def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    parser = commands.add_parser(
+        "probe",
+        help="test a live Dynamic Event server over ROS 2, case by case, against docs/spec.md",
+        description="Point at a fleet and robot on a live ROS 2 graph and run the probe's cases as a "
+        "client would (raw goals, the status and begin topics): each case cites the rules it tests and "
+        "ends pass, non-strict, fail (with the D-number when docs/divergences.md records that way of "
+        "breaking it), info or missing.  --list prints the cases without ROS.  Exit status: 0 nothing "
+        "failed, 1 a case failed, 2 bad usage or no server.",
+    )
+    parser.add_argument("--fleet", default="tinyRobot")
+    parser.add_argument("--robot", default="tinyRobot1")
+    parser.add_argument("--list", action="store_true", help="print the cases (no ROS needed) and exit")
+    parser.add_argument(
+        "--cases", nargs="+", default=[], metavar="PATTERN",
+        help="run only these: case ids or globs (request.*), sections (cancel), rules (R4.*)",
+    )  # fmt: skip
+    parser.add_argument("--place", help="a place the robot can go to (the cases that run a child need one)")
+    parser.add_argument("--category", default="go_to_place", help="the category of those children's NEXT")
+    parser.add_argument("--timeout", type=float, default=10.0, metavar="SECONDS", help="bound on each wait")
+    parser.add_argument(
+        "--begin-command", metavar="CMD",
+        help="a command that begins a dynamic event for the robot, run when a case needs one and none "
+        "is active",
+    )  # fmt: skip
+    parser.add_argument(
+        "--known", choices=["rmf_ros2"],
+        help="count the divergences docs/divergences.md records for rmf_ros2 as known: shown, not failing",
+    )  # fmt: skip
+    parser.add_argument("--junit", metavar="FILE", help="write the findings as JUnit XML")
+    parser.set_defaults(run=_probe)
+
+
 def _add_send_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = commands.add_parser(
         "send",
@@ -423,6 +478,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     _add_vectors_command(commands)
     _add_serve_command(commands)
     _add_send_command(commands)
+    _add_probe_command(commands)
     args = parser.parse_args(argv)
     if args.command is None:  # bare `dynevent`: what it can do, not a run of one of its commands
         parser.print_help()

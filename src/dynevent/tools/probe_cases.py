@@ -1,0 +1,201 @@
+"""``dynevent probe``'s cases, verdicts and reports, without ROS 2.
+
+A case is data: an id (``section.name``), what it checks, the rules of
+docs/spec.md it tests, what it needs of the server (an active run, a child
+it can run), and the divergences of docs/divergences.md whose way of
+breaking it shows.  The ROS part (:mod:`dynevent.ros.probe`) carries each case
+out over the wire and gives a :class:`Finding` per case; this module selects
+cases, lists them, and reports findings (a table, JUnit XML) and the exit
+status, so that ``dynevent probe --list`` needs no ROS.
+
+Verdicts, as the Autobahn testsuite grades: ``pass``; ``non-strict`` (a
+SHOULD-level difference the spec allows); ``fail`` (a rule broken); ``info``
+(behaviour the spec leaves open); ``missing`` (the case could not be
+reached, e.g. no run began in time).  A failure whose way of breaking
+docs/divergences.md records for rmf_ros2 names its D-number; with
+``--known rmf_ros2`` such a failure is shown as ``known`` and does not fail
+the run.
+"""
+
+from __future__ import annotations
+
+import enum
+import fnmatch
+import xml.etree.ElementTree as ET
+from collections.abc import Iterable, Sequence
+
+import attrs
+
+__all__ = [
+    "CASES",
+    "KNOWN",
+    "Case",
+    "Finding",
+    "Verdict",
+    "exit_status",
+    "format_findings",
+    "format_list",
+    "junit_xml",
+    "select",
+]
+
+
+class Verdict(enum.Enum):
+    """What became of one case."""
+
+    PASS = "pass"
+    NON_STRICT = "non-strict"
+    FAIL = "fail"
+    INFO = "info"
+    MISSING = "missing"
+
+
+@attrs.frozen
+class Case:
+    """One probe case: ``needs`` is ``"status"`` (a status on the graph), ``"run"`` (an active
+    dynamic event, WAITING) or ``"child"`` (an active run and a place to send the robot to)."""
+
+    id: str
+    title: str
+    rules: tuple[str, ...]
+    needs: str = "run"
+    divergences: tuple[str, ...] = ()
+
+    @property
+    def section(self) -> str:
+        return self.id.split(".", 1)[0]
+
+
+@attrs.frozen
+class Finding:
+    """A case's verdict, what the spec expects and what was seen, the messages exchanged, and the
+    D-number when the failure is one docs/divergences.md records; ``known`` when ``--known`` covers
+    it."""
+
+    case: Case
+    verdict: Verdict
+    expected: str = ""
+    seen: str = ""
+    messages: tuple[str, ...] = ()
+    divergence: str | None = None
+    known: bool = False
+    seconds: float = 0.0
+
+
+#: Every case, in the order they run (the ones that end a run come last).
+CASES: tuple[Case, ...] = (
+    Case("status.latched", "a late subscriber receives the robot's status (transient-local)",
+         ("R1.4", "R2.2"), needs="status"),
+    Case("status.waiting", "an active run's status is WAITING with the run's seq", ("R2.1", "R2.2", "R3.1")),
+    Case("request.seq_stale", "a goal for an earlier run is refused", ("R4.2",)),
+    Case("request.seq_future", "a goal for a run that has not begun is refused", ("R4.2",)),
+    Case("request.event_type_0", "a goal of event_type 0 is refused", ("R4.4",), divergences=("D7",)),
+    Case("request.event_type_unknown", "a goal of event_type 4 is refused", ("R4.5",), divergences=("D7",)),
+    Case("request.category_unknown", "a NEXT of a category the robot does not support is refused", ("R4.7",)),
+    Case("request.description_not_json", "a NEXT whose description is not JSON is refused", ("R4.9",)),
+    Case("request.cancel_idle", "a CANCEL while no child runs is refused", ("R4.13",), divergences=("D8",)),
+    Case("next.runs_a_child", "a NEXT runs its child: accepted, feedback with its id, one answer",
+         ("R6.2", "R6.4", "R7.1", "R8.1", "R8.2", "R19.1"), needs="child"),
+    Case("next.id_stale", "a NEXT whose id is not above the run's highest is refused", ("R4.12",),
+         needs="child", divergences=("D10",)),
+    Case("next.status_after_child", "after a child ends the status is WAITING with its id", ("R2.2", "R8.4"),
+         needs="child", divergences=("D2",)),
+    Case("next.busy", "a NEXT while a child runs is refused", ("R4.6",), needs="child"),
+    Case("cancel.wrong_id", "a CANCEL naming another event is refused", ("R4.14",), needs="child",
+         divergences=("D8",)),
+    Case("cancel.running_child", "a CANCEL of the running child ends it: both goals answered once",
+         ("R9.3", "R8.2", "R8.3", "R19.1"), needs="child"),
+    Case("finished.ends_the_run", "FINISHED ends the run: succeeded, completed, then INACTIVE",
+         ("R11.1", "R11.2", "R2.2")),
+    Case("finished.next_after", "a NEXT after the run ended is refused", ("R4.3",), needs="status"),
+)  # fmt: skip
+
+
+#: The divergences a ``--known`` name covers: every one docs/divergences.md records is rmf_ros2's.
+KNOWN: dict[str, frozenset[str]] = {"rmf_ros2": frozenset(d for case in CASES for d in case.divergences)}
+
+
+def select(patterns: Iterable[str] = ()) -> list[Case]:
+    """The cases any pattern names (all when none): a case id or glob (``request.*``), a section
+    (``cancel``), or a rule or rule glob (``R4.*``, ``R9.3``)."""
+    wanted = list(patterns)
+    if not wanted:
+        return list(CASES)
+    chosen = []
+    for case in CASES:
+        names = (case.id, case.section, *case.rules)
+        if any(fnmatch.fnmatchcase(name, pattern) for pattern in wanted for name in names):
+            chosen.append(case)
+    return chosen
+
+
+def format_list(cases: Sequence[Case]) -> str:
+    """The cases, a line each: id, rules, what it checks."""
+    width = max((len(case.id) for case in cases), default=0)
+    lines = [f"{case.id:{width}}  {case.title} ({', '.join(case.rules)})" for case in cases]
+    return "\n".join([*lines, f"{len(cases)} case(s)"]) + "\n"
+
+
+def _label(finding: Finding) -> str:
+    if finding.verdict is Verdict.FAIL and finding.known:
+        return f"known ({finding.divergence})"
+    if finding.verdict is Verdict.FAIL and finding.divergence:
+        return f"fail ({finding.divergence})"
+    return finding.verdict.value
+
+
+def format_findings(findings: Sequence[Finding]) -> str:
+    """A line per case, the account of every failure, and the counts."""
+    width = max((len(finding.case.id) for finding in findings), default=0)
+    lines = [f"{finding.case.id:{width}}  {_label(finding):14}  {finding.case.title}" for finding in findings]
+    for finding in findings:
+        if finding.verdict in (Verdict.FAIL, Verdict.MISSING, Verdict.NON_STRICT):
+            lines.append("")
+            lines.append(f"{finding.case.id} ({', '.join(finding.case.rules)}): {_label(finding)}")
+            lines.append(f"  expected: {finding.expected}")
+            lines.append(f"  seen:     {finding.seen}")
+            lines.extend(f"  | {message}" for message in finding.messages)
+    counts = {verdict: 0 for verdict in Verdict}
+    for finding in findings:
+        counts[finding.verdict] += 1
+    known = sum(1 for finding in findings if finding.known)
+    summary = ", ".join(f"{count} {verdict.value}" for verdict, count in counts.items() if count)
+    lines.append("")
+    lines.append(summary + (f" ({known} of the failures known)" if known else ""))
+    return "\n".join(lines) + "\n"
+
+
+def exit_status(findings: Sequence[Finding]) -> int:
+    """0 when nothing failed (a known divergence does not count), else 1."""
+    return 1 if any(finding.verdict is Verdict.FAIL and not finding.known for finding in findings) else 0
+
+
+def junit_xml(findings: Sequence[Finding], server: str = "") -> str:
+    """The run as JUnit XML: a test case per probe case (``classname`` its section), a failure with
+    the account, a skip for a missing case; each case's rules as a property."""
+    failures = sum(1 for finding in findings if finding.verdict is Verdict.FAIL and not finding.known)
+    skipped = sum(1 for finding in findings if finding.verdict is Verdict.MISSING)
+    suites = ET.Element("testsuites", name="dynevent probe", tests=str(len(findings)))
+    suite = ET.SubElement(
+        suites, "testsuite", name=server or "dynevent probe", tests=str(len(findings)),
+        failures=str(failures), skipped=str(skipped),
+    )  # fmt: skip
+    for finding in findings:
+        test = ET.SubElement(
+            suite,
+            "testcase",
+            classname=finding.case.section,
+            name=finding.case.id,
+            time=f"{finding.seconds:.3f}",
+        )
+        properties = ET.SubElement(test, "properties")
+        ET.SubElement(properties, "property", name="rules", value=" ".join(finding.case.rules))
+        ET.SubElement(properties, "property", name="verdict", value=_label(finding))
+        account = "\n".join([f"expected: {finding.expected}", f"seen: {finding.seen}", *finding.messages])
+        if finding.verdict is Verdict.FAIL and not finding.known:
+            ET.SubElement(test, "failure", message=f"{_label(finding)}: {finding.seen}").text = account
+        elif finding.verdict is Verdict.MISSING:
+            ET.SubElement(test, "skipped", message=finding.seen)
+        elif finding.known:
+            ET.SubElement(test, "system-out").text = f"known divergence {finding.divergence}\n{account}"
+    return ET.tostring(suites, encoding="unicode") + "\n"

@@ -1,0 +1,126 @@
+"""``dynevent probe`` against ``dynevent serve`` over DDS: every case passes against the standard
+mode, and against the rmf_ros2 mode fails exactly where docs/divergences.md says rmf_ros2 differs and
+the mode reproduces it, naming the D-number; ``--known rmf_ros2`` then exits 0."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+from ros_support import Child, child_env, finish
+
+from dynevent.ros import probe
+from dynevent.tools.probe_cases import CASES
+
+#: What the rmf_ros2 mode of serve reproduces of rmf_ros2, case by case: the D-number the probe names.
+RMF_ROS2_FAILS = {
+    "request.event_type_0": "D7",
+    "request.event_type_unknown": "D7",
+    "request.cancel_idle": "D8",
+    "next.id_stale": "D10",
+    "next.status_after_child": "D2",
+    "cancel.wrong_id": "D8",
+}
+
+
+def _serve(tmp_path: Path, robot: str, mode: str) -> Child:
+    config = tmp_path / "fleet.json"
+    config.write_text(
+        json.dumps(
+            {
+                "categories": {"go_to_place": {"duration": 0.5, "report_every": 0.1}},
+                "rebegin": 0.5,
+            }
+        ),
+        encoding="utf-8",
+    )
+    serve = Child(
+        ["-m", "dynevent", "serve", "--robot", robot, "--config", str(config), "--compatibility", mode]
+    )
+    serve.wait_line("serving ")
+    return serve
+
+
+def _probe(robot: str, *args: str) -> subprocess.CompletedProcess[str]:
+    process = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "dynevent",
+            "probe",
+            "--robot",
+            robot,
+            "--place",
+            "pantry",
+            "--timeout",
+            "5",
+            *args,
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=child_env(),
+    )
+    return finish(process, 120)
+
+
+def _verdicts(output: str) -> dict[str, str]:
+    ids = {case.id for case in CASES}
+    verdicts = {}
+    for line in output.splitlines():
+        words = line.split()
+        if words and words[0] in ids and words[0] not in verdicts:
+            verdicts[words[0]] = " ".join(words[1:3]) if words[1] in ("fail", "known") else words[1]
+    return verdicts
+
+
+def test_every_case_is_carried_out() -> None:
+    assert probe.implemented() == {case.id for case in CASES}
+
+
+@pytest.mark.spec("R4.2", "R4.4", "R4.13", "R9.3", "R11.1")
+def test_the_standard_mode_of_serve_passes_every_case_within_a_minute(tmp_path: Path) -> None:
+    serve = _serve(tmp_path, "probeStandard", "standard")
+    try:
+        started = time.monotonic()
+        done = _probe("probeStandard", "--junit", str(tmp_path / "probe.xml"))
+        took = time.monotonic() - started
+    finally:
+        code = serve.stop()
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert _verdicts(done.stdout) == {case.id: "pass" for case in CASES}, done.stdout
+    assert done.stdout.rstrip().endswith(f"{len(CASES)} pass")
+    assert took < 60, took
+    suite = ET.parse(tmp_path / "probe.xml").getroot().find("testsuite")
+    assert suite is not None and suite.get("tests") == str(len(CASES)) and suite.get("failures") == "0"
+    assert code == 0, serve.output
+
+
+@pytest.mark.spec("R17.4")
+def test_the_rmf_ros2_mode_fails_exactly_at_its_recorded_divergences(tmp_path: Path) -> None:
+    serve = _serve(tmp_path, "probeCompat", "rmf_ros2")
+    try:
+        strict = _probe("probeCompat")
+        known = _probe("probeCompat", "--known", "rmf_ros2")
+    finally:
+        code = serve.stop()
+    assert strict.returncode == 1, strict.stdout + strict.stderr
+    expected = {case.id: "pass" for case in CASES}
+    expected.update({case: f"fail ({number})" for case, number in RMF_ROS2_FAILS.items()})
+    assert _verdicts(strict.stdout) == expected, strict.stdout
+    assert known.returncode == 0, known.stdout + known.stderr
+    expected.update({case: f"known ({number})" for case, number in RMF_ROS2_FAILS.items()})
+    assert _verdicts(known.stdout) == expected, known.stdout
+    assert code == 0, serve.output
+
+
+def test_no_server_is_exit_2_in_one_line(tmp_path: Path) -> None:
+    done = _probe("nobodyHere", "--timeout", "1")
+    assert done.returncode == 2
+    assert done.stdout.strip() == "no Dynamic Event server for tinyRobot/nobodyHere within 1 s"
+    assert "Traceback" not in done.stderr

@@ -1,0 +1,88 @@
+"""``dynevent probe``'s cases as data, its selection, reports and exit status, without ROS 2."""
+
+from __future__ import annotations
+
+import re
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+
+from dynevent.tools import probe_cases
+from dynevent.tools.probe_cases import CASES, KNOWN, Case, Finding, Verdict
+
+ROOT = Path(__file__).resolve().parents[2]
+SPEC_RULES = set(re.findall(r"\*\*(R\d+\.\d+)\*\*", (ROOT / "docs" / "spec.md").read_text(encoding="utf-8")))
+DIVERGENCES = set(
+    re.findall(r"^## (D\d+)\.", (ROOT / "docs" / "divergences.md").read_text(encoding="utf-8"), re.M)
+)
+
+
+def test_every_case_cites_rules_of_the_spec_and_divergences_of_the_record() -> None:
+    assert len({case.id for case in CASES}) == len(CASES)
+    for case in CASES:
+        assert case.rules and set(case.rules) <= SPEC_RULES, case
+        assert set(case.divergences) <= DIVERGENCES, case
+        assert case.needs in ("status", "run", "child"), case
+    assert KNOWN["rmf_ros2"] == {"D2", "D7", "D8", "D10"}
+
+
+@pytest.mark.parametrize(
+    ("patterns", "ids"),
+    [
+        ((), [case.id for case in CASES]),
+        (("cancel",), ["cancel.wrong_id", "cancel.running_child"]),
+        (("request.seq_*",), ["request.seq_stale", "request.seq_future"]),
+        (("R4.1*",), ["request.cancel_idle", "next.id_stale", "cancel.wrong_id"]),
+        (("R9.3", "finished.next_after"), ["cancel.running_child", "finished.next_after"]),
+        (("nothing",), []),
+    ],
+)
+def test_cases_are_chosen_by_id_section_or_rule(patterns: tuple[str, ...], ids: list[str]) -> None:
+    assert [case.id for case in probe_cases.select(patterns)] == ids
+
+
+CASE = Case("request.event_type_0", "a goal of event_type 0 is refused", ("R4.4",), divergences=("D7",))
+
+
+def test_a_known_divergence_is_shown_and_does_not_fail_the_run() -> None:
+    failing = Finding(CASE, Verdict.FAIL, expected="rejected", seen="accepted", divergence="D7")
+    assert probe_cases.exit_status([failing]) == 1
+    known = Finding(CASE, Verdict.FAIL, expected="rejected", seen="accepted", divergence="D7", known=True)
+    assert probe_cases.exit_status([known]) == 0
+    assert probe_cases.exit_status([Finding(CASE, Verdict.MISSING), Finding(CASE, Verdict.PASS)]) == 0
+    text = probe_cases.format_findings([failing, known, Finding(CASE, Verdict.PASS)])
+    assert "fail (D7)" in text and "known (D7)" in text
+    assert text.rstrip().endswith("1 pass, 2 fail (1 of the failures known)")
+
+
+def test_the_junit_report_is_what_a_ci_server_reads() -> None:
+    findings = [
+        Finding(
+            CASE,
+            Verdict.FAIL,
+            expected="rejected",
+            seen="accepted",
+            divergence="D7",
+            messages=("sent type 0",),
+        ),
+        Finding(CASE, Verdict.MISSING, seen="no active run"),
+        Finding(CASE, Verdict.PASS),
+    ]
+    suites = ET.fromstring(probe_cases.junit_xml(findings, "tinyRobot/r1"))
+    suite = suites.find("testsuite")
+    assert suite is not None and suite.get("failures") == "1" and suite.get("skipped") == "1"
+    cases = suite.findall("testcase")
+    assert [case.get("classname") for case in cases] == ["request"] * 3
+    failure = cases[0].find("failure")
+    assert failure is not None and "sent type 0" in (failure.text or "")
+    assert cases[1].find("skipped") is not None
+    rules = cases[2].find("properties/property[@name='rules']")
+    assert rules is not None and rules.get("value") == "R4.4"
+
+
+def test_the_list_names_every_case_with_its_rules() -> None:
+    text = probe_cases.format_list(CASES)
+    assert text.splitlines()[-1] == f"{len(CASES)} case(s)"
+    line = next(line for line in text.splitlines() if line.startswith("request.cancel_idle "))
+    assert " ".join(line.split()) == "request.cancel_idle a CANCEL while no child runs is refused (R4.13)"
