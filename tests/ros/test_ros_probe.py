@@ -75,7 +75,8 @@ def _verdicts(output: str) -> dict[str, str]:
     for line in output.splitlines():
         words = line.split()
         if words and words[0] in ids and words[0] not in verdicts:
-            verdicts[words[0]] = " ".join(words[1:3]) if words[1] in ("fail", "known") else words[1]
+            numbered = len(words) > 2 and words[2].startswith("(D")  # fail (D7), known (D7)
+            verdicts[words[0]] = " ".join(words[1:3]) if numbered else words[1]
     return verdicts
 
 
@@ -124,3 +125,41 @@ def test_no_server_is_exit_2_in_one_line(tmp_path: Path) -> None:
     assert done.returncode == 2
     assert done.stdout.strip() == "no Dynamic Event server for tinyRobot/nobodyHere within 1 s"
     assert "Traceback" not in done.stderr
+
+
+#: Each deliberately broken server (tests/ros/broken_serve.py) and the one case that must catch it.
+BROKEN = {
+    "accepts_stale_seq": {"request.seq_stale": "fail", "request.seq_future": "fail"},
+    "accepts_unknown_category": {"request.category_unknown": "fail"},
+    "accepts_when_busy": {"next.busy": "fail"},
+    "never_answers_cancel": {"cancel.running_child": "fail"},
+    "hangs_next": {"next.runs_a_child": "fail", "next.status_after_child": "missing"},
+    "running_after_child": {"next.status_after_child": "fail (D2)"},
+    "wrong_feedback_id": {"next.runs_a_child": "fail"},
+    "ignores_finished": {"finished.ends_the_run": "fail", "finished.next_after": "missing"},
+}
+
+
+@pytest.mark.parametrize("defect", list(BROKEN))
+def test_a_broken_server_is_caught_by_the_case_of_the_rule_it_breaks(tmp_path: Path, defect: str) -> None:
+    """Every other case passes: no false failure (a case that cannot be reached is missing, and
+    only where the defect makes it so)."""
+    config = tmp_path / "fleet.json"
+    config.write_text(json.dumps({"categories": {"go_to_place": {"duration": 0.5, "report_every": 0.1}},
+                                  "rebegin": 0}), encoding="utf-8")  # fmt: skip
+    robot = f"broken_{defect}"
+    script = Path(__file__).resolve().parent / "broken_serve.py"
+    serve = Child([str(script), defect, "--robot", robot, "--config", str(config)])
+    serve.wait_line("serving ")
+    try:
+        done = _probe(robot, "--timeout", "3")
+    finally:
+        serve.stop()
+    assert done.returncode == 1, done.stdout + done.stderr
+    expected = {case.id: "pass" for case in CASES}
+    expected.update(BROKEN[defect])
+    assert _verdicts(done.stdout) == expected, done.stdout
+    rules = {case.id: case.rules for case in CASES}
+    for case in BROKEN[defect]:
+        if BROKEN[defect][case].startswith("fail"):
+            assert f"{case} ({', '.join(rules[case])}): fail" in done.stdout, done.stdout

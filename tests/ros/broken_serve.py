@@ -1,0 +1,111 @@
+"""``dynevent serve`` with one deliberate defect, for the probe to catch (tests/ros/test_ros_probe.py).
+
+``python broken_serve.py DEFECT SERVE-ARGS...``: each defect is a small change to the real server
+(:class:`dynevent.ros.server.DynamicEventServer` and the machine it runs), made in this process only.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from typing import Any
+
+import attrs
+
+from dynevent.ros import server as ros_server
+from dynevent.server import machine
+from dynevent.server import outputs as outs
+from dynevent.tools.cli import main
+from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReason
+
+
+def _accept_despite(reason: RejectReason) -> None:
+    """The request check lets through what it should refuse for ``reason``."""
+    original = machine.accept
+
+    def accept(state: Any, goal: Any, config: Any) -> Any:
+        decision = original(state, goal, config)
+        if isinstance(decision, outs.Rejected) and decision.reason is reason:
+            return outs.Accepted(event_type=goal.event_type)
+        return decision
+
+    machine.accept = accept  # type: ignore[assignment]
+
+
+def _rewrite(change: Callable[[Any, outs.Output], outs.Output | None]) -> None:
+    """Each output goes through ``change`` before the server carries it out (None: dropped)."""
+    original = ros_server.DynamicEventServer._carry_out
+
+    def carry_out(self: Any, output: outs.Output) -> None:
+        changed = change(self, output)
+        if changed is not None:
+            original(self, changed)
+
+    ros_server.DynamicEventServer._carry_out = carry_out  # type: ignore[method-assign]
+
+
+def _event_type(server: Any, uuid: str) -> int | None:
+    handle = server._handles.get(uuid)
+    return None if handle is None else int(handle.request.event_type)
+
+
+def never_answers_cancel(server: Any, output: outs.Output) -> outs.Output | None:
+    if isinstance(output, outs.AnswerGoal) and _event_type(server, output.goal_uuid) == EventType.CANCEL:
+        return None
+    return output
+
+
+def hangs_next(server: Any, output: outs.Output) -> outs.Output | None:
+    """A NEXT whose child completed is never answered."""
+    if (
+        isinstance(output, outs.AnswerGoal)
+        and output.status is GoalStatus.SUCCEEDED
+        and _event_type(server, output.goal_uuid) == EventType.NEXT
+    ):
+        return None
+    return output
+
+
+def running_after_child(server: Any, output: outs.Output) -> outs.Output | None:
+    """After a child ends, the status says RUNNING (in standard mode, where it must say WAITING)."""
+    if isinstance(output, outs.StartChild):
+        server._broken_ran = True
+    elif isinstance(output, outs.PublishBegin):
+        server._broken_ran = False
+    elif (
+        isinstance(output, outs.PublishStatus)
+        and getattr(server, "_broken_ran", False)
+        and output.message.dynamic_state == DynamicState.WAITING
+    ):
+        message = attrs.evolve(output.message, dynamic_state=DynamicState.RUNNING, status="completed")
+        return attrs.evolve(output, message=message)
+    return output
+
+
+def wrong_feedback_id(server: Any, output: outs.Output) -> outs.Output | None:
+    if isinstance(output, outs.PublishFeedback):
+        return attrs.evolve(output, feedback=attrs.evolve(output.feedback, id=output.feedback.id + 1))
+    return output
+
+
+def ignores_finished(server: Any, output: outs.Output) -> outs.Output | None:
+    """FINISHED is answered, but the status never says the run ended."""
+    if isinstance(output, outs.PublishStatus) and output.message.dynamic_state == DynamicState.INACTIVE:
+        return None
+    return output
+
+
+DEFECTS: dict[str, Callable[[], None]] = {
+    "accepts_stale_seq": lambda: _accept_despite(RejectReason.SEQ_MISMATCH),
+    "accepts_unknown_category": lambda: _accept_despite(RejectReason.UNSUPPORTED_CATEGORY),
+    "accepts_when_busy": lambda: _accept_despite(RejectReason.BUSY),
+    "never_answers_cancel": lambda: _rewrite(never_answers_cancel),
+    "hangs_next": lambda: _rewrite(hangs_next),
+    "running_after_child": lambda: _rewrite(running_after_child),
+    "wrong_feedback_id": lambda: _rewrite(wrong_feedback_id),
+    "ignores_finished": lambda: _rewrite(ignores_finished),
+}
+
+if __name__ == "__main__":
+    DEFECTS[sys.argv[1]]()
+    sys.exit(main(["serve", *sys.argv[2:]]))
