@@ -1,13 +1,13 @@
 """``dynevent probe`` against ``dynevent serve`` over DDS: every case passes against the standard
 mode, and against the rmf_ros2 mode fails exactly where docs/divergences.md says rmf_ros2 differs and
-the mode reproduces it, naming the D-number; ``--known rmf_ros2`` then exits 0."""
+the mode reproduces it, naming the D-number; ``--known rmf_ros2`` then exits 0.  (How long a probe
+takes is measured, not asserted: docs/probe.md.)"""
 
 from __future__ import annotations
 
 import json
 import subprocess
 import sys
-import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -85,18 +85,15 @@ def test_every_case_is_carried_out() -> None:
 
 
 @pytest.mark.spec("R4.2", "R4.4", "R4.13", "R9.3", "R11.1")
-def test_the_standard_mode_of_serve_passes_every_case_within_a_minute(tmp_path: Path) -> None:
+def test_the_standard_mode_of_serve_passes_every_case(tmp_path: Path) -> None:
     serve = _serve(tmp_path, "probeStandard", "standard")
     try:
-        started = time.monotonic()
         done = _probe("probeStandard", "--junit", str(tmp_path / "probe.xml"))
-        took = time.monotonic() - started
     finally:
         code = serve.stop()
     assert done.returncode == 0, done.stdout + done.stderr
     assert _verdicts(done.stdout) == {case.id: "pass" for case in CASES}, done.stdout
     assert done.stdout.rstrip().endswith(f"{len(CASES)} pass")
-    assert took < 60, took
     suite = ET.parse(tmp_path / "probe.xml").getroot().find("testsuite")
     assert suite is not None and suite.get("tests") == str(len(CASES)) and suite.get("failures") == "0"
     assert code == 0, serve.output
