@@ -28,13 +28,13 @@ RMF_ROS2_FAILS = {
 }
 
 
-def _serve(tmp_path: Path, robot: str, mode: str) -> Child:
+def _serve(tmp_path: Path, robot: str, mode: str, rebegin: float = 0.5) -> Child:
     config = tmp_path / "fleet.json"
     config.write_text(
         json.dumps(
             {
                 "categories": {"go_to_place": {"duration": 0.5, "report_every": 0.1}},
-                "rebegin": 0.5,
+                "rebegin": rebegin,
             }
         ),
         encoding="utf-8",
@@ -160,3 +160,19 @@ def test_a_broken_server_is_caught_by_the_case_of_the_rule_it_breaks(tmp_path: P
     for case in BROKEN[defect]:
         if BROKEN[defect][case].startswith("fail"):
             assert f"{case} ({', '.join(rules[case])}): fail" in done.stdout, done.stdout
+
+
+def test_a_begin_command_that_cannot_run_makes_the_cases_missing_not_a_crash(tmp_path: Path) -> None:
+    """No run is active (the robot's run ended and serve begins no other), so the probe runs the
+    begin command; one that cannot run is said, per case, and nothing crashes."""
+    serve = _serve(tmp_path, "probeNoRun", "standard", rebegin=0)
+    try:
+        assert _probe("probeNoRun", "--cases", "finished.ends_the_run").returncode == 0
+        done = _probe("probeNoRun", "--cases", "request.seq_stale", "--timeout", "1",
+                      "--begin-command", "no-such-command-here")  # fmt: skip
+    finally:
+        serve.stop()
+    assert done.returncode == 0, done.stdout + done.stderr  # missing is not a failure
+    assert _verdicts(done.stdout) == {"request.seq_stale": "missing"}, done.stdout
+    assert "--begin-command 'no-such-command-here' did not run" in done.stdout
+    assert "Traceback" not in done.stderr

@@ -288,6 +288,10 @@ def _without_ros(*args: str, blocked: str = "rclpy") -> subprocess.CompletedProc
         (["serve", "--shard", "3/2"], "dynevent serve: --shard '3/2': expected K/N"),
         (["probe", "--cases", "nothing"], "dynevent probe: --cases nothing: no case matches"),
         (["probe", "--timeout", "0"], "dynevent probe: --timeout: expected positive seconds"),
+        (
+            ["probe", "--junit", "no/such/dir/probe.xml"],
+            "dynevent probe: --junit no/such/dir/probe.xml: its directory",
+        ),
         (["serve", "--robot", "bad name"], "dynevent serve:"),
     ],
 )

@@ -31,7 +31,7 @@ from action_msgs.msg import GoalStatus as RosGoalStatus
 from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 
-from dynevent.errors import InvalidMessage
+from dynevent.errors import InvalidMessage, ProbeError
 from dynevent.ros import convert
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.server import latched
@@ -273,11 +273,27 @@ class Probe:
         timeout = self.options.timeout
         status = self.link.wait_status(_waits, 0.5)
         if status is None and self.options.begin_command:
-            subprocess.run(shlex.split(self.options.begin_command), timeout=timeout, check=False)
+            self._run_begin_command()
         status = status or self.link.wait_status(_waits, timeout)
         if status is None:
             raise _Unreachable(f"no active run (a WAITING status) within {timeout:g} s")
         return status
+
+    def _run_begin_command(self) -> None:
+        """Run ``--begin-command`` (bounded by the timeout); a command that cannot run makes the case
+        missing, with why."""
+        command = self.options.begin_command or ""
+        try:
+            done = subprocess.run(
+                shlex.split(command),
+                timeout=self.options.timeout,
+                check=False,
+                capture_output=True,
+                text=True,
+            )
+        except (OSError, ValueError, subprocess.TimeoutExpired) as exc:
+            raise _Unreachable(f"--begin-command {command!r} did not run: {exc}") from None
+        self.note(f"ran --begin-command: exit status {done.returncode}")
 
     def any_status(self) -> DynamicEventStatus:
         status = self.link.wait_status(lambda s: True, self.options.timeout)
@@ -583,9 +599,12 @@ def main(args: Any, cases: list[Case], say: Callable[[str], None]) -> int:
         return 2
     say(probe_cases.format_findings(findings).rstrip("\n"))
     if args.junit:
-        Path(args.junit).write_text(
-            probe_cases.junit_xml(findings, f"{options.fleet}/{options.robot}"), "utf-8"
-        )
+        try:
+            Path(args.junit).write_text(
+                probe_cases.junit_xml(findings, f"{options.fleet}/{options.robot}"), "utf-8"
+            )
+        except OSError as exc:
+            raise ProbeError(f"--junit {args.junit}: {exc}") from None
     return probe_cases.exit_status(findings)
 
 

@@ -375,6 +375,8 @@ def _probe(args: argparse.Namespace) -> int:
             raise ProbeError(f"--cases {' '.join(args.cases)}: no case matches (see dynevent probe --list)")
         if not 0 < args.timeout < 1e6:
             raise ProbeError(f"--timeout: expected positive seconds (got {args.timeout})")
+        if args.junit and not Path(args.junit).resolve().parent.is_dir():
+            raise ProbeError(f"--junit {args.junit}: its directory does not exist")
         return cases
 
     if args.list:
