@@ -15,6 +15,7 @@ import pytest
 from ros_support import Child, child_env, finish
 
 from dynevent.ros import probe
+from dynevent.tools.check import check_trace
 from dynevent.tools.probe_cases import CASES
 
 #: What the rmf_ros2 mode of serve reproduces of rmf_ros2, case by case: the D-number the probe names.
@@ -80,6 +81,37 @@ def _verdicts(output: str) -> dict[str, str]:
     return verdicts
 
 
+def _check_agrees(trace: Path, junit: Path, *, only_failed: bool = True) -> set[str]:
+    """``dynevent check`` on the probe's trace agrees with the probe's verdicts: it finds a violation
+    within every case the probe failed on a message it saw (not one that never came) whose failure a
+    trace shows (``Case.traced``); with ``only_failed``, within no case the probe passed.  (A defect
+    that shows in every message, a wrong feedback id, is found by check in every case, and by the
+    probe in the case of its rule: so not ``only_failed`` for broken servers.)  The cases it found."""
+    text = trace.read_text("utf-8")
+    case_at: dict[int, str] = {}
+    current = ""
+    for number, line in enumerate(text.splitlines(), start=1):
+        if line.startswith("# case "):
+            current = line.removeprefix("# case ")
+        case_at[number] = current
+    report = check_trace(text, str(trace))
+    found = {case_at[finding.line] for finding in report.findings}
+    failed, seen = set(), set()
+    for test in ET.parse(junit).getroot().iter("testcase"):
+        properties = {item.get("name"): item.get("value") for item in test.iter("property")}
+        if str(properties["verdict"]).startswith(("fail", "known")):
+            failed.add(test.get("name"))
+            if "absent" not in properties:
+                seen.add(test.get("name"))
+    traced = {case.id for case in CASES if case.traced}
+    findings = [finding.to_dict() for finding in report.findings]
+    assert seen & traced <= found, findings
+    if only_failed:
+        assert found <= failed, findings
+    assert failed or report.clean, findings
+    return found
+
+
 def test_every_case_is_carried_out() -> None:
     assert probe.implemented() == {case.id for case in CASES}
 
@@ -88,11 +120,12 @@ def test_every_case_is_carried_out() -> None:
 def test_the_standard_mode_of_serve_passes_every_case(tmp_path: Path) -> None:
     serve = _serve(tmp_path, "probeStandard", "standard")
     try:
-        done = _probe("probeStandard", "--junit", str(tmp_path / "probe.xml"))
+        done = _probe("probeStandard", "--junit", str(tmp_path / "probe.xml"), "--trace", str(tmp_path / "t"))
     finally:
         code = serve.stop()
     assert done.returncode == 0, done.stdout + done.stderr
     assert _verdicts(done.stdout) == {case.id: "pass" for case in CASES}, done.stdout
+    assert _check_agrees(tmp_path / "t", tmp_path / "probe.xml") == set()
     assert done.stdout.rstrip().endswith(f"{len(CASES)} pass")
     suite = ET.parse(tmp_path / "probe.xml").getroot().find("testsuite")
     assert suite is not None and suite.get("tests") == str(len(CASES)) and suite.get("failures") == "0"
@@ -103,7 +136,7 @@ def test_the_standard_mode_of_serve_passes_every_case(tmp_path: Path) -> None:
 def test_the_rmf_ros2_mode_fails_exactly_at_its_recorded_divergences(tmp_path: Path) -> None:
     serve = _serve(tmp_path, "probeCompat", "rmf_ros2")
     try:
-        strict = _probe("probeCompat")
+        strict = _probe("probeCompat", "--trace", str(tmp_path / "t"), "--junit", str(tmp_path / "j.xml"))
         known = _probe("probeCompat", "--known", "rmf_ros2")
     finally:
         code = serve.stop()
@@ -111,6 +144,7 @@ def test_the_rmf_ros2_mode_fails_exactly_at_its_recorded_divergences(tmp_path: P
     expected = {case.id: "pass" for case in CASES}
     expected.update({case: f"fail ({number})" for case, number in RMF_ROS2_FAILS.items()})
     assert _verdicts(strict.stdout) == expected, strict.stdout
+    _check_agrees(tmp_path / "t", tmp_path / "j.xml")
     assert known.returncode == 0, known.stdout + known.stderr
     expected.update({case: f"known ({number})" for case, number in RMF_ROS2_FAILS.items()})
     assert _verdicts(known.stdout) == expected, known.stdout
@@ -129,7 +163,8 @@ BROKEN = {
     "accepts_stale_seq": {"request.seq_stale": "fail", "request.seq_future": "fail"},
     "accepts_unknown_category": {"request.category_unknown": "fail"},
     "accepts_when_busy": {"next.busy": "fail"},
-    "never_answers_cancel": {"cancel.running_child": "fail"},
+    # the CANCEL that ends a child after next.busy and cancel.wrong_id goes unanswered too (R19.1)
+    "never_answers_cancel": {"next.busy": "fail", "cancel.wrong_id": "fail", "cancel.running_child": "fail"},
     "hangs_next": {"next.runs_a_child": "fail", "next.status_after_child": "missing"},
     "running_after_child": {"next.status_after_child": "fail (D2)"},
     "wrong_feedback_id": {"next.runs_a_child": "fail"},
@@ -149,13 +184,16 @@ def test_a_broken_server_is_caught_by_the_case_of_the_rule_it_breaks(tmp_path: P
     serve = Child([str(script), defect, "--robot", robot, "--config", str(config)])
     serve.wait_line("serving ")
     try:
-        done = _probe(robot, "--timeout", "3")
+        done = _probe(
+            robot, "--timeout", "3", "--trace", str(tmp_path / "t"), "--junit", str(tmp_path / "j.xml")
+        )
     finally:
         serve.stop()
     assert done.returncode == 1, done.stdout + done.stderr
     expected = {case.id: "pass" for case in CASES}
     expected.update(BROKEN[defect])
     assert _verdicts(done.stdout) == expected, done.stdout
+    _check_agrees(tmp_path / "t", tmp_path / "j.xml", only_failed=False)
     rules = {case.id: case.rules for case in CASES}
     for case in BROKEN[defect]:
         if BROKEN[defect][case].startswith("fail"):

@@ -367,6 +367,113 @@ def test_a_trace_from_a_late_subscriber_binds_the_running_goal() -> None:
     assert trace.check().clean
 
 
+def test_an_answer_a_step_owed_that_never_came_is_missing_at_that_step() -> None:
+    """A CANCEL stops the child, whose NEXT is answered; the CANCEL's own answer never comes."""
+    trace = Trace().started().goal(2, event_type=2, id=6).status(1, 1, "standby", 6)
+    owed_at = trace.line
+    trace.result(1, "aborted", "canceled", 6).next(3, 7).feedback(3, "underway", 7)
+    assert found(trace.check()) == [(owed_at, "R19.1", "answer_missing")]
+    assert "never answered" in trace.check().findings[0].message
+
+
+# --------------------------------------------------------------------------- a tap at a client
+
+
+def _client_view(rows: list[dict[str, Any]], moves: list[tuple[int, int]]) -> str:
+    """The records as a client may see them: each ``(record, later)`` pair moves a record to just after
+    the one ``later`` places on (channels in order each, not with one another)."""
+    rows = list(rows)
+    for index, later in moves:
+        row = rows.pop(index)
+        rows.insert(index + later, row)
+    return "".join(_json.dumps(row) + "\n" for row in rows)
+
+
+def _clean_run() -> Trace:
+    """begin, a NEXT run to its end, a CANCEL of a second child, FINISHED: as the server wrote it."""
+    trace = Trace().started().result(1, "succeeded", "completed", 6).status(1, 1, "standby", 6)
+    trace.next(2, 7).feedback(2, "underway", 7).status(1, 2, "underway", 7)
+    trace.goal(3, event_type=2, id=7)
+    trace.result(2, "aborted", "canceled", 7).result(3, "succeeded", "canceled", 7).status(1, 1, "standby", 7)
+    trace.goal(4, event_type=3).result(4, "succeeded", "completed", 5).status(1, 0, "uninitialized", 0)
+    return trace
+
+
+def _index(trace: Trace, kind: str, **match: Any) -> int:
+    """The row index (the config record is 0) of the first record of ``kind`` with these fields."""
+    for index, row in enumerate(trace.rows):
+        if row["type"] == kind and all(row.get(key) == value for key, value in match.items()):
+            return index
+    raise AssertionError(f"no {kind} {match}")
+
+
+@pytest.mark.spec("R19.1", "R2.2")
+def test_a_trace_from_a_tap_at_a_client_is_read_in_the_servers_order() -> None:
+    """A client sees each channel in order, not the channels in order with one another: a goal's
+    feedback before its response, a start's status before the response, a child's end on the status
+    topic before its answer, FINISHED's INACTIVE before its response; the observer reads all of that as
+    the server's order, and the same trace is clean."""
+    trace = _clean_run()
+    assert trace.check().clean
+    rows = trace.rows
+    response_1 = _index(trace, "goal_response", goal_uuid=uuid(1))
+    end_1 = _index(trace, "result", goal_uuid=uuid(1))
+    response_2 = _index(trace, "goal_response", goal_uuid=uuid(2))
+    answers_2 = _index(trace, "result", goal_uuid=uuid(2))
+    response_4 = _index(trace, "goal_response", goal_uuid=uuid(4))
+    moves = {
+        "feedback before response": [(response_1, 1)],
+        "status before response": [(response_2, 2)],
+        "child end's status before its answers": [(answers_2, 2), (answers_2, 2)],
+        "status before answer": [(end_1, 1)],
+        "INACTIVE before FINISHED's response": [(response_4, 2)],
+    }
+    for name, move in moves.items():
+        text = _client_view(rows, move)
+        assert text != trace.text(), name
+        report = check_trace(text, name)
+        assert report.clean, (name, report.findings)
+
+
+def test_a_late_subscriber_may_read_the_latched_begin_after_the_status() -> None:
+    trace = Trace(config=False).status(1, 1, "standby", 5).begin()
+    trace.next(1, 6).feedback(1, "underway", 6).status(1, 2, "underway", 6)
+    assert trace.check().clean
+    again = Trace(config=False).status(1, 1, "standby", 5).begin().begin()
+    assert [code for _, _, code in found(again.check())] == ["begin_while_active", "begin_seq"]
+
+
+def test_a_trace_writer_writes_what_check_reads(tmp_path: Path) -> None:
+    from dynevent.tools.check.trace import TraceWriter, observation
+    from dynevent.wire.messages import DynamicEventStatus
+
+    writer = TraceWriter(str(tmp_path / "t.jsonl"), fleet="tinyRobot", robot="tinyRobot1")
+    status = DynamicEventStatus(dynamic_event_seq=1, dynamic_state=1, status="standby", id=5)
+    writer.write(observation("status", 100 * 10**9, message=status))
+    writer.comment("case  one\nline")
+    writer.write(
+        observation(
+            "goal", 100_500_000_000, goal_uuid=uuid(1), message=Goal(dynamic_event_seq=1, event_type=3)
+        )
+    )
+    writer.write(observation("goal_response", 100_600_000_000, goal_uuid=uuid(1), accepted=False))
+    writer.close()
+    writer.write(observation("status", 101 * 10**9, message=status))  # after close: nothing, no error
+    lines = (tmp_path / "t.jsonl").read_text("utf-8").splitlines()
+    assert lines[0] == '{"type":"config","fleet":"tinyRobot","robot":"tinyRobot1"}'
+    assert lines[2] == "# case one line"
+    assert len(lines) == 5
+    header, records = read_trace(lines, "t")
+    assert (header.fleet, header.robot) == ("tinyRobot", "tinyRobot1")
+    assert [(record.kind, record.time) for record in records] == [
+        ("status", 100 * 10**9),
+        ("goal", 100_500_000_000),
+        ("goal_response", 100_600_000_000),
+    ]
+    report = check_trace("\n".join(lines), "t")
+    assert [(finding.rule, finding.code) for finding in report.findings] == [("R4.16", "rejected_acceptable")]
+
+
 # --------------------------------------------------------------------------- rmf_ros2 as it behaves today
 
 #: Each rmf_ros2 defect of docs/divergences.md that a trace shows, and the findings that flag it.

@@ -37,6 +37,7 @@ from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.server import latched
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.tools import probe_cases
+from dynevent.tools.check.trace import TraceWriter, observation
 from dynevent.tools.probe_cases import Case, Finding, Verdict
 from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
 from dynevent.wire.names import (
@@ -94,9 +95,10 @@ class Link:
     """Raw access to one robot: its status and begin topics, and an action client without a client
     machine, so that the probe can send what a well-behaved client never would."""
 
-    def __init__(self, node: Any, fleet: str, robot: str) -> None:
+    def __init__(self, node: Any, fleet: str, robot: str, trace: TraceWriter | None = None) -> None:
         self._node = node
         self.fleet, self.robot = fleet, robot
+        self._trace = trace
         self.statuses: list[DynamicEventStatus] = []
         self.begins: list[DynamicEventDescription] = []
         self._changed = threading.Condition()
@@ -113,6 +115,7 @@ class Link:
             status = convert.status_from_ros(message)
         except InvalidMessage:
             return
+        self._record("status", message=status)
         with self._changed:
             self.statuses.append(status)
             self._changed.notify_all()
@@ -122,9 +125,19 @@ class Link:
             begin = convert.begin_from_ros(message)
         except InvalidMessage:
             return
+        self._record("begin", message=begin)
         with self._changed:
             self.begins.append(begin)
             self._changed.notify_all()
+
+    def mark(self, text: str) -> None:
+        """A comment in the trace: what the records after it belong to."""
+        if self._trace is not None:
+            self._trace.comment(text)
+
+    def _record(self, kind: str, **fields: Any) -> None:
+        if self._trace is not None:
+            self._trace.write(observation(kind, time.time_ns(), **fields))
 
     def wait_for_server(self, timeout: float) -> bool:
         return bool(self._action.wait_for_server(timeout_sec=timeout))
@@ -161,6 +174,7 @@ class Link:
 
     def send(self, goal: Goal) -> Exchange:
         exchange = Exchange(goal)
+        self._record("goal", goal_uuid=exchange.uuid, message=goal)
         future = self._action.send_goal_async(
             convert.goal_to_ros(goal),
             feedback_callback=lambda message: self._on_feedback(exchange, message),
@@ -172,6 +186,7 @@ class Link:
     def _on_response(self, exchange: Exchange, future: Any) -> None:
         handle = future.result()
         accepted = bool(handle is not None and handle.accepted)
+        self._record("goal_response", goal_uuid=exchange.uuid, accepted=accepted)
         exchange._note(lambda: setattr(exchange, "accepted", accepted))
         if accepted:
             handle.get_result_async().add_done_callback(lambda done: self._on_result(exchange, done))
@@ -180,6 +195,7 @@ class Link:
         response = future.result()
         status = _TERMINAL.get(response.status, GoalStatus.ABORTED)
         result = convert.result_from_ros(response.result)
+        self._record("result", goal_uuid=exchange.uuid, status=status, message=result)
         exchange._note(lambda: exchange.answers.append((status, result)))
 
     def _on_feedback(self, exchange: Exchange, message: Any) -> None:
@@ -187,6 +203,7 @@ class Link:
             feedback = convert.feedback_from_ros(message.feedback)
         except InvalidMessage:
             return
+        self._record("feedback", goal_uuid=exchange.uuid, message=feedback)
         exchange._note(lambda: exchange.feedback.append(feedback))
 
     def destroy(self) -> None:
@@ -204,6 +221,7 @@ class Options:
     timeout: float = 10.0
     begin_command: str | None = None
     known: frozenset[str] = frozenset()
+    trace: str | None = None
 
 
 def _waits(status: DynamicEventStatus) -> bool:
@@ -245,16 +263,20 @@ class Probe:
         self.link = link
         self.options = options
         self.messages: list[str] = []
+        self.exchanges: list[Exchange] = []
 
     # ---------------------------------------------------------------- carrying out
 
     def run(self, case: Case) -> Finding:
         self.messages = []
+        self.exchanges = []
+        self.link.mark(f"case {case.id}")
         started = time.monotonic()
         try:
             finding = _CASES[case.id](self, case)
         except _Unreachable as exc:
             finding = Finding(case, Verdict.MISSING, seen=str(exc))
+        finding = self._answered_once(finding)
         finding = attrs.evolve(
             finding,
             messages=tuple(self.messages),
@@ -265,6 +287,25 @@ class Probe:
 
     def note(self, text: str) -> None:
         self.messages.append(text)
+
+    def _answered_once(self, finding: Finding) -> Finding:
+        """Every goal the case saw accepted, its own and its clean-up's, answered exactly once (R19.1):
+        a case that otherwise passed fails when one was not."""
+        for exchange in self.exchanges:
+            goal = _describe_goal(exchange.goal).removeprefix("sent ")
+            if exchange.accepted and not exchange.answered(self.options.timeout):
+                what = f"{goal} accepted, no answer"
+            elif len(exchange.answers) > 1:
+                what = f"{goal} answered {len(exchange.answers)} times"
+            else:
+                continue
+            self.note(f"{what} within {self.options.timeout:g} s (R19.1)")
+            if finding.verdict in (Verdict.PASS, Verdict.NON_STRICT, Verdict.INFO):
+                return Finding(
+                    finding.case, Verdict.FAIL, expected="every accepted goal answered exactly once (R19.1)",
+                    seen=what, absent="no answer" in what,
+                )  # fmt: skip
+        return finding
 
     def waiting(self) -> DynamicEventStatus:
         """The status of an active run the robot waits in, after the begin command when one is given
@@ -304,6 +345,7 @@ class Probe:
     def send(self, goal: Goal, *, answer: bool = True) -> Exchange:
         """Send ``goal``; wait for the response and, when accepted and ``answer``, for its answer."""
         exchange = self.link.send(goal)
+        self.exchanges.append(exchange)
         self.note(_describe_goal(goal))
         if not exchange.responded(self.options.timeout):
             self.note("no response")
@@ -331,7 +373,7 @@ class Probe:
         if exchange.accepted is False:
             return Finding(case, Verdict.PASS, expected="rejected", seen="rejected")
         if exchange.accepted is None:
-            return Finding(case, Verdict.FAIL, expected="rejected", seen="no response")
+            return Finding(case, Verdict.FAIL, expected="rejected", seen="no response", absent=True)
         answer = exchange.answer
         aborted = answer is not None and answer[0] is GoalStatus.ABORTED
         return Finding(
@@ -447,7 +489,11 @@ def _runs_a_child(probe: Probe, case: Case) -> Finding:
     answer = exchange.answer
     if answer is None:
         return Finding(
-            case, Verdict.FAIL, expected=expected, seen=f"no answer within {probe.options.timeout:g} s"
+            case,
+            Verdict.FAIL,
+            expected=expected,
+            seen=f"no answer within {probe.options.timeout:g} s",
+            absent=True,
         )
     status_, result = answer
     if ids != [goal.id] or (status_, result.status, result.id) != (
@@ -483,7 +529,11 @@ def _status_after_child(probe: Probe, case: Case) -> Finding:
     )
     if after is None:
         return Finding(
-            case, Verdict.FAIL, expected=f"WAITING, id {goal.id}", seen="no status after the child"
+            case,
+            Verdict.FAIL,
+            expected=f"WAITING, id {goal.id}",
+            seen="no status after the child",
+            absent=True,
         )
     phase = DynamicState(after.dynamic_state).name
     probe.note(f"status {phase} seq={after.dynamic_event_seq} id={after.id} {after.status}")
@@ -515,7 +565,9 @@ def _cancel_running_child(probe: Probe, case: Case) -> Finding:
         probe.note(f"the NEXT: {_describe_answer(running)}")
         cancel_answer, next_answer = cancel.answer, running.answer
         if cancel_answer is None or next_answer is None:
-            return Finding(case, Verdict.FAIL, expected=expected, seen="a goal left without an answer")
+            return Finding(
+                case, Verdict.FAIL, expected=expected, seen="a goal left without an answer", absent=True
+            )
         if len(running.answers) != 1 or len(cancel.answers) != 1:
             return Finding(case, Verdict.FAIL, expected=expected, seen="a goal answered twice")
         if cancel_answer[0] is not GoalStatus.SUCCEEDED or next_answer[1].status != "canceled":
@@ -537,7 +589,9 @@ def _finished(probe: Probe, case: Case) -> Finding:
         probe.options.timeout,
     )
     if ended is None or (ended.dynamic_state != DynamicState.INACTIVE and ended.dynamic_event_seq == seq):
-        return Finding(case, Verdict.FAIL, expected=expected, seen="the run's status did not end")
+        return Finding(
+            case, Verdict.FAIL, expected=expected, seen="the run's status did not end", absent=True
+        )
     return Finding(case, Verdict.PASS, expected=expected, seen="so")
 
 
@@ -584,6 +638,7 @@ def main(args: Any, cases: list[Case], say: Callable[[str], None]) -> int:
     options = Options(
         fleet=args.fleet, robot=args.robot, place=args.place, category=args.category, timeout=args.timeout,
         begin_command=args.begin_command, known=probe_cases.KNOWN.get(args.known or "", frozenset()),
+        trace=args.trace,
     )  # fmt: skip
     live = sys.stdout.isatty()
 
@@ -615,9 +670,10 @@ def run(
     progress: Callable[[str], None] | None = None,
 ) -> list[Finding] | None:
     """Carry out ``cases`` against the robot; the findings, or None when no server was found."""
+    trace = _open_trace(options)
     rclpy.init()
     node = rclpy.create_node("dynevent_probe")
-    link = Link(node, options.fleet, options.robot)
+    link = Link(node, options.fleet, options.robot, trace)
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     spinner = Spinner(executor, "dynevent-probe")
@@ -638,3 +694,14 @@ def run(
             spinner.stop()
             link.destroy()
             close_down([node])
+        if trace is not None:
+            trace.close()
+
+
+def _open_trace(options: Options) -> TraceWriter | None:
+    if options.trace is None:
+        return None
+    try:
+        return TraceWriter(options.trace, fleet=options.fleet, robot=options.robot)
+    except OSError as exc:
+        raise ProbeError(f"--trace {options.trace}: cannot write: {exc.strerror or exc}") from None

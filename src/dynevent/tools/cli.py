@@ -365,6 +365,12 @@ def _send(args: argparse.Namespace) -> int:
     return _ros_command("send", check, lambda send, _: send.run(args, _say))
 
 
+def _check_directory(flag: str, path: str | None, error: type[Exception]) -> None:
+    """Refuse, before anything runs, an output file whose directory does not exist."""
+    if path and not Path(path).resolve().parent.is_dir():
+        raise error(f"--{flag} {path}: its directory does not exist")
+
+
 def _probe(args: argparse.Namespace) -> int:
     from dynevent.errors import ProbeError
     from dynevent.tools import probe_cases
@@ -375,8 +381,8 @@ def _probe(args: argparse.Namespace) -> int:
             raise ProbeError(f"--cases {' '.join(args.cases)}: no case matches (see dynevent probe --list)")
         if not 0 < args.timeout < 1e6:
             raise ProbeError(f"--timeout: expected positive seconds (got {args.timeout})")
-        if args.junit and not Path(args.junit).resolve().parent.is_dir():
-            raise ProbeError(f"--junit {args.junit}: its directory does not exist")
+        for flag in ("junit", "report", "trace"):
+            _check_directory(flag, getattr(args, flag), ProbeError)
         return cases
 
     if args.list:
@@ -419,6 +425,15 @@ def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         help="count the divergences docs/divergences.md records for rmf_ros2 as known: shown, not failing",
     )  # fmt: skip
     parser.add_argument("--junit", metavar="FILE", help="write the findings as JUnit XML")
+    parser.add_argument(
+        "--report", metavar="FILE",
+        help="write a report a person reads: per case the rules, the verdict, what was sent and seen "
+        "(HTML when FILE ends in .html, else Markdown)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--trace", metavar="FILE",
+        help="write every message sent and seen, as a trace dynevent check reads",
+    )  # fmt: skip
     parser.set_defaults(run=_probe)
 
 

@@ -53,13 +53,16 @@ class Verdict(enum.Enum):
 @attrs.frozen
 class Case:
     """One probe case: ``needs`` is ``"status"`` (a status on the graph), ``"run"`` (an active
-    dynamic event, WAITING) or ``"child"`` (an active run and a place to send the robot to)."""
+    dynamic event, WAITING) or ``"child"`` (an active run and a place to send the robot to).
+    ``traced`` says whether ``dynevent check``, reading the probe's ``--trace``, can see the case's
+    failure too (not when a passive observer cannot tell the failure from a moment the spec allows)."""
 
     id: str
     title: str
     rules: tuple[str, ...]
     needs: str = "run"
     divergences: tuple[str, ...] = ()
+    traced: bool = True
 
     @property
     def section(self) -> str:
@@ -70,7 +73,8 @@ class Case:
 class Finding:
     """A case's verdict, what the spec expects and what was seen, the messages exchanged, and the
     D-number when the failure is one docs/divergences.md records; ``known`` when ``--known`` covers
-    it."""
+    it; ``absent`` when the failure is a message that did not come within the timeout (a trace,
+    which has no clock, shows that only when later messages prove it)."""
 
     case: Case
     verdict: Verdict
@@ -80,6 +84,7 @@ class Finding:
     divergence: str | None = None
     known: bool = False
     seconds: float = 0.0
+    absent: bool = False  # the failure is a message that did not come within the timeout
 
 
 #: Every case, in the order they run (the ones that end a run come last).
@@ -99,7 +104,7 @@ CASES: tuple[Case, ...] = (
     Case("next.id_stale", "a NEXT whose id is not above the run's highest is refused", ("R4.12",),
          needs="child", divergences=("D10",)),
     Case("next.status_after_child", "after a child ends the status is WAITING with its id", ("R2.2", "R8.4"),
-         needs="child", divergences=("D2",)),
+         needs="child", divergences=("D2",), traced=False),
     Case("next.busy", "a NEXT while a child runs is refused", ("R4.6",), needs="child"),
     Case("cancel.wrong_id", "a CANCEL naming another event is refused", ("R4.14",), needs="child",
          divergences=("D8",)),
@@ -191,6 +196,8 @@ def junit_xml(findings: Sequence[Finding], server: str = "") -> str:
         properties = ET.SubElement(test, "properties")
         ET.SubElement(properties, "property", name="rules", value=" ".join(finding.case.rules))
         ET.SubElement(properties, "property", name="verdict", value=_label(finding))
+        if finding.absent:
+            ET.SubElement(properties, "property", name="absent", value="a message did not come in time")
         account = "\n".join([f"expected: {finding.expected}", f"seen: {finding.seen}", *finding.messages])
         if finding.verdict is Verdict.FAIL and not finding.known:
             ET.SubElement(test, "failure", message=f"{_label(finding)}: {finding.seen}").text = account

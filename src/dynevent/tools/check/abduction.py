@@ -52,6 +52,7 @@ class _Owed:
     channel: str
     output: outs.Output
     rule: str
+    line: int = 0  # the line whose step owes it
 
 
 def _channel(output: outs.Output) -> str | None:

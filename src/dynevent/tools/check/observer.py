@@ -114,7 +114,7 @@ class _Books:
 
     def commit(self, state: State, owed: list[_Owed]) -> None:
         self.state = state
-        self.owed.extend(owed)
+        self.owed.extend(attrs.evolve(item, line=self.line) for item in owed)
 
     def forget_channel(self, channel: str) -> None:
         self.owed = [item for item in self.owed if item.channel != channel]
@@ -177,6 +177,26 @@ class _Books:
             return other
         self.state = saved
         return found
+
+    def answers_never_seen(self) -> None:
+        """At the trace's end: every answer owed by a step the trace showed, never seen, is missing."""
+        missing = Violation.ANSWER_MISSING
+        for item in self.owed:
+            if isinstance(item.output, outs.AnswerGoal):
+                self.findings.append(
+                    Finding(
+                        line=item.line,
+                        rule=missing.rule,
+                        code=missing.code,
+                        message=f"goal {item.output.goal_uuid} never answered (by the end of the trace)",
+                        expected=f"{answer_text(item.output.status.value, item.output.result)} ({item.rule})",
+                    )
+                )
+        self.owed = [item for item in self.owed if not isinstance(item.output, outs.AnswerGoal)]
+
+    def answers_ahead(self) -> set[tuple[str, str]]:
+        """The goal UUIDs and goal statuses of the answers among the records ahead."""
+        return {(record.goal_uuid, record.status) for record in self.lookahead if record.kind == "result"}
 
     def ahead(self, uuid: str) -> Record | None:
         """The next feedback or answer of this goal among the records the observer sees ahead."""
@@ -347,6 +367,7 @@ class _Runs:
         self.books = books
         self.names = (header.fleet, header.robot) if header.fleet or header.robot else None
         self.event_id_pending = False
+        self.begin_seen = False
 
     def sync(self, record: Record) -> bool:
         """Set the starting state from the first record; True when the record is used up."""
@@ -387,6 +408,9 @@ class _Runs:
                 f"the robot of this trace, {self.names[0]}/{self.names[1]}",
             )
         state = self.books.st
+        if self.late_begin(message):
+            return
+        self.begin_seen = True
         if state.shutdown:
             self.books.flag(
                 Violation.BEGIN_AFTER_SHUTDOWN, f"begin of run {message.dynamic_event_seq}", "nothing"
@@ -424,6 +448,15 @@ class _Runs:
         self.books.commit(*self.books.simulate([event]))
         self.event_id_pending = True
         self.books.event_id_unknown = self.books.start_uncertain = False
+
+    def late_begin(self, message: DynamicEventDescription) -> bool:
+        """The begin of the run a trace started in (from its status), read after that status: a late
+        subscriber reads the two latched topics in either order (docs/trace-format.md)."""
+        state = self.books.st
+        if self.begin_seen or not self.books.partial or not state.active:
+            return False
+        self.begin_seen = True
+        return message.dynamic_event_seq == state.seq
 
     def adopt_event_id(self, message: DynamicEventStatus) -> None:
         """The begin did not say the dynamic event's id; the WAITING status that follows does."""
@@ -476,18 +509,19 @@ class _Runs:
         if _same_status(current, message):
             return  # a repeat of the state's status (e.g. the latched message, read again)
         # in the server's order a step's answers and feedback come before its status: prefer a
-        # candidate that owes none, then accept one whose other outputs are still to come
+        # candidate that owes none, then accept one whose other outputs are still to come; a tap at a
+        # client may see the status first, so a candidate whose answers the next records show wins
+        ahead = self.books.answers_ahead()
         found: tuple[State, list[_Owed]] | None = None
-        for events in candidates(self.books.st, record, self.books.now):
+        best = (-1, True)
+        for events in [*candidates(self.books.st, record, self.books.now), *self.ended_child()]:
             state, owed = self.books.simulate(events)
             published = [item.output for item in owed if isinstance(item.output, outs.PublishStatus)]
             if not published or not _same_status(published[-1].message, message):
                 continue
-            if not any(item.channel.startswith("goal:") for item in owed):
-                found = (state, owed)
-                break
-            if found is None:
-                found = (state, owed)
+            rank = (len(_answers(owed) & ahead), not any(item.channel.startswith("goal:") for item in owed))
+            if rank > best:
+                found, best = (state, owed), rank
         if found is not None:
             state, owed = found
             self.books.commit(state, [item for item in owed if item.channel != "status"])
@@ -499,6 +533,31 @@ class _Runs:
             f"status {status_text(message)}",
             f"{status_text(current)}, the state's status",
         )
+
+    def ended_child(self) -> list[list[ins.Input]]:
+        """A child's end whose answer the next records show, after the starts of none, one, ... of the
+        queued goals (a CANCEL starts silently and stops the child): a tap at a client sees the status
+        topic and the answer on separate channels, so the status may come first."""
+        running = self.books.st.running
+        answer = self.books.ahead(running.goal_uuid) if running is not None and running.started else None
+        if answer is None or answer.kind != "result" or answer.message.status not in _STATUS_VALUES:
+            return []
+        now = self.books.now
+        starts = [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now) for queued in self.books.st.queued]
+        ended = ins.ChildFinished(status=answer.message.status, now=now)
+        # most starts first: a binding starts a goal as soon as it accepts it
+        return [[*starts[:count], ended] for count in range(len(starts), -1, -1)]
+
+
+def _answers(owed: Iterable[_Owed]) -> set[tuple[str, str]]:
+    return {
+        (item.output.goal_uuid, item.output.status.value)
+        for item in owed
+        if isinstance(item.output, outs.AnswerGoal)
+    }
+
+
+_STATUS_VALUES = frozenset(status.value for status in Status)
 
 
 class _Feedback:
@@ -861,6 +920,23 @@ class _Observer:
 LOOKAHEAD = 2
 
 
+def _response_ahead(books: _Books, record: Record, window: Iterable[Record]) -> Record | None:
+    """The response, among the records ahead, of the goal whose feedback or answer ``record`` is, when
+    the goal awaits it, or of an accepted goal when ``record`` is a status: a tap at a client sees the
+    action's channels and the status topic each in order, not one another.  (At the server a goal's
+    response follows its request at once, so no record comes between them.)"""
+
+    def awaited(ahead: Record) -> bool:
+        seen = books.goals.get(ahead.goal_uuid)
+        return ahead.kind == "goal_response" and seen is not None and not seen.responded
+
+    if record.kind == "status":  # the status of an accepted goal's start, before its response
+        return next((ahead for ahead in window if awaited(ahead) and ahead.accepted), None)
+    if record.kind not in ("feedback", "result"):
+        return None
+    return next((ahead for ahead in window if awaited(ahead) and ahead.goal_uuid == record.goal_uuid), None)
+
+
 def check_records(header: _Header, records: Iterable[Record], source: str = "<trace>") -> Report:
     """Replay parsed records in observer mode; see :func:`check_trace`."""
     observer = _Observer(header)
@@ -872,6 +948,11 @@ def check_records(header: _Header, records: Iterable[Record], source: str = "<tr
         if not window:
             break
         record = window.popleft()
+        response = _response_ahead(observer.books, record, window)
+        if response is not None:  # a tap at a client: the goal's feedback or answer came first
+            window.remove(response)
+            window.appendleft(record)
+            record = response
         observer.books.lookahead = tuple(window)
         observer.books.upcoming = window[0] if window else None
         try:
@@ -879,4 +960,5 @@ def check_records(header: _Header, records: Iterable[Record], source: str = "<tr
         except _Unreadable as exc:
             raise TraceError(source, record.line, exc.field, exc.problem) from None
         count += 1
+    observer.books.answers_never_seen()
     return Report(source=source, records=count, findings=tuple(observer.books.findings))

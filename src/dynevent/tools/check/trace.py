@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import threading
 from collections.abc import Iterable, Iterator
 from typing import Any
 
@@ -321,6 +322,81 @@ def step_records(event: ins.Input, outputs: Iterable[outs.Output]) -> list[dict[
         rows.append({"type": "cancel_request", "goal_uuid": event.goal_uuid})
     rows.extend(row for row in map(_output_record, outputs) if row is not None)
     return [{"time": time, **row} for row in rows]
+
+
+def observation(
+    kind: str,
+    now: int,
+    *,
+    goal_uuid: str | None = None,
+    message: Any = None,
+    accepted: bool | None = None,
+    status: GoalStatus | None = None,
+) -> dict[str, Any]:
+    """The trace record of one thing seen on the wire at ``now`` (integer nanoseconds), from either end.
+
+    ``message`` is the wire mirror the record holds (a begin or status message, a goal, feedback, a
+    result); ``accepted`` the answer of a goal or cancel response; ``status`` a result's goal status.
+    """
+    row: dict[str, Any] = {"time": _seconds(now), "type": kind}
+    if goal_uuid is not None:
+        row["goal_uuid"] = goal_uuid
+    if message is not None:
+        row[_MESSAGE_FIELD.get(kind, "message")] = message.to_dict()
+    if accepted is not None:
+        row["accepted"] = accepted
+    if status is not None:
+        row["status"] = status.value
+    return row
+
+
+_MESSAGE_FIELD = {"goal": "goal", "feedback": "feedback", "result": "result"}
+
+
+class TraceWriter:
+    """Writes a trace file as things happen, one record per line, each line flushed as written (a
+    process that dies keeps every record before its end).  Threads may share one writer.
+
+    ``fleet`` and ``robot`` (and the server's ``config`` as JSON, when known) make the config record.
+    Raises ``OSError`` when the file cannot be opened.
+    """
+
+    def __init__(
+        self, path: str, *, fleet: str | None = None, robot: str | None = None, config: Any = None
+    ) -> None:
+        self.path = path
+        self._lock = threading.Lock()
+        self._stream = open(path, "w", encoding="utf-8")  # noqa: SIM115  # closed by close()
+        header: dict[str, Any] = {"type": "config"}
+        header.update({key: value for key, value in (("fleet", fleet), ("robot", robot)) if value})
+        if config is not None:
+            header["config"] = config
+        self.write(header)
+
+    def write(self, row: dict[str, Any]) -> None:
+        """Write one record."""
+        line = _json.dumps(row) + "\n"
+        with self._lock:
+            if not self._stream.closed:
+                self._stream.write(line)
+                self._stream.flush()
+
+    def comment(self, text: str) -> None:
+        """Write a ``#`` line (skipped by readers), e.g. which probe case the next records belong to."""
+        line = "# " + " ".join(text.split()) + "\n"
+        with self._lock:
+            if not self._stream.closed:
+                self._stream.write(line)
+                self._stream.flush()
+
+    def step(self, event: ins.Input, outputs: Iterable[outs.Output]) -> None:
+        """Write the records of one step of a server machine (:func:`step_records`)."""
+        for row in step_records(event, outputs):
+            self.write(row)
+
+    def close(self) -> None:
+        with self._lock:
+            self._stream.close()
 
 
 def _output_record(output: outs.Output) -> dict[str, Any] | None:
