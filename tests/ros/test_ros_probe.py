@@ -136,7 +136,8 @@ def test_the_standard_mode_of_serve_passes_every_case(tmp_path: Path) -> None:
 def test_the_rmf_ros2_mode_fails_exactly_at_its_recorded_divergences(tmp_path: Path) -> None:
     serve = _serve(tmp_path, "probeCompat", "rmf_ros2")
     try:
-        strict = _probe("probeCompat", "--trace", str(tmp_path / "t"), "--junit", str(tmp_path / "j.xml"))
+        strict = _probe("probeCompat", "--trace", str(tmp_path / "t"), "--junit", str(tmp_path / "j.xml"),
+                        "--report", str(tmp_path / "report.html"))  # fmt: skip
         known = _probe("probeCompat", "--known", "rmf_ros2")
     finally:
         code = serve.stop()
@@ -145,6 +146,9 @@ def test_the_rmf_ros2_mode_fails_exactly_at_its_recorded_divergences(tmp_path: P
     expected.update({case: f"fail ({number})" for case, number in RMF_ROS2_FAILS.items()})
     assert _verdicts(strict.stdout) == expected, strict.stdout
     _check_agrees(tmp_path / "t", tmp_path / "j.xml")
+    page = (tmp_path / "report.html").read_text("utf-8")
+    for case, number in RMF_ROS2_FAILS.items():
+        assert f'<h2 id="{case}">{case}: fail ({number})</h2>' in page
     assert known.returncode == 0, known.stdout + known.stderr
     expected.update({case: f"known ({number})" for case, number in RMF_ROS2_FAILS.items()})
     assert _verdicts(known.stdout) == expected, known.stdout

@@ -81,6 +81,42 @@ def test_the_junit_report_is_what_a_ci_server_reads() -> None:
     assert rules is not None and rules.get("value") == "R4.4"
 
 
+def test_the_report_a_person_reads_says_per_case_the_rules_verdict_and_messages() -> None:
+    import html.parser
+
+    findings = [
+        Finding(CASE, Verdict.FAIL, expected="rejected", seen="accepted <then> aborted | D7",
+                divergence="D7", messages=("sent type 0 seq=1 id=0", "accepted, answered aborted")),
+        Finding(CASE, Verdict.PASS, expected="rejected", seen="so", seconds=0.25),
+    ]  # fmt: skip
+    text = probe_cases.report(findings, "tinyRobot/r1")
+    assert text.startswith("# dynevent probe: tinyRobot/r1\n\n1 pass, 1 fail\n")
+    assert f"| `{CASE.id}` | fail (D7) | R4.4 | {CASE.title} |" in text
+    assert "- seen: accepted <then> aborted \\| D7" in text  # a table cell's bar is escaped
+    assert "```\nsent type 0 seq=1 id=0\naccepted, answered aborted\n```" in text
+    assert "- divergence: D7 (docs/divergences.md)" in text and "- time: 0.250 s" in text
+    page = probe_cases.report(findings, "tinyRobot/<r1>", html_form=True)
+    assert "<title>dynevent probe: tinyRobot/&lt;r1&gt;</title>" in page
+    assert "accepted &lt;then&gt; aborted | D7" in page and "<then>" not in page
+    assert '<tr class="fail">' in page and '<tr class="pass">' in page
+
+    class Balanced(html.parser.HTMLParser):
+        def __init__(self) -> None:
+            super().__init__()
+            self.open: list[str] = []
+
+        def handle_starttag(self, tag: str, attrs: object) -> None:
+            if tag not in ("meta", "br"):
+                self.open.append(tag)
+
+        def handle_endtag(self, tag: str) -> None:
+            assert self.open.pop() == tag
+
+    parser = Balanced()
+    parser.feed(page)
+    assert parser.open == []
+
+
 def test_the_list_names_every_case_with_its_rules() -> None:
     text = probe_cases.format_list(CASES)
     assert text.splitlines()[-1] == f"{len(CASES)} case(s)"

@@ -653,13 +653,20 @@ def main(args: Any, cases: list[Case], say: Callable[[str], None]) -> int:
     if findings is None:
         return 2
     say(probe_cases.format_findings(findings).rstrip("\n"))
-    if args.junit:
-        try:
-            Path(args.junit).write_text(
-                probe_cases.junit_xml(findings, f"{options.fleet}/{options.robot}"), "utf-8"
-            )
-        except OSError as exc:
-            raise ProbeError(f"--junit {args.junit}: {exc}") from None
+    server = f"{options.fleet}/{options.robot}"
+    outputs: dict[str, Callable[[], str]] = {
+        "junit": lambda: probe_cases.junit_xml(findings, server),
+        "report": lambda: probe_cases.report(
+            findings, server, html_form=str(args.report).lower().endswith((".html", ".htm"))
+        ),
+    }
+    for flag, text in outputs.items():
+        path = getattr(args, flag)
+        if path:
+            try:
+                Path(path).write_text(text(), "utf-8")
+            except OSError as exc:
+                raise ProbeError(f"--{flag} {path}: cannot write: {exc.strerror or exc}") from None
     return probe_cases.exit_status(findings)
 
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import enum
 import fnmatch
+import html
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Sequence
 
@@ -36,6 +37,8 @@ __all__ = [
     "format_findings",
     "format_list",
     "junit_xml",
+    "probe_summary",
+    "report",
     "select",
 ]
 
@@ -160,13 +163,8 @@ def format_findings(findings: Sequence[Finding]) -> str:
             lines.append(f"  expected: {finding.expected}")
             lines.append(f"  seen:     {finding.seen}")
             lines.extend(f"  | {message}" for message in finding.messages)
-    counts = {verdict: 0 for verdict in Verdict}
-    for finding in findings:
-        counts[finding.verdict] += 1
-    known = sum(1 for finding in findings if finding.known)
-    summary = ", ".join(f"{count} {verdict.value}" for verdict, count in counts.items() if count)
     lines.append("")
-    lines.append(summary + (f" ({known} of the failures known)" if known else ""))
+    lines.append(probe_summary(findings))
     return "\n".join(lines) + "\n"
 
 
@@ -206,3 +204,90 @@ def junit_xml(findings: Sequence[Finding], server: str = "") -> str:
         elif finding.known:
             ET.SubElement(test, "system-out").text = f"known divergence {finding.divergence}\n{account}"
     return ET.tostring(suites, encoding="unicode") + "\n"
+
+
+def probe_summary(findings: Sequence[Finding]) -> str:
+    """The counts line: ``15 pass, 2 fail (2 of the failures known)``."""
+    counts = {verdict: 0 for verdict in Verdict}
+    for finding in findings:
+        counts[finding.verdict] += 1
+    known = sum(1 for finding in findings if finding.known)
+    summary = ", ".join(f"{count} {verdict.value}" for verdict, count in counts.items() if count)
+    return summary + (f" ({known} of the failures known)" if known else "")
+
+
+def report(findings: Sequence[Finding], server: str, *, html_form: bool = False) -> str:
+    """A report a person reads: a table of the cases, then per case its rules, verdict, what the spec
+    expects, what was seen and every message sent and seen.  Markdown, or a self-contained HTML page."""
+    title = f"dynevent probe: {server}"
+    rows = [
+        (finding.case.id, _label(finding), ", ".join(finding.case.rules), finding.case.title)
+        for finding in findings
+    ]
+    if html_form:
+        return _report_html(title, rows, findings)
+    lines = [
+        f"# {title}",
+        "",
+        probe_summary(findings),
+        "",
+        "| case | verdict | rules | checks |",
+        "|---|---|---|---|",
+    ]
+    lines.extend(f"| `{case}` | {label} | {rules} | {_cell(text)} |" for case, label, rules, text in rows)
+    for finding in findings:
+        lines += ["", f"## `{finding.case.id}`: {_label(finding)}", "", finding.case.title + ".", ""]
+        lines.append(f"- rules: {', '.join(finding.case.rules)} (docs/spec.md)")
+        if finding.divergence:
+            lines.append(f"- divergence: {finding.divergence} (docs/divergences.md)")
+        lines.append(f"- expected: {_cell(finding.expected) or '-'}")
+        lines.append(f"- seen: {_cell(finding.seen) or '-'}")
+        lines.append(f"- time: {finding.seconds:.3f} s")
+        if finding.messages:
+            lines += ["", "```", *finding.messages, "```"]
+    return "\n".join(lines) + "\n"
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+_STYLE = (
+    "body{font-family:sans-serif;margin:2em;max-width:70em}table{border-collapse:collapse}"
+    "td,th{border:1px solid #ccc;padding:.3em .6em;text-align:left}pre{background:#f6f6f6;padding:.6em}"
+    ".pass{background:#dfd}.fail{background:#fdd}.known{background:#ffd}.missing,.non-strict,.info{background:#eef}"
+)
+
+
+def _report_html(title: str, rows: list[tuple[str, str, str, str]], findings: Sequence[Finding]) -> str:
+    escape = html.escape
+    parts = [
+        "<!DOCTYPE html>",
+        f'<html lang="en"><head><meta charset="utf-8"><title>{escape(title)}</title>'
+        f"<style>{_STYLE}</style></head><body>",
+        f"<h1>{escape(title)}</h1>",
+        f"<p>{escape(probe_summary(findings))}</p>",
+        "<table><tr><th>case</th><th>verdict</th><th>rules</th><th>checks</th></tr>",
+    ]
+    for case, label, rules, text in rows:
+        css = label.split(" ", 1)[0]
+        parts.append(
+            f'<tr class="{escape(css)}"><td><a href="#{escape(case)}">{escape(case)}</a></td>'
+            f"<td>{escape(label)}</td><td>{escape(rules)}</td><td>{escape(text)}</td></tr>"
+        )
+    parts.append("</table>")
+    for finding in findings:
+        parts.append(
+            f'<h2 id="{escape(finding.case.id)}">{escape(finding.case.id)}: {escape(_label(finding))}</h2>'
+        )
+        parts.append(f"<p>{escape(finding.case.title)}.</p><ul>")
+        parts.append(f"<li>rules: {escape(', '.join(finding.case.rules))}</li>")
+        if finding.divergence:
+            parts.append(f"<li>divergence: {escape(finding.divergence)}</li>")
+        parts.append(f"<li>expected: {escape(finding.expected or '-')}</li>")
+        parts.append(f"<li>seen: {escape(finding.seen or '-')}</li>")
+        parts.append(f"<li>time: {finding.seconds:.3f} s</li></ul>")
+        if finding.messages:
+            parts.append(f"<pre>{escape(chr(10).join(finding.messages))}</pre>")
+    parts.append("</body></html>")
+    return "\n".join(parts) + "\n"
