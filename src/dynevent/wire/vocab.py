@@ -13,6 +13,7 @@ import enum
 __all__ = [
     "ENDED_CHILD_STATUSES",
     "TERMINAL_GOAL_STATUSES",
+    "ClientViolation",
     "Compatibility",
     "DynamicState",
     "EventType",
@@ -231,6 +232,28 @@ class Compatibility(str, enum.Enum):
 
     def __str__(self) -> str:
         return self.value
+
+
+class ClientViolation(enum.Enum):
+    """What a client can be seen sending that docs/spec.md section 22 says it must not: a code, the
+    rule, and what a well-behaved client does instead.  ``dynevent serve`` reports each under one."""
+
+    code: str
+    rule: str
+    instead: str
+
+    def __init__(self, code: str, rule: str, instead: str) -> None:
+        self.code = code
+        self.rule = rule
+        self.instead = instead
+
+    STALE_SEQ = ("stale_seq", "R22.2", "the seq of the run the status shows")
+    AFTER_FINISHED = ("after_finished", "R22.3", "no goal until a run begins")
+    NEXT_WHILE_RUNNING = ("next_while_running", "R22.4", "a NEXT or FINISHED once the child has ended")
+    CANCEL_NOT_RUNNING = ("cancel_not_running", "R22.5", "a CANCEL naming the running child, while one runs")
+    STALE_ID = ("stale_id", "R22.6", "id 0, or above the id the status shows")
+    NEVER_ACCEPTABLE = ("never_acceptable", "R22.7", "a goal some state accepts")
+    RUN_LEFT_OPEN = ("run_left_open", "R22.8", "a FINISHED at the end of the run it drove")
 
 
 class Violation(enum.Enum):
