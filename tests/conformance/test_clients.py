@@ -11,6 +11,7 @@ from dynevent import client as cl
 from dynevent.conformance.clients import ONE_CLIENT, ClientJudge
 from dynevent.server import inputs as ins
 from dynevent.server import machine
+from dynevent.server import outputs as outs
 from dynevent.server.machine import ServerConfig, State
 from dynevent.tools import loopback
 from dynevent.wire._fields import SECOND
@@ -20,8 +21,17 @@ from dynevent.wire.vocab import ClientViolation, EventType
 CONFIG = ServerConfig(categories={"go_to_place": machine.any_description})
 
 
+@pytest.fixture(autouse=True, params=["requested", "submitted"])
+def _binding(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every judgement holds whether the server steps goal requests and starts (an in-process binding)
+    or submits the goals its transport accepted (rclpy, R5.3)."""
+    monkeypatch.setattr(Robot, "submit", request.param == "submitted")
+
+
 class Robot:
     """A server machine and the judge that follows it; time in seconds."""
+
+    submit = False
 
     def __init__(self, grace: float = 0.5) -> None:
         self.state = State.new("tinyRobot", "r1")
@@ -54,9 +64,13 @@ class Robot:
             **fields,
         )  # type: ignore[arg-type]
         found = self.judge.goal(client, uuid, goal, self.now)
-        self.input(ins.GoalRequested(goal_uuid=uuid, goal=goal, now=self.now))
-        if any(queued.goal_uuid == uuid for queued in self.state.queued):
-            self.input(ins.GoalStarted(goal_uuid=uuid, now=self.now))
+        if self.submit:  # as an rclpy binding steps an accepted goal (R5.3); a refusal is not stepped
+            if isinstance(machine.accept(self.state, goal, CONFIG), outs.Accepted):
+                self.input(ins.GoalSubmitted(goal_uuid=uuid, goal=goal, now=self.now))
+        else:
+            self.input(ins.GoalRequested(goal_uuid=uuid, goal=goal, now=self.now))
+            if any(queued.goal_uuid == uuid for queued in self.state.queued):
+                self.input(ins.GoalStarted(goal_uuid=uuid, now=self.now))
         return [finding.violation.code for finding in found]
 
     def child_ends(self) -> None:

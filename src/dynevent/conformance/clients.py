@@ -121,6 +121,11 @@ class ClientJudge:
         now = event.now
         if isinstance(event, (ins.TaskCancel, ins.TaskKill, ins.Restart)) and self._active_seq is not None:
             self._ended_by_task.add(self._active_seq)
+        outputs = tuple(outputs)
+        if isinstance(event, ins.GoalSubmitted) and not any(
+            isinstance(item, outs.Ignored) for item in outputs
+        ):
+            self._accept(event, now)  # the transport accepted it before the step (R5.3)
         for output in outputs:
             if isinstance(output, outs.PublishStatus):
                 self._publish(now, output.message)
@@ -129,13 +134,16 @@ class ClientJudge:
             elif isinstance(output, outs.GoalRejected):
                 self._ended[output.goal_uuid] = (now, None)
             elif isinstance(output, outs.GoalAccepted) and isinstance(event, ins.GoalRequested):
-                self._accepted[output.goal_uuid] = now
-                seq = event.goal.dynamic_event_seq
-                if event.goal.event_type == EventType.NEXT:
-                    self._drivers[seq] = output.goal_uuid
-                elif event.goal.event_type == EventType.FINISHED:
-                    self._drivers.pop(seq, None)
+                self._accept(event, now)
         self._forget(now)
+
+    def _accept(self, event: ins.GoalRequested | ins.GoalSubmitted, now: int) -> None:
+        self._accepted[event.goal_uuid] = now
+        seq = event.goal.dynamic_event_seq
+        if event.goal.event_type == EventType.NEXT:
+            self._drivers[seq] = event.goal_uuid
+        elif event.goal.event_type == EventType.FINISHED:
+            self._drivers.pop(seq, None)
 
     def _publish(self, now: int, status: DynamicEventStatus) -> None:
         self._statuses.append(_Published(now, status))

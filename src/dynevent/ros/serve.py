@@ -29,20 +29,26 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+import attrs
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.logging import LoggingSeverity
 
+from dynevent.conformance.clients import ONE_CLIENT, ClientFinding, ClientJudge
 from dynevent.errors import (
     InvalidConfig,
+    InvalidMessage,
     ServeError,  # defined there with every error; importable here too
 )
+from dynevent.ros import convert
 from dynevent.ros.convert import RosDescription
 from dynevent.ros.server import ChildExecution, DynamicEventServer, latched
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
+from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.machine import ServerConfig, State
 from dynevent.server.store import StateStore
+from dynevent.tools.check.trace import TraceWriter
 from dynevent.tools.serve_config import (
     CategorySpec,
     ServeConfig,
@@ -155,6 +161,118 @@ def _describe(output: outs.Output | outs.Rejected) -> str | None:
     return None
 
 
+@attrs.frozen
+class Watch:
+    """What ``dynevent serve`` writes and judges besides serving: ``judge`` its clients (docs/spec.md
+    section 22) with a ``grace`` period in seconds; ``report`` a Markdown summary of the judgement at
+    exit; ``trace`` each robot's steps as a trace (a file for one robot, a directory for several)."""
+
+    judge: bool = True
+    grace: float = 0.5
+    report: str | None = None
+    trace: str | None = None
+
+
+class _Clients:
+    """Names the clients of a serve process by the GIDs of their action clients (R22.1), in the order
+    they are first seen: ``client 1``, ``client 2``..."""
+
+    def __init__(self) -> None:
+        self._names: dict[bytes, str] = {}
+        self._lock = threading.Lock()
+
+    def name(self, gid: bytes) -> str:
+        with self._lock:
+            if gid not in self._names:
+                self._names[gid] = f"client {len(self._names) + 1} (gid {gid.hex()})"
+            return self._names[gid]
+
+
+class _Judged:
+    """One robot's judge of its clients and its trace, fed by the server's steps and, when the action
+    server can be introspected, by its ``send_goal`` service events (which name the client)."""
+
+    def __init__(
+        self, fleet: str, robot: str, config: ServerConfig, watch: Watch, clients: _Clients,
+        say: Callable[[str], None], trace: TraceWriter | None,
+    ) -> None:  # fmt: skip
+        self.fleet, self.robot, self.say = fleet, robot, say
+        self.judge = ClientJudge(fleet, robot, grace=watch.grace, config=config) if watch.judge else None
+        self.clients = clients
+        self.trace = trace
+        self.named = False  # introspection names the clients; else every goal is ONE_CLIENT's
+        self.goals = 0
+        self._lock = threading.Lock()
+
+    def on_step(self, event: ins.Input, outputs: tuple[outs.Output, ...]) -> None:
+        if self.trace is not None:
+            self.trace.step(event, outputs)
+        if self.judge is None:
+            return
+        with self._lock:
+            if isinstance(event, (ins.GoalRequested, ins.GoalSubmitted)) and not self.named:
+                self._report(self.judge.goal(ONE_CLIENT, event.goal_uuid, event.goal, event.now))
+            self.judge.step(event, outputs)
+
+    def on_goal_event(self, message: Any) -> None:
+        """A ``send_goal`` service event: a request received names its client and its goal."""
+        if self.judge is None or message.info.event_type != _REQUEST_RECEIVED or not message.request:
+            return
+        request = message.request[0]
+        try:
+            goal = convert.goal_from_ros(request.goal)
+            uuid = convert.uuid_from_ros(request.goal_id)
+        except (InvalidMessage, ValueError):
+            return  # the server refuses it as it stands; nothing a judge of clients adds
+        client = self.clients.name(bytes(message.info.client_gid))
+        arrived = message.info.stamp.sec * 1_000_000_000 + message.info.stamp.nanosec
+        with self._lock:
+            self._report(self.judge.goal(client, uuid, goal, arrived))
+
+    def _report(self, found: list[ClientFinding]) -> None:
+        self.goals += 1
+        for finding in found:
+            self.say(f"{self.fleet}/{self.robot}  client judge: {finding.line()}")
+
+    def close(self, now: int) -> None:
+        if self.judge is not None:
+            with self._lock:
+                for finding in self.judge.close(now):
+                    self.say(f"{self.fleet}/{self.robot}  client judge: {finding.line()}")
+        if self.trace is not None:
+            self.trace.close()
+
+
+#: ``service_msgs/ServiceEventInfo.REQUEST_RECEIVED``.
+_REQUEST_RECEIVED = 1
+
+
+def judgement(judged: list[_Judged]) -> tuple[str, str]:
+    """The judgement of the clients at exit: one line for the live log, and a Markdown report."""
+    findings = [finding for item in judged if item.judge is not None for finding in item.judge.findings]
+    goals = sum(item.goals for item in judged)
+    by_client: dict[str, dict[str, int]] = {}
+    for finding in findings:
+        rules = by_client.setdefault(finding.client, {})
+        key = f"{finding.rule} {finding.violation.code}"
+        rules[key] = rules.get(key, 0) + 1
+    parts = [f"{client}: " + ", ".join(f"{key} x{count}" for key, count in sorted(rules.items()))
+             for client, rules in sorted(by_client.items())]  # fmt: skip
+    line = f"client judgement: {goals} goal(s) judged, {len(findings) or 'no'} finding(s)"
+    line += ("; " + "; ".join(parts)) if parts else ""
+    report = ["# dynevent serve: the judgement of its clients", "", line, ""]
+    report += ["| time | robot | client | rule | sent | could know |", "|---|---|---|---|---|---|"]
+    for finding in sorted(findings, key=lambda item: item.time):
+        stamp = (
+            time.strftime("%H:%M:%S", time.gmtime(finding.time / 1e9))
+            + f".{finding.time % 10**9 // 10**6:03d}"
+        )
+        cells = [stamp, finding.robot, finding.client, f"{finding.rule} `{finding.violation.code}`",
+                 finding.sent, finding.knew]  # fmt: skip
+        report.append("| " + " | ".join(cell.replace("|", "\\|") for cell in cells) + " |")
+    return line, "\n".join(report) + "\n"
+
+
 #: Robots per lane: one node and one executor thread each.  rclpy's executor walks every entity of
 #: its nodes at each wake-up, so a wake-up costs in proportion to the robots it serves: 2,000 robots
 #: on one executor served 56 goals a second per core, in lanes of 64 several times more
@@ -189,10 +307,14 @@ class _Robots:
         machine_config: ServerConfig,
         store: StateStore | None,
         say: Callable[[str], None],
+        watch: Watch | None = None,
     ) -> None:
         self.config = config
         self.store = store
         self.say = say
+        self.watch = watch or Watch()
+        self.clients = _Clients()
+        self.judged: list[_Judged] = []
         self.machine_config = machine_config
         index, count = config.shard
         base = "dynevent_serve" if count == 1 else f"dynevent_serve_{index}_of_{count}"
@@ -236,6 +358,9 @@ class _Robots:
     def add(self, robot: str, restored: State | None) -> None:
         """Serve ``robot``, from its restored state if any; a robot with no active run begins one."""
         fleet, store, lane = self.config.fleet, self.store, self.lane_of[robot]
+        judged = _Judged(fleet, robot, self.machine_config, self.watch, self.clients, self.say,
+                         self._trace(robot))  # fmt: skip
+        self.judged.append(judged)
         server = DynamicEventServer(
             lane.node,
             fleet,
@@ -249,7 +374,10 @@ class _Robots:
             answers=store.answers(fleet, robot) if store is not None else None,
             observer=self.observer(robot),
             on_finished=self.finished(robot),
+            on_step=judged.on_step,
         )
+        if self.watch.judge:
+            judged.named = server.introspect(judged.on_goal_event)
         self.servers[robot] = server
         if restored is not None:
             self.say(f"{fleet}/{robot}  restored: run {restored.seq}, last id {restored.last_id}")
@@ -257,13 +385,28 @@ class _Robots:
         if not server.state.active:
             server.begin(DEFAULT_DESCRIPTION, 1)
 
+    def _trace(self, robot: str) -> TraceWriter | None:
+        path = self.watch.trace
+        if path is None:
+            return None
+        if len(self.config.served()) > 1:
+            path = os.path.join(path, f"{robot}.jsonl")
+        try:
+            return TraceWriter(path, fleet=self.config.fleet, robot=robot)
+        except OSError as exc:
+            raise ServeError(f"--trace {path}: cannot write: {exc.strerror or exc}") from None
+
     def on_begin_command(self, message: Any) -> None:
         if message.fleet == self.config.fleet and message.robot in self.servers:
             self.begin_again(message.robot, message.description or DEFAULT_DESCRIPTION)
 
 
 def run(
-    config: ServeConfig, state_path: str | None, seconds: float | None, say: Callable[[str], None]
+    config: ServeConfig,
+    state_path: str | None,
+    seconds: float | None,
+    say: Callable[[str], None],
+    watch: Watch | None = None,
 ) -> int:
     """Serve until SIGINT or SIGTERM (or ``seconds``); 0, or 2 for a store or configuration refused."""
     store = StateStore(state_path) if state_path is not None else None  # InvalidStore: nothing written
@@ -279,7 +422,11 @@ def run(
     # GIL runs one thread at a time anyway.  rclpy's EventsExecutor (rclpy 9.1.2, rclpy.experimental)
     # cannot serve the binding: it refuses guard conditions and hangs at 100% CPU on an action server
     # whose execute callback is a coroutine (docs/performance.md).
-    robots = _Robots(config, checking, store, log)
+    watch = watch or Watch()
+    if watch.trace is not None and len(config.served()) > 1:
+        with contextlib.suppress(FileExistsError):
+            os.mkdir(watch.trace)
+    robots = _Robots(config, checking, store, log, watch)
     for robot in config.served():
         robots.add(robot, stored.get((config.fleet, robot)))
     robots.node.create_subscription(RosDescription, BEGIN_COMMAND_TOPIC, robots.on_begin_command, latched(10))
@@ -293,6 +440,9 @@ def run(
     part = "" if count == 1 else f" (shard {index}/{count} of {len(config.robots)})"
     log(f"serving {len(names)} robot(s) of fleet {config.fleet}{part}: {shown}")
     stop.wait(seconds)
+    now = time.time_ns()
+    for judged in robots.judged:  # before the shutdown ends every run
+        judged.close(now)
     for server in robots.servers.values():
         server.shutdown()
     time.sleep(0.2)  # let the shutdown answers go out before the node goes
@@ -304,6 +454,15 @@ def run(
         close_down([lane.node for lane in robots.lanes])
     if store is not None:
         store.close()
+    if watch.judge:
+        line, report = judgement(robots.judged)
+        log(line)
+        if watch.report is not None:
+            try:
+                with open(watch.report, "w", encoding="utf-8") as stream:
+                    stream.write(report)
+            except OSError as exc:
+                log(f"--report {watch.report}: cannot write: {exc.strerror or exc}")
     log.close()
     return 0
 

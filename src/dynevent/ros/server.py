@@ -246,6 +246,8 @@ class _Entities:
         )
         self.timer: Any = None
         self.service = None
+        self.introspection: Any = None
+        self.action_name = action_name(fleet, robot)
         if description_service is not None:
             self.service = node.create_service(
                 description_service,
@@ -263,7 +265,29 @@ class _Entities:
             self.node.destroy_timer(self.timer)
             self.timer = None
 
+    def introspect(self, on_goal: Callable[[Any], None]) -> bool:
+        """Turn on the introspection of the action server (the requests' contents) and follow its
+        ``send_goal`` service events with ``on_goal``: how a server learns which client sent a goal
+        (R22.1).  False where rclpy cannot."""
+        configure = getattr(self.action, "configure_introspection", None)
+        if configure is None:
+            return False
+        from rclpy.qos import QoSProfile
+        from rclpy.service_introspection import ServiceIntrospectionState
+
+        configure(self.node.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
+        self.introspection = self.node.create_subscription(
+            DynamicEvent.Impl.SendGoalService.Event,
+            f"{self.action_name}/_action/send_goal/_service_event",
+            on_goal,
+            QoSProfile(depth=100),
+            callback_group=self.group,
+        )
+        return True
+
     def destroy(self, node: Any) -> None:
+        if self.introspection is not None:
+            node.destroy_subscription(self.introspection)
         self.action.destroy()
         self.refresh(False)
         node.destroy_publisher(self.status)
@@ -291,9 +315,10 @@ class DynamicEventServer:
     them, :meth:`dynevent.server.store.StateStore.keep_answers`); ``answers``
     are the answers kept before a restart, given to clients that ask for
     their goals' results again (R21.4); ``observer`` sees
-    every output as it is carried out and every refusal of a goal request.  The node must be spun
-    by an executor (single- or multi-threaded); every method may be called
-    from any thread.
+    every output as it is carried out and every refusal of a goal request; ``on_step(input,
+    outputs)`` every step of the machine, as it is taken (a trace, a judge of the clients).  The
+    node must be spun by an executor (single- or multi-threaded); every method may be called from
+    any thread.
     """
 
     def __init__(
@@ -314,8 +339,10 @@ class DynamicEventServer:
         on_answers: Callable[[tuple[outs.AnswerGoal, ...]], None] | None = None,
         answers: Mapping[str, outs.AnswerGoal] | None = None,
         observer: Callable[[outs.Output | outs.Rejected], None] | None = None,
+        on_step: Callable[[ins.Input, tuple[outs.Output, ...]], None] | None = None,
     ) -> None:
         self._node = node
+        self._on_step = on_step
         self._config = config
         self._children = children
         self._stubbornness = stubbornness
@@ -379,6 +406,8 @@ class DynamicEventServer:
 
     def _step(self, event: ins.Input) -> tuple[outs.Output, ...]:
         transition = machine.step(self._state, event, self._config)
+        if self._on_step is not None:  # under the lock: steps are seen in the order they were taken
+            self._on_step(event, transition.outputs)
         self._keep(transition.state, transition.outputs)
         self._outbox.extend(transition.outputs)
         return transition.outputs
@@ -434,6 +463,11 @@ class DynamicEventServer:
         """Release the action server, publishers, timer and guard condition (after :meth:`shutdown`)."""
         self._ros.destroy(self._node)
 
+    def introspect(self, on_goal: Callable[[Any], None]) -> bool:
+        """Follow the ``send_goal`` service events of this robot's action server (its introspection,
+        turned on): ``on_goal(event)`` for each; False where rclpy cannot introspect an action."""
+        return self._ros.introspect(on_goal)
+
     def _describe(self, request: Any, response: Any) -> Any:
         with self._lock:  # a query: its one output is the answer, not an effect for the outbox (R16)
             outputs = machine.step(self._state, ins.DescriptionQuery(now=self.now()), self._config).outputs
@@ -476,9 +510,10 @@ class DynamicEventServer:
             goal = convert.goal_from_ros(goal_handle.request)  # it passed the goal callback's check
         self._converted = (None, goal)
         with self._lock:
-            transition = machine.step(
-                self._state, ins.GoalSubmitted(goal_uuid=uuid, goal=goal, now=self.now()), self._config
-            )
+            submitted = ins.GoalSubmitted(goal_uuid=uuid, goal=goal, now=self.now())
+            transition = machine.step(self._state, submitted, self._config)
+            if self._on_step is not None:
+                self._on_step(submitted, transition.outputs)
             first = transition.outputs[0]
             if isinstance(first, outs.Ignored):  # R18.2: a UUID still open in a restored state
                 self._log.error(f"goal {uuid}: {first.why}; aborted")

@@ -296,13 +296,21 @@ def _ros_command(command: str, check: Callable[[], Any], run: Callable[[Any, Any
 
 
 def _serve(args: argparse.Namespace) -> int:
+    from dynevent.errors import ServeError
     from dynevent.tools.serve_config import load_config
 
-    return _ros_command(
-        "serve",
-        lambda: load_config(args),
-        lambda serve, config: serve.run(config, args.state, args.seconds, _say),
-    )
+    def check() -> Any:
+        if not 0 <= args.grace <= 3600:
+            raise ServeError(f"--grace: expected seconds from 0 to 3600 (got {args.grace})")
+        for flag in ("report", "trace"):
+            _check_directory(flag, getattr(args, flag), ServeError)
+        return load_config(args)
+
+    def run(serve: Any, config: Any) -> int:
+        watch = serve.Watch(judge=not args.no_judge, grace=args.grace, report=args.report, trace=args.trace)
+        return int(serve.run(config, args.state, args.seconds, _say, watch))
+
+    return _ros_command("serve", check, run)
 
 
 def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -350,6 +358,23 @@ def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         "for one fleet (each with its own --state file)",
     )
     parser.add_argument("--seconds", type=float, metavar="SECONDS", help="stop after this long")
+    parser.add_argument(
+        "--no-judge", action="store_true",
+        help="do not judge the clients (by default every goal is judged against docs/spec.md section 22, "
+        "a line per finding, and a summary at exit)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--grace", type=float, default=0.5, metavar="SECONDS",
+        help="how long a status takes to reach a client, for the judgement (default 0.5)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--report", metavar="FILE", help="write the judgement of the clients as Markdown at exit"
+    )
+    parser.add_argument(
+        "--trace", metavar="PATH",
+        help="write every step as a trace dynevent check reads: a file for one robot, a directory of "
+        "ROBOT.jsonl for several",
+    )  # fmt: skip
     parser.set_defaults(run=_serve)
 
 

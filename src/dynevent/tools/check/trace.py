@@ -308,16 +308,23 @@ def step_records(event: ins.Input, outputs: Iterable[outs.Output]) -> list[dict[
     """The trace records a tap at the server writes for one step of the machine, in order.
 
     A goal request gives its ``goal`` record, then the ``goal_response``
-    (with the reason, as an in-process binding can give it); an action-level
+    (with the reason, as an in-process binding can give it); a goal submitted
+    (accepted by the transport, R5.3) its ``goal`` and an accepted response; an action-level
     cancel its ``cancel_request`` and ``cancel_response``; every publication,
     feedback and answer its record.  The other outputs are not on the wire.
     Feeding a server's steps through this gives a trace that
     :func:`check_trace` finds clean.
     """
     time = _seconds(event.now)
+    outputs = tuple(outputs)
     rows: list[dict[str, Any]] = []
-    if isinstance(event, ins.GoalRequested):
+    if isinstance(event, (ins.GoalRequested, ins.GoalSubmitted)):
         rows.append({"type": "goal", "goal_uuid": event.goal_uuid, "goal": event.goal.to_dict()})
+    if isinstance(event, ins.GoalSubmitted) and not any(
+        isinstance(output, outs.Ignored) for output in outputs
+    ):
+        # the transport accepted it before the step (R5.3): the response the client saw
+        rows.append({"type": "goal_response", "goal_uuid": event.goal_uuid, "accepted": True})
     if isinstance(event, ins.CancelRequested):
         rows.append({"type": "cancel_request", "goal_uuid": event.goal_uuid})
     rows.extend(row for row in map(_output_record, outputs) if row is not None)
