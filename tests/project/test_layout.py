@@ -26,7 +26,8 @@ ALLOWED: dict[str, frozenset[str]] = {
     "conformance": frozenset({"errors", "wire", "server", "descriptions"}),
     "descriptions": frozenset({"errors", "wire", "server"}),
     "tools": frozenset({"errors", "wire", "server", "client", "conformance", "descriptions", "ros"}),
-    "ros": frozenset({"errors", "wire", "server", "client", "descriptions", "tools"}),
+    # judging is conformance (docs/design): ros reads the client judge from below
+    "ros": frozenset({"errors", "wire", "server", "client", "conformance", "descriptions", "tools"}),
     "testing": frozenset({"errors", "wire", "server", "conformance"}),
 }
 

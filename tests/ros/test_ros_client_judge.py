@@ -1,0 +1,87 @@
+"""``dynevent serve`` judges the clients that talk to it (docs/spec.md section 22), over DDS: each
+deliberately broken client (a probe case that sends what a client must not, run as its own process,
+so its own action client) is caught by its rule and named by its action client's GID; dynevent's own
+``send`` (the client machine) is judged clean; a run left open is its last driver's at exit; the
+summary, the ``--report`` and a ``--trace`` that check finds clean are written at exit."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from ros_support import Child, child_env, finish, wait_for
+
+from dynevent.tools.check import check_trace
+
+ROBOT = "judged1"
+
+#: Each broken client (the probe cases it runs) and the one rule serve must name for it.
+BROKEN_CLIENTS = [
+    (["request.seq_stale"], "R22.2 stale_seq"),
+    (["request.event_type_0"], "R22.7 never_acceptable"),
+    (["request.cancel_idle"], "R22.5 cancel_not_running"),
+    (["next.id_stale"], "R22.6 stale_id"),
+    (["next.busy"], "R22.4 next_while_running"),
+    (["finished.ends_the_run", "finished.next_after"], "R22.3 after_finished"),
+]
+
+
+def _run(*args: str) -> subprocess.CompletedProcess[str]:
+    process = subprocess.Popen(
+        [sys.executable, "-m", "dynevent", *args, "--robot", ROBOT],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=child_env(),
+    )  # fmt: skip
+    return finish(process, 90)
+
+
+def _findings(serve: Child) -> list[str]:
+    return [line for line in serve.lines if "  client judge: " in line]
+
+
+@pytest.mark.spec("R22.1", "R22.2", "R22.3", "R22.4", "R22.5", "R22.6", "R22.7", "R22.8")
+def test_serve_names_each_broken_client_by_its_rule_and_judges_send_clean(tmp_path: Path) -> None:
+    config = tmp_path / "fleet.json"
+    config.write_text(json.dumps({"categories": {"go_to_place": {"duration": 0.5, "report_every": 0.1}},
+                                  "rebegin": 0.5}), encoding="utf-8")  # fmt: skip
+    report, trace = tmp_path / "judgement.md", tmp_path / "serve.jsonl"
+    serve = Child(["-m", "dynevent", "serve", "--robot", ROBOT, "--config", str(config),
+                   "--report", str(report), "--trace", str(trace)])  # fmt: skip
+    clients = []
+    try:
+        serve.wait_line("serving ")
+        for cases, rule in BROKEN_CLIENTS:
+            before = len(_findings(serve))
+            done = _run("probe", "--place", "pantry", "--timeout", "5", "--cases", *cases)
+            assert done.returncode == 0, done.stdout + done.stderr
+            serve.wait_line(rule)
+            new = _findings(serve)[before:]
+            assert len(new) == 1 and rule in new[0], (cases, new)
+            clients.append(re.search(r"client judge: (client \d+ \(gid [0-9a-f]{32}\))", new[0]).group(1))  # type: ignore[union-attr]
+        assert len(set(clients)) == len(clients), clients  # each process its own action client (R22.1)
+        before = len(_findings(serve))
+        for args in (["--place", "pantry"], ["--end"]):  # the client machine, as dynevent send drives it
+            sent = _run("send", "--timeout", "20", *args)
+            assert sent.returncode == 0, sent.stdout + sent.stderr
+        runs = sum(1 for line in serve.lines if "begin: run" in line)
+        wait_for(
+            lambda: sum(1 for line in serve.lines if "begin: run" in line) > runs, "the next run (rebegin)"
+        )
+        left_open = _run("send", "--timeout", "20", "--place", "pantry")  # a run driven, never ended
+        assert left_open.returncode == 0, left_open.stdout + left_open.stderr
+        assert _findings(serve)[before:] == [], serve.output
+    finally:
+        code = serve.stop()
+    assert code == 0, serve.output
+    last = _findings(serve)[-1]
+    assert "R22.8 run_left_open" in last and clients[0] not in last, serve.output
+    summary = next(line for line in serve.lines if "client judgement:" in line)
+    assert f"{len(BROKEN_CLIENTS) + 1} finding(s)" in summary, summary
+    text = report.read_text("utf-8")
+    assert text.startswith("# dynevent serve: the judgement of its clients")
+    assert sum(1 for line in text.splitlines() if line.startswith("| ") and " R22." in line) == 7
+    checked = check_trace(trace.read_text("utf-8"), str(trace))
+    assert checked.records > 30 and checked.clean, checked.findings[:3]
