@@ -237,15 +237,19 @@ def report(findings: Sequence[Finding], server: str, *, html_form: bool = False)
     lines.extend(f"| `{case}` | {label} | {rules} | {_cell(text)} |" for case, label, rules, text in rows)
     for finding in findings:
         lines += ["", f"## `{finding.case.id}`: {_label(finding)}", "", finding.case.title + ".", ""]
-        lines.append(f"- rules: {', '.join(finding.case.rules)} (docs/spec.md)")
-        if finding.divergence:
-            lines.append(f"- divergence: {finding.divergence} (docs/divergences.md)")
-        lines.append(f"- expected: {_cell(finding.expected) or '-'}")
-        lines.append(f"- seen: {_cell(finding.seen) or '-'}")
-        lines.append(f"- time: {finding.seconds:.3f} s")
+        lines.extend(f"- {name}: {_cell(value)}" for name, value in _facts(finding))
         if finding.messages:
             lines += ["", "```", *finding.messages, "```"]
     return "\n".join(lines) + "\n"
+
+
+def _facts(finding: Finding) -> list[tuple[str, str]]:
+    """What a report says of a case, in order: its rules, divergence, expected, seen and time."""
+    facts = [("rules", f"{', '.join(finding.case.rules)} (docs/spec.md)")]
+    if finding.divergence:
+        facts.append(("divergence", f"{finding.divergence} (docs/divergences.md)"))
+    facts += [("expected", finding.expected or "-"), ("seen", finding.seen or "-")]
+    return [*facts, ("time", f"{finding.seconds:.3f} s")]
 
 
 def _cell(text: str) -> str:
@@ -281,12 +285,8 @@ def _report_html(title: str, rows: list[tuple[str, str, str, str]], findings: Se
             f'<h2 id="{escape(finding.case.id)}">{escape(finding.case.id)}: {escape(_label(finding))}</h2>'
         )
         parts.append(f"<p>{escape(finding.case.title)}.</p><ul>")
-        parts.append(f"<li>rules: {escape(', '.join(finding.case.rules))}</li>")
-        if finding.divergence:
-            parts.append(f"<li>divergence: {escape(finding.divergence)}</li>")
-        parts.append(f"<li>expected: {escape(finding.expected or '-')}</li>")
-        parts.append(f"<li>seen: {escape(finding.seen or '-')}</li>")
-        parts.append(f"<li>time: {finding.seconds:.3f} s</li></ul>")
+        parts.extend(f"<li>{name}: {escape(value)}</li>" for name, value in _facts(finding))
+        parts.append("</ul>")
         if finding.messages:
             parts.append(f"<pre>{escape(chr(10).join(finding.messages))}</pre>")
     parts.append("</body></html>")
