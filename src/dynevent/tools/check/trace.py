@@ -382,18 +382,16 @@ class TraceWriter:
 
     def write(self, row: dict[str, Any]) -> None:
         """Write one record."""
-        line = _json.dumps(row) + "\n"
-        with self._lock:
-            if not self._stream.closed:
-                self._stream.write(line)
-                self._stream.flush()
+        self._put(_json.dumps(row))
 
     def comment(self, text: str) -> None:
         """Write a ``#`` line (skipped by readers), e.g. which probe case the next records belong to."""
-        line = "# " + " ".join(text.split()) + "\n"
+        self._put("# " + " ".join(text.split()))
+
+    def _put(self, line: str) -> None:
         with self._lock:
-            if not self._stream.closed:
-                self._stream.write(line)
+            if not self._stream.closed:  # a late callback after close writes nothing
+                self._stream.write(line + "\n")
                 self._stream.flush()
 
     def step(self, event: ins.Input, outputs: Iterable[outs.Output]) -> None:
