@@ -16,7 +16,7 @@ from dynevent.ros import server as ros_server
 from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.tools.cli import main
-from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReason
+from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReason, Tier
 
 
 def _accept_despite(reason: RejectReason) -> None:
@@ -95,6 +95,14 @@ def ignores_finished(server: Any, output: outs.Output) -> outs.Output | None:
     return output
 
 
+def ignores_clamp(server: Any, output: outs.Output) -> outs.Output | None:
+    """A stubborn period below the minimum is clamped without the warning (the start feedback's)."""
+    if isinstance(output, outs.PublishFeedback) and output.feedback.logs:
+        logs = tuple(entry for entry in output.feedback.logs if entry.tier != Tier.WARNING.value)
+        return attrs.evolve(output, feedback=attrs.evolve(output.feedback, logs=logs))
+    return output
+
+
 DEFECTS: dict[str, Callable[[], None]] = {
     "accepts_stale_seq": lambda: _accept_despite(RejectReason.SEQ_MISMATCH),
     "accepts_unknown_category": lambda: _accept_despite(RejectReason.UNSUPPORTED_CATEGORY),
@@ -104,6 +112,7 @@ DEFECTS: dict[str, Callable[[], None]] = {
     "running_after_child": lambda: _rewrite(running_after_child),
     "wrong_feedback_id": lambda: _rewrite(wrong_feedback_id),
     "ignores_finished": lambda: _rewrite(ignores_finished),
+    "ignores_clamp": lambda: _rewrite(ignores_clamp),
 }
 
 if __name__ == "__main__":

@@ -435,6 +435,26 @@ def test_a_trace_from_a_tap_at_a_client_is_read_in_the_servers_order() -> None:
         assert report.clean, (name, report.findings)
 
 
+@pytest.mark.spec("R3.1", "R3.2")
+def test_a_new_runs_status_may_be_read_before_its_begin() -> None:
+    """The run after the wrap begins: its WAITING status, on the status topic, is read just before its
+    begin; the observer reads the begin first.  A status of a run whose begin never comes is still
+    flagged."""
+    trace = Trace().begin(4294967295).status(4294967295, 1, "standby", 0)
+    trace.goal(1, event_type=3, dynamic_event_seq=4294967295).result(1, "succeeded", "completed", 0)
+    trace.status(4294967295, 0, "uninitialized", 0).begin(0).status(0, 1, "standby", 0)
+    assert trace.check().clean
+    rows = trace.rows
+    begin = _index(trace, "begin", message=rows[-2]["message"])
+    swapped = _client_view(rows, [(begin, 1)])
+    assert swapped != trace.text()
+    assert check_trace(swapped, "swapped").clean
+    alone = Trace().begin(4294967295).status(4294967295, 1, "standby", 0)
+    alone.goal(1, event_type=3, dynamic_event_seq=4294967295).result(1, "succeeded", "completed", 0)
+    alone.status(4294967295, 0, "uninitialized", 0).status(0, 1, "standby", 0)
+    assert [code for _, _, code in found(alone.check())] == ["status_mismatch"]
+
+
 def test_a_late_subscriber_may_read_the_latched_begin_after_the_status() -> None:
     trace = Trace(config=False).status(1, 1, "standby", 5).begin()
     trace.next(1, 6).feedback(1, "underway", 6).status(1, 2, "underway", 6)

@@ -24,17 +24,20 @@ def test_every_case_cites_rules_of_the_spec_and_divergences_of_the_record() -> N
         assert case.rules and set(case.rules) <= SPEC_RULES, case
         assert set(case.divergences) <= DIVERGENCES, case
         assert case.needs in ("status", "run", "child"), case
-    assert KNOWN["rmf_ros2"] == {"D2", "D7", "D8", "D10"}
+    assert KNOWN["rmf_ros2"] == {"D2", "D7", "D8", "D9", "D10", "D11"}
 
 
 @pytest.mark.parametrize(
     ("patterns", "ids"),
     [
         ((), [case.id for case in CASES]),
-        (("cancel",), ["cancel.wrong_id", "cancel.running_child"]),
+        (("cancel",), ["cancel.wrong_id", "cancel.running_child", "cancel.both_answered"]),
         (("request.seq_*",), ["request.seq_stale", "request.seq_future"]),
-        (("R4.1*",), ["request.cancel_idle", "next.id_stale", "cancel.wrong_id"]),
-        (("R9.3", "finished.next_after"), ["cancel.running_child", "finished.next_after"]),
+        (("R4.1*",), ["request.cancel_idle", "next.id_stale", "next.race", "cancel.wrong_id"]),
+        (
+            ("R9.3", "finished.next_after"),
+            ["cancel.running_child", "cancel.both_answered", "finished.next_after"],
+        ),
         (("nothing",), []),
     ],
 )
@@ -122,3 +125,12 @@ def test_the_list_names_every_case_with_its_rules() -> None:
     assert text.splitlines()[-1] == f"{len(CASES)} case(s)"
     line = next(line for line in text.splitlines() if line.startswith("request.cancel_idle "))
     assert " ".join(line.split()) == "request.cancel_idle a CANCEL while no child runs is refused (R4.13)"
+
+
+def test_docs_probe_lists_every_case_with_its_rules_and_divergences() -> None:
+    """docs/probe.md's table of cases is the data of CASES, row for row."""
+    text = (ROOT / "docs" / "probe.md").read_text(encoding="utf-8")
+    rows = re.findall(r"^\| `([a-z_.0-9]+)` \| (.*?) \| (.*?) \| (.*?) \|$", text, re.M)
+    assert rows == [
+        (case.id, ", ".join(case.rules), case.title, ", ".join(case.divergences)) for case in CASES
+    ]

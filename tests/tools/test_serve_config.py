@@ -149,3 +149,19 @@ def test_the_defaults_are_the_documented_ones() -> None:
     assert DEFAULT_CATEGORIES["go_to_place"].fail_on == ("nowhere",)
     assert DEFAULT_CATEGORIES["go_to_place"].duration == 3.0
     assert DEFAULT_CATEGORIES["perform_action"].duration == 2.0
+
+
+def test_the_first_runs_seq_is_configured_by_file_or_flag_within_a_uint32(tmp_path: Path) -> None:
+    assert load_config(_args()).first_seq == 1
+    assert _load(tmp_path, {"first_seq": 4294967295}).first_seq == 4294967295
+    flagged = _args()
+    flagged.first_seq = 0
+    assert load_config(flagged).first_seq == 0
+    for value in (-1, 2**32, 1.5, True, "7"):
+        with pytest.raises(ServeError, match=r"serve\.json: first_seq: expected a seq from 0 to 4294967295"):
+            _load(tmp_path, {"first_seq": value})
+    flagged.first_seq = 2**32
+    with pytest.raises(
+        ServeError, match=r"^--first-seq: expected a seq from 0 to 4294967295 \(got 4294967296\)$"
+    ):
+        load_config(flagged)

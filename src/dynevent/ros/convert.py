@@ -38,6 +38,7 @@ __all__ = [
     "RosStatus",
     "begin_from_ros",
     "begin_to_ros",
+    "describe_type",
     "feedback_from_ros",
     "feedback_to_ros",
     "goal_from_ros",
@@ -54,6 +55,16 @@ __all__ = [
 
 
 _F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def describe_type() -> Any | None:
+    """The description query's service type (R16), ``rmf_task_msgs/srv/DescribeDynamicEvent``, or
+    None where the installed ``rmf_task_msgs`` has none (the deployed one has none: D17)."""
+    try:
+        from rmf_task_msgs.srv import DescribeDynamicEvent
+    except ImportError:
+        return None
+    return DescribeDynamicEvent
 
 
 def _received(convert: _F) -> _F:

@@ -13,6 +13,7 @@ status that follows.
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import shlex
@@ -39,15 +40,22 @@ from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.tools import probe_cases
 from dynevent.tools.check.trace import TraceWriter, observation
 from dynevent.tools.probe_cases import Case, Finding, Verdict
-from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
+from dynevent.wire.messages import (
+    DynamicEventDescription,
+    DynamicEventStatus,
+    Feedback,
+    Goal,
+    LogEntry,
+    Result,
+)
 from dynevent.wire.names import (
-    ROBOT_BEGIN_TOPIC_DEPTH,
     STATUS_TOPIC_DEPTH,
     action_name,
     begin_topic,
+    description_service,
     status_topic,
 )
-from dynevent.wire.vocab import ENDED_CHILD_STATUSES, DynamicState, EventType, GoalStatus
+from dynevent.wire.vocab import ENDED_CHILD_STATUSES, DynamicState, EventType, GoalStatus, Tier
 
 __all__ = ["Exchange", "Link", "Options", "Probe", "main", "run"]
 
@@ -57,6 +65,11 @@ _TERMINAL = {
     RosGoalStatus.STATUS_ABORTED: GoalStatus.ABORTED,
 }
 _U32 = 2**32
+_U64 = 2**64
+#: How long the description case looks for the service, which a server need not offer (D17).
+_SERVICE_WAIT = 2.0
+#: The history depth of the probe's own subscriptions.
+_READER_DEPTH = 100
 
 
 class Exchange:
@@ -68,6 +81,7 @@ class Exchange:
         self.accepted: bool | None = None
         self.feedback: list[Feedback] = []
         self.answers: list[tuple[GoalStatus, Result]] = []
+        self.handle: Any = None  # rclpy's ClientGoalHandle, once accepted
         self._changed = threading.Condition()
 
     def _note(self, update: Callable[[], None]) -> None:
@@ -102,11 +116,14 @@ class Link:
         self.statuses: list[DynamicEventStatus] = []
         self.begins: list[DynamicEventDescription] = []
         self._changed = threading.Condition()
+        # a deep reader history: the writer keeps the last message for late subscribers (R1.4), and
+        # the probe, subscribed all along, must miss none of those that follow (an INACTIVE status
+        # followed at once by the next run's)
         self._status = node.create_subscription(
-            RosStatus, status_topic(fleet, robot), self._on_status, latched(STATUS_TOPIC_DEPTH)
+            RosStatus, status_topic(fleet, robot), self._on_status, latched(_READER_DEPTH)
         )
         self._begin = node.create_subscription(
-            RosDescription, begin_topic(fleet, robot), self._on_begin, latched(ROBOT_BEGIN_TOPIC_DEPTH)
+            RosDescription, begin_topic(fleet, robot), self._on_begin, latched(_READER_DEPTH)
         )
         self._action = ActionClient(node, DynamicEvent, action_name(fleet, robot))
 
@@ -187,6 +204,8 @@ class Link:
         handle = future.result()
         accepted = bool(handle is not None and handle.accepted)
         self._record("goal_response", goal_uuid=exchange.uuid, accepted=accepted)
+        if accepted:
+            exchange.handle = handle
         exchange._note(lambda: setattr(exchange, "accepted", accepted))
         if accepted:
             handle.get_result_async().add_done_callback(lambda done: self._on_result(exchange, done))
@@ -206,6 +225,61 @@ class Link:
         self._record("feedback", goal_uuid=exchange.uuid, message=feedback)
         exchange._note(lambda: exchange.feedback.append(feedback))
 
+    def cancel(self, exchange: Exchange, timeout: float) -> bool | None:
+        """Ask for an action-level cancel of ``exchange``'s goal: whether the server accepted it (its
+        response lists the goal as canceling), or None when no response came within ``timeout``."""
+        answered = threading.Event()
+        accepted: list[bool] = []
+
+        def on_response(future: Any) -> None:
+            response = future.result()
+            canceling = [] if response is None else response.goals_canceling
+            accepted.append(any(convert.uuid_from_ros(info.goal_id) == exchange.uuid for info in canceling))
+            self._record("cancel_response", goal_uuid=exchange.uuid, accepted=accepted[0])
+            answered.set()
+
+        self._record("cancel_request", goal_uuid=exchange.uuid)
+        exchange.handle.cancel_goal_async().add_done_callback(on_response)
+        return accepted[0] if answered.wait(timeout) else None
+
+    def describe(self, timeout: float) -> tuple[Any, str]:
+        """The description query's answer (R16), or None and why there is none: no service type in
+        this installation, no service for the robot, or no answer within ``timeout``."""
+        service = convert.describe_type()
+        if service is None:
+            return None, "this installation's rmf_task_msgs has no DescribeDynamicEvent service type"
+        client = self._node.create_client(service, description_service(self.fleet, self.robot))
+        try:
+            if not client.wait_for_service(timeout_sec=min(timeout, _SERVICE_WAIT)):
+                return None, f"no description service {description_service(self.fleet, self.robot)}"
+            answered = threading.Event()
+            future = client.call_async(service.Request())
+            future.add_done_callback(lambda _: answered.set())
+            if not answered.wait(timeout):
+                return None, f"the description service did not answer within {timeout:g} s"
+            return future.result(), ""
+        finally:
+            self._node.destroy_client(client)
+
+    def wait_seen(self, condition: Callable[[DynamicEventStatus], bool], since: int, timeout: float) -> bool:
+        """Whether a status received after the first ``since`` satisfies ``condition``, waiting at
+        most ``timeout`` seconds (a later status may have followed it)."""
+        with self._changed:
+            return self._changed.wait_for(lambda: any(map(condition, self.statuses[since:])), timeout)
+
+    def wait_begin(self, seq: int, timeout: float) -> bool:
+        """Whether the begin of run ``seq`` has come, waiting at most ``timeout`` seconds (the begin
+        topic is read apart from the status topic, so a run's begin may follow its status)."""
+        with self._changed:
+            return self._changed.wait_for(
+                lambda: any(begin.dynamic_event_seq == seq for begin in self.begins), timeout
+            )
+
+    def history(self) -> list[DynamicEventStatus]:
+        """Every status received so far, oldest first."""
+        with self._changed:
+            return list(self.statuses)
+
     def destroy(self) -> None:
         self._action.destroy()
 
@@ -222,6 +296,7 @@ class Options:
     begin_command: str | None = None
     known: frozenset[str] = frozenset()
     trace: str | None = None
+    stubborn_minimum: float = 2.0
 
 
 def _waits(status: DynamicEventStatus) -> bool:
@@ -354,6 +429,15 @@ class Probe:
             exchange.answered(self.options.timeout)
         self.note(_describe_answer(exchange))
         return exchange
+
+    def cancel(self, exchange: Exchange) -> bool | None:
+        """An action-level cancel of ``exchange``'s goal: accepted, refused, or None (no response)."""
+        accepted = self.link.cancel(exchange, self.options.timeout)
+        outcome = {None: "no response", True: "accepted", False: "refused"}[accepted]
+        self.note(
+            f"sent an action-level cancel of {_describe_goal(exchange.goal).removeprefix('sent ')}: {outcome}"
+        )
+        return accepted
 
     def next_goal(self, status: DynamicEventStatus, goal_id: int | None = None) -> Goal:
         if self.options.place is None:
@@ -578,20 +662,19 @@ def _cancel_running_child(probe: Probe, case: Case) -> Finding:
 
 def _finished(probe: Probe, case: Case) -> Finding:
     status = probe.waiting()
+    since = len(probe.link.history())
     exchange = probe.send(_goal(status, EventType.FINISHED))
     expected = "succeeded, completed; then INACTIVE"
     answer = exchange.answer
     if answer is None or (answer[0], answer[1].status) != (GoalStatus.SUCCEEDED, "completed"):
         return Finding(case, Verdict.FAIL, expected=expected, seen=_describe_answer(exchange))
     seq = status.dynamic_event_seq
-    ended = probe.link.wait_status(
-        lambda s: s.dynamic_state == DynamicState.INACTIVE or s.dynamic_event_seq != seq,
+    if not probe.link.wait_seen(
+        lambda s: s.dynamic_state == DynamicState.INACTIVE and s.dynamic_event_seq == seq,
+        since,
         probe.options.timeout,
-    )
-    if ended is None or (ended.dynamic_state != DynamicState.INACTIVE and ended.dynamic_event_seq == seq):
-        return Finding(
-            case, Verdict.FAIL, expected=expected, seen="the run's status did not end", absent=True
-        )
+    ):
+        return Finding(case, Verdict.FAIL, expected=expected, seen="no INACTIVE status", absent=True)
     return Finding(case, Verdict.PASS, expected=expected, seen="so")
 
 
@@ -607,9 +690,270 @@ def _next_after(probe: Probe, case: Case) -> Finding:
     return probe.refused(case, goal)
 
 
+def _ran(exchange: Exchange, child_id: int) -> str | None:
+    """None when ``exchange``'s NEXT ran child ``child_id`` to its end (feedback with that id only,
+    answered succeeded, completed, with it); else what was seen instead."""
+    if not exchange.accepted or exchange.answer is None:
+        return _describe_answer(exchange)
+    ids = sorted({feedback.id for feedback in exchange.feedback})
+    status, result = exchange.answer
+    if ids != [child_id] or (status, result.status, result.id) != (
+        GoalStatus.SUCCEEDED,
+        "completed",
+        child_id,
+    ):
+        return f"feedback ids {ids}; {_describe_answer(exchange)}"
+    return None
+
+
+def _ran_finding(probe: Probe, case: Case, exchange: Exchange, child_id: int, expected: str) -> Finding:
+    seen = _ran(exchange, child_id)
+    if seen is None:
+        return Finding(case, Verdict.PASS, expected=expected, seen="so")
+    absent = bool(exchange.accepted) and exchange.answer is None
+    return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=absent)
+
+
+def _id_zero(probe: Probe, case: Case) -> Finding:
+    status = probe.waiting()
+    child_id = (status.id + 1) % _U64
+    exchange = probe.send(probe.next_goal(status, goal_id=0))
+    return _ran_finding(probe, case, exchange, child_id, f"child {child_id} runs and completes")
+
+
+def _id_chosen(probe: Probe, case: Case) -> Finding:
+    status = probe.waiting()
+    chosen = status.id + 5
+    if chosen >= _U64:
+        raise _Unreachable(f"no id above {status.id} is left to choose")
+    exchange = probe.send(probe.next_goal(status, goal_id=chosen))
+    finding = _ran_finding(
+        probe, case, exchange, chosen, f"child {chosen} (the NEXT's id) runs and completes"
+    )
+    if finding.verdict is Verdict.FAIL and _ran(exchange, status.id + 1) is None:
+        finding = attrs.evolve(finding, divergence="D10")  # the id was ignored: the server numbered it
+    return finding
+
+
+def _stateless_id(probe: Probe, case: Case) -> Finding:
+    status = probe.waiting()
+    first = probe.next_goal(status)
+    if not probe.send(first).answers:
+        raise _Unreachable(f"the first child did not end within {probe.options.timeout:g} s")
+    after = probe.link.wait_status(lambda s: s.id == first.id and _waits(s), probe.options.timeout)
+    if after is None:
+        raise _Unreachable(f"no status after child {first.id} ended within {probe.options.timeout:g} s")
+    phase = DynamicState(after.dynamic_state).name
+    probe.note(
+        f"status {phase} seq={after.dynamic_event_seq} id={after.id} {after.status}: the client's only state"
+    )
+    exchange = probe.send(probe.next_goal(after))  # seq and id + 1 from that status alone
+    return _ran_finding(probe, case, exchange, after.id + 1, f"child {after.id + 1} runs and completes")
+
+
+def _race(probe: Probe, case: Case) -> Finding:
+    status = probe.waiting()
+    goals = [probe.next_goal(status), probe.next_goal(status, goal_id=status.id + 2)]
+    exchanges = [probe.link.send(goal) for goal in goals]  # at once: no wait between them
+    probe.exchanges.extend(exchanges)
+    for goal, exchange in zip(goals, exchanges, strict=True):
+        exchange.responded(probe.options.timeout)
+        if exchange.accepted:
+            exchange.answered(probe.options.timeout)
+        probe.note(f"{_describe_goal(goal)}: {_describe_answer(exchange)}, {len(exchange.feedback)} feedback")
+    expected = (
+        "one child runs and completes; the other NEXT rejected, or accepted and aborted without a child"
+    )
+    ran = [exchange for exchange in exchanges if exchange.feedback]
+    if len(ran) != 1:
+        return Finding(case, Verdict.FAIL, expected=expected, seen=f"{len(ran)} of the NEXTs ran a child")
+    seen = _ran(ran[0], ran[0].goal.id)
+    if seen is not None:
+        absent = ran[0].answer is None
+        return Finding(
+            case, Verdict.FAIL, expected=expected, seen=f"the child that ran: {seen}", absent=absent
+        )
+    other = exchanges[1] if ran[0] is exchanges[0] else exchanges[0]
+    if other.accepted is None:
+        return Finding(case, Verdict.FAIL, expected=expected, seen="the other NEXT: no response", absent=True)
+    if other.accepted and other.answer is not None and other.answer[0] is not GoalStatus.ABORTED:
+        return Finding(
+            case, Verdict.FAIL, expected=expected, seen=f"the other NEXT: {_describe_answer(other)}"
+        )
+    return Finding(case, Verdict.PASS, expected=expected, seen="so")  # an unanswered other: R19.1 below
+
+
+def _log_seq(probe: Probe, case: Case) -> Finding:
+    children: list[list[LogEntry]] = []
+    for _ in range(2):
+        exchange = probe.send(probe.next_goal(probe.waiting()))
+        if not exchange.answers:
+            raise _Unreachable(f"a child did not end within {probe.options.timeout:g} s")
+        children.append([entry for feedback in exchange.feedback for entry in feedback.logs])
+    entries = [entry for logs in children for entry in logs]
+    probe.note(f"log seqs of the two children: {[[entry.seq for entry in logs] for logs in children]}")
+    expected = "each entry's seq one above the one before (modulo 2^32), across children; tiers " + ", ".join(
+        tier.value for tier in Tier
+    )
+    if len(entries) < 2:
+        return Finding(
+            case, Verdict.INFO, expected=expected, seen=f"{len(entries)} log entries: nothing to judge"
+        )
+    tiers = sorted({entry.tier for entry in entries} - {tier.value for tier in Tier})
+    if tiers:
+        return Finding(case, Verdict.FAIL, expected=expected, seen=f"tiers {tiers}")
+    within = all((b.seq - a.seq) % _U32 == 1 for logs in children for a, b in itertools.pairwise(logs))
+    gaps = [(b.seq - a.seq) % _U32 for a, b in itertools.pairwise(entries)]
+    if within and all(0 < gap <= 2**31 for gap in gaps):
+        return Finding(case, Verdict.PASS, expected=expected, seen="so")
+    seq = probe.link.status.dynamic_event_seq if probe.link.status else None
+    same_as_run = all(entry.seq == seq for entry in entries)
+    seen = "every entry's seq is the run's seq" if same_as_run else f"steps between entries {gaps}"
+    return Finding(case, Verdict.FAIL, expected=expected, seen=seen, divergence="D9" if same_as_run else None)
+
+
+def _clamp_notice(probe: Probe, case: Case) -> Finding:
+    minimum = probe.options.stubborn_minimum
+    if minimum <= 0:
+        return Finding(case, Verdict.INFO, expected="a clamp", seen="--stubborn-minimum 0: nothing to clamp")
+    goal = attrs.evolve(probe.next_goal(probe.waiting()), stubborn_period=minimum / 4)  # float32 on the wire
+    period = goal.stubborn_period
+    exchange = probe.send(goal)
+    expected = (
+        f"a warning log entry in the first feedback (stubborn period {period:g} s, minimum {minimum:g} s)"
+    )
+    if not exchange.feedback:
+        seen = f"{_describe_answer(exchange)}, no feedback"
+        return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=True)
+    warnings = [(i, entry) for i, feedback in enumerate(exchange.feedback) for entry in feedback.logs
+                if entry.tier == Tier.WARNING.value]  # fmt: skip
+    for index, entry in warnings:
+        probe.note(f"feedback {index + 1}: warning {entry.text!r}")
+    if not warnings:
+        return Finding(case, Verdict.FAIL, expected=expected, seen="no warning: the clamp is silent",
+                       divergence="D11")  # fmt: skip
+    if warnings[0][0] != 0:
+        return Finding(case, Verdict.NON_STRICT, expected=expected,
+                       seen=f"the warning came with feedback {warnings[0][0] + 1}")  # fmt: skip
+    return Finding(case, Verdict.PASS, expected=expected, seen="so")
+
+
+def _cancel_both_answered(probe: Probe, case: Case) -> Finding:
+    expected = "both CANCELs accepted and answered succeeded with the child's result; the NEXT answered once"
+    with probe.child() as (running, child_id):
+        status = probe.link.status or probe.any_status()
+        cancels = [probe.link.send(_goal(status, EventType.CANCEL, id=child_id)) for _ in range(2)]
+        probe.exchanges.extend(cancels)
+        for cancel in cancels:
+            cancel.responded(probe.options.timeout)
+            cancel.answered(probe.options.timeout)
+            probe.note(f"{_describe_goal(cancel.goal)}: {_describe_answer(cancel)}")
+        running.answered(probe.options.timeout)
+        probe.note(f"the NEXT: {_describe_answer(running)}")
+        if not all(cancel.accepted for cancel in cancels):
+            absent = any(cancel.accepted is None for cancel in cancels)
+            return Finding(case, Verdict.FAIL, expected=expected, seen="a CANCEL not accepted", absent=absent)
+        if running.answer is None or any(cancel.answer is None for cancel in cancels):
+            return Finding(case, Verdict.FAIL, expected=expected, seen="a goal left without an answer",
+                           absent=True)  # fmt: skip
+        result = running.answer[1]
+        wrong = [cancel for cancel in cancels if cancel.answer != (GoalStatus.SUCCEEDED, result)]
+        if wrong:
+            seen = f"a CANCEL {_describe_answer(wrong[0])}; the NEXT {_describe_answer(running)}"
+            return Finding(case, Verdict.FAIL, expected=expected, seen=seen)
+        return Finding(case, Verdict.PASS, expected=expected, seen="so")
+
+
+def _action_cancel_running(probe: Probe, case: Case) -> Finding:
+    expected = "the cancel accepted; the NEXT answered canceled"
+    with probe.child() as (running, _):
+        accepted = probe.cancel(running)
+        running.answered(probe.options.timeout)
+        probe.note(f"the NEXT: {_describe_answer(running)}")
+        if accepted is None:
+            return Finding(case, Verdict.FAIL, expected=expected, seen="no cancel response", absent=True)
+        if not accepted:
+            return Finding(case, Verdict.FAIL, expected=expected, seen="the cancel refused")
+        if running.answer is None:
+            return Finding(case, Verdict.FAIL, expected=expected, seen="the NEXT not answered", absent=True)
+        if running.answer[0] is not GoalStatus.CANCELED:
+            return Finding(
+                case, Verdict.FAIL, expected=expected, seen=f"the NEXT {_describe_answer(running)}"
+            )
+        return Finding(case, Verdict.PASS, expected=expected, seen="so")
+
+
+def _action_cancel_answered(probe: Probe, case: Case) -> Finding:
+    exchange = probe.send(probe.next_goal(probe.waiting()))
+    if not exchange.answers:
+        raise _Unreachable(f"the child did not end within {probe.options.timeout:g} s")
+    accepted = probe.cancel(exchange)
+    if accepted is None:
+        return Finding(
+            case, Verdict.FAIL, expected="the cancel refused", seen="no cancel response", absent=True
+        )
+    if accepted:
+        return Finding(case, Verdict.FAIL, expected="the cancel refused", seen="the cancel accepted")
+    return Finding(case, Verdict.PASS, expected="the cancel refused", seen="so")
+
+
+def _describe_query(probe: Probe, case: Case) -> Finding:
+    status = probe.waiting()
+    answer, why = probe.link.describe(probe.options.timeout)
+    if answer is None:
+        probe.note(why)
+        return Finding(case, Verdict.INFO, expected="an answer, where the server offers the query",
+                       seen=f"{why} (a server need not offer it: rmf_ros2 does not, D17)")  # fmt: skip
+    begun = [begin for begin in probe.link.begins if begin.dynamic_event_seq == status.dynamic_event_seq]
+    wanted = (True, status.status, status.id)
+    got = (bool(answer.running), str(answer.status), int(answer.id))
+    probe.note(f"answer: running={got[0]} status={got[1]} id={got[2]} description={answer.description!r}")
+    expected = f"running, {status.status}, id {status.id}, the begin's description"
+    if got != wanted or (begun and answer.description != begun[-1].description):
+        return Finding(case, Verdict.FAIL, expected=expected,
+                       seen=f"running={got[0]}, {got[1]}, id {got[2]}, {answer.description!r}")  # fmt: skip
+    return Finding(case, Verdict.PASS, expected=expected, seen="so")
+
+
+_LAST_SEQ = _U32 - 1
+
+
+def _seq_wrap(probe: Probe, case: Case) -> Finding:
+    status = probe.waiting()
+    if status.dynamic_event_seq == _LAST_SEQ:
+        ended = probe.send(_goal(status, EventType.FINISHED))
+        if not ended.answers:
+            raise _Unreachable(f"the FINISHED that ends run {_LAST_SEQ} was {_describe_answer(ended)}")
+        probe.link.wait_status(
+            lambda s: s.dynamic_event_seq != _LAST_SEQ and _waits(s), probe.options.timeout
+        )
+        status = probe.waiting()
+    seqs = [s.dynamic_event_seq for s in probe.link.history() if s.dynamic_state != DynamicState.INACTIVE]
+    if _LAST_SEQ not in seqs:
+        raise _Unreachable(
+            f"the wrap needs a run {_LAST_SEQ} (e.g. dynevent serve --first-seq {_LAST_SEQ}); this run is "
+            f"{status.dynamic_event_seq}"
+        )
+    last = len(seqs) - 1 - seqs[::-1].index(_LAST_SEQ)
+    after = [seq for seq in seqs[last:] if seq != _LAST_SEQ]
+    if not after:
+        raise _Unreachable(f"no run began after run {_LAST_SEQ} within {probe.options.timeout:g} s")
+    probe.link.wait_begin(after[0], probe.options.timeout)
+    begins = sorted({begin.dynamic_event_seq for begin in probe.link.begins})
+    probe.note(f"the run after {_LAST_SEQ}: {after[0]}; begins seen for runs {begins}")
+    expected = f"run 0 after run {_LAST_SEQ}, begun on the begin topic; a goal for {_LAST_SEQ} refused"
+    if after[0] != 0 or 0 not in begins:
+        return Finding(case, Verdict.FAIL, expected=expected, seen=f"run {after[0]}; begins for {begins}")
+    if status.dynamic_event_seq != 0:
+        raise _Unreachable(f"run 0 is over: the robot is in run {status.dynamic_event_seq}")
+    finding = probe.refused(case, _goal(status, EventType.FINISHED, dynamic_event_seq=_LAST_SEQ))
+    return attrs.evolve(finding, expected=expected)
+
+
 _CASES: dict[str, Callable[[Probe, Case], Finding]] = {
     "status.latched": _status_latched,
     "status.waiting": _status_waiting,
+    "describe.query": _describe_query,
     "request.seq_stale": _seq_stale,
     "request.seq_future": _seq_future,
     "request.event_type_0": _event_type_0,
@@ -618,13 +962,23 @@ _CASES: dict[str, Callable[[Probe, Case], Finding]] = {
     "request.description_not_json": _description_not_json,
     "request.cancel_idle": _cancel_idle,
     "next.runs_a_child": _runs_a_child,
+    "next.id_zero": _id_zero,
+    "next.id_chosen": _id_chosen,
+    "next.stateless_id": _stateless_id,
     "next.id_stale": _id_stale,
     "next.status_after_child": _status_after_child,
     "next.busy": _busy,
+    "next.race": _race,
+    "feedback.log_seq": _log_seq,
+    "stubborn.clamp_notice": _clamp_notice,
     "cancel.wrong_id": _cancel_wrong_id,
     "cancel.running_child": _cancel_running_child,
+    "cancel.both_answered": _cancel_both_answered,
+    "action.cancel_running": _action_cancel_running,
+    "action.cancel_answered": _action_cancel_answered,
     "finished.ends_the_run": _finished,
     "finished.next_after": _next_after,
+    "begin.seq_wrap": _seq_wrap,
 }
 
 
@@ -638,7 +992,7 @@ def main(args: Any, cases: list[Case], say: Callable[[str], None]) -> int:
     options = Options(
         fleet=args.fleet, robot=args.robot, place=args.place, category=args.category, timeout=args.timeout,
         begin_command=args.begin_command, known=probe_cases.KNOWN.get(args.known or "", frozenset()),
-        trace=args.trace,
+        trace=args.trace, stubborn_minimum=args.stubborn_minimum,
     )  # fmt: skip
     live = sys.stdout.isatty()
 

@@ -41,7 +41,7 @@ from dynevent.errors import (
     ServeError,  # defined there with every error; importable here too
 )
 from dynevent.ros import convert
-from dynevent.ros.convert import RosDescription
+from dynevent.ros.convert import RosDescription, describe_type
 from dynevent.ros.server import ChildExecution, DynamicEventServer, latched
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.server import inputs as ins
@@ -328,6 +328,9 @@ class _Robots:
         self.begins = DynamicEventServer.fleet_begin_publisher(self.node)
         self.servers: dict[str, DynamicEventServer] = {}
         self.rebegin_timers: dict[str, Any] = {}
+        # the description query (R16) as dynevent offers it; rmf_ros2 has none (D17), nor has a
+        # rmf_task_msgs without the project's DescribeDynamicEvent
+        self.description_service = None if config.compatibility == "rmf_ros2" else describe_type()
         self._timers_lock = threading.Lock()  # begin commands arrive on lane 0's thread
 
     def observer(self, robot: str) -> Callable[[outs.Output | outs.Rejected], None]:
@@ -368,7 +371,8 @@ class _Robots:
             self.machine_config,
             lane.children,
             begin_publisher=self.begins,
-            state=restored,
+            description_service=self.description_service,
+            state=restored or self._fresh(robot),
             on_state=store.save if store is not None else None,
             on_answers=(lambda answers: store.keep_answers(fleet, robot, answers)) if store else None,
             answers=store.answers(fleet, robot) if store is not None else None,
@@ -384,6 +388,10 @@ class _Robots:
             server.restart()
         if not server.state.active:
             server.begin(DEFAULT_DESCRIPTION, 1)
+
+    def _fresh(self, robot: str) -> State:
+        """A robot's state before its first run: the begin that follows gives it ``first_seq``."""
+        return attrs.evolve(State.new(self.config.fleet, robot), seq=(self.config.first_seq - 1) % 2**32)
 
     def _trace(self, robot: str) -> TraceWriter | None:
         path = self.watch.trace

@@ -347,6 +347,12 @@ def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         help="begin a new dynamic event this long after a run ends; 0 never (default 2)",
     )
     parser.add_argument(
+        "--first-seq",
+        type=int,
+        metavar="SEQ",
+        help="the seq of each robot's first run (default 1); 4294967295 shows the seq wrap to 0 (R3.2)",
+    )
+    parser.add_argument(
         "--compatibility",
         choices=("standard", "rmf_ros2"),
         help="serve as the spec says (standard, the default) or as rmf_ros2 does where they differ",
@@ -406,6 +412,8 @@ def _probe(args: argparse.Namespace) -> int:
             raise ProbeError(f"--cases {' '.join(args.cases)}: no case matches (see dynevent probe --list)")
         if not 0 < args.timeout < 1e6:
             raise ProbeError(f"--timeout: expected positive seconds (got {args.timeout})")
+        if not 0 <= args.stubborn_minimum < 1e6:
+            raise ProbeError(f"--stubborn-minimum: expected seconds from 0 (got {args.stubborn_minimum})")
         for flag in ("junit", "report", "trace"):
             _check_directory(flag, getattr(args, flag), ProbeError)
         return cases
@@ -440,6 +448,11 @@ def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
     parser.add_argument("--place", help="a place the robot can go to (the cases that run a child need one)")
     parser.add_argument("--category", default="go_to_place", help="the category of those children's NEXT")
     parser.add_argument("--timeout", type=float, default=10.0, metavar="SECONDS", help="bound on each wait")
+    parser.add_argument(
+        "--stubborn-minimum", type=float, default=2.0, metavar="SECONDS",
+        help="the server's least stubborn period (default 2, rmf_ros2's): stubborn.clamp_notice asks for a "
+        "quarter of it; 0 when the server applies none",
+    )  # fmt: skip
     parser.add_argument(
         "--begin-command", metavar="CMD",
         help="a command that begins a dynamic event for the robot, run when a case needs one and none "

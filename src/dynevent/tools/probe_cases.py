@@ -95,6 +95,8 @@ CASES: tuple[Case, ...] = (
     Case("status.latched", "a late subscriber receives the robot's status (transient-local)",
          ("R1.4", "R2.2"), needs="status"),
     Case("status.waiting", "an active run's status is WAITING with the run's seq", ("R2.1", "R2.2", "R3.1")),
+    Case("describe.query", "the description query answers with the run's description, status and id",
+         ("R16.2",)),
     Case("request.seq_stale", "a goal for an earlier run is refused", ("R4.2",)),
     Case("request.seq_future", "a goal for a run that has not begun is refused", ("R4.2",)),
     Case("request.event_type_0", "a goal of event_type 0 is refused", ("R4.4",), divergences=("D7",)),
@@ -104,18 +106,38 @@ CASES: tuple[Case, ...] = (
     Case("request.cancel_idle", "a CANCEL while no child runs is refused", ("R4.13",), divergences=("D8",)),
     Case("next.runs_a_child", "a NEXT runs its child: accepted, feedback with its id, one answer",
          ("R6.2", "R6.4", "R7.1", "R8.1", "R8.2", "R19.1"), needs="child"),
+    Case("next.id_zero", "a NEXT with id 0 runs child status.id + 1 (the server numbers it)",
+         ("R6.2", "R20.1"), needs="child"),
+    Case("next.id_chosen", "a NEXT's own id (above the run's highest) names its child", ("R6.2",),
+         needs="child", divergences=("D10",)),
+    Case("next.stateless_id", "right after a child ends, a NEXT with the status's id + 1 runs",
+         ("R20.1", "R20.2"), needs="child"),
     Case("next.id_stale", "a NEXT whose id is not above the run's highest is refused", ("R4.12",),
          needs="child", divergences=("D10",)),
     Case("next.status_after_child", "after a child ends the status is WAITING with its id", ("R2.2", "R8.4"),
          needs="child", divergences=("D2",), traced=False),
     Case("next.busy", "a NEXT while a child runs is refused", ("R4.6",), needs="child"),
+    Case("next.race", "two NEXTs at once: one child runs, the other NEXT is refused or aborted, each "
+         "answered once", ("R4.16", "R5.2", "R19.2", "R19.1"), needs="child"),
+    Case("feedback.log_seq", "log entries are numbered one by one per robot, across children, in known tiers",
+         ("R7.2", "R7.3"), needs="child", divergences=("D9",)),
+    Case("stubborn.clamp_notice", "a stubborn period below the minimum is clamped with a warning in the "
+         "start feedback", ("R12.2",), needs="child", divergences=("D11",)),
     Case("cancel.wrong_id", "a CANCEL naming another event is refused", ("R4.14",), needs="child",
          divergences=("D8",)),
     Case("cancel.running_child", "a CANCEL of the running child ends it: both goals answered once",
          ("R9.3", "R8.2", "R8.3", "R19.1"), needs="child"),
+    Case("cancel.both_answered", "two CANCELs of the running child wait for its end and are both "
+         "answered with its result", ("R9.3", "R8.3", "R19.1"), needs="child"),
+    Case("action.cancel_running", "an action-level cancel of the running NEXT is accepted and the NEXT "
+         "answered canceled", ("R10.3", "R8.2"), needs="child"),
+    Case("action.cancel_answered", "an action-level cancel of an answered goal is refused", ("R10.5",),
+         needs="child"),
     Case("finished.ends_the_run", "FINISHED ends the run: succeeded, completed, then INACTIVE",
          ("R11.1", "R11.2", "R2.2")),
     Case("finished.next_after", "a NEXT after the run ended is refused", ("R4.3",), needs="status"),
+    Case("begin.seq_wrap", "after run 4294967295 the next run is run 0, and a goal for 4294967295 is "
+         "refused", ("R3.2", "R3.1", "R4.2")),
 )  # fmt: skip
 
 

@@ -66,6 +66,9 @@ class ServeConfig:
     categories: dict[str, CategorySpec] = attrs.field(factory=lambda: dict(DEFAULT_CATEGORIES))
     compatibility: str = "standard"
     rebegin: float = 2.0
+    #: The seq of each robot's first run (a robot restored from ``--state`` keeps its own): start at
+    #: 4294967295 to see the seq wrap to 0 at the next begin (R3.2).
+    first_seq: int = 1
     #: The robots' map (waypoint names by index, None for an unnamed one) and the actions they
     #: perform; None: every place and every action exists.
     places: tuple[str | None, ...] | None = None
@@ -107,6 +110,8 @@ def load_config(args: argparse.Namespace) -> ServeConfig:
         config = attrs.evolve(config, robots=tuple(args.robots))
     if args.rebegin is not None:
         config = attrs.evolve(config, rebegin=args.rebegin)
+    if getattr(args, "first_seq", None) is not None:
+        config = attrs.evolve(config, first_seq=_seq(args.first_seq, "--first-seq"))
     if getattr(args, "compatibility", None) is not None:
         config = attrs.evolve(config, compatibility=args.compatibility)
     if getattr(args, "shard", None) is not None:
@@ -185,10 +190,26 @@ def plan(category: str, description: Any, config: ServeConfig) -> list[Step]:
     return [Step(label, spec.duration, failure)]
 
 
+def _seq(value: Any, what: str) -> int:
+    """A run's seq (0 to 4294967295); raises :class:`ServeError` naming ``what`` and the value."""
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**32:
+        raise ServeError(f"{what}: expected a seq from 0 to 4294967295 (got {value!r})")
+    return value
+
+
 def _config_from_dict(data: Any, source: str) -> ServeConfig:
     if not isinstance(data, dict):
         raise ServeError(f"{source}: expected a JSON object")
-    unknown = set(data) - {"fleet", "robots", "categories", "compatibility", "rebegin", "places", "actions"}
+    unknown = set(data) - {
+        "fleet",
+        "robots",
+        "categories",
+        "compatibility",
+        "rebegin",
+        "first_seq",
+        "places",
+        "actions",
+    }
     if unknown:
         raise ServeError(f"{source}: unknown keys {sorted(unknown)}")
     categories = dict(DEFAULT_CATEGORIES)
@@ -232,6 +253,7 @@ def _config_from_dict(data: Any, source: str) -> ServeConfig:
         categories=categories,
         compatibility=str(data.get("compatibility", "standard")),
         rebegin=float(data.get("rebegin", 2.0)),
+        first_seq=_seq(data.get("first_seq", 1), f"{source}: first_seq"),
         places=None if places is None else tuple(places),
         actions=None if actions is None else tuple(actions),
     )

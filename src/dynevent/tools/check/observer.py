@@ -922,15 +922,24 @@ LOOKAHEAD = 2
 
 def _response_ahead(books: _Books, record: Record, window: Iterable[Record]) -> Record | None:
     """The response, among the records ahead, of the goal whose feedback or answer ``record`` is, when
-    the goal awaits it, or of an accepted goal when ``record`` is a status: a tap at a client sees the
-    action's channels and the status topic each in order, not one another.  (At the server a goal's
+    the goal awaits it, or of an accepted goal when ``record`` is a status; or the begin of the run
+    whose status ``record`` is, when that run has not begun: a tap at a client sees the action's
+    channels, the status topic and the begin topic each in order, not one another.  (At the server a goal's
     response follows its request at once, so no record comes between them.)"""
 
     def awaited(ahead: Record) -> bool:
         seen = books.goals.get(ahead.goal_uuid)
         return ahead.kind == "goal_response" and seen is not None and not seen.responded
 
-    if record.kind == "status":  # the status of an accepted goal's start, before its response
+    if record.kind == "status":
+        seq = record.message.dynamic_event_seq
+        state = books.state
+        if state is not None and seq != state.seq and record.message.dynamic_state != DynamicState.INACTIVE:
+            # the status of a run whose begin, on the other topic, was read just after it
+            begin = next((ahead for ahead in window if ahead.kind == "begin"), None)
+            if begin is not None and begin.message.dynamic_event_seq == seq:
+                return begin
+        # the status of an accepted goal's start, before its response
         return next((ahead for ahead in window if awaited(ahead) and ahead.accepted), None)
     if record.kind not in ("feedback", "result"):
         return None
