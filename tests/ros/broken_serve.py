@@ -20,16 +20,17 @@ from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReaso
 
 
 def _accept_despite(reason: RejectReason) -> None:
-    """The request check lets through what it should refuse for ``reason``."""
-    original = machine.accept
+    """The request check (``accept``, and the steps of a goal's request and submission, which share
+    it) lets through what it should refuse for ``reason``."""
+    original = machine._decide
 
-    def accept(state: Any, goal: Any, config: Any) -> Any:
-        decision = original(state, goal, config)
+    def decide(state: Any, goal: Any, config: Any) -> Any:
+        decision, parsed = original(state, goal, config)
         if isinstance(decision, outs.Rejected) and decision.reason is reason:
-            return outs.Accepted(event_type=goal.event_type)
-        return decision
+            return outs.Accepted(event_type=goal.event_type), parsed
+        return decision, parsed
 
-    machine.accept = accept  # type: ignore[assignment]
+    machine._decide = decide
 
 
 def _rewrite(change: Callable[[Any, outs.Output], outs.Output | None]) -> None:

@@ -564,6 +564,44 @@ def test_a_goal_the_mirrors_refuse_is_rejected_with_its_reason_not_a_traceback(g
         convert.uuid_from_ros([1, 2, 3])
 
 
+@pytest.mark.spec("R4.15", "R5.3")
+def test_on_step_sees_every_goal_a_refused_one_by_its_request_with_its_uuid(graph: Graph) -> None:
+    """rclpy's goal callback gets the goal alone; the server learns the request's UUID all the same,
+    so a refused goal is a step of its own (request, refusal with its reason), and an accepted one the
+    step of its submission."""
+    from dynevent.server import inputs as ins
+    from dynevent.server import outputs as outs
+
+    steps: list[tuple[Any, tuple[Any, ...]]] = []
+
+    def on_step(event: Any, outputs: tuple[Any, ...]) -> None:
+        steps.append((event, outputs))
+
+    server = graph.node(
+        "stepped", lambda node: DynamicEventServer(node, FLEET, ROBOT, CONFIG, Adapter(), on_step=on_step)
+    )
+    server.begin("{}", 7)
+    raw = RawClient(graph, "raw")
+    stale = raw.send(dynamic_event_seq=9, event_type=3)
+    assert stale.wait_response() is False
+    finished = raw.send(dynamic_event_seq=1, event_type=3)
+    assert finished.wait_response() is True
+    wait_for(lambda: any(isinstance(event, ins.GoalSubmitted) for event, _ in steps), "the submitted step")
+    goals = [
+        (event, outputs)
+        for event, outputs in steps
+        if isinstance(event, (ins.GoalRequested, ins.GoalSubmitted))
+    ]
+    assert [type(event) for event, _ in goals] == [ins.GoalRequested, ins.GoalSubmitted]
+    (refused, outputs), (submitted, _) = goals
+    assert refused.goal_uuid == bytes(stale.handle.goal_id.uuid).hex()
+    assert len(outputs) == 1 and isinstance(outputs[0], outs.GoalRejected)
+    assert outputs[0].goal_uuid == refused.goal_uuid and outputs[0].rejection.reason.value == "seq_mismatch"
+    assert submitted.goal_uuid == bytes(finished.handle.goal_id.uuid).hex()
+    assert refused.goal_uuid != submitted.goal_uuid
+    server.shutdown()
+
+
 def test_a_received_message_the_mirror_refuses_is_the_senders_fault() -> None:
     """Conversions of received ROS messages raise MalformedMessage (a RemoteError), never the
     LocalError a value built here would; a goal UUID comes in rclpy's own shape (a uint8 array)."""

@@ -2,7 +2,8 @@
 deliberately broken client (a probe case that sends what a client must not, run as its own process,
 so its own action client) is caught by its rule and named by its action client's GID; dynevent's own
 ``send`` (the client machine) is judged clean; a run left open is its last driver's at exit; the
-summary, the ``--report`` and a ``--trace`` that check finds clean are written at exit."""
+summary, the ``--report`` and a ``--trace`` that check finds clean are written at exit, and ``send
+--trace`` writes what send sent and received, which check finds clean too."""
 
 from __future__ import annotations
 
@@ -63,8 +64,8 @@ def test_serve_names_each_broken_client_by_its_rule_and_judges_send_clean(tmp_pa
             clients.append(re.search(r"client judge: (client \d+ \(gid [0-9a-f]{32}\))", new[0]).group(1))  # type: ignore[union-attr]
         assert len(set(clients)) == len(clients), clients  # each process its own action client (R22.1)
         before = len(_findings(serve))
-        for args in (["--place", "pantry"], ["--end"]):  # the client machine, as dynevent send drives it
-            sent = _run("send", "--timeout", "20", *args)
+        for name, args in (("next", ["--place", "pantry"]), ("end", ["--end"])):  # the client machine
+            sent = _run("send", "--timeout", "20", "--trace", str(tmp_path / f"send-{name}.jsonl"), *args)
             assert sent.returncode == 0, sent.stdout + sent.stderr
         runs = sum(1 for line in serve.lines if "begin: run" in line)
         wait_for(
@@ -85,3 +86,23 @@ def test_serve_names_each_broken_client_by_its_rule_and_judges_send_clean(tmp_pa
     assert sum(1 for line in text.splitlines() if line.startswith("| ") and " R22." in line) == 7
     checked = check_trace(trace.read_text("utf-8"), str(trace))
     assert checked.records > 30 and checked.clean, checked.findings[:3]
+    # the goals serve refused are in its trace too, each with its reason (R4.15)
+    rows = [json.loads(line) for line in trace.read_text("utf-8").splitlines()]
+    reasons = {row.get("reason") for row in rows if row["type"] == "goal_response" and not row["accepted"]}
+    assert {
+        "seq_mismatch",
+        "uninitialized_event_type",
+        "cancel_idle",
+        "stale_id",
+        "busy",
+        "inactive",
+    } <= reasons
+    # send's own --trace, a tap at the client: every message it sent and received, clean under check
+    kinds = {"next": ["status", "begin", "goal", "goal_response", "feedback", "result"],
+             "end": ["status", "begin", "goal", "goal_response", "result"]}  # fmt: skip
+    for name, wanted in kinds.items():
+        text = (tmp_path / f"send-{name}.jsonl").read_text("utf-8")
+        rows = [json.loads(line) for line in text.splitlines()[1:]]
+        assert sorted({row["type"] for row in rows}, key=wanted.index) == wanted, (name, rows)
+        checked = check_trace(text, name)
+        assert checked.clean, (name, checked.findings[:3])

@@ -43,6 +43,7 @@ from dynevent.ros import convert
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.server import latched
 from dynevent.server.inputs import NOW_RANGE
+from dynevent.tools.check.trace import TraceWriter
 from dynevent.wire.messages import Result
 from dynevent.wire.names import (
     ROBOT_BEGIN_TOPIC_DEPTH,
@@ -115,6 +116,8 @@ class DynamicEventClient:
     ``categories`` (the robot's, when known) and ``validators`` (e.g.
     ``dynevent.descriptions.Robot().validators()``) let the client refuse, without
     sending it, a goal the server would refuse (:class:`dynevent.client.ClientState`).
+    ``trace`` records every message the client sends and receives, as a tap at a client
+    (docs/trace-format.md), for ``dynevent check``.
     """
 
     def __init__(
@@ -126,8 +129,10 @@ class DynamicEventClient:
         categories: Any = None,
         validators: Any = None,
         uuid_prefix: str | None = None,
+        trace: TraceWriter | None = None,
     ) -> None:
         self._node = node
+        self._trace = trace
         self._lock = threading.Lock()
         prefix = uuid_prefix if uuid_prefix is not None else os.urandom(8).hex()
         self._state = cl.ClientState.new(prefix, categories=categories, validators=validators)
@@ -264,6 +269,8 @@ class DynamicEventClient:
         uuid = send.goal_uuid
         if self._servers is None:  # the server processes this goal is sent to, to see a new one come
             self._servers = self._server_processes()
+        if self._trace is not None:
+            self._trace.observe("goal", goal_uuid=uuid, message=send.goal)
         response = self._action.send_goal_async(
             convert.goal_to_ros(send.goal),
             feedback_callback=lambda message: self._on_feedback(uuid, message),
@@ -274,6 +281,8 @@ class DynamicEventClient:
     def _on_response(self, uuid: str, future: Any) -> None:
         handle = future.result()
         accepted = bool(handle is not None and handle.accepted)
+        if self._trace is not None:
+            self._trace.observe("goal_response", goal_uuid=uuid, accepted=accepted)
         self._step(cl.GoalResponse(goal_uuid=uuid, accepted=accepted))
         if accepted:
             handle.get_result_async().add_done_callback(lambda done: self._on_result(uuid, done))
@@ -285,6 +294,8 @@ class DynamicEventClient:
         else:
             status = _TERMINAL.get(response.status, GoalStatus.ABORTED)
             result = convert.result_from_ros(response.result)
+            if self._trace is not None:
+                self._trace.observe("result", goal_uuid=uuid, status=status, message=result)
         with self._lock:
             self._orphans.discard(uuid)
         self._step(cl.ResultReceived(goal_uuid=uuid, status=status, result=result))
@@ -295,6 +306,8 @@ class DynamicEventClient:
         except InvalidMessage as exc:
             self._node.get_logger().warning(f"feedback for goal {uuid} refused: {exc}")
             return
+        if self._trace is not None:
+            self._trace.observe("feedback", goal_uuid=uuid, message=feedback)
         self._step(cl.FeedbackReceived(goal_uuid=uuid, feedback=feedback))
 
     def _on_status(self, message: Any) -> None:
@@ -303,6 +316,8 @@ class DynamicEventClient:
         except InvalidMessage as exc:
             self._node.get_logger().warning(f"status refused: {exc}")
             return
+        if self._trace is not None:
+            self._trace.observe("status", message=status)
         with self._lock:
             self._status_seen = True
         self._step(cl.StatusReceived(message=status))
@@ -313,6 +328,8 @@ class DynamicEventClient:
         except InvalidMessage as exc:
             self._node.get_logger().warning(f"begin refused: {exc}")
             return
+        if self._trace is not None:
+            self._trace.observe("begin", message=begin)
         self._step(cl.BeginReceived(message=begin))
 
     def _on_tick(self) -> None:

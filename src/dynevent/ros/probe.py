@@ -38,7 +38,7 @@ from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.server import latched
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.tools import probe_cases
-from dynevent.tools.check.trace import TraceWriter, observation
+from dynevent.tools.check.trace import TraceWriter
 from dynevent.tools.probe_cases import Case, Finding, Verdict
 from dynevent.wire.messages import (
     DynamicEventDescription,
@@ -154,7 +154,7 @@ class Link:
 
     def _record(self, kind: str, **fields: Any) -> None:
         if self._trace is not None:
-            self._trace.write(observation(kind, time.time_ns(), **fields))
+            self._trace.observe(kind, **fields)
 
     def wait_for_server(self, timeout: float) -> bool:
         return bool(self._action.wait_for_server(timeout_sec=timeout))

@@ -28,6 +28,7 @@ from dynevent.ros.client import DynamicEventClient, GoalWaitTimeout
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.server import outputs as outs
 from dynevent.tools import explain
+from dynevent.tools.check.trace import TraceWriter
 from dynevent.tools.send_request import goal_request
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import EventType, GoalStatus
@@ -56,11 +57,14 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
     def left() -> float:
         return max(timeout - (time.monotonic() - started), 0.0)
 
+    trace = _open_trace(args)
     rclpy.init()
     node = rclpy.create_node("dynevent_send")
     # a description of the field's categories is checked here as every server checks its shape
     # (R4.18): one the robot would refuse is refused here, with the server's errors, and never sent
-    client = DynamicEventClient(node, args.fleet, args.robot, validators=descriptions.shape_validators())
+    client = DynamicEventClient(
+        node, args.fleet, args.robot, validators=descriptions.shape_validators(), trace=trace
+    )
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     spinner = Spinner(executor, "dynevent-send")
@@ -105,6 +109,17 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
             spinner.stop()
             client.destroy()
             close_down([node])
+        if trace is not None:
+            trace.close()
+
+
+def _open_trace(args: argparse.Namespace) -> TraceWriter | None:
+    if getattr(args, "trace", None) is None:
+        return None
+    try:
+        return TraceWriter(args.trace, fleet=args.fleet, robot=args.robot)
+    except OSError as exc:
+        raise SendError(f"--trace {args.trace}: cannot write: {exc.strerror or exc}") from None
 
 
 def _why_refused(status: DynamicEventStatus, goal: Goal) -> str:

@@ -54,6 +54,7 @@ from dynevent.server.holder import Execution
 from dynevent.server.inputs import NOW_RANGE
 from dynevent.server.machine import ServerConfig, State
 from dynevent.wire import names
+from dynevent.wire.messages import Goal
 from dynevent.wire.names import (
     BEGIN_TOPIC,
     BEGIN_TOPIC_DEPTH,
@@ -191,6 +192,16 @@ class _RecoveringActionServer(ActionServer):  # type: ignore[misc]  # rclpy is u
     def __init__(self, *args: Any, owed: Callable[[str], outs.AnswerGoal | None], **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self._owed = owed
+        #: The UUID of the goal request whose goal callback runs (rclpy gives the callback the goal
+        #: alone); None outside it.
+        self.requested_uuid: str | None = None
+
+    async def _execute_goal_request(self, request_header_and_message: Any) -> None:
+        self.requested_uuid = convert.uuid_from_ros(request_header_and_message[1].goal_id)
+        try:
+            await super()._execute_goal_request(request_header_and_message)
+        finally:
+            self.requested_uuid = None
 
     async def _execute_get_result_request(self, request_header_and_message: Any) -> None:
         request_header, request = request_header_and_message
@@ -492,16 +503,33 @@ class DynamicEventServer:
             self._log.warning(f"goal refused: {exc}")
             return GoalResponse.REJECT
         with self._lock:
-            decision = machine.accept(self._state, goal, self._config)
+            refusal = self._refusal(goal)
         # rclpy hands the same request object to the accepted callback right after this one, in the
         # same callback of the group: its conversion is kept for it rather than done twice
         self._converted = (request, goal)
-        if isinstance(decision, outs.Rejected):
-            self._log.info(f"goal refused: {decision.reason.value}: {decision.text}")
+        if refusal is not None:
+            self._log.info(f"goal refused: {refusal.reason.value}: {refusal.text}")
             if self._observer is not None:
-                self._observer(decision)
+                self._observer(refusal)
             return GoalResponse.REJECT
         return GoalResponse.ACCEPT
+
+    def _refusal(self, goal: Goal) -> outs.Rejected | None:
+        """Why ``goal`` is refused, or None to accept it (under the lock).  Where ``on_step`` watches
+        and the request's UUID is known, a refusal is the machine's step of the request (R4.15), which
+        ``on_step`` sees; that step changes nothing, and an accepted goal is stepped when it is
+        submitted (R5.3)."""
+        uuid = self._ros.action.requested_uuid
+        if self._on_step is None or uuid is None:
+            decision = machine.accept(self._state, goal, self._config)
+            return decision if isinstance(decision, outs.Rejected) else None
+        requested = ins.GoalRequested(goal_uuid=uuid, goal=goal, now=self.now())
+        outputs = machine.step(self._state, requested, self._config).outputs
+        refused = next((output for output in outputs if isinstance(output, outs.GoalRejected)), None)
+        if refused is not None:
+            self._on_step(requested, outputs)
+            return refused.rejection
+        return None
 
     def _handle_accepted(self, goal_handle: Any) -> None:
         uuid = convert.uuid_from_ros(goal_handle.goal_id)

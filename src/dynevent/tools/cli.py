@@ -391,6 +391,7 @@ def _send(args: argparse.Namespace) -> int:
     def check() -> None:
         if not 0 < args.timeout < 1e6:
             raise SendError(f"--timeout: expected positive seconds (got {args.timeout})")
+        _check_directory("trace", args.trace, SendError)
         goal_request(args)
 
     return _ros_command("send", check, lambda send, _: send.run(args, _say))
@@ -517,6 +518,11 @@ def _add_send_command(commands: argparse._SubParsersAction[argparse.ArgumentPars
         default=60.0,
         metavar="SECONDS",
         help="bound on the whole exchange (default 60)",
+    )
+    parser.add_argument(
+        "--trace",
+        metavar="FILE",
+        help="write every message sent and received as a trace dynevent check reads",
     )
     parser.set_defaults(run=_send)
 

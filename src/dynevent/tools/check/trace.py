@@ -6,6 +6,7 @@ from __future__ import annotations
 import itertools
 import math
 import threading
+import time
 from collections.abc import Iterable, Iterator
 from typing import Any
 
@@ -383,6 +384,22 @@ class TraceWriter:
     def write(self, row: dict[str, Any]) -> None:
         """Write one record."""
         self._put(_json.dumps(row))
+
+    def observe(
+        self,
+        kind: str,
+        *,
+        goal_uuid: str | None = None,
+        message: Any = None,
+        accepted: bool | None = None,
+        status: GoalStatus | None = None,
+    ) -> None:
+        """Write what a tap saw now (the wall clock): :func:`observation`'s record."""
+        self.write(
+            observation(
+                kind, time.time_ns(), goal_uuid=goal_uuid, message=message, accepted=accepted, status=status
+            )
+        )
 
     def comment(self, text: str) -> None:
         """Write a ``#`` line (skipped by readers), e.g. which probe case the next records belong to."""
