@@ -106,3 +106,28 @@ def test_serve_names_each_broken_client_by_its_rule_and_judges_send_clean(tmp_pa
         assert sorted({row["type"] for row in rows}, key=wanted.index) == wanted, (name, rows)
         checked = check_trace(text, name)
         assert checked.clean, (name, checked.findings[:3])
+
+
+@pytest.mark.spec("R22.1", "R22.2")
+def test_without_introspection_a_refused_goal_is_judged_as_the_one_clients() -> None:
+    """Where rclpy cannot introspect the action server, every goal is one client's, judged from the
+    server's steps: a refused goal is the step of its request (the binding knows its UUID), so it is
+    judged too."""
+    from dynevent.ros.serve import Watch, _Clients, _Judged
+    from dynevent.server import inputs as ins
+    from dynevent.server import machine
+    from dynevent.wire.messages import Goal
+
+    said: list[str] = []
+    config = machine.ServerConfig()
+    judged = _Judged("tinyRobot", ROBOT, config, Watch(), _Clients(), said.append, None)
+    state = machine.State.new("tinyRobot", ROBOT)
+    begin = ins.Begin(description="{}", event_id=1, now=10**9)
+    state, outputs = machine.step(state, begin, config)
+    judged.on_step(begin, outputs)
+    stale = ins.GoalRequested(
+        goal_uuid="ab" * 16, goal=Goal(dynamic_event_seq=0, event_type=3), now=5 * 10**9
+    )
+    _, outputs = machine.step(state, stale, config)
+    judged.on_step(stale, outputs)
+    assert len(said) == 1 and "R22.2 stale_seq" in said[0] and ": a client: " in said[0], said
