@@ -455,6 +455,24 @@ def test_a_new_runs_status_may_be_read_before_its_begin() -> None:
     assert [code for _, _, code in found(alone.check())] == ["status_mismatch"]
 
 
+@pytest.mark.spec("R2.2", "R11.1")
+def test_a_latched_begin_that_opens_a_trace_does_not_name_the_runs_id_through_a_later_status() -> None:
+    """A tap that joins a run late reads the latched begin, then the latched status of a later step
+    (another time): its id is the highest used, a child's, not the run's own, which the FINISHED's
+    answer then tells.  The begin's own status (the same time) still names it."""
+
+    def opened(status_time: int, event_id: int) -> Trace:
+        trace = Trace(config=False)
+        begin = {"fleet": "tinyRobot", "robot": "tinyRobot1", "dynamic_event_seq": 2, "description": "{}"}
+        trace.add("begin", message={**begin, "start_time": {"sec": 100, "nanosec": 0}})
+        trace.add("status", message={"dynamic_event_seq": 2, "dynamic_state": 1, "status": "standby",
+                                     "id": event_id, "time": {"sec": status_time, "nanosec": 0}})  # fmt: skip
+        return trace.goal(1, event_type=3, dynamic_event_seq=2).result(1, "succeeded", "completed", 1)
+
+    assert opened(160, 2).check().clean
+    assert [code for _, _, code in found(opened(100, 2).check())] == ["result_id"]
+
+
 def test_a_late_subscriber_may_read_the_latched_begin_after_the_status() -> None:
     trace = Trace(config=False).status(1, 1, "standby", 5).begin()
     trace.next(1, 6).feedback(1, "underway", 6).status(1, 2, "underway", 6)

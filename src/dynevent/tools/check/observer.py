@@ -368,6 +368,10 @@ class _Runs:
         self.names = (header.fleet, header.robot) if header.fleet or header.robot else None
         self.event_id_pending = False
         self.begin_seen = False
+        # the trace opened with a begin: a tap at a client may have read it latched, long after it
+        # was published, and the status after it is then not the begin's own
+        self.opened_by_begin = False
+        self.latched_begin: DynamicEventDescription | None = None
 
     def sync(self, record: Record) -> bool:
         """Set the starting state from the first record; True when the record is used up."""
@@ -392,6 +396,7 @@ class _Runs:
             return True
         if record.kind == "begin":
             self.books.state = resync.next_run(base, record.message.dynamic_event_seq)
+            self.opened_by_begin = True
             return False
         self.books.state = base  # a trace from the server's start
         return False
@@ -446,6 +451,8 @@ class _Runs:
             event = ins.Begin(description="{}", event_id=0, now=self.books.now)
         self.books.state = state
         self.books.commit(*self.books.simulate([event]))
+        self.latched_begin = message if self.opened_by_begin else None
+        self.opened_by_begin = False
         self.event_id_pending = True
         self.books.event_id_unknown = self.books.start_uncertain = False
 
@@ -471,6 +478,11 @@ class _Runs:
             return
         self.event_id_pending = False
         self.books.state = resync.event_id(state, message.id)
+        begin, self.latched_begin = self.latched_begin, None
+        if begin is not None and begin.start_time != message.time:
+            # not the begin's own status (a step publishes both with one time): the id it names is the
+            # highest used so far, and the run's own id is told by its FINISHED's answer
+            self.books.event_id_unknown = True
         patched = []
         for item in self.books.owed:
             output = item.output
