@@ -20,6 +20,7 @@ error of the wire mirrors, comes as :class:`InvalidValue` (built here) or
 from __future__ import annotations
 
 __all__ = [
+    "BagError",
     "DuplicateRobot",
     "DyneventError",
     "GoalWaitTimeout",
@@ -192,6 +193,15 @@ class TraceError(RemoteError):
         self.field = field
         self.problem = problem
         super().__init__(f"{source}:{line}: {field}: {problem}")
+
+
+class BagError(RemoteError):
+    """A rosbag2 recording could not be read: ``source`` is the bag, ``problem`` says what is wrong."""
+
+    def __init__(self, source: str, problem: str) -> None:
+        self.source = source
+        self.problem = problem
+        super().__init__(f"{source}: {problem}")
 
 
 class InvalidRecord(RemoteError):

@@ -9,9 +9,7 @@ are built field by field from checked mirrors.
 
 from __future__ import annotations
 
-import functools
-from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Any
 
 from builtin_interfaces.msg import Time as RosTime
 from rmf_task_msgs.action import DynamicEvent
@@ -20,7 +18,14 @@ from rmf_task_msgs.msg import DynamicEventStatus as RosStatus
 from rmf_task_msgs.msg import LogEntry as RosLogEntry
 from unique_identifier_msgs.msg import UUID as RosUUID
 
-from dynevent.errors import InvalidMessage, MalformedMessage
+from dynevent.conformance.received import (
+    begin_from_ros,
+    feedback_from_ros,
+    goal_from_ros,
+    result_from_ros,
+    status_from_ros,
+    uuid_from_ros,
+)
 from dynevent.server.inputs import goal_uuid
 from dynevent.wire.messages import (
     DynamicEventDescription,
@@ -54,9 +59,6 @@ __all__ = [
 ]
 
 
-_F = TypeVar("_F", bound=Callable[..., Any])
-
-
 def describe_type() -> Any | None:
     """The description query's service type (R16), ``rmf_task_msgs/srv/DescribeDynamicEvent``, or
     None where the installed ``rmf_task_msgs`` has none (the deployed one has none: D17)."""
@@ -67,32 +69,6 @@ def describe_type() -> Any | None:
     return DescribeDynamicEvent
 
 
-def _received(convert: _F) -> _F:
-    """A conversion of a message received: a value the mirror refuses is the sender's fault
-    (:class:`~dynevent.errors.MalformedMessage`), not a misuse of dynevent here."""
-
-    @functools.wraps(convert)
-    def received(*args: Any) -> Any:
-        try:
-            return convert(*args)
-        except MalformedMessage:
-            raise
-        except InvalidMessage as exc:
-            raise MalformedMessage.of(exc) from None
-
-    return received  # type: ignore[return-value]
-
-
-@_received
-def uuid_from_ros(value: Any) -> str:
-    """A goal UUID (``unique_identifier_msgs/UUID`` or its 16 uint8 values) as 32 hex digits."""
-    raw = getattr(value, "uuid", value)
-    try:
-        return goal_uuid(bytes(bytearray(raw)))
-    except (TypeError, ValueError) as exc:
-        raise MalformedMessage("UUID", "uuid", raw, str(exc)) from None
-
-
 def uuid_to_ros(value: str) -> Any:
     """The ``unique_identifier_msgs/UUID`` of a goal UUID written as 32 hex digits."""
     return RosUUID(uuid=list(bytes.fromhex(goal_uuid(value))))
@@ -101,24 +77,6 @@ def uuid_to_ros(value: str) -> Any:
 def time_to_ros(time: Time) -> Any:
     """A ``builtin_interfaces/Time``."""
     return RosTime(sec=time.sec, nanosec=time.nanosec)
-
-
-@_received
-def _time_from_ros(message: Any) -> Time:
-    return Time(sec=message.sec, nanosec=message.nanosec)
-
-
-@_received
-def goal_from_ros(message: Any) -> Goal:
-    """The mirror of a received goal; raises :class:`InvalidMessage` for a value the mirror refuses."""
-    return Goal(
-        dynamic_event_seq=message.dynamic_event_seq,
-        event_type=message.event_type,
-        category=message.category,
-        description=message.description,
-        id=message.id,
-        stubborn_period=float(message.stubborn_period),
-    )
 
 
 def goal_to_ros(goal: Goal) -> Any:
@@ -138,12 +96,6 @@ def result_to_ros(result: Result) -> Any:
     return DynamicEvent.Result(execution_failure=result.execution_failure, status=result.status, id=result.id)
 
 
-@_received
-def result_from_ros(message: Any) -> Result:
-    """The mirror of a received result."""
-    return Result(execution_failure=message.execution_failure, status=message.status, id=message.id)
-
-
 def log_entry_to_ros(entry: LogEntry) -> Any:
     """A ``rmf_task_msgs/LogEntry``."""
     return RosLogEntry(
@@ -158,16 +110,6 @@ def feedback_to_ros(feedback: Feedback) -> Any:
     )
 
 
-@_received
-def feedback_from_ros(message: Any) -> Feedback:
-    """The mirror of received feedback."""
-    logs = tuple(
-        LogEntry(seq=entry.seq, tier=entry.tier, unix_millis_time=entry.unix_millis_time, text=entry.text)
-        for entry in message.logs
-    )
-    return Feedback(status=message.status, id=message.id, logs=logs)
-
-
 def status_to_ros(status: DynamicEventStatus) -> Any:
     """A ``rmf_task_msgs/DynamicEventStatus``."""
     return RosStatus(
@@ -179,18 +121,6 @@ def status_to_ros(status: DynamicEventStatus) -> Any:
     )
 
 
-@_received
-def status_from_ros(message: Any) -> DynamicEventStatus:
-    """The mirror of a received status message."""
-    return DynamicEventStatus(
-        dynamic_event_seq=message.dynamic_event_seq,
-        dynamic_state=message.dynamic_state,
-        status=message.status,
-        id=message.id,
-        time=_time_from_ros(message.time),
-    )
-
-
 def begin_to_ros(begin: DynamicEventDescription) -> Any:
     """A ``rmf_task_msgs/DynamicEventDescription``."""
     return RosDescription(
@@ -199,16 +129,4 @@ def begin_to_ros(begin: DynamicEventDescription) -> Any:
         dynamic_event_seq=begin.dynamic_event_seq,
         description=begin.description,
         start_time=time_to_ros(begin.start_time),
-    )
-
-
-@_received
-def begin_from_ros(message: Any) -> DynamicEventDescription:
-    """The mirror of a received begin message."""
-    return DynamicEventDescription(
-        fleet=message.fleet,
-        robot=message.robot,
-        dynamic_event_seq=message.dynamic_event_seq,
-        description=message.description,
-        start_time=_time_from_ros(message.start_time),
     )

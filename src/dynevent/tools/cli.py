@@ -60,14 +60,18 @@ def _add_demo_command(commands: argparse._SubParsersAction[argparse.ArgumentPars
 def _add_check_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = commands.add_parser(
         "check",
-        help="check an observed trace of one robot against the protocol rules",
+        help="check an observed trace of one robot, or a rosbag2 recording, against the protocol rules",
         description="Replay TRACE, a JSON-lines record of what was observed on the wire for one robot "
         f"({DOCS}/trace-format.md), against the server machine in observer mode, and report every "
-        "protocol violation with its line, its spec rule and what was expected.  Exit status: "
+        "protocol violation with its line, its spec rule and what was expected.  TRACE may also be a "
+        "rosbag2 recording (a bag directory, or one .mcap or .db3 file; the bags extra): every robot "
+        f"in it is judged, each violation at its bag time ({DOCS}/recordings.md).  Exit status: "
         "0 when the trace is clean, 1 when it holds violations, 2 on a usage error or unreadable input "
         "(the message names the file, the line and the field).",
     )
-    parser.add_argument("trace", metavar="TRACE", help="the trace file, or - for standard input")
+    parser.add_argument(
+        "trace", metavar="TRACE", help="the trace file, - for standard input, or a rosbag2 recording"
+    )
     parser.add_argument("--json", action="store_true", help="one JSON object per violation, then a summary")
     parser.set_defaults(run=_lazy("dynevent.tools.check"))
 

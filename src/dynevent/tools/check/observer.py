@@ -4,7 +4,6 @@ feedback, answers), composed by :class:`_Observer`; :func:`check_records` drives
 from __future__ import annotations
 
 import collections
-import itertools
 from collections.abc import Callable, Iterable
 
 import attrs
@@ -958,28 +957,51 @@ def _response_ahead(books: _Books, record: Record, window: Iterable[Record]) -> 
     return next((ahead for ahead in window if awaited(ahead) and ahead.goal_uuid == record.goal_uuid), None)
 
 
-def check_records(header: _Header, records: Iterable[Record], source: str = "<trace>") -> Report:
-    """Replay parsed records in observer mode; see :func:`check_trace`."""
-    observer = _Observer(header)
-    pending = iter(records)
-    window = collections.deque(itertools.islice(pending, LOOKAHEAD))
-    count = 0
-    while True:
-        window.extend(itertools.islice(pending, 1))
-        if not window:
-            break
+class Checker:
+    """The observer fed one record at a time (:meth:`push`), for a reader that interleaves the
+    records of several robots (a bag); :meth:`finish` gives the report.  It holds
+    :data:`LOOKAHEAD` records, whatever the length of what it reads."""
+
+    def __init__(self, header: _Header, source: str = "<trace>") -> None:
+        self.source = source
+        self._observer = _Observer(header)
+        self._window: collections.deque[Record] = collections.deque()
+        self._count = 0
+
+    def push(self, record: Record) -> None:
+        """Take the next record; the one :data:`LOOKAHEAD` records before it is judged."""
+        self._window.append(record)
+        if len(self._window) > LOOKAHEAD:
+            self._judge_first()
+
+    def finish(self) -> Report:
+        """Judge what is held, then what never came (answers owed); the report."""
+        while self._window:
+            self._judge_first()
+        books = self._observer.books
+        books.answers_never_seen()
+        return Report(source=self.source, records=self._count, findings=tuple(books.findings))
+
+    def _judge_first(self) -> None:
+        window, books = self._window, self._observer.books
         record = window.popleft()
-        response = _response_ahead(observer.books, record, window)
+        response = _response_ahead(books, record, window)
         if response is not None:  # a tap at a client: the goal's feedback or answer came first
             window.remove(response)
             window.appendleft(record)
             record = response
-        observer.books.lookahead = tuple(window)
-        observer.books.upcoming = window[0] if window else None
+        books.lookahead = tuple(window)
+        books.upcoming = window[0] if window else None
         try:
-            observer.feed(record)
+            self._observer.feed(record)
         except _Unreadable as exc:
-            raise TraceError(source, record.line, exc.field, exc.problem) from None
-        count += 1
-    observer.books.answers_never_seen()
-    return Report(source=source, records=count, findings=tuple(observer.books.findings))
+            raise TraceError(self.source, record.line, exc.field, exc.problem) from None
+        self._count += 1
+
+
+def check_records(header: _Header, records: Iterable[Record], source: str = "<trace>") -> Report:
+    """Replay parsed records in observer mode; see :func:`check_trace`."""
+    checker = Checker(header, source)
+    for record in records:
+        checker.push(record)
+    return checker.finish()

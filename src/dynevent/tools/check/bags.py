@@ -1,0 +1,436 @@
+"""``dynevent check BAG``: the Dynamic Event conversations of a rosbag2 recording, judged without ROS.
+
+A bag is a directory (``metadata.yaml`` and its storage files) or one storage
+file, MCAP (``.mcap``, rosbag2's default since Iron) or SQLite (``.db3``).  It
+is read with ``rosbags`` (the ``bags`` extra: ``pip install 'dynevent[bags]'``),
+its CDR messages decoded with the project's own interface files
+(``dynevent/ros/setup/interfaces``), so no ROS installation is needed.
+
+Every topic named after a robot (:mod:`dynevent.wire.names`) is that robot's:
+its status and begin topics, the action's ``_action/feedback`` topic and,
+when the bag has them, the introspection service events of the action's
+``send_goal``, ``get_result`` and ``cancel_goal`` services, which carry the
+goals, their responses, their answers and the action-level cancels (ROS 2
+records them when introspection is on, at the server or the client).  The
+fleet-wide begin topic is read for a robot whose own begin topic the bag
+lacks.  Each robot's messages become trace records (docs/trace-format.md),
+in bag order, judged by a :class:`~dynevent.tools.check.observer.Checker` of
+their own: one pass over the bag, whatever its size, holding a few records
+per robot.
+
+A robot whose goals the bag lacks (no ``send_goal`` events) is a partial
+view: its statuses show child events no goal the bag holds explains, so it is
+not judged, and its :class:`RobotReport` says which channels were absent
+rather than report a violation the missing channel would cause.  A
+finding's ``line`` is the bag time of its message, in nanoseconds.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.resources
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import attrs
+
+from dynevent.conformance.received import (
+    begin_from_ros,
+    feedback_from_ros,
+    goal_from_ros,
+    result_from_ros,
+    status_from_ros,
+    uuid_from_ros,
+)
+from dynevent.errors import BagError, InvalidMessage, InvalidName, MissingExtra, TraceError
+from dynevent.tools.check.observer import Checker
+from dynevent.tools.check.trace import Record, Report, _Header
+from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
+from dynevent.wire.vocab import GoalStatus
+
+__all__ = ["BagReport", "RobotReport", "check_bag", "typestore"]
+
+#: The action's hidden topics (``<action>/_action/...``) and what each carries.
+FEEDBACK, GOAL_STATUS = "feedback", "goal status"
+SEND_GOAL, GET_RESULT, CANCEL_GOAL = "send_goal", "get_result", "cancel_goal"
+_HIDDEN = {
+    "/_action/feedback": FEEDBACK,
+    "/_action/status": GOAL_STATUS,
+    "/_action/send_goal/_service_event": SEND_GOAL,
+    "/_action/get_result/_service_event": GET_RESULT,
+    "/_action/cancel_goal/_service_event": CANCEL_GOAL,
+}
+#: The channels a robot's judgement needs, in the words a partial view line uses.
+CHANNELS = {
+    "status": "the status topic",
+    "begin": "the begin topic",
+    FEEDBACK: "feedback",
+    SEND_GOAL: "goals and their responses (send_goal introspection)",
+    GET_RESULT: "answers (get_result introspection)",
+}
+
+#: service_msgs/ServiceEventInfo event types.
+_REQUEST_SENT, _REQUEST_RECEIVED, _RESPONSE_SENT, _RESPONSE_RECEIVED = 0, 1, 2, 3
+#: action_msgs/GoalStatus of a get_result response: the terminal ones, and "the server knows no such goal".
+_TERMINAL = {4: GoalStatus.SUCCEEDED, 5: GoalStatus.CANCELED, 6: GoalStatus.ABORTED}
+
+
+@attrs.frozen
+class RobotReport:
+    """One robot of a bag: the channels the bag recorded for it (keys of :data:`CHANNELS`, and
+    ``"goal status"``, the action's goal statuses), the ones a full judgement needs that it lacks,
+    its report (None when the view was too partial to judge), and how many of its messages the
+    mirrors refused (a value the wire cannot carry: not judged)."""
+
+    fleet: str
+    robot: str
+    channels: tuple[str, ...]
+    absent: tuple[str, ...]
+    report: Report | None
+    refused: int = 0
+
+    @property
+    def name(self) -> str:
+        return f"{self.fleet}/{self.robot}"
+
+
+@attrs.frozen
+class BagReport:
+    """What :func:`check_bag` found: each robot's report, and how many messages the bag held on the
+    Dynamic Event names (``messages``) and on others (``other``)."""
+
+    source: str
+    robots: tuple[RobotReport, ...]
+    messages: int
+    other: int
+
+    @property
+    def clean(self) -> bool:
+        """No robot's judgement found a violation."""
+        return all(robot.report is None or robot.report.clean for robot in self.robots)
+
+
+def check_bag(path: str | Path) -> BagReport:
+    """Judge every Dynamic Event conversation of the bag at ``path``.
+
+    Raises :class:`~dynevent.errors.MissingExtra` without ``rosbags``, and
+    :class:`~dynevent.errors.BagError` for a bag that cannot be read (no such
+    file, not a bag, truncated or corrupt, a message that cannot be decoded).
+    """
+    source = str(path)
+    rosbags = _rosbags()
+    reader_type, reader_errors = rosbags
+    if Path(path).is_dir() and not (Path(path) / "metadata.yaml").exists():
+        raise BagError(source, "not a rosbag2 recording: a bag directory holds a metadata.yaml")
+    robots: dict[tuple[str, str], _Robot] = {}
+    messages = other = 0
+    try:
+        with reader_type(Path(path)) as reader:
+            routes = _routes(reader.connections, robots)
+            other = sum(item.msgcount for item in reader.connections if item.id not in routes)
+            store = typestore()
+            wanted = [item for item in reader.connections if item.id in routes]
+            decode_as = {item.id: _stored_name(store, item.msgtype) for item in wanted}
+            for connection, time, raw in reader.messages(connections=wanted) if wanted else ():
+                robot, channel = routes[connection.id]
+                try:
+                    message = store.deserialize_cdr(raw, decode_as[connection.id])
+                except Exception as exc:  # a decoder's error, of any kind: the bag is not what it says
+                    raise BagError(source, f"{connection.topic} at {time}: cannot decode: {exc}") from None
+                messages += 1
+                robot.take(channel, time, message)
+    except BagError:
+        raise
+    except TraceError as exc:  # a record the observer cannot take, in the bag's order
+        raise BagError(source, f"{exc.field} at bag time {exc.line}: {exc.problem}") from None
+    except (FileNotFoundError, IsADirectoryError, PermissionError) as exc:
+        raise BagError(source, f"cannot read: {exc.strerror or exc}") from None
+    except reader_errors as exc:
+        raise BagError(source, f"not a readable rosbag2 recording: {exc}") from None
+    reports = tuple(robot.finish(source) for _, robot in sorted(robots.items()))
+    return BagReport(source=source, robots=reports, messages=messages, other=other)
+
+
+def _stored_name(store: Any, msgtype: str) -> str:
+    """The name the type store knows a bag's type by: rosbags files a service's types
+    (``action_msgs/srv/CancelGoal_Event``) under ``.../srv/msg/...``."""
+    if msgtype in store.types:
+        return msgtype
+    from rosbags.typesys.msg import normalize_msgtype
+
+    normalized: str = normalize_msgtype(msgtype)
+    return normalized
+
+
+def _rosbags() -> tuple[Any, tuple[type[BaseException], ...]]:
+    """rosbags' reader, and the errors it raises for a file that is not a readable bag."""
+    try:
+        from rosbags.rosbag2 import Reader, ReaderError
+    except ImportError:
+        raise MissingExtra("bags", "rosbags", "reads rosbag2 recordings") from None
+    return Reader, (ReaderError, ValueError, OSError, EOFError)
+
+
+def _routes(connections: Any, robots: dict[tuple[str, str], _Robot]) -> dict[int, tuple[_Robot, str]]:
+    """Each connection (by id) on a Dynamic Event name: the robot it belongs to and its channel."""
+    routes: dict[int, tuple[_Robot, str]] = {}
+    fleet_wide = []
+    for connection in connections:
+        topic = connection.topic
+        if topic.lstrip("/") == BEGIN_TOPIC:
+            fleet_wide.append(connection)
+            continue
+        name, channel = topic, ""
+        for suffix, hidden in _HIDDEN.items():
+            if topic.endswith(suffix):
+                name, channel = topic[: -len(suffix)], hidden
+        try:
+            parsed = parse_name(name)
+        except InvalidName:
+            continue
+        if parsed.kind is NameKind.ACTION and not channel:
+            continue
+        if parsed.kind is not NameKind.ACTION:
+            if channel:
+                continue
+            channel = str(parsed.kind)
+        key = (parsed.fleet, parsed.robot)
+        robot = robots.setdefault(key, _Robot(*key))
+        robot.channels.add(channel)  # recorded, even if nothing was said on it
+        routes[connection.id] = (robot, channel)
+    for connection in fleet_wide:  # a robot's begins, where its own begin topic was not recorded
+        routes[connection.id] = (_FleetBegins(robots), "begin")  # type: ignore[assignment]
+    return routes
+
+
+class _Robot:
+    """One robot's records, judged as they come.  A client's and the server's introspection both
+    record each goal, response and answer: a record the same as one taken before is taken once (an
+    answer that differs is a second answer, which the judgement sees)."""
+
+    def __init__(self, fleet: str, robot: str) -> None:
+        self.fleet, self.robot = fleet, robot
+        self.checker = Checker(_Header(fleet=fleet, robot=robot))
+        self.channels: set[str] = set()
+        self.own_begins = False
+        self.refused = 0
+        self._seen: set[tuple[Any, ...]] = set()
+        self._calls: dict[tuple[str, bytes, int], Any] = {}  # service calls whose response is to come
+        self._records: list[Record] = []  # held until the bag shows whether it has goals at all
+        self._goals = False
+
+    def take(self, channel: str, time: int, message: Any, *, fleet_wide: bool = False) -> None:
+        if channel == "begin" and not fleet_wide:
+            self.own_begins = True
+        self.channels.add(channel)
+        try:
+            if channel in _SERVICES:
+                message = self._paired(channel, message)
+                if message is None:
+                    return
+            for record in _RECORDS[channel](time, message):
+                if record.kind in _EVENT_KINDS:  # the same from the client's and the server's introspection
+                    key = (record.kind, record.goal_uuid, record.message, record.accepted, record.status)
+                    if key in self._seen:
+                        continue
+                    self._seen.add(key)
+                self._push(record)
+        except InvalidMessage:
+            self.refused += 1
+
+    def _paired(self, channel: str, event: Any) -> tuple[int, Any, Any] | None:
+        """A service event as (kind, request, response): a response event carries no request (ROS 2
+        introspection), so the request of the same call (client GID and sequence number) is kept
+        until it comes.  None for a response whose request the bag does not hold."""
+        kind = int(event.info.event_type)
+        call = (channel, bytes(bytearray(event.info.client_gid)), int(event.info.sequence_number))
+        request = event.request[0] if len(event.request) else None
+        response = event.response[0] if len(event.response) else None
+        if kind in (_REQUEST_SENT, _REQUEST_RECEIVED):
+            if request is None:
+                return None  # introspection without contents: nothing to judge
+            self._calls[call] = request
+            while len(self._calls) > _CALLS:  # calls never answered: the oldest are let go
+                del self._calls[next(iter(self._calls))]
+            return kind, request, None
+        request = request if request is not None else self._calls.pop(call, None)
+        if request is None or response is None:
+            return None
+        return kind, request, response
+
+    def _push(self, record: Record) -> None:
+        if record.kind == "goal":
+            self._goals = True
+        if not self._goals:  # until the first goal, a bag without goals cannot be told apart
+            self._records.append(record)
+            if len(self._records) <= _HELD:
+                return
+            self._goals = True  # held enough: judge as it comes, the channels say what was absent
+        for held in self._records:
+            self.checker.push(held)
+        self._records.clear()
+        self.checker.push(record)
+
+    def finish(self, source: str) -> RobotReport:
+        channels = tuple(sorted(self.channels))
+        absent = tuple(CHANNELS[name] for name in CHANNELS if name not in self.channels)
+        judged = SEND_GOAL in self.channels or not ({FEEDBACK, GOAL_STATUS} & self.channels)
+        if not judged:
+            report = None
+        else:
+            for held in self._records:
+                self.checker.push(held)
+            self._records.clear()
+            self.checker.source = f"{source}: {self.fleet}/{self.robot}"
+            report = self.checker.finish()
+        return RobotReport(self.fleet, self.robot, channels, absent, report, self.refused)
+
+
+#: The channels of service events, and how many calls without a response a robot keeps.
+_SERVICES = frozenset({SEND_GOAL, GET_RESULT, CANCEL_GOAL})
+_CALLS = 1024
+#: The records a service event gives.
+_EVENT_KINDS = frozenset({"goal", "goal_response", "result", "cancel_request", "cancel_response"})
+#: How many records of a robot are held before its first goal.
+_HELD = 10_000
+
+
+class _FleetBegins:
+    """The fleet-wide begin topic: each begin goes to its robot, unless that robot's own begin
+    topic was recorded (the same begin, twice)."""
+
+    def __init__(self, robots: dict[tuple[str, str], _Robot]) -> None:
+        self.robots = robots
+
+    def take(self, channel: str, time: int, message: Any) -> None:
+        key = (str(message.fleet), str(message.robot))
+        robot = self.robots.get(key)
+        if robot is None:
+            robot = self.robots[key] = _Robot(*key)
+        if not robot.own_begins:
+            robot.take(channel, time, message, fleet_wide=True)
+
+
+def _status(time: int, message: Any) -> Iterator[Record]:
+    yield Record(line=time, kind="status", time=time, message=status_from_ros(message))
+
+
+def _begin(time: int, message: Any) -> Iterator[Record]:
+    yield Record(line=time, kind="begin", time=time, message=begin_from_ros(message))
+
+
+def _feedback(time: int, message: Any) -> Iterator[Record]:
+    uuid = uuid_from_ros(message.goal_id)
+    yield Record(
+        line=time, kind="feedback", time=time, goal_uuid=uuid, message=feedback_from_ros(message.feedback)
+    )
+
+
+def _goal_status(time: int, message: Any) -> Iterator[Record]:
+    return iter(())  # recorded as a channel: what the goal statuses tell, the goals' own records tell
+
+
+def _send_goal(time: int, call: Any) -> Iterator[Record]:
+    _, request, response = call
+    uuid = uuid_from_ros(request.goal_id)
+    if response is None:
+        yield Record(line=time, kind="goal", time=time, goal_uuid=uuid, message=goal_from_ros(request.goal))
+    else:
+        yield Record(
+            line=time, kind="goal_response", time=time, goal_uuid=uuid, accepted=bool(response.accepted)
+        )
+
+
+def _get_result(time: int, call: Any) -> Iterator[Record]:
+    _, request, response = call
+    status = None if response is None else _TERMINAL.get(int(response.status))
+    if status is not None:  # STATUS_UNKNOWN: the server knows no such goal, which answers nothing
+        uuid = uuid_from_ros(request.goal_id)
+        result = result_from_ros(response.result)
+        yield Record(line=time, kind="result", time=time, goal_uuid=uuid, message=result, status=status)
+
+
+def _cancel_goal(time: int, call: Any) -> Iterator[Record]:
+    _, request, response = call
+    uuid = uuid_from_ros(request.goal_info.goal_id)
+    if uuid == "0" * 32:
+        return  # a cancel of every goal (or of goals before a time): no record says that
+    if response is None:
+        yield Record(line=time, kind="cancel_request", time=time, goal_uuid=uuid)
+    else:
+        canceling = {uuid_from_ros(info.goal_id) for info in response.goals_canceling}
+        yield Record(line=time, kind="cancel_response", time=time, goal_uuid=uuid, accepted=uuid in canceling)
+
+
+_RECORDS: dict[str, Callable[[int, Any], Iterator[Record]]] = {
+    "status": _status,
+    "begin": _begin,
+    FEEDBACK: _feedback,
+    GOAL_STATUS: _goal_status,
+    SEND_GOAL: _send_goal,
+    GET_RESULT: _get_result,
+    CANCEL_GOAL: _cancel_goal,
+}
+
+
+# --------------------------------------------------------------------------- the message definitions
+
+#: The action's own message types (``rmf_task_msgs/action/DynamicEvent_*``) and the services ROS 2
+#: derives from every action (``ros2/rcl_interfaces``' action_msgs and the rosidl action
+#: generators), whose introspection events a bag may hold.
+_DERIVED = {
+    "rmf_task_msgs/action/DynamicEvent_FeedbackMessage": (
+        "unique_identifier_msgs/UUID goal_id\nrmf_task_msgs/action/DynamicEvent_Feedback feedback"
+    ),
+    "rmf_task_msgs/action/DynamicEvent_SendGoal_Request": (
+        "unique_identifier_msgs/UUID goal_id\nrmf_task_msgs/action/DynamicEvent_Goal goal"
+    ),
+    "rmf_task_msgs/action/DynamicEvent_SendGoal_Response": "bool accepted\nbuiltin_interfaces/Time stamp",
+    "rmf_task_msgs/action/DynamicEvent_GetResult_Request": "unique_identifier_msgs/UUID goal_id",
+    "rmf_task_msgs/action/DynamicEvent_GetResult_Response": (
+        "int8 status\nrmf_task_msgs/action/DynamicEvent_Result result"
+    ),
+    "action_msgs/srv/CancelGoal_Request": "action_msgs/GoalInfo goal_info",
+    "action_msgs/srv/CancelGoal_Response": ("int8 return_code\naction_msgs/GoalInfo[] goals_canceling"),
+}
+_EVENTS = (
+    "rmf_task_msgs/action/DynamicEvent_SendGoal",
+    "rmf_task_msgs/action/DynamicEvent_GetResult",
+    "action_msgs/srv/CancelGoal",
+)
+
+
+@functools.cache
+def typestore() -> Any:
+    """rosbags' type store for ROS 2 Jazzy, with every type a Dynamic Event conversation uses."""
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    types: dict[str, Any] = {}
+    for name, text in _definitions().items():
+        types.update(get_types_from_msg(text, name))
+    store.register(types)
+    return store
+
+
+def _definitions() -> dict[str, str]:
+    """Every definition, from the project's interface files and :data:`_DERIVED`."""
+    # the package's files, without importing dynevent.ros (which needs rclpy)
+    root = importlib.resources.files("dynevent") / "ros" / "setup" / "interfaces" / "rmf_task_msgs"
+    definitions = {}
+    for name in ("DynamicEventStatus", "DynamicEventDescription", "LogEntry"):
+        definitions[f"rmf_task_msgs/msg/{name}"] = (root / "msg" / f"{name}.msg").read_text("utf-8")
+    parts = (root / "action" / "DynamicEvent.action").read_text("utf-8").split("\n---")
+    for part, text in zip(("Goal", "Result", "Feedback"), parts, strict=True):
+        definitions[f"rmf_task_msgs/action/DynamicEvent_{part}"] = text.strip("-\n")
+    definitions.update(_DERIVED)
+    for service in _EVENTS:
+        definitions[f"{service}_Event"] = "\n".join(
+            (
+                "service_msgs/ServiceEventInfo info",
+                f"{service}_Request[<=1] request",
+                f"{service}_Response[<=1] response",
+            )
+        )
+    return definitions

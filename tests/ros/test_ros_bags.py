@@ -1,0 +1,120 @@
+"""Bags whose messages ROS 2 itself serialised (rclpy's type support, not the reader's definitions),
+written by rosbags' writer: ``dynevent check`` decodes them with the project's interface files and
+judges them, which holds those definitions, the action's derived types included, to ROS's own."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import pytest
+from action_msgs.msg import GoalInfo
+from action_msgs.srv import CancelGoal
+from builtin_interfaces.msg import Time
+from rclpy.serialization import serialize_message
+from rmf_task_msgs.action import DynamicEvent
+from rmf_task_msgs.msg import DynamicEventDescription, DynamicEventStatus
+from rosbags.rosbag2 import StoragePlugin, Writer
+from service_msgs.msg import ServiceEventInfo
+from unique_identifier_msgs.msg import UUID
+
+from dynevent.tools.check.bags import _definitions, check_bag
+
+ACTION = "/rmf/dynamic_event/command/tinyRobot/r1"
+T0 = 1_700_000_000 * 10**9
+UNHASHED = "RIHS01_" + "0" * 64
+
+
+def _types() -> dict[str, Any]:
+    return {
+        "rmf_task_msgs/msg/DynamicEventStatus": DynamicEventStatus,
+        "rmf_task_msgs/msg/DynamicEventDescription": DynamicEventDescription,
+        "rmf_task_msgs/action/DynamicEvent_FeedbackMessage": DynamicEvent.Impl.FeedbackMessage,
+        "rmf_task_msgs/action/DynamicEvent_SendGoal_Event": DynamicEvent.Impl.SendGoalService.Event,
+        "rmf_task_msgs/action/DynamicEvent_GetResult_Event": DynamicEvent.Impl.GetResultService.Event,
+        "action_msgs/srv/CancelGoal_Event": CancelGoal.Event,
+    }
+
+
+def _event(event_type: type, kind: int, call: int, request: Any = None, response: Any = None) -> Any:
+    """As ROS 2 introspection records a call: the request in the request event, the response alone in
+    the response event, paired by the client's GID and the sequence number ``call``."""
+    info = ServiceEventInfo(event_type=kind, stamp=Time(sec=T0 // 10**9), sequence_number=call)
+    return event_type(info=info, request=[] if request is None else [request],
+                      response=[] if response is None else [response])  # fmt: skip
+
+
+def _conversation(stale: bool) -> list[tuple[str, str, Any]]:
+    """begin, WAITING, a NEXT run to its end with feedback and an action-level cancel refused after it,
+    FINISHED (for run 0 when ``stale``: a goal the server must refuse, accepted)."""
+    uuid = UUID(uuid=[1] * 16)
+    finished_uuid = UUID(uuid=[2] * 16)
+    status = "/rmf/dynamic_event/status/tinyRobot/r1"
+    next_goal = DynamicEvent.Goal(dynamic_event_seq=1, event_type=1, category="go_to_place",
+                                  description='"pantry"', id=1)  # fmt: skip
+    send = DynamicEvent.Impl.SendGoalService
+    get = DynamicEvent.Impl.GetResultService
+    finished_goal = DynamicEvent.Goal(dynamic_event_seq=0 if stale else 1, event_type=3)
+    return [
+        ("/rmf/dynamic_event/begin/tinyRobot/r1", "rmf_task_msgs/msg/DynamicEventDescription",
+         DynamicEventDescription(fleet="tinyRobot", robot="r1", dynamic_event_seq=1, description="{}")),
+        (status, "rmf_task_msgs/msg/DynamicEventStatus",
+         DynamicEventStatus(dynamic_event_seq=1, dynamic_state=1, status="standby", id=0)),
+        (f"{ACTION}/_action/send_goal/_service_event", "rmf_task_msgs/action/DynamicEvent_SendGoal_Event",
+         _event(send.Event, 1, 1, send.Request(goal_id=uuid, goal=next_goal))),
+        (f"{ACTION}/_action/send_goal/_service_event", "rmf_task_msgs/action/DynamicEvent_SendGoal_Event",
+         _event(send.Event, 2, 1, response=send.Response(accepted=True))),
+        (f"{ACTION}/_action/feedback", "rmf_task_msgs/action/DynamicEvent_FeedbackMessage",
+         DynamicEvent.Impl.FeedbackMessage(
+             goal_id=uuid, feedback=DynamicEvent.Feedback(status="underway", id=1))),
+        (status, "rmf_task_msgs/msg/DynamicEventStatus",
+         DynamicEventStatus(dynamic_event_seq=1, dynamic_state=2, status="underway", id=1)),
+        (f"{ACTION}/_action/get_result/_service_event", "rmf_task_msgs/action/DynamicEvent_GetResult_Event",
+         _event(get.Event, 1, 1, get.Request(goal_id=uuid))),
+        (f"{ACTION}/_action/get_result/_service_event", "rmf_task_msgs/action/DynamicEvent_GetResult_Event",
+         _event(get.Event, 2, 1,
+                response=get.Response(status=4, result=DynamicEvent.Result(status="completed", id=1)))),
+        (status, "rmf_task_msgs/msg/DynamicEventStatus",
+         DynamicEventStatus(dynamic_event_seq=1, dynamic_state=1, status="standby", id=1)),
+        (f"{ACTION}/_action/cancel_goal/_service_event", "action_msgs/srv/CancelGoal_Event",
+         _event(CancelGoal.Event, 1, 1, CancelGoal.Request(goal_info=GoalInfo(goal_id=uuid)))),
+        (f"{ACTION}/_action/cancel_goal/_service_event", "action_msgs/srv/CancelGoal_Event",
+         _event(CancelGoal.Event, 2, 1, response=CancelGoal.Response(return_code=3))),
+        (f"{ACTION}/_action/send_goal/_service_event", "rmf_task_msgs/action/DynamicEvent_SendGoal_Event",
+         _event(send.Event, 1, 2, send.Request(goal_id=finished_uuid, goal=finished_goal))),
+        (f"{ACTION}/_action/send_goal/_service_event", "rmf_task_msgs/action/DynamicEvent_SendGoal_Event",
+         _event(send.Event, 2, 2, response=send.Response(accepted=True))),
+        (f"{ACTION}/_action/get_result/_service_event", "rmf_task_msgs/action/DynamicEvent_GetResult_Event",
+         _event(get.Event, 1, 2, get.Request(goal_id=finished_uuid))),
+        (f"{ACTION}/_action/get_result/_service_event", "rmf_task_msgs/action/DynamicEvent_GetResult_Event",
+         _event(get.Event, 2, 2,
+                response=get.Response(status=4, result=DynamicEvent.Result(status="completed", id=0)))),
+        (status, "rmf_task_msgs/msg/DynamicEventStatus",
+         DynamicEventStatus(dynamic_event_seq=1, dynamic_state=0, status="uninitialized", id=0)),
+    ]  # fmt: skip
+
+
+def _write(path: Path, storage: StoragePlugin, messages: list[tuple[str, str, Any]]) -> Path:
+    definitions = _definitions()
+    with Writer(path, version=9, storage_plugin=storage) as writer:
+        connections: dict[str, Any] = {}
+        for index, (topic, msgtype, message) in enumerate(messages):
+            if topic not in connections:
+                connections[topic] = writer.add_connection(
+                    topic, msgtype, msgdef=definitions.get(msgtype, ""), rihs01=UNHASHED
+                )
+            writer.write(connections[topic], T0 + index * 10**8, serialize_message(message))
+    return path
+
+
+@pytest.mark.spec("R4.2", "R10.5")
+@pytest.mark.parametrize("storage", [StoragePlugin.MCAP, StoragePlugin.SQLITE3], ids=["mcap", "sqlite3"])
+def test_messages_ros_serialised_are_decoded_and_judged(tmp_path: Path, storage: StoragePlugin) -> None:
+    assert set(_types()) <= set(_definitions()) | {"rmf_task_msgs/msg/DynamicEventStatus"}
+    clean = check_bag(_write(tmp_path / "clean", storage, _conversation(stale=False)))
+    robot = clean.robots[0]
+    assert clean.clean and robot.report is not None and robot.report.records == 14, clean
+    assert robot.absent == () and robot.refused == 0
+    stale = check_bag(_write(tmp_path / "stale", storage, _conversation(stale=True)))
+    findings = stale.robots[0].report.findings  # type: ignore[union-attr]
+    assert findings and (findings[0].rule, findings[0].line) == ("R4.2", T0 + 12 * 10**8), findings

@@ -1,0 +1,296 @@
+"""``dynevent check BAG`` without ROS: rosbag2 recordings written by rosbags' own writer (not
+dynevent's code), in both storage formats, judged per robot at the bag time of each message.
+
+(The messages are built from the type store the reader uses; tests/ros/test_ros_bags.py writes them
+with ROS's own serialisation instead, which holds the reader's message definitions to ROS's.)
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from rosbags.rosbag2 import StoragePlugin, Writer
+
+from dynevent.errors import BagError
+from dynevent.tools.check.bags import BagReport, _definitions, check_bag, typestore
+
+STORE = typestore()
+DEFINITIONS = _definitions()
+#: A type hash for the topics' metadata (the reader does not use it).
+UNHASHED = "RIHS01_" + "0" * 64
+FLEET, ROBOT = "tinyRobot", "r1"
+ACTION = f"/rmf/dynamic_event/command/{FLEET}/{ROBOT}"
+STATUS_TOPIC = f"/rmf/dynamic_event/status/{FLEET}/{ROBOT}"
+BEGIN_TOPIC = f"/rmf/dynamic_event/begin/{FLEET}/{ROBOT}"
+SECOND = 10**9
+T0 = 1_700_000_000 * SECOND
+
+
+def _type(name: str) -> Any:
+    return STORE.types[name]
+
+
+def _time(ns: int) -> Any:
+    return _type("builtin_interfaces/msg/Time")(sec=ns // SECOND, nanosec=ns % SECOND)
+
+
+def _uuid(n: int) -> Any:
+    return _type("unique_identifier_msgs/msg/UUID")(uuid=np.array([n] * 16, dtype=np.uint8))
+
+
+class Conversation:
+    """A robot's messages as a rosbag2 recording holds them: (topic, type, bag time, message)."""
+
+    def __init__(self) -> None:
+        self.messages: list[tuple[str, str, int, Any]] = []
+        self.now = T0
+        self.calls = 0  # get_result calls
+
+    def at(self, topic: str, msgtype: str, message: Any) -> Conversation:
+        self.now += SECOND // 10
+        self.messages.append((topic, msgtype, self.now, message))
+        return self
+
+    def status(self, seq: int, phase: int, status: str, event_id: int) -> Conversation:
+        message = _type("rmf_task_msgs/msg/DynamicEventStatus")(
+            dynamic_event_seq=seq, dynamic_state=phase, status=status, id=event_id, time=_time(self.now)
+        )
+        return self.at(STATUS_TOPIC, "rmf_task_msgs/msg/DynamicEventStatus", message)
+
+    def begin(self, seq: int = 1, topic: str = BEGIN_TOPIC) -> Conversation:
+        message = _type("rmf_task_msgs/msg/DynamicEventDescription")(
+            fleet=FLEET, robot=ROBOT, dynamic_event_seq=seq, description="{}", start_time=_time(self.now)
+        )
+        return self.at(topic, "rmf_task_msgs/msg/DynamicEventDescription", message)
+
+    def _event(
+        self, service: str, kind: int, call: int, request: Any = None, response: Any = None
+    ) -> Conversation:
+        """A service event as ROS 2 introspection records it: a request event carries the request, a
+        response event the response alone, the two paired by the client's GID and ``call``."""
+        name = {"send_goal": "DynamicEvent_SendGoal", "get_result": "DynamicEvent_GetResult"}[service]
+        info = _type("service_msgs/msg/ServiceEventInfo")(
+            event_type=kind,
+            stamp=_time(self.now),
+            client_gid=np.zeros(16, dtype=np.uint8),
+            sequence_number=call,
+        )
+        msgtype = f"rmf_task_msgs/action/{name}_Event"
+        event = _type(msgtype)(
+            info=info,
+            request=[] if request is None else [request],
+            response=[] if response is None else [response],
+        )
+        return self.at(f"{ACTION}/_action/{service}/_service_event", msgtype, event)
+
+    def goal(
+        self, n: int, *, accepted: bool = True, seq: int = 1, event_type: int = 1, goal_id: int = 0
+    ) -> Conversation:
+        goal = _type("rmf_task_msgs/action/DynamicEvent_Goal")(
+            dynamic_event_seq=seq, event_type=event_type, category="go_to_place" if event_type == 1 else "",
+            description='"pantry"' if event_type == 1 else "", id=goal_id, stubborn_period=0.0,
+        )  # fmt: skip
+        request = _type("rmf_task_msgs/action/DynamicEvent_SendGoal_Request")(goal_id=_uuid(n), goal=goal)
+        response = _type("rmf_task_msgs/action/DynamicEvent_SendGoal_Response")(
+            accepted=accepted, stamp=_time(0)
+        )
+        self._event("send_goal", 1, n, request=request)
+        return self._event("send_goal", 2, n, response=response)
+
+    def feedback(self, n: int, status: str, event_id: int) -> Conversation:
+        feedback = _type("rmf_task_msgs/action/DynamicEvent_Feedback")(status=status, id=event_id, logs=[])
+        message = _type("rmf_task_msgs/action/DynamicEvent_FeedbackMessage")(
+            goal_id=_uuid(n), feedback=feedback
+        )
+        return self.at(
+            f"{ACTION}/_action/feedback", "rmf_task_msgs/action/DynamicEvent_FeedbackMessage", message
+        )
+
+    def result(self, n: int, goal_status: int, status: str, event_id: int) -> Conversation:
+        request = _type("rmf_task_msgs/action/DynamicEvent_GetResult_Request")(goal_id=_uuid(n))
+        result = _type("rmf_task_msgs/action/DynamicEvent_Result")(
+            execution_failure="", status=status, id=event_id
+        )
+        response = _type("rmf_task_msgs/action/DynamicEvent_GetResult_Response")(
+            status=goal_status, result=result
+        )
+        self.calls += 1
+        self._event("get_result", 1, self.calls, request=request)
+        return self._event("get_result", 2, self.calls, response=response)
+
+    def write(self, path: Path, storage: StoragePlugin) -> Path:
+        writer = Writer(path, version=9, storage_plugin=storage)
+        with writer:
+            connections: dict[str, Any] = {}
+            for topic, msgtype, time, message in self.messages:
+                if topic not in connections:
+                    # the definition as rosbag2 keeps it (rosbags generates one for "msg" types only)
+                    text = DEFINITIONS.get(msgtype, "")
+                    connections[topic] = writer.add_connection(topic, msgtype, msgdef=text, rihs01=UNHASHED)
+                writer.write(connections[topic], time, STORE.serialize_cdr(message, msgtype))
+        return path
+
+
+SUCCEEDED, ABORTED = 4, 6
+
+
+def _clean(between: Any = None) -> Conversation:
+    """A run: begin, a NEXT that runs its child to the end, FINISHED; ``between(run)`` adds messages
+    after the NEXT's answer."""
+    run = Conversation().begin().status(1, 1, "standby", 0)
+    run.goal(1, goal_id=1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
+    run.result(1, SUCCEEDED, "completed", 1)
+    if between is not None:
+        between(run)
+    run.status(1, 1, "standby", 1)
+    run.goal(2, event_type=3).result(2, SUCCEEDED, "completed", 0).status(1, 0, "uninitialized", 0)
+    return run
+
+
+STORAGES = [StoragePlugin.MCAP, StoragePlugin.SQLITE3]
+
+
+def _robot(report: BagReport) -> Any:
+    assert [robot.name for robot in report.robots] == [f"{FLEET}/{ROBOT}"]
+    return report.robots[0]
+
+
+@pytest.mark.parametrize("storage", STORAGES, ids=["mcap", "sqlite3"])
+def test_a_clean_recording_is_clean_in_both_storage_formats(tmp_path: Path, storage: StoragePlugin) -> None:
+    report = check_bag(_clean().write(tmp_path / "bag", storage))
+    robot = _robot(report)
+    assert report.clean and robot.report is not None and robot.report.records == 12
+    assert robot.absent == ()
+    assert report.messages == 14 and report.other == 0
+
+
+@pytest.mark.spec("R4.2", "R2.2")
+@pytest.mark.parametrize("storage", STORAGES, ids=["mcap", "sqlite3"])
+def test_each_broken_conversation_is_found_at_its_bag_time_and_rule(
+    tmp_path: Path, storage: StoragePlugin
+) -> None:
+    stale = Conversation().begin().status(1, 1, "standby", 0).goal(1, seq=0, event_type=3)
+    at_stale = stale.now  # the response that accepted it
+    stale_running = Conversation().begin().status(1, 1, "standby", 0)
+    stale_running.goal(1, goal_id=1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
+    stale_running.result(1, SUCCEEDED, "completed", 1).status(1, 2, "underway", 1)  # after its answer
+    at_running = stale_running.now
+    missing = Conversation().begin().status(1, 1, "standby", 0)
+    missing.goal(1, goal_id=1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
+    missing.status(1, 1, "standby", 1)  # the child ended: its NEXT's answer never came
+    at_unanswered = missing.now
+    cases = {
+        "stale": (stale, at_stale, "R4.2"),
+        "running": (stale_running, at_running, "R2.2"),
+        # a child's end is read from its NEXT's answer: a WAITING status without it is the finding
+        "missing": (missing, at_unanswered, "R2.2"),
+    }
+    for name, (conversation, at, rule) in cases.items():
+        report = check_bag(conversation.write(tmp_path / name, storage))
+        robot = _robot(report)
+        assert robot.report is not None and not report.clean, name
+        first = robot.report.findings[0]
+        assert (first.line, first.rule) == (at, rule), (name, robot.report.findings)
+
+
+def test_a_second_different_answer_is_found_and_the_same_answer_twice_is_not(tmp_path: Path) -> None:
+    """A client that asks twice for a result gets the same answer twice: one answer.  A different
+    second answer to the same goal is a double answer."""
+    same = _clean(lambda run: run.result(1, SUCCEEDED, "completed", 1))
+    assert check_bag(same.write(tmp_path / "same", StoragePlugin.MCAP)).clean
+    double = _clean(lambda run: run.result(1, ABORTED, "failed", 1))
+    report = check_bag(double.write(tmp_path / "double", StoragePlugin.MCAP))
+    findings = _robot(report).report.findings
+    assert findings and findings[0].rule == "R19.1", findings
+
+
+def test_a_recording_without_goals_is_a_partial_view_not_judged(tmp_path: Path) -> None:
+    """Only the topics (begin, status, feedback): the statuses show children no goal explains, so
+    the robot is not judged, and the absent channels are named; never a false finding."""
+    run = _clean()
+    run.messages = [item for item in run.messages if "_service_event" not in item[0]]
+    report = check_bag(run.write(tmp_path / "bag", StoragePlugin.SQLITE3))
+    robot = _robot(report)
+    assert robot.report is None and report.clean
+    assert robot.absent == (
+        "goals and their responses (send_goal introspection)", "answers (get_result introspection)"
+    )  # fmt: skip
+
+
+def test_the_fleet_wide_begin_topic_stands_for_a_robots_own(tmp_path: Path) -> None:
+    run = _clean()
+    fleet_wide = Conversation().begin(topic="/rmf/dynamic_event/begin")
+    run.messages[0] = (fleet_wide.messages[0][0], *run.messages[0][1:])
+    report = check_bag(run.write(tmp_path / "bag", StoragePlugin.MCAP))
+    assert report.clean and _robot(report).report.records == 12
+    both = _clean()
+    both.messages.insert(1, (fleet_wide.messages[0][0], *both.messages[0][1:]))  # the same begin twice
+    assert check_bag(both.write(tmp_path / "both", StoragePlugin.MCAP)).clean
+
+
+def test_bags_that_cannot_be_read_are_said_in_one_line(tmp_path: Path) -> None:
+    with pytest.raises(BagError, match=r"nowhere: cannot read"):
+        check_bag(tmp_path / "nowhere")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(
+        BagError, match=r"empty: not a rosbag2 recording: a bag directory holds a metadata.yaml$"
+    ):
+        check_bag(tmp_path / "empty")
+    garbage = tmp_path / "garbage.mcap"
+    garbage.write_bytes(b"\x89MCAP0\r\n" + b"\x00" * 64)
+    with pytest.raises(BagError, match=r"garbage.mcap: not a readable rosbag2 recording"):
+        check_bag(garbage)
+    whole = _clean().write(tmp_path / "whole", StoragePlugin.MCAP)
+    data = next(whole.glob("*.mcap")).read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) // 2])
+    with pytest.raises(BagError, match=r"cut.mcap: "):
+        check_bag(cut)
+
+
+def test_a_bag_of_other_topics_has_no_robot(tmp_path: Path) -> None:
+    other = Conversation()
+    other.at("/chatter", "builtin_interfaces/msg/Time", _time(5))
+    report = check_bag(other.write(tmp_path / "bag", StoragePlugin.MCAP))
+    assert report.robots == () and report.messages == 0 and report.other == 1
+
+
+def _check(*args: str) -> Any:
+    import subprocess
+    import sys
+
+    command = [sys.executable, "-m", "dynevent", "check", *args]
+    return subprocess.run(command, check=False, capture_output=True, text=True, timeout=60)
+
+
+def test_dynevent_check_reads_a_bag_directory_or_file_and_exits_0_1_or_2(tmp_path: Path) -> None:
+    clean = _clean().write(tmp_path / "clean", StoragePlugin.MCAP)
+    done = _check(str(clean))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[-1] == f"{clean}: 1 robot(s), 1 judged, 14 messages, no violations"
+    stale = Conversation().begin().status(1, 1, "standby", 0).goal(1, seq=0, event_type=3)
+    bag = stale.write(tmp_path / "stale", StoragePlugin.SQLITE3)
+    storage = next(bag.glob("*.db3"))
+    done = _check(str(storage))
+    assert done.returncode == 1
+    assert done.stdout.startswith(
+        f"{storage}: tinyRobot/r1 @ {stale.now // SECOND}.{stale.now % SECOND:09d}: R4.2 "
+    )
+    done = _check("--json", str(bag))
+    rows = [json.loads(line) for line in done.stdout.splitlines()]
+    assert [row["type"] for row in rows] == ["violation", "partial_view", "summary"]
+    assert rows[0]["rule"] == "R4.2" and rows[0]["robot"] == "tinyRobot/r1"
+    (tmp_path / "notabag").mkdir()
+    done = _check(str(tmp_path / "notabag"))
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert done.stderr.strip().endswith("not a rosbag2 recording: a bag directory holds a metadata.yaml")
+    other = Conversation().at("/chatter", "builtin_interfaces/msg/Time", _time(5))
+    done = _check(str(other.write(tmp_path / "other", StoragePlugin.MCAP)))
+    assert (
+        done.returncode == 2
+        and "nothing to check: no Dynamic Event names in it (1 other messages)" in done.stderr
+    )
