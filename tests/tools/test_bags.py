@@ -219,6 +219,10 @@ def test_a_recording_without_goals_is_a_partial_view_not_judged(tmp_path: Path) 
     assert robot.absent == (
         "goals and their responses (send_goal introspection)", "answers (get_result introspection)"
     )  # fmt: skip
+    statuses = _clean()
+    statuses.messages = [item for item in statuses.messages if item[0] == STATUS_TOPIC]
+    robot = _robot(check_bag(statuses.write(tmp_path / "statuses", StoragePlugin.MCAP)))
+    assert robot.report is None and robot.channels == ("status",)
 
 
 def test_the_fleet_wide_begin_topic_stands_for_a_robots_own(tmp_path: Path) -> None:

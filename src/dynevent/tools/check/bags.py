@@ -18,8 +18,8 @@ in bag order, judged by a :class:`~dynevent.tools.check.observer.Checker` of
 their own: one pass over the bag, whatever its size, holding a few records
 per robot.
 
-A robot whose goals the bag lacks (no ``send_goal`` events) is a partial
-view: its statuses show child events no goal the bag holds explains, so it is
+A robot whose goals the bag lacks (no ``send_goal`` introspection topic) is a
+partial view: its statuses show child events no goal the bag holds explains, so it is
 not judged, and its :class:`RobotReport` says which channels were absent
 rather than report a violation the missing channel would cause.  A
 finding's ``line`` is the bag time of its message, in nanoseconds.
@@ -27,6 +27,7 @@ finding's ``line`` is the bag time of its message, in nanoseconds.
 
 from __future__ import annotations
 
+import collections
 import functools
 import importlib.resources
 from collections.abc import Callable, Iterator
@@ -215,10 +216,9 @@ class _Robot:
         self.channels: set[str] = set()
         self.own_begins = False
         self.refused = 0
-        self._seen: set[tuple[Any, ...]] = set()
+        # the records taken lately: the client's copy of one comes close to the server's
+        self._seen: collections.OrderedDict[tuple[Any, ...], None] = collections.OrderedDict()
         self._calls: dict[tuple[str, bytes, int], Any] = {}  # service calls whose response is to come
-        self._records: list[Record] = []  # held until the bag shows whether it has goals at all
-        self._goals = False
 
     def take(self, channel: str, time: int, message: Any, *, fleet_wide: bool = False) -> None:
         if channel == "begin" and not fleet_wide:
@@ -234,8 +234,11 @@ class _Robot:
                     key = (record.kind, record.goal_uuid, record.message, record.accepted, record.status)
                     if key in self._seen:
                         continue
-                    self._seen.add(key)
-                self._push(record)
+                    self._seen[key] = None
+                    if len(self._seen) > _CALLS:
+                        self._seen.popitem(last=False)
+                if self.judged:
+                    self.checker.push(record)
         except InvalidMessage:
             self.refused += 1
 
@@ -259,41 +262,28 @@ class _Robot:
             return None
         return kind, request, response
 
-    def _push(self, record: Record) -> None:
-        if record.kind == "goal":
-            self._goals = True
-        if not self._goals:  # until the first goal, a bag without goals cannot be told apart
-            self._records.append(record)
-            if len(self._records) <= _HELD:
-                return
-            self._goals = True  # held enough: judge as it comes, the channels say what was absent
-        for held in self._records:
-            self.checker.push(held)
-        self._records.clear()
-        self.checker.push(record)
+    @property
+    def judged(self) -> bool:
+        """Whether the bag recorded this robot's goals (its send_goal introspection): without them,
+        its statuses show child events no goal explains, and it is a partial view, not judged."""
+        return SEND_GOAL in self.channels
 
     def finish(self, source: str) -> RobotReport:
         channels = tuple(sorted(self.channels))
         absent = tuple(CHANNELS[name] for name in CHANNELS if name not in self.channels)
-        judged = SEND_GOAL in self.channels or not ({FEEDBACK, GOAL_STATUS} & self.channels)
-        if not judged:
-            report = None
-        else:
-            for held in self._records:
-                self.checker.push(held)
-            self._records.clear()
+        report = None
+        if self.judged:
             self.checker.source = f"{source}: {self.fleet}/{self.robot}"
             report = self.checker.finish()
         return RobotReport(self.fleet, self.robot, channels, absent, report, self.refused)
 
 
-#: The channels of service events, and how many calls without a response a robot keeps.
+#: The channels of service events, and how many calls without a response (and records taken lately)
+#: a robot keeps.
 _SERVICES = frozenset({SEND_GOAL, GET_RESULT, CANCEL_GOAL})
 _CALLS = 1024
 #: The records a service event gives.
 _EVENT_KINDS = frozenset({"goal", "goal_response", "result", "cancel_request", "cancel_response"})
-#: How many records of a robot are held before its first goal.
-_HELD = 10_000
 
 
 class _FleetBegins:
