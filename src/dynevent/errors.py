@@ -40,6 +40,7 @@ __all__ = [
     "MalformedMessage",
     "MissingExtra",
     "ProbeError",
+    "RecordError",
     "RemoteError",
     "SendError",
     "ServeError",
@@ -295,6 +296,10 @@ class SendError(LocalError):
 
 class ServeError(LocalError):
     """A bad ``dynevent serve`` configuration."""
+
+
+class RecordError(LocalError):
+    """``dynevent record`` cannot run as asked (its output, its options)."""
 
 
 class ProbeError(LocalError):

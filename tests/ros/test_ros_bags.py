@@ -118,3 +118,75 @@ def test_messages_ros_serialised_are_decoded_and_judged(tmp_path: Path, storage:
     stale = check_bag(_write(tmp_path / "stale", storage, _conversation(stale=True)))
     findings = stale.robots[0].report.findings  # type: ignore[union-attr]
     assert findings and (findings[0].rule, findings[0].line) == ("R4.2", T0 + 12 * 10**8), findings
+
+
+# --------------------------------------------------------------------------- dynevent record, over DDS
+
+ROBOT = "recorded1"
+SERVICE_EVENTS = [f"/rmf/dynamic_event/command/tinyRobot/{ROBOT}/_action/{name}/_service_event"
+                  for name in ("send_goal", "get_result")]  # fmt: skip
+
+
+def _session(tmp_path: Path, graph: Any, serve_args: list[str]) -> Path:
+    """serve, and dynevent record of its robot, while send runs a NEXT and a FINISHED; the bag."""
+    import json
+    import subprocess
+    import sys
+
+    from ros_support import Child, child_env, finish, wait_for
+
+    config = tmp_path / "fleet.json"
+    config.write_text(json.dumps({"categories": {"go_to_place": {"duration": 0.5, "report_every": 0.1}},
+                                  "rebegin": 0}), encoding="utf-8")  # fmt: skip
+    serve = Child(["-m", "dynevent", "serve", "--robot", ROBOT, "--config", str(config), *serve_args])
+    bag = tmp_path / "bag"
+    record = None
+    try:
+        serve.wait_line("serving ")
+        record = Child(["-m", "dynevent", "record", "-o", str(bag), "--robot", ROBOT])
+        record.wait_line(f"recording /rmf/dynamic_event/status/tinyRobot/{ROBOT}")
+        watcher = graph.node("bag_watcher")
+        if (
+            "--no-judge" not in serve_args
+        ):  # the recorder's subscriptions to the service events are on the graph
+            for topic in SERVICE_EVENTS:
+                record.wait_line(f"recording {topic}")
+                wait_for(lambda topic=topic: watcher.count_subscribers(topic) > 0, f"the recorder on {topic}")
+        for args in (["--place", "pantry"], ["--end"]):
+            process = subprocess.Popen(
+                [sys.executable, "-m", "dynevent", "send", "--robot", ROBOT, "--timeout", "20", *args],
+                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=child_env(),
+            )  # fmt: skip
+            sent = finish(process, 60)
+            assert sent.returncode == 0, sent.stdout + sent.stderr
+        wait_for(lambda: serve.saw("status: INACTIVE"), "the run's end at serve")
+    finally:
+        if record is not None:
+            assert record.stop() == 0, record.output
+        serve.stop()
+    assert record.saw("recorded "), record.output
+    return bag
+
+
+@pytest.mark.spec("R19.1", "R11.1")
+def test_a_recorded_session_with_introspection_is_judged_clean(tmp_path: Path, graph: Any) -> None:
+    """serve judges its clients, so its action's introspection is on: the bag holds the goals and
+    answers, rosbags reads it, and check judges it clean and whole."""
+    from rosbags.rosbag2 import Reader
+
+    bag = _session(tmp_path, graph, [])
+    with Reader(bag) as reader:  # the independent reader opens what dynevent record wrote
+        topics = {connection.topic for connection in reader.connections}
+        assert set(SERVICE_EVENTS) <= topics and reader.message_count > 10
+    report = check_bag(bag)
+    robot = next(item for item in report.robots if item.robot == ROBOT)
+    assert report.clean and robot.report is not None, report
+    assert robot.report.records > 10 and robot.absent == (), robot
+
+
+def test_a_recorded_session_without_introspection_is_a_partial_view(tmp_path: Path, graph: Any) -> None:
+    bag = _session(tmp_path, graph, ["--no-judge"])
+    report = check_bag(bag)
+    robot = next(item for item in report.robots if item.robot == ROBOT)
+    assert report.clean and robot.report is None, report
+    assert "goals and their responses (send_goal introspection)" in robot.absent

@@ -20,7 +20,7 @@ from dynevent.tools.diagram import render
 
 ROOT = Path(__file__).resolve().parents[2]
 CLI_DOC = ROOT / "docs" / "cli.md"
-SUBCOMMANDS = ("demo", "check", "explain", "diagram", "vectors")
+SUBCOMMANDS = ("demo", "check", "explain", "diagram", "vectors", "serve", "send", "probe", "record")
 RUNNING = '{"dynamic_event_seq": 3, "dynamic_state": 2, "status": "underway", "id": 8}'
 
 
@@ -293,6 +293,18 @@ def _without_ros(*args: str, blocked: str = "rclpy") -> subprocess.CompletedProc
             "dynevent probe: --junit no/such/dir/probe.xml: its directory",
         ),
         (["serve", "--robot", "bad name"], "dynevent serve:"),
+        (["serve", "--first-seq", "-1"], "dynevent serve: --first-seq: expected a seq from 0 to 4294967295"),
+        (
+            ["probe", "--stubborn-minimum", "nan"],
+            "dynevent probe: --stubborn-minimum: expected seconds from 0",
+        ),
+        (["record", "--seconds", "0"], "dynevent record: --seconds: expected positive seconds"),
+        (["record", "-o", "."], "dynevent record: --output .: exists already"),
+        (["record", "-o", "no/such/dir/bag"], "dynevent record: --output no/such/dir/bag: its directory"),
+        (
+            ["send", "--end", "--trace", "no/such/dir/t"],
+            "dynevent send: --trace no/such/dir/t: its directory",
+        ),
     ],
 )
 def test_serve_and_send_check_their_own_input_before_they_need_ros(args: list[str], problem: str) -> None:
@@ -303,7 +315,9 @@ def test_serve_and_send_check_their_own_input_before_they_need_ros(args: list[st
 
 
 @pytest.mark.parametrize("blocked", ["rclpy", "rmf_task_msgs"])
-@pytest.mark.parametrize("args", [["send", "--end"], ["serve", "--seconds", "1"], ["probe"]])
+@pytest.mark.parametrize(
+    "args", [["send", "--end"], ["serve", "--seconds", "1"], ["probe"], ["record", "--seconds", "1"]]
+)
 def test_without_ros_serve_and_send_say_what_is_missing_and_how_to_get_it(
     args: list[str], blocked: str
 ) -> None:

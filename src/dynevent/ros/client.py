@@ -217,6 +217,18 @@ class DynamicEventClient:
         """Tell the robot that the dynamic event is over (a FINISHED goal)."""
         return self._command(lambda state, now: cl.request_finish(state, now=now), None)
 
+    def introspect(self) -> bool:
+        """Publish this client's action service events (ROS 2 introspection, with contents), so that
+        a recording holds its goals and answers; False where rclpy cannot."""
+        configure = getattr(self._action, "configure_introspection", None)
+        if configure is None:
+            return False
+        from rclpy.qos import QoSProfile
+        from rclpy.service_introspection import ServiceIntrospectionState
+
+        configure(self._node.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
+        return True
+
     def destroy(self) -> None:
         """Release the action client, subscriptions and timer."""
         self._action.destroy()

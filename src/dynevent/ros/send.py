@@ -65,6 +65,8 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
     client = DynamicEventClient(
         node, args.fleet, args.robot, validators=descriptions.shape_validators(), trace=trace
     )
+    if getattr(args, "introspection", False):
+        client.introspect()
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     spinner = Spinner(executor, "dynevent-send")

@@ -171,6 +171,8 @@ class Watch:
     grace: float = 0.5
     report: str | None = None
     trace: str | None = None
+    #: Publish the action's service events (introspection, with contents) even when not judging.
+    introspection: bool = False
 
 
 class _Clients:
@@ -380,7 +382,7 @@ class _Robots:
             on_finished=self.finished(robot),
             on_step=judged.on_step,
         )
-        if self.watch.judge:
+        if self.watch.judge or self.watch.introspection:  # a recording of serve then holds the goals
             judged.named = server.introspect(judged.on_goal_event)
         self.servers[robot] = server
         if restored is not None:

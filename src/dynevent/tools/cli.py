@@ -311,10 +311,46 @@ def _serve(args: argparse.Namespace) -> int:
         return load_config(args)
 
     def run(serve: Any, config: Any) -> int:
-        watch = serve.Watch(judge=not args.no_judge, grace=args.grace, report=args.report, trace=args.trace)
+        watch = serve.Watch(judge=not args.no_judge, grace=args.grace, report=args.report, trace=args.trace,
+                            introspection=args.introspection)  # fmt: skip
         return int(serve.run(config, args.state, args.seconds, _say, watch))
 
     return _ros_command("serve", check, run)
+
+
+def _record(args: argparse.Namespace) -> int:
+    from dynevent.errors import RecordError
+
+    def check() -> None:
+        if args.seconds is not None and not 0 < args.seconds < 1e9:
+            raise RecordError(f"--seconds: expected positive seconds (got {args.seconds})")
+        if args.output and Path(args.output).exists():
+            raise RecordError(f"--output {args.output}: exists already (a bag is a new directory)")
+        _check_directory("output", args.output, RecordError)
+
+    return _ros_command("record", check, lambda record, _: record.run(args, _say))
+
+
+def _add_record_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    parser = commands.add_parser(
+        "record",
+        help="record the Dynamic Event conversations of a live system into a rosbag2 bag (MCAP)",
+        description="Subscribe to every Dynamic Event name on the ROS 2 graph (each robot's status and "
+        "begin topics, the fleet-wide begin topic, the action's feedback and goal status topics, and "
+        "the action's service events where introspection is on) and write each message as it "
+        "arrives into an MCAP bag in the rosbag2 layout, which ros2 bag and dynevent check read "
+        f"({DOCS}/recordings.md).  Runs until Ctrl-C or --seconds; stops cleanly.  Exit status: 0, "
+        "or 2 for a bad option or an output that cannot be written.",
+    )
+    parser.add_argument(
+        "-o", "--output", metavar="DIR", help="the bag directory to create (default dynevent_<date>-<time>)"
+    )
+    parser.add_argument(
+        "--fleet", action="append", metavar="FLEET", help="only this fleet's robots; repeatable"
+    )
+    parser.add_argument("--robot", action="append", metavar="ROBOT", help="only these robots; repeatable")
+    parser.add_argument("--seconds", type=float, metavar="SECONDS", help="stop after this long")
+    parser.set_defaults(run=_record)
 
 
 def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -380,6 +416,12 @@ def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
     parser.add_argument(
         "--report", metavar="FILE", help="write the judgement of the clients as Markdown at exit"
     )
+    parser.add_argument(
+        "--introspection", action="store_true",
+        help="publish the action's service events (ROS 2 introspection, with contents), so that a "
+        "recording holds the goals and their answers (docs/recordings.md); on whenever the clients "
+        "are judged",
+    )  # fmt: skip
     parser.add_argument(
         "--trace", metavar="PATH",
         help="write every step as a trace dynevent check reads: a file for one robot, a directory of "
@@ -528,6 +570,11 @@ def _add_send_command(commands: argparse._SubParsersAction[argparse.ArgumentPars
         metavar="FILE",
         help="write every message sent and received as a trace dynevent check reads",
     )
+    parser.add_argument(
+        "--introspection", action="store_true",
+        help="publish the action's service events (ROS 2 introspection, with contents), so that a "
+        "recording holds the goals and their answers (docs/recordings.md)",
+    )  # fmt: skip
     parser.set_defaults(run=_send)
 
 
@@ -544,6 +591,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     _add_serve_command(commands)
     _add_send_command(commands)
     _add_probe_command(commands)
+    _add_record_command(commands)
     args = parser.parse_args(argv)
     if args.command is None:  # bare `dynevent`: what it can do, not a run of one of its commands
         parser.print_help()

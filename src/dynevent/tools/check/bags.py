@@ -50,7 +50,7 @@ from dynevent.tools.check.trace import Record, Report, _Header
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
 from dynevent.wire.vocab import GoalStatus
 
-__all__ = ["BagReport", "RobotReport", "check_bag", "typestore"]
+__all__ = ["HIDDEN_SUFFIXES", "BagReport", "RobotReport", "check_bag", "message_definition", "typestore"]
 
 #: The action's hidden topics (``<action>/_action/...``) and what each carries.
 FEEDBACK, GOAL_STATUS = "feedback", "goal status"
@@ -62,6 +62,8 @@ _HIDDEN = {
     "/_action/get_result/_service_event": GET_RESULT,
     "/_action/cancel_goal/_service_event": CANCEL_GOAL,
 }
+#: The suffixes of the action's hidden topics, after ``<action>``.
+HIDDEN_SUFFIXES = tuple(_HIDDEN)
 #: The channels a robot's judgement needs, in the words a partial view line uses.
 CHANNELS = {
     "status": "the status topic",
@@ -199,6 +201,7 @@ def _routes(connections: Any, robots: dict[tuple[str, str], _Robot]) -> dict[int
         key = (parsed.fleet, parsed.robot)
         robot = robots.setdefault(key, _Robot(*key))
         robot.channels.add(channel)  # recorded, even if nothing was said on it
+        robot.own_begins = robot.own_begins or channel == "begin"
         routes[connection.id] = (robot, channel)
     for connection in fleet_wide:  # a robot's begins, where its own begin topic was not recorded
         routes[connection.id] = (_FleetBegins(robots), "begin")  # type: ignore[assignment]
@@ -214,15 +217,13 @@ class _Robot:
         self.fleet, self.robot = fleet, robot
         self.checker = Checker(_Header(fleet=fleet, robot=robot))
         self.channels: set[str] = set()
-        self.own_begins = False
+        self.own_begins = False  # the bag recorded the robot's own begin topic
         self.refused = 0
         # the records taken lately: the client's copy of one comes close to the server's
         self._seen: collections.OrderedDict[tuple[Any, ...], None] = collections.OrderedDict()
         self._calls: dict[tuple[str, bytes, int], Any] = {}  # service calls whose response is to come
 
-    def take(self, channel: str, time: int, message: Any, *, fleet_wide: bool = False) -> None:
-        if channel == "begin" and not fleet_wide:
-            self.own_begins = True
+    def take(self, channel: str, time: int, message: Any) -> None:
         self.channels.add(channel)
         try:
             if channel in _SERVICES:
@@ -299,7 +300,7 @@ class _FleetBegins:
         if robot is None:
             robot = self.robots[key] = _Robot(*key)
         if not robot.own_begins:
-            robot.take(channel, time, message, fleet_wide=True)
+            robot.take(channel, time, message)
 
 
 def _status(time: int, message: Any) -> Iterator[Record]:
@@ -424,3 +425,38 @@ def _definitions() -> dict[str, str]:
             )
         )
     return definitions
+
+
+def message_definition(msgtype: str) -> str:
+    """The definition of ``msgtype`` as rosbag2 keeps it beside a topic: ROS 2's concatenated form,
+    the type's own text, then each type it uses after a line of ``=`` and ``MSG: <type>``."""
+    own = _definitions()
+    store = typestore()
+
+    def text_of(name: str) -> str:
+        if name in own:
+            return own[name]
+        generated: str = store.generate_msgdef(name, ros_version=2)[0]
+        return generated.split("\n" + "=" * 80, maxsplit=1)[0]
+
+    used: list[str] = []
+
+    def visit(name: str) -> None:
+        for line in text_of(name).splitlines():
+            words = line.split("#", 1)[0].split()
+            if len(words) >= 2 and "/" in words[0] and "=" not in words[1]:
+                sub = _full_name(words[0].split("[", 1)[0])
+                if sub not in used:
+                    used.append(sub)
+                    visit(sub)
+
+    visit(msgtype)
+    parts = [text_of(msgtype).rstrip("\n")]
+    for name in used:
+        parts.append("=" * 80 + f"\nMSG: {name}\n" + text_of(name).rstrip("\n"))
+    return "\n".join(parts) + "\n"
+
+
+def _full_name(name: str) -> str:
+    """``pkg/Type`` as ``pkg/msg/Type``; a name with its interface kind stays."""
+    return name if name.count("/") == 2 else name.replace("/", "/msg/", 1)

@@ -1,0 +1,205 @@
+"""``dynevent record``: record a live system's Dynamic Event conversations into a rosbag2 bag.
+
+The recorder looks at the ROS 2 graph once a second and subscribes to every
+Dynamic Event name it finds for the robots asked for (``--fleet``,
+``--robot``; every robot by default): each robot's status and begin topics,
+the fleet-wide begin topic, the action's feedback and goal status topics and,
+where introspection is on at a server or client, the action's service event
+topics (send_goal, get_result, cancel_goal), which carry the goals and their
+answers (docs/recordings.md).  Each message is written as it arrives,
+serialised as received, with its receive time, into an MCAP bag in the
+rosbag2 layout (``metadata.yaml`` beside it), which ``ros2 bag`` and other
+rosbag2 readers open and ``dynevent check`` judges.
+
+A progress line (messages, bytes) is shown on a terminal.  Ctrl-C (or
+SIGTERM, or ``--seconds``) stops it cleanly: the bag is closed with its index
+and metadata, and nothing received is lost.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import rclpy
+from action_msgs.msg import GoalStatusArray
+from action_msgs.srv import CancelGoal
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from dynevent.errors import InvalidName, RecordError
+from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
+from dynevent.ros.spinning import Spinner, bounded_close, close_down
+from dynevent.tools.check import bags
+from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
+
+__all__ = ["Recorder", "run"]
+
+#: The message class of each type a Dynamic Event conversation uses.
+_CLASSES: dict[str, Any] = {
+    "rmf_task_msgs/msg/DynamicEventStatus": RosStatus,
+    "rmf_task_msgs/msg/DynamicEventDescription": RosDescription,
+    "rmf_task_msgs/action/DynamicEvent_FeedbackMessage": DynamicEvent.Impl.FeedbackMessage,
+    "action_msgs/msg/GoalStatusArray": GoalStatusArray,
+    "rmf_task_msgs/action/DynamicEvent_SendGoal_Event": DynamicEvent.Impl.SendGoalService.Event,
+    "rmf_task_msgs/action/DynamicEvent_GetResult_Event": DynamicEvent.Impl.GetResultService.Event,
+    "action_msgs/srv/CancelGoal_Event": CancelGoal.Event,
+}
+#: How often the graph is looked at for new topics, and the progress line redrawn, in seconds.
+DISCOVERY_PERIOD = 1.0
+#: The depth of the recorder's subscriptions.
+DEPTH = 1000
+_UNHASHED = "RIHS01_" + "0" * 64
+
+
+class Recorder:
+    """Subscribes to the Dynamic Event topics of the robots ``wanted(fleet, robot)`` names and writes
+    every message into ``writer`` (rosbags' rosbag2 writer, open); :meth:`discover` finds new topics."""
+
+    def __init__(
+        self, node: Any, writer: Any, wanted: Callable[[str, str], bool], say: Callable[[str], None] = print
+    ) -> None:
+        self.node = node
+        self.say = say
+        self.writer = writer
+        self.wanted = wanted
+        self.messages = 0
+        self.bytes = 0
+        self.topics: dict[str, Any] = {}  # topic: its subscription
+        self._connections: dict[str, Any] = {}
+        self._lock = threading.Lock()
+
+    def discover(self) -> None:
+        """Subscribe to every Dynamic Event topic on the graph not yet recorded."""
+        for topic, types in self.node.get_topic_names_and_types():
+            if topic in self.topics:
+                continue
+            msgtype = next((name for name in types if name in _CLASSES), None)
+            if msgtype is None or not self._named(topic):
+                continue
+            infos = self.node.get_publishers_info_by_topic(topic)
+            qos = _qos_for(infos)
+            rihs01 = next((str(info.topic_type_hash) for info in infos if info.topic_type_hash), "")
+            with self._lock:
+                self._connections[topic] = self.writer.add_connection(
+                    topic, msgtype, msgdef=bags.message_definition(msgtype),
+                    rihs01=rihs01 if rihs01.startswith("RIHS01_") else _UNHASHED,
+                )  # fmt: skip
+            self.topics[topic] = self.node.create_subscription(
+                _CLASSES[msgtype], topic, lambda data, topic=topic: self._write(topic, data), qos, raw=True
+            )
+            self.say(f"recording {topic} ({msgtype})")
+
+    def _named(self, topic: str) -> bool:
+        """Whether ``topic`` is a Dynamic Event name of a robot asked for (the fleet-wide begin topic
+        always is: it carries every robot's begins)."""
+        if topic.lstrip("/") == BEGIN_TOPIC:
+            return True
+        name = topic
+        for suffix in bags.HIDDEN_SUFFIXES:
+            if topic.endswith(suffix):
+                name = topic[: -len(suffix)]
+        try:
+            parsed = parse_name(name)
+        except InvalidName:
+            return False
+        if (parsed.kind is NameKind.ACTION) == (name == topic):
+            return False  # the action's own name is no topic; a hidden suffix on a topic is no name
+        return self.wanted(parsed.fleet, parsed.robot)
+
+    def _write(self, topic: str, data: bytes) -> None:
+        now = time.time_ns()
+        with self._lock:
+            connection = self._connections.get(topic)
+            if connection is None:  # after close
+                return
+            self.writer.write(connection, now, data)
+            self.messages += 1
+            self.bytes += len(data)
+
+    def close(self) -> None:
+        """Write nothing more; the caller closes the writer."""
+        with self._lock:
+            self._connections.clear()
+
+
+def _qos_for(infos: Any) -> QoSProfile:
+    """Reliable and transient-local when any publisher offers it (a latched topic: its last messages
+    are recorded too), else what the publishers offer; a deep history."""
+    transient = any(info.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for info in infos)
+    reliable = all(info.qos_profile.reliability == ReliabilityPolicy.RELIABLE for info in infos) and infos
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST,
+        depth=DEPTH,
+        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL if transient else DurabilityPolicy.VOLATILE,
+    )
+
+
+def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
+    """Record until SIGINT, SIGTERM or ``--seconds``; 0, or 2 when the bag cannot be written."""
+    try:
+        from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
+    except ImportError:
+        from dynevent.errors import MissingExtra
+
+        raise MissingExtra("bags", "rosbags", "writes rosbag2 recordings") from None
+    output = Path(args.output or time.strftime("dynevent_%Y_%m_%d-%H_%M_%S"))
+    if output.exists():
+        raise RecordError(f"--output {output}: exists already (a bag is a new directory)")
+    fleets, robots = set(args.fleet or ()), set(args.robot or ())
+
+    def wanted(fleet: str, robot: str) -> bool:
+        return (not fleets or fleet in fleets) and (not robots or robot in robots)
+
+    try:
+        writer = Writer(output, version=9, storage_plugin=StoragePlugin.MCAP)
+        writer.open()
+    except (OSError, WriterError) as exc:
+        raise RecordError(f"--output {output}: cannot write: {exc}") from None
+    rclpy.init()
+    node = rclpy.create_node("dynevent_record")
+    live = sys.stdout.isatty()
+
+    def line(text: str) -> None:
+        say(f"\r\033[K{text}" if live else text)
+
+    recorder = Recorder(node, writer, wanted, line)
+
+    def tick() -> None:
+        recorder.discover()
+        if live:
+            sys.stdout.write(f"\r\033[Krecording {output}: {len(recorder.topics)} topics, "
+                             f"{recorder.messages:,} messages, {recorder.bytes:,} bytes")  # fmt: skip
+            sys.stdout.flush()
+
+    timer = node.create_timer(DISCOVERY_PERIOD, tick)
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    spinner = Spinner(executor, "dynevent-record")
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
+    recorder.discover()
+    spinner.start()
+    say(f"recording into {output} (Ctrl-C to stop)")
+    try:
+        stop.wait(args.seconds)
+    finally:
+        with bounded_close():
+            spinner.stop()
+            node.destroy_timer(timer)
+            recorder.close()
+            close_down([node])
+        writer.close()
+        if live:
+            sys.stdout.write("\r\033[K")
+    say(f"recorded {recorder.messages} messages ({recorder.bytes} bytes) on {len(recorder.topics)} topics "
+        f"into {output}")  # fmt: skip
+    return 0
