@@ -10,7 +10,6 @@ from typing import Any
 import pytest
 from action_msgs.msg import GoalInfo
 from action_msgs.srv import CancelGoal
-from builtin_interfaces.msg import Time
 from rclpy.serialization import serialize_message
 from rmf_task_msgs.action import DynamicEvent
 from rmf_task_msgs.msg import DynamicEventDescription, DynamicEventStatus
@@ -39,7 +38,7 @@ def _types() -> dict[str, Any]:
 def _event(event_type: type, kind: int, call: int, request: Any = None, response: Any = None) -> Any:
     """As ROS 2 introspection records a call: the request in the request event, the response alone in
     the response event, paired by the client's GID and the sequence number ``call``."""
-    info = ServiceEventInfo(event_type=kind, stamp=Time(sec=T0 // 10**9), sequence_number=call)
+    info = ServiceEventInfo(event_type=kind, sequence_number=call)  # no stamp: the bag time orders it
     return event_type(info=info, request=[] if request is None else [request],
                       response=[] if response is None else [response])  # fmt: skip
 
@@ -143,18 +142,17 @@ def _session(tmp_path: Path, graph: Any, serve_args: list[str]) -> Path:
     record = None
     try:
         serve.wait_line("serving ")
-        record = Child(["-m", "dynevent", "record", "-o", str(bag), "--robot", ROBOT])
+        record = Child(["-m", "dynevent", "record", "-o", str(bag), "--fleet", "tinyRobot", "--robot", ROBOT])
         record.wait_line(f"recording /rmf/dynamic_event/status/tinyRobot/{ROBOT}")
         watcher = graph.node("bag_watcher")
-        if (
-            "--no-judge" not in serve_args
-        ):  # the recorder's subscriptions to the service events are on the graph
+        if "--no-judge" not in serve_args:  # the recorder is on the service events before a goal is sent
             for topic in SERVICE_EVENTS:
                 record.wait_line(f"recording {topic}")
                 wait_for(lambda topic=topic: watcher.count_subscribers(topic) > 0, f"the recorder on {topic}")
         for args in (["--place", "pantry"], ["--end"]):
+            command = ["-m", "dynevent", "send", "--robot", ROBOT, "--timeout", "20", *args]
             process = subprocess.Popen(
-                [sys.executable, "-m", "dynevent", "send", "--robot", ROBOT, "--timeout", "20", *args],
+                [sys.executable, *command],
                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=child_env(),
             )  # fmt: skip
             sent = finish(process, 60)

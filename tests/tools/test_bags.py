@@ -298,3 +298,21 @@ def test_dynevent_check_reads_a_bag_directory_or_file_and_exits_0_1_or_2(tmp_pat
         done.returncode == 2
         and "nothing to check: no Dynamic Event names in it (1 other messages)" in done.stderr
     )
+
+
+def test_the_servers_stamps_order_what_a_recorder_received_out_of_order(tmp_path: Path) -> None:
+    """A recorder receives each topic in order, not the topics in order with one another: here the
+    NEXT's request and response events come after the feedback and the status its start published.
+    The stamps the server put on them (within ``SKEW`` of the bag time) give back its order."""
+    run = _clean()
+    times = [item[2] for item in run.messages[:6]]  # begin, WAITING, request, response, feedback, RUN
+    received = [*run.messages[:2], *run.messages[4:6], *run.messages[2:4]]
+    pairs = zip(received, times, strict=True)
+    run.messages[:6] = [(topic, msgtype, time, message) for (topic, msgtype, _, message), time in pairs]
+    report = check_bag(run.write(tmp_path / "bag", StoragePlugin.MCAP))
+    assert report.clean, _robot(report).report
+    unstamped = Conversation()
+    unstamped.messages = list(run.messages)
+    for index in (4, 5):  # the same events stamped with another clock (simulated time): bag order rules
+        unstamped.messages[index][3].info.stamp = _time(5 * SECOND)
+    assert not check_bag(unstamped.write(tmp_path / "unstamped", StoragePlugin.MCAP)).clean

@@ -54,7 +54,7 @@ from dynevent.wire.names import (
 )
 from dynevent.wire.vocab import Failure, GoalStatus
 
-__all__ = ["DynamicEventClient", "GoalRun", "GoalWaitTimeout"]
+__all__ = ["DynamicEventClient", "GoalRun", "GoalWaitTimeout", "introspect"]
 
 _TERMINAL = {
     RosGoalStatus.STATUS_SUCCEEDED: GoalStatus.SUCCEEDED,
@@ -220,14 +220,7 @@ class DynamicEventClient:
     def introspect(self) -> bool:
         """Publish this client's action service events (ROS 2 introspection, with contents), so that
         a recording holds its goals and answers; False where rclpy cannot."""
-        configure = getattr(self._action, "configure_introspection", None)
-        if configure is None:
-            return False
-        from rclpy.qos import QoSProfile
-        from rclpy.service_introspection import ServiceIntrospectionState
-
-        configure(self._node.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
-        return True
+        return introspect(self._action, self._node)
 
     def destroy(self) -> None:
         """Release the action client, subscriptions and timer."""
@@ -375,3 +368,16 @@ class DynamicEventClient:
             response = DynamicEvent.Impl.SendGoalService.Response(accepted=True)
             handle = ClientGoalHandle(self._action, convert.uuid_to_ros(uuid), response)
             handle.get_result_async().add_done_callback(lambda done, uuid=uuid: self._on_result(uuid, done))
+
+
+def introspect(action: Any, node: Any) -> bool:
+    """Turn on the introspection, with contents, of an rclpy action client or server: its service
+    events are published (``<action>/_action/<service>/_service_event``).  False where rclpy cannot."""
+    configure = getattr(action, "configure_introspection", None)
+    if configure is None:
+        return False
+    from rclpy.qos import QoSProfile
+    from rclpy.service_introspection import ServiceIntrospectionState
+
+    configure(node.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
+    return True

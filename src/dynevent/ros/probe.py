@@ -34,6 +34,7 @@ from rclpy.executors import SingleThreadedExecutor
 
 from dynevent.errors import InvalidMessage, ProbeError
 from dynevent.ros import convert
+from dynevent.ros.client import introspect
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.server import latched
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
@@ -280,6 +281,10 @@ class Link:
         with self._changed:
             return list(self.statuses)
 
+    def introspect(self) -> bool:
+        """Publish the probe's action service events (ROS 2 introspection, with contents)."""
+        return introspect(self._action, self._node)
+
     def destroy(self) -> None:
         self._action.destroy()
 
@@ -297,6 +302,7 @@ class Options:
     known: frozenset[str] = frozenset()
     trace: str | None = None
     stubborn_minimum: float = 2.0
+    introspection: bool = False
 
 
 def _waits(status: DynamicEventStatus) -> bool:
@@ -992,7 +998,7 @@ def main(args: Any, cases: list[Case], say: Callable[[str], None]) -> int:
     options = Options(
         fleet=args.fleet, robot=args.robot, place=args.place, category=args.category, timeout=args.timeout,
         begin_command=args.begin_command, known=probe_cases.KNOWN.get(args.known or "", frozenset()),
-        trace=args.trace, stubborn_minimum=args.stubborn_minimum,
+        trace=args.trace, stubborn_minimum=args.stubborn_minimum, introspection=args.introspection,
     )  # fmt: skip
     live = sys.stdout.isatty()
 
@@ -1035,6 +1041,8 @@ def run(
     rclpy.init()
     node = rclpy.create_node("dynevent_probe")
     link = Link(node, options.fleet, options.robot, trace)
+    if options.introspection:
+        link.introspect()
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     spinner = Spinner(executor, "dynevent-probe")

@@ -37,7 +37,7 @@ from dynevent.errors import InvalidName, RecordError
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.tools.check import bags
-from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
+from dynevent.wire.names import BEGIN_TOPIC, NameKind, action_name, begin_topic, parse_name, status_topic
 
 __all__ = ["Recorder", "run"]
 
@@ -84,17 +84,45 @@ class Recorder:
             if msgtype is None or not self._named(topic):
                 continue
             infos = self.node.get_publishers_info_by_topic(topic)
-            qos = _qos_for(infos)
             rihs01 = next((str(info.topic_type_hash) for info in infos if info.topic_type_hash), "")
-            with self._lock:
-                self._connections[topic] = self.writer.add_connection(
-                    topic, msgtype, msgdef=bags.message_definition(msgtype),
-                    rihs01=rihs01 if rihs01.startswith("RIHS01_") else _UNHASHED,
-                )  # fmt: skip
-            self.topics[topic] = self.node.create_subscription(
-                _CLASSES[msgtype], topic, lambda data, topic=topic: self._write(topic, data), qos, raw=True
-            )
-            self.say(f"recording {topic} ({msgtype})")
+            self._subscribe(topic, msgtype, _qos_for(infos), rihs01)
+
+    def expect(self, fleet: str, robot: str) -> None:
+        """Subscribe now to every name of this robot, before any publisher is there: a short-lived
+        client's introspection (its first goal) is recorded too."""
+        action = "/" + action_name(fleet, robot)
+        names = {
+            "/" + status_topic(fleet, robot): ("rmf_task_msgs/msg/DynamicEventStatus", True),
+            "/" + begin_topic(fleet, robot): ("rmf_task_msgs/msg/DynamicEventDescription", True),
+            action + "/_action/feedback": ("rmf_task_msgs/action/DynamicEvent_FeedbackMessage", False),
+            action + "/_action/status": ("action_msgs/msg/GoalStatusArray", True),
+            action + "/_action/send_goal/_service_event": (
+                "rmf_task_msgs/action/DynamicEvent_SendGoal_Event",
+                False,
+            ),
+            action + "/_action/get_result/_service_event": (
+                "rmf_task_msgs/action/DynamicEvent_GetResult_Event",
+                False,
+            ),
+            action + "/_action/cancel_goal/_service_event": ("action_msgs/srv/CancelGoal_Event", False),
+        }
+        for topic, (msgtype, latched_topic) in names.items():
+            if topic not in self.topics:
+                durability = DurabilityPolicy.TRANSIENT_LOCAL if latched_topic else DurabilityPolicy.VOLATILE
+                qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=DEPTH,
+                                 reliability=ReliabilityPolicy.RELIABLE, durability=durability)  # fmt: skip
+                self._subscribe(topic, msgtype, qos, "")
+
+    def _subscribe(self, topic: str, msgtype: str, qos: QoSProfile, rihs01: str) -> None:
+        with self._lock:
+            self._connections[topic] = self.writer.add_connection(
+                topic, msgtype, msgdef=bags.message_definition(msgtype),
+                rihs01=rihs01 if rihs01.startswith("RIHS01_") else _UNHASHED,
+            )  # fmt: skip
+        self.topics[topic] = self.node.create_subscription(
+            _CLASSES[msgtype], topic, lambda data, topic=topic: self._write(topic, data), qos, raw=True
+        )
+        self.say(f"recording {topic} ({msgtype})")
 
     def _named(self, topic: str) -> bool:
         """Whether ``topic`` is a Dynamic Event name of a robot asked for (the fleet-wide begin topic
@@ -186,6 +214,9 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
     stop = threading.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stop.set())
+    for fleet in sorted(fleets) if robots else ():  # robots named in full: their names are known now
+        for robot in sorted(robots):
+            recorder.expect(fleet, robot)
     recorder.discover()
     spinner.start()
     say(f"recording into {output} (Ctrl-C to stop)")

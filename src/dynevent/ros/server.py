@@ -280,13 +280,10 @@ class _Entities:
         """Turn on the introspection of the action server (the requests' contents) and follow its
         ``send_goal`` service events with ``on_goal``: how a server learns which client sent a goal
         (R22.1).  False where rclpy cannot."""
-        configure = getattr(self.action, "configure_introspection", None)
-        if configure is None:
-            return False
-        from rclpy.qos import QoSProfile
-        from rclpy.service_introspection import ServiceIntrospectionState
+        from dynevent.ros.client import introspect  # the client module imports this one
 
-        configure(self.node.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
+        if not introspect(self.action, self.node):
+            return False
         self.introspection = self.node.create_subscription(
             DynamicEvent.Impl.SendGoalService.Event,
             f"{self.action_name}/_action/send_goal/_service_event",

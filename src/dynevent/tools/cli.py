@@ -519,6 +519,11 @@ def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         "--trace", metavar="FILE",
         help="write every message sent and seen, as a trace dynevent check reads",
     )  # fmt: skip
+    parser.add_argument(
+        "--introspection", action="store_true",
+        help="publish the probe's action service events (ROS 2 introspection, with contents), so that a "
+        "recording holds its goals and their answers (docs/recordings.md)",
+    )  # fmt: skip
     parser.set_defaults(run=_probe)
 
 

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import collections
 import functools
+import heapq
 import importlib.resources
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -50,7 +51,15 @@ from dynevent.tools.check.trace import Record, Report, _Header
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
 from dynevent.wire.vocab import GoalStatus
 
-__all__ = ["HIDDEN_SUFFIXES", "BagReport", "RobotReport", "check_bag", "message_definition", "typestore"]
+__all__ = [
+    "HIDDEN_SUFFIXES",
+    "SKEW",
+    "BagReport",
+    "RobotReport",
+    "check_bag",
+    "message_definition",
+    "typestore",
+]
 
 #: The action's hidden topics (``<action>/_action/...``) and what each carries.
 FEEDBACK, GOAL_STATUS = "feedback", "goal status"
@@ -200,7 +209,8 @@ def _routes(connections: Any, robots: dict[tuple[str, str], _Robot]) -> dict[int
             channel = str(parsed.kind)
         key = (parsed.fleet, parsed.robot)
         robot = robots.setdefault(key, _Robot(*key))
-        robot.channels.add(channel)  # recorded, even if nothing was said on it
+        if connection.msgcount:  # a topic subscribed to in vain holds nothing to judge
+            robot.channels.add(channel)
         robot.own_begins = robot.own_begins or channel == "begin"
         routes[connection.id] = (robot, channel)
     for connection in fleet_wide:  # a robot's begins, where its own begin topic was not recorded
@@ -222,9 +232,12 @@ class _Robot:
         # the records taken lately: the client's copy of one comes close to the server's
         self._seen: collections.OrderedDict[tuple[Any, ...], None] = collections.OrderedDict()
         self._calls: dict[tuple[str, bytes, int], Any] = {}  # service calls whose response is to come
+        self._waiting: list[tuple[int, int, Record]] = []  # records held for the server's order
+        self._arrived = 0
 
     def take(self, channel: str, time: int, message: Any) -> None:
         self.channels.add(channel)
+        stamp = _stamp(channel, message, time)
         try:
             if channel in _SERVICES:
                 message = self._paired(channel, message)
@@ -239,9 +252,20 @@ class _Robot:
                     if len(self._seen) > _CALLS:
                         self._seen.popitem(last=False)
                 if self.judged:
-                    self.checker.push(record)
+                    self._order(record, stamp)
         except InvalidMessage:
             self.refused += 1
+
+    def _order(self, record: Record, stamp: int) -> None:
+        """Pass records on in the server's order: a recorder receives each topic in order, but not
+        the topics in order with one another (a goal's request event may come after the status its
+        start published).  Each record waits :data:`SKEW` of bag time, then goes in the order of the
+        time the server stamped on it (a status's ``time``, a begin's ``start_time``, a service
+        event's ``stamp``; the bag time for feedback), ties in bag order."""
+        heapq.heappush(self._waiting, (stamp, self._arrived, record))
+        self._arrived += 1
+        while self._waiting and self._waiting[0][0] <= record.time - SKEW:
+            self.checker.push(heapq.heappop(self._waiting)[2])
 
     def _paired(self, channel: str, event: Any) -> tuple[int, Any, Any] | None:
         """A service event as (kind, request, response): a response event carries no request (ROS 2
@@ -274,9 +298,28 @@ class _Robot:
         absent = tuple(CHANNELS[name] for name in CHANNELS if name not in self.channels)
         report = None
         if self.judged:
+            while self._waiting:
+                self.checker.push(heapq.heappop(self._waiting)[2])
             self.checker.source = f"{source}: {self.fleet}/{self.robot}"
             report = self.checker.finish()
         return RobotReport(self.fleet, self.robot, channels, absent, report, self.refused)
+
+
+#: How long (bag time, nanoseconds) a record waits for records the server published before it; a
+#: stamp farther than this from the bag time (another clock: simulated time, another host) is not used.
+SKEW = 1_000_000_000
+
+
+def _stamp(channel: str, message: Any, time: int) -> int:
+    """The time the server stamped on a message, when it is within :data:`SKEW` of the bag time."""
+    source = {"status": "time", "begin": "start_time"}.get(channel)
+    stamped = (
+        getattr(message, source, None) if source else getattr(getattr(message, "info", None), "stamp", None)
+    )
+    if stamped is None:
+        return time
+    nanoseconds = int(stamped.sec) * 1_000_000_000 + int(stamped.nanosec)
+    return nanoseconds if abs(nanoseconds - time) <= SKEW else time
 
 
 #: The channels of service events, and how many calls without a response (and records taken lately)
