@@ -300,19 +300,67 @@ def test_dynevent_check_reads_a_bag_directory_or_file_and_exits_0_1_or_2(tmp_pat
     )
 
 
-def test_the_servers_stamps_order_what_a_recorder_received_out_of_order(tmp_path: Path) -> None:
+def _received(run: Conversation, order: list[int]) -> None:
+    """The messages ``order`` names, received in that order: each takes the bag time of the place it
+    lands in, and keeps the stamps the server put on it."""
+    times = [run.messages[index][2] for index in sorted(order)]
+    moved = [run.messages[index] for index in order]
+    for place, (topic, msgtype, _, message), time in zip(sorted(order), moved, times, strict=True):
+        run.messages[place] = (topic, msgtype, time, message)
+
+
+def _passed(monkeypatch: pytest.MonkeyPatch, path: Path) -> list[str]:
+    """The kinds of the records check_bag passes to the observer, in order."""
+    from dynevent.tools.check import bags
+
+    kinds: list[str] = []
+    push = bags.Checker.push
+    monkeypatch.setattr(
+        bags.Checker, "push", lambda self, record: (kinds.append(record.kind), push(self, record))
+    )
+    check_bag(path)
+    return kinds
+
+
+def test_the_servers_stamps_order_what_a_recorder_received_out_of_order(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """A recorder receives each topic in order, not the topics in order with one another: here the
-    NEXT's request and response events come after the feedback and the status its start published.
-    The stamps the server put on them (within ``SKEW`` of the bag time) give back its order."""
+    INACTIVE status that FINISHED's start published comes before FINISHED's request, response and
+    answer events.  The stamps the server put on them (within ``SKEW`` of the bag time) give back its
+    order; stamps of another clock (simulated time) are not used, and the bag's order stands."""
     run = _clean()
-    times = [item[2] for item in run.messages[:6]]  # begin, WAITING, request, response, feedback, RUN
-    received = [*run.messages[:2], *run.messages[4:6], *run.messages[2:4]]
-    pairs = zip(received, times, strict=True)
-    run.messages[:6] = [(topic, msgtype, time, message) for (topic, msgtype, _, message), time in pairs]
-    report = check_bag(run.write(tmp_path / "bag", StoragePlugin.MCAP))
-    assert report.clean, _robot(report).report
-    unstamped = Conversation()
-    unstamped.messages = list(run.messages)
-    for index in (4, 5):  # the same events stamped with another clock (simulated time): bag order rules
-        unstamped.messages[index][3].info.stamp = _time(5 * SECOND)
-    assert not check_bag(unstamped.write(tmp_path / "unstamped", StoragePlugin.MCAP)).clean
+    _received(run, [*range(9), 13, 9, 10, 11, 12])
+    tail = ["goal", "goal_response", "result", "status"]
+    assert _passed(monkeypatch, run.write(tmp_path / "bag", StoragePlugin.MCAP))[-4:] == tail
+    assert check_bag(tmp_path / "bag").clean
+    run.messages[9][3].time = _time(5 * SECOND)  # the INACTIVE status, stamped by another clock
+    passed = _passed(monkeypatch, run.write(tmp_path / "unstamped", StoragePlugin.MCAP))
+    assert passed[-4:] == ["goal", "status", "goal_response", "result"]  # the status at its bag time
+
+
+def test_a_goal_goes_before_what_names_it_and_a_response_needs_its_goal(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Two hosts' clocks: the NEXT's request event is stamped after its response and the feedback;
+    the goal goes first.  A response whose request the bag lost is left out, never unreadable."""
+    run = _clean()
+    _received(run, [0, 1, 2, 4, 3, 5])  # the request's stamp after the feedback's
+    run.messages[2][3].info.stamp = _time(run.messages[3][2] + SECOND // 20)
+    passed = _passed(monkeypatch, run.write(tmp_path / "skewed", StoragePlugin.MCAP))
+    assert passed[:5] == ["begin", "status", "goal", "feedback", "goal_response"], passed
+    lost = _clean()
+    del lost.messages[2]  # the NEXT's request event
+    report = check_bag(lost.write(tmp_path / "lost", StoragePlugin.MCAP))
+    assert _robot(report).report is not None  # judged: a finding where its child is unexplained
+
+
+def test_feedback_received_after_its_goals_answer_is_read_as_sent_before_it(tmp_path: Path) -> None:
+    """The feedback topic and the result service are two channels: a recorder may receive a goal's
+    last feedback after its answer, and cannot tell that from late sending; within ``SKEW`` it is
+    read as sent before the answer.  Long after the answer it is a finding (R19.1)."""
+    late = _clean(lambda run: run.feedback(1, "underway", 1))
+    assert check_bag(late.write(tmp_path / "late", StoragePlugin.MCAP)).clean
+    later = _clean(lambda run: (setattr(run, "now", run.now + 2 * SECOND), run.feedback(1, "underway", 1)))
+    findings = _robot(check_bag(later.write(tmp_path / "later", StoragePlugin.MCAP))).report.findings
+    assert [(finding.rule, finding.code) for finding in findings][:1] == [("R19.1", "after_answer")], findings

@@ -84,6 +84,8 @@ class Recorder:
             if msgtype is None or not self._named(topic):
                 continue
             infos = self.node.get_publishers_info_by_topic(topic)
+            if not infos:
+                continue  # no publisher yet: its QoS (a latched topic?) is learned when one comes
             rihs01 = next((str(info.topic_type_hash) for info in infos if info.topic_type_hash), "")
             self._subscribe(topic, msgtype, _qos_for(infos), rihs01)
 
@@ -223,12 +225,13 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
     try:
         stop.wait(args.seconds)
     finally:
-        with bounded_close():
-            spinner.stop()
-            node.destroy_timer(timer)
-            recorder.close()
-            close_down([node])
+        # the bag is closed (its index and metadata.yaml written) before anything that could hang
+        spinner.stop()
+        recorder.close()  # a write in progress ends first; none follows
         writer.close()
+        with bounded_close():
+            node.destroy_timer(timer)
+            close_down([node])
         if live:
             sys.stdout.write("\r\033[K")
     say(f"recorded {recorder.messages} messages ({recorder.bytes} bytes) on {len(recorder.topics)} topics "

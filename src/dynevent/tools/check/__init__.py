@@ -152,7 +152,7 @@ def _run_bag(source: str, as_json: bool) -> int:
     except (BagError, MissingExtra) as exc:
         print(f"dynevent check: {exc}", file=sys.stderr)
         return 2
-    if not bag.robots:
+    if not bag.robots or not bag.messages:
         print(f"dynevent check: {source}: nothing to check: no Dynamic Event names in it "
               f"({bag.other} other messages)", file=sys.stderr)  # fmt: skip
         return 2
@@ -212,6 +212,10 @@ def bag_records(bag: Any) -> list[dict[str, Any]]:
         if robot.absent:
             rows.append({"type": "partial_view", "file": bag.source, "robot": robot.name,
                          "absent": list(robot.absent), "judged": robot.report is not None})  # fmt: skip
+        if robot.refused:
+            rows.append(
+                {"type": "refused", "file": bag.source, "robot": robot.name, "messages": robot.refused}
+            )
     violations = sum(len(robot.report.findings) for robot in bag.robots if robot.report)
     rows.append({"type": "summary", "file": bag.source, "robots": len(bag.robots),
                  "messages": bag.messages, "violations": violations})  # fmt: skip

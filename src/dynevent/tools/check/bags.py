@@ -45,7 +45,7 @@ from dynevent.conformance.received import (
     status_from_ros,
     uuid_from_ros,
 )
-from dynevent.errors import BagError, InvalidMessage, InvalidName, MissingExtra, TraceError
+from dynevent.errors import BagError, DyneventError, InvalidMessage, InvalidName, MissingExtra, TraceError
 from dynevent.tools.check.observer import Checker
 from dynevent.tools.check.trace import Record, Report, _Header
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
@@ -70,6 +70,16 @@ _HIDDEN = {
     "/_action/send_goal/_service_event": SEND_GOAL,
     "/_action/get_result/_service_event": GET_RESULT,
     "/_action/cancel_goal/_service_event": CANCEL_GOAL,
+}
+#: The type each channel carries: a topic of a Dynamic Event name with another type is not read.
+TYPES = {
+    "status": "rmf_task_msgs/msg/DynamicEventStatus",
+    "begin": "rmf_task_msgs/msg/DynamicEventDescription",
+    FEEDBACK: "rmf_task_msgs/action/DynamicEvent_FeedbackMessage",
+    GOAL_STATUS: "action_msgs/msg/GoalStatusArray",
+    SEND_GOAL: "rmf_task_msgs/action/DynamicEvent_SendGoal_Event",
+    GET_RESULT: "rmf_task_msgs/action/DynamicEvent_GetResult_Event",
+    CANCEL_GOAL: "action_msgs/srv/CancelGoal_Event",
 }
 #: The suffixes of the action's hidden topics, after ``<action>``.
 HIDDEN_SUFFIXES = tuple(_HIDDEN)
@@ -152,6 +162,7 @@ def check_bag(path: str | Path) -> BagReport:
                     raise BagError(source, f"{connection.topic} at {time}: cannot decode: {exc}") from None
                 messages += 1
                 robot.take(channel, time, message)
+        reports = tuple(robot.finish(source) for _, robot in sorted(robots.items()))
     except BagError:
         raise
     except TraceError as exc:  # a record the observer cannot take, in the bag's order
@@ -159,9 +170,18 @@ def check_bag(path: str | Path) -> BagReport:
     except (FileNotFoundError, IsADirectoryError, PermissionError) as exc:
         raise BagError(source, f"cannot read: {exc.strerror or exc}") from None
     except reader_errors as exc:
-        raise BagError(source, f"not a readable rosbag2 recording: {exc}") from None
-    reports = tuple(robot.finish(source) for _, robot in sorted(robots.items()))
+        raise BagError(source, f"not a readable rosbag2 recording: {_one_line(exc)}") from None
+    except DyneventError:
+        raise
+    except Exception as exc:  # the storage library's own (apsw, zstandard) on a corrupt file
+        raise BagError(
+            source, f"not a readable rosbag2 recording: {type(exc).__name__}: {_one_line(exc)}"
+        ) from None
     return BagReport(source=source, robots=reports, messages=messages, other=other)
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())
 
 
 def _stored_name(store: Any, msgtype: str) -> str:
@@ -191,7 +211,8 @@ def _routes(connections: Any, robots: dict[tuple[str, str], _Robot]) -> dict[int
     for connection in connections:
         topic = connection.topic
         if topic.lstrip("/") == BEGIN_TOPIC:
-            fleet_wide.append(connection)
+            if connection.msgtype == TYPES["begin"]:
+                fleet_wide.append(connection)
             continue
         name, channel = topic, ""
         for suffix, hidden in _HIDDEN.items():
@@ -207,11 +228,13 @@ def _routes(connections: Any, robots: dict[tuple[str, str], _Robot]) -> dict[int
             if channel:
                 continue
             channel = str(parsed.kind)
+        if connection.msgtype != TYPES[channel]:
+            continue  # a Dynamic Event name with another type: not this protocol's
         key = (parsed.fleet, parsed.robot)
         robot = robots.setdefault(key, _Robot(*key))
         if connection.msgcount:  # a topic subscribed to in vain holds nothing to judge
             robot.channels.add(channel)
-        robot.own_begins = robot.own_begins or channel == "begin"
+            robot.own_begins = robot.own_begins or channel == "begin"
         routes[connection.id] = (robot, channel)
     for connection in fleet_wide:  # a robot's begins, where its own begin topic was not recorded
         routes[connection.id] = (_FleetBegins(robots), "begin")  # type: ignore[assignment]
@@ -232,20 +255,32 @@ class _Robot:
         # the records taken lately: the client's copy of one comes close to the server's
         self._seen: collections.OrderedDict[tuple[Any, ...], None] = collections.OrderedDict()
         self._calls: dict[tuple[str, bytes, int], Any] = {}  # service calls whose response is to come
-        self._waiting: list[tuple[int, int, Record]] = []  # records held for the server's order
+        # records held for the server's order: (stamp, order, arrival, record)
+        self._waiting: list[tuple[int, float, int, Record]] = []
+        self._waiting_goals: dict[str, tuple[int, float, int, Record]] = {}
+        self._waiting_answers: dict[str, tuple[int, float, int, Record]] = {}
+        self._last: collections.OrderedDict[str, int] = collections.OrderedDict()  # a goal's latest key
+        self._goals: collections.OrderedDict[str, None] = collections.OrderedDict()  # awaiting a response
         self._arrived = 0
 
     def take(self, channel: str, time: int, message: Any) -> None:
         self.channels.add(channel)
         stamp = _stamp(channel, message, time)
+        call: tuple[str, bytes, int] | None = None
         try:
             if channel in _SERVICES:
                 message = self._paired(channel, message)
                 if message is None:
                     return
+                call = message[3]
             for record in _RECORDS[channel](time, message):
-                if record.kind in _EVENT_KINDS:  # the same from the client's and the server's introspection
-                    key = (record.kind, record.goal_uuid, record.message, record.accepted, record.status)
+                if record.kind in _EVENT_KINDS:
+                    # one call seen by both the client's and the server's introspection is one record; an
+                    # answer asked for again is the same answer (another answer to the goal is not)
+                    same = (
+                        (record.goal_uuid, record.message, record.status) if record.kind == "result" else call
+                    )
+                    key = (record.kind, same)
                     if key in self._seen:
                         continue
                     self._seen[key] = None
@@ -261,14 +296,60 @@ class _Robot:
         the topics in order with one another (a goal's request event may come after the status its
         start published).  Each record waits :data:`SKEW` of bag time, then goes in the order of the
         time the server stamped on it (a status's ``time``, a begin's ``start_time``, a service
-        event's ``stamp``; the bag time for feedback), ties in bag order."""
-        heapq.heappush(self._waiting, (stamp, self._arrived, record))
+        event's ``stamp``; the bag time for feedback), ties in bag order.  The records of one goal
+        keep their own order: its answer goes after the feedback received before it, and feedback
+        received while its answer waits is read as sent before it (the feedback topic and the
+        result service are two channels: a recorder cannot tell late delivery from late sending)."""
+        while self._waiting and self._waiting[0][0] <= record.time - SKEW:  # what is due goes first
+            self._release()
+        answer = self._waiting_answers.get(record.goal_uuid) if record.kind == "feedback" else None
+        if answer is not None:
+            key: tuple[int, float] = (answer[0], answer[1] - 0.5)
+        elif record.goal_uuid:
+            key = (max(stamp, self._last.get(record.goal_uuid, stamp)), float(self._arrived))
+        else:
+            key = (stamp, float(self._arrived))
+        if record.goal_uuid:
+            self._last[record.goal_uuid] = key[0]
+            while len(self._last) > _CALLS:
+                self._last.popitem(last=False)
+        entry = (key[0], key[1], self._arrived, record)
+        heapq.heappush(self._waiting, entry)
         self._arrived += 1
+        if record.kind == "goal":
+            self._waiting_goals[record.goal_uuid] = entry
+        elif record.kind == "result":
+            self._waiting_answers[record.goal_uuid] = entry
         while self._waiting and self._waiting[0][0] <= record.time - SKEW:
-            self.checker.push(heapq.heappop(self._waiting)[2])
+            self._release()
 
-    def _paired(self, channel: str, event: Any) -> tuple[int, Any, Any] | None:
-        """A service event as (kind, request, response): a response event carries no request (ROS 2
+    def _release(self) -> None:
+        """Pass on the first record waiting; a goal stamped later than a record that names it (two
+        hosts' clocks) goes first."""
+        entry = heapq.heappop(self._waiting)
+        record = entry[3]
+        if self._waiting_answers.get(record.goal_uuid) is entry:
+            del self._waiting_answers[record.goal_uuid]
+        goal = self._waiting_goals.pop(record.goal_uuid, None) if record.goal_uuid else None
+        if goal is not None and goal is not entry:
+            self._waiting.remove(goal)
+            heapq.heapify(self._waiting)
+            self._pass(goal[3])
+        self._pass(record)
+
+    def _pass(self, record: Record) -> None:
+        if record.kind == "goal":
+            self._goals[record.goal_uuid] = None
+            if len(self._goals) > _CALLS:
+                self._goals.popitem(last=False)
+        elif record.kind == "goal_response":
+            if record.goal_uuid not in self._goals:
+                return  # the response to a goal the bag does not hold (lost, or before the recording)
+            del self._goals[record.goal_uuid]
+        self.checker.push(record)
+
+    def _paired(self, channel: str, event: Any) -> tuple[int, Any, Any, tuple[str, bytes, int]] | None:
+        """A service event as (kind, request, response, call): a response event carries no request (ROS 2
         introspection), so the request of the same call (client GID and sequence number) is kept
         until it comes.  None for a response whose request the bag does not hold."""
         kind = int(event.info.event_type)
@@ -281,11 +362,11 @@ class _Robot:
             self._calls[call] = request
             while len(self._calls) > _CALLS:  # calls never answered: the oldest are let go
                 del self._calls[next(iter(self._calls))]
-            return kind, request, None
+            return kind, request, None, call
         request = request if request is not None else self._calls.pop(call, None)
         if request is None or response is None:
             return None
-        return kind, request, response
+        return kind, request, response, call
 
     @property
     def judged(self) -> bool:
@@ -299,7 +380,7 @@ class _Robot:
         report = None
         if self.judged:
             while self._waiting:
-                self.checker.push(heapq.heappop(self._waiting)[2])
+                self._release()
             self.checker.source = f"{source}: {self.fleet}/{self.robot}"
             report = self.checker.finish()
         return RobotReport(self.fleet, self.robot, channels, absent, report, self.refused)
@@ -366,7 +447,7 @@ def _goal_status(time: int, message: Any) -> Iterator[Record]:
 
 
 def _send_goal(time: int, call: Any) -> Iterator[Record]:
-    _, request, response = call
+    _, request, response, _ = call
     uuid = uuid_from_ros(request.goal_id)
     if response is None:
         yield Record(line=time, kind="goal", time=time, goal_uuid=uuid, message=goal_from_ros(request.goal))
@@ -377,7 +458,7 @@ def _send_goal(time: int, call: Any) -> Iterator[Record]:
 
 
 def _get_result(time: int, call: Any) -> Iterator[Record]:
-    _, request, response = call
+    _, request, response, _ = call
     status = None if response is None else _TERMINAL.get(int(response.status))
     if status is not None:  # STATUS_UNKNOWN: the server knows no such goal, which answers nothing
         uuid = uuid_from_ros(request.goal_id)
@@ -386,7 +467,7 @@ def _get_result(time: int, call: Any) -> Iterator[Record]:
 
 
 def _cancel_goal(time: int, call: Any) -> Iterator[Record]:
-    _, request, response = call
+    _, request, response, _ = call
     uuid = uuid_from_ros(request.goal_info.goal_id)
     if uuid == "0" * 32:
         return  # a cancel of every goal (or of goals before a time): no record says that
