@@ -93,23 +93,12 @@ class Recorder:
         """Subscribe now to every name of this robot, before any publisher is there: a short-lived
         client's introspection (its first goal) is recorded too."""
         action = "/" + action_name(fleet, robot)
-        names = {
-            "/" + status_topic(fleet, robot): ("rmf_task_msgs/msg/DynamicEventStatus", True),
-            "/" + begin_topic(fleet, robot): ("rmf_task_msgs/msg/DynamicEventDescription", True),
-            action + "/_action/feedback": ("rmf_task_msgs/action/DynamicEvent_FeedbackMessage", False),
-            action + "/_action/status": ("action_msgs/msg/GoalStatusArray", True),
-            action + "/_action/send_goal/_service_event": (
-                "rmf_task_msgs/action/DynamicEvent_SendGoal_Event",
-                False,
-            ),
-            action + "/_action/get_result/_service_event": (
-                "rmf_task_msgs/action/DynamicEvent_GetResult_Event",
-                False,
-            ),
-            action + "/_action/cancel_goal/_service_event": ("action_msgs/srv/CancelGoal_Event", False),
-        }
-        for topic, (msgtype, latched_topic) in names.items():
+        names = {"/" + status_topic(fleet, robot): "status", "/" + begin_topic(fleet, robot): "begin"}
+        names.update({action + suffix: channel for suffix, channel in bags.HIDDEN.items()})
+        for topic, channel in names.items():
             if topic not in self.topics:
+                msgtype = bags.TYPES[channel]
+                latched_topic = channel in ("status", "begin", bags.GOAL_STATUS)  # transient-local (R1.4)
                 durability = DurabilityPolicy.TRANSIENT_LOCAL if latched_topic else DurabilityPolicy.VOLATILE
                 qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=DEPTH,
                                  reliability=ReliabilityPolicy.RELIABLE, durability=durability)  # fmt: skip

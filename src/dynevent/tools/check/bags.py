@@ -61,10 +61,10 @@ __all__ = [
     "typestore",
 ]
 
-#: The action's hidden topics (``<action>/_action/...``) and what each carries.
+#: The action's hidden topics (``<action>/_action/...``) and the channel each is.
 FEEDBACK, GOAL_STATUS = "feedback", "goal status"
 SEND_GOAL, GET_RESULT, CANCEL_GOAL = "send_goal", "get_result", "cancel_goal"
-_HIDDEN = {
+HIDDEN = {
     "/_action/feedback": FEEDBACK,
     "/_action/status": GOAL_STATUS,
     "/_action/send_goal/_service_event": SEND_GOAL,
@@ -82,7 +82,7 @@ TYPES = {
     CANCEL_GOAL: "action_msgs/srv/CancelGoal_Event",
 }
 #: The suffixes of the action's hidden topics, after ``<action>``.
-HIDDEN_SUFFIXES = tuple(_HIDDEN)
+HIDDEN_SUFFIXES = tuple(HIDDEN)
 #: The channels a robot's judgement needs, in the words a partial view line uses.
 CHANNELS = {
     "status": "the status topic",
@@ -215,7 +215,7 @@ def _routes(connections: Any, robots: dict[tuple[str, str], _Robot]) -> dict[int
                 fleet_wide.append(connection)
             continue
         name, channel = topic, ""
-        for suffix, hidden in _HIDDEN.items():
+        for suffix, hidden in HIDDEN.items():
             if topic.endswith(suffix):
                 name, channel = topic[: -len(suffix)], hidden
         try:
