@@ -126,11 +126,13 @@ SERVICE_EVENTS = [f"/rmf/dynamic_event/command/tinyRobot/{ROBOT}/_action/{name}/
                   for name in ("send_goal", "get_result")]  # fmt: skip
 
 
-def _session(tmp_path: Path, graph: Any, serve_args: list[str]) -> Path:
-    """serve, and dynevent record of its robot, while send runs a NEXT and a FINISHED; the bag."""
+def _session(tmp_path: Path, graph: Any, serve_args: list[str], pause: float = 0.0) -> Path:
+    """serve, and dynevent record of its robot, while send runs a NEXT and, ``pause`` seconds after,
+    a FINISHED; the bag."""
     import json
     import subprocess
     import sys
+    import time
 
     from ros_support import Child, child_env, finish, wait_for
 
@@ -157,6 +159,7 @@ def _session(tmp_path: Path, graph: Any, serve_args: list[str]) -> Path:
             )  # fmt: skip
             sent = finish(process, 60)
             assert sent.returncode == 0, sent.stdout + sent.stderr
+            time.sleep(pause)
         wait_for(lambda: serve.saw("status: INACTIVE"), "the run's end at serve")
     finally:
         if record is not None:
@@ -182,9 +185,29 @@ def test_a_recorded_session_with_introspection_is_judged_clean(tmp_path: Path, g
     assert robot.report.records > 10 and robot.absent == (), robot
 
 
+@pytest.mark.spec("R2.2", "R7.1", "R7.3", "R19.1")
 def test_a_recorded_session_without_introspection_is_a_partial_view(tmp_path: Path, graph: Any) -> None:
+    """Without introspection the bag holds the topics alone: the robot is a partial view, judged from
+    its begins, statuses, feedback and goal statuses, and clean."""
     bag = _session(tmp_path, graph, ["--no-judge"])
     report = check_bag(bag)
     robot = next(item for item in report.robots if item.robot == ROBOT)
-    assert report.clean and robot.report is None, report
+    assert report.clean and robot.partial, report
     assert "goals and their responses (send_goal introspection)" in robot.absent
+    assert {"status", "begin", "feedback", "goal status"} <= set(robot.channels), robot
+    assert robot.report.records > 10, robot
+
+
+@pytest.mark.spec("R2.2", "R8.4", "R17.4")
+def test_a_partial_view_of_rmf_ros2_finds_the_running_status_after_a_childs_end(
+    tmp_path: Path, graph: Any
+) -> None:
+    """serve in rmf_ros2 mode publishes RUNNING with the child's final status at its end (D2), and the
+    topic keeps saying so: a bag without introspection shows it, one finding at the NEXT's answer."""
+    bag = _session(tmp_path, graph, ["--no-judge", "--compatibility", "rmf_ros2"], pause=1.5)
+    report = check_bag(bag)
+    robot = next(item for item in report.robots if item.robot == ROBOT)
+    assert robot.partial, robot
+    assert [(finding.rule, finding.code) for finding in robot.report.findings] == [
+        ("R2.2", "status_mismatch")
+    ], robot.report.findings

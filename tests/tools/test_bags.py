@@ -101,14 +101,31 @@ class Conversation:
         self._event("send_goal", 1, n, request=request)
         return self._event("send_goal", 2, n, response=response)
 
-    def feedback(self, n: int, status: str, event_id: int) -> Conversation:
-        feedback = _type("rmf_task_msgs/action/DynamicEvent_Feedback")(status=status, id=event_id, logs=[])
+    def feedback(self, n: int, status: str, event_id: int, logs: tuple[int, ...] = ()) -> Conversation:
+        entries = [
+            _type("rmf_task_msgs/msg/LogEntry")(seq=seq, tier="info", unix_millis_time=0, text="a log line")
+            for seq in logs
+        ]
+        feedback = _type("rmf_task_msgs/action/DynamicEvent_Feedback")(
+            status=status, id=event_id, logs=entries
+        )
         message = _type("rmf_task_msgs/action/DynamicEvent_FeedbackMessage")(
             goal_id=_uuid(n), feedback=feedback
         )
         return self.at(
             f"{ACTION}/_action/feedback", "rmf_task_msgs/action/DynamicEvent_FeedbackMessage", message
         )
+
+    def goal_statuses(self, *goals: tuple[int, int]) -> Conversation:
+        """The action's goal status array: (goal, action_msgs/GoalStatus status) for each goal it holds."""
+        items = [
+            _type("action_msgs/msg/GoalStatus")(
+                goal_info=_type("action_msgs/msg/GoalInfo")(goal_id=_uuid(n), stamp=_time(T0)), status=code
+            )
+            for n, code in goals
+        ]
+        message = _type("action_msgs/msg/GoalStatusArray")(status_list=items)
+        return self.at(f"{ACTION}/_action/status", "action_msgs/msg/GoalStatusArray", message)
 
     def result(self, n: int, goal_status: int, status: str, event_id: int) -> Conversation:
         request = _type("rmf_task_msgs/action/DynamicEvent_GetResult_Request")(goal_id=_uuid(n))
@@ -168,7 +185,7 @@ def test_a_clean_recording_is_clean_in_both_storage_formats(tmp_path: Path, stor
     assert report.messages == 14 and report.other == 0
 
 
-@pytest.mark.spec("R4.2", "R2.2")
+@pytest.mark.spec("R4.2", "R2.2", "R19.1")
 @pytest.mark.parametrize("storage", STORAGES, ids=["mcap", "sqlite3"])
 def test_each_broken_conversation_is_found_at_its_bag_time_and_rule(
     tmp_path: Path, storage: StoragePlugin
@@ -186,8 +203,8 @@ def test_each_broken_conversation_is_found_at_its_bag_time_and_rule(
     cases = {
         "stale": (stale, at_stale, "R4.2"),
         "running": (stale_running, at_running, "R2.2"),
-        # a child's end is read from its NEXT's answer: a WAITING status without it is the finding
-        "missing": (missing, at_unanswered, "R2.2"),
+        # the WAITING status shows the child's end; its NEXT's answer, owed there, never came
+        "missing": (missing, at_unanswered, "R19.1"),
     }
     for name, (conversation, at, rule) in cases.items():
         report = check_bag(conversation.write(tmp_path / name, storage))
@@ -195,6 +212,7 @@ def test_each_broken_conversation_is_found_at_its_bag_time_and_rule(
         assert robot.report is not None and not report.clean, name
         first = robot.report.findings[0]
         assert (first.line, first.rule) == (at, rule), (name, robot.report.findings)
+        assert len(robot.report.findings) == 1, (name, robot.report.findings)
 
 
 def test_a_second_different_answer_is_found_and_the_same_answer_twice_is_not(tmp_path: Path) -> None:
@@ -208,21 +226,136 @@ def test_a_second_different_answer_is_found_and_the_same_answer_twice_is_not(tmp
     assert findings and findings[0].rule == "R19.1", findings
 
 
-def test_a_recording_without_goals_is_a_partial_view_not_judged(tmp_path: Path) -> None:
-    """Only the topics (begin, status, feedback): the statuses show children no goal explains, so
-    the robot is not judged, and the absent channels are named; never a false finding."""
-    run = _clean()
+EXECUTING, CANCELED = 2, 5
+
+
+def _topics(run: Conversation) -> Conversation:
+    """The conversation as a recording without introspection holds it: its topics alone."""
     run.messages = [item for item in run.messages if "_service_event" not in item[0]]
-    report = check_bag(run.write(tmp_path / "bag", StoragePlugin.SQLITE3))
+    return run
+
+
+def _partial_clean() -> Conversation:
+    """Two runs as their topics show them: a NEXT whose child logs and ends, with the action's goal
+    statuses; a run ended by FINISHED; a second run's NEXT cancelled through the action."""
+    run = Conversation().begin().status(1, 1, "standby", 0)
+    run.goal(1, goal_id=1).goal_statuses((1, EXECUTING)).feedback(1, "underway", 1, logs=(0,))
+    run.status(1, 2, "underway", 1).feedback(1, "completed", 1, logs=(1, 2)).status(1, 2, "completed", 1)
+    run.goal_statuses((1, SUCCEEDED)).status(1, 1, "standby", 1)
+    run.goal_statuses((1, SUCCEEDED), (2, EXECUTING)).goal_statuses((1, SUCCEEDED), (2, SUCCEEDED))
+    run.status(1, 0, "uninitialized", 0).begin(2).status(2, 1, "standby", 7)
+    run.goal_statuses((3, EXECUTING)).feedback(3, "underway", 8, logs=(5,)).status(2, 2, "underway", 8)
+    run.goal_statuses((3, CANCELED)).status(2, 1, "standby", 8)
+    run.now += 5 * SECOND  # the robot waits
+    return run.status(2, 1, "underway", 8)  # a stubborn wait, say: the run's id stays
+
+
+@pytest.mark.spec("R2.2", "R19.3", "R6.2", "R3.1", "R7.1", "R7.3", "R19.1", "R19.2")
+@pytest.mark.parametrize("storage", STORAGES, ids=["mcap", "sqlite3"])
+def test_a_recording_without_goals_is_judged_from_its_topics_alone(
+    tmp_path: Path, storage: StoragePlugin
+) -> None:
+    """Only the topics (begin, status, feedback, the goal statuses): the robot is a partial view,
+    the absent channels named, and what the topics show by themselves judged; never a false finding."""
+    report = check_bag(_topics(_partial_clean()).write(tmp_path / "bag", storage))
     robot = _robot(report)
-    assert robot.report is None and report.clean
+    assert robot.partial and report.clean, robot.report.findings
+    assert robot.report.records == len(_topics(_partial_clean()).messages)
     assert robot.absent == (
         "goals and their responses (send_goal introspection)", "answers (get_result introspection)"
     )  # fmt: skip
     statuses = _clean()
     statuses.messages = [item for item in statuses.messages if item[0] == STATUS_TOPIC]
-    robot = _robot(check_bag(statuses.write(tmp_path / "statuses", StoragePlugin.MCAP)))
-    assert robot.report is None and robot.channels == ("status",)
+    robot = _robot(check_bag(statuses.write(tmp_path / "statuses", storage)))
+    assert robot.partial and robot.report.clean and robot.channels == ("status",)
+
+
+def _partial_cases() -> dict[str, tuple[Conversation, int, str, str]]:
+    """Broken conversations as their topics show them: each (the conversation, the bag time and the
+    rule and code of its one finding)."""
+    cases = {}
+
+    def case(name: str, run: Conversation, at: int, violation: tuple[str, str]) -> None:
+        cases[name] = (_topics(run), at, *violation)
+
+    def running(child: int = 1) -> Conversation:
+        run = Conversation().begin().status(1, 1, "standby", 0).goal_statuses((1, EXECUTING))
+        return run.feedback(1, "underway", child).status(1, 2, "underway", child)
+
+    stale = running().status(1, 2, "completed", 1).goal_statuses((1, SUCCEEDED))
+    at = stale.now
+    stale.now += 2 * SECOND
+    case(
+        "stale_running", stale.goal_statuses((1, SUCCEEDED), (2, EXECUTING)), at, ("R2.2", "status_mismatch")
+    )
+    late = running().goal_statuses((1, SUCCEEDED)).status(1, 1, "standby", 1)
+    late.now += 2 * SECOND
+    case(
+        "feedback_after_answer",
+        late.feedback(1, "completed", 1),
+        late.now,
+        ("R19.1", "after_answer"),
+    )
+    two = running().goal_statuses((1, EXECUTING), (2, EXECUTING)).feedback(2, "underway", 2)
+    case("two_children", two.feedback(1, "underway", 1), two.now, ("R19.2", "one_child"))
+    again = running().goal_statuses((1, SUCCEEDED))
+    case(
+        "second_answer",
+        again.goal_statuses((1, ABORTED)),
+        again.now,
+        ("R19.1", "goal_transition"),
+    )
+    logs = running().feedback(1, "underway", 1, logs=(1,))
+    case("log_seq", logs.feedback(1, "underway", 1, logs=(1,)), logs.now, ("R7.3", "log_seq"))
+    other = running()
+    case("feedback_id", other.feedback(1, "underway", 2), other.now, ("R7.1", "feedback_id"))
+    back = running(5)
+    case("status_id", back.status(1, 1, "standby", 3), back.now, ("R6.2", "status_id"))
+    ended = Conversation().begin().status(1, 1, "standby", 0).status(1, 0, "uninitialized", 0)
+    case("reopened", ended.status(1, 1, "standby", 0), ended.now, ("R19.3", "status_seq"))
+    older = Conversation().begin(2).status(2, 1, "standby", 0).status(2, 0, "uninitialized", 0)
+    case("seq_backwards", older.status(1, 1, "standby", 0), older.now, ("R19.3", "status_seq"))
+    rebegun = Conversation().begin(2).status(2, 1, "standby", 0).status(2, 0, "uninitialized", 0)
+    case("begin_seq", rebegun.begin(2), rebegun.now, ("R3.1", "begin_seq"))
+    inactive = Conversation().status(0, 0, "standby", 4)
+    case("inactive", inactive, inactive.now, ("R2.2", "status_mismatch"))
+    return cases
+
+
+@pytest.mark.spec("R2.2", "R19.3", "R6.2", "R3.1", "R7.1", "R7.3", "R19.1", "R19.2")
+@pytest.mark.parametrize("name", sorted(_partial_cases()))
+def test_each_broken_conversation_a_partial_view_shows_is_found_at_its_bag_time_and_rule(
+    tmp_path: Path, name: str
+) -> None:
+    run, at, rule, code = _partial_cases()[name]
+    robot = _robot(check_bag(run.write(tmp_path / name, StoragePlugin.MCAP)))
+    assert robot.partial
+    assert [(finding.line, finding.rule, finding.code) for finding in robot.report.findings] == [
+        (at, rule, code)
+    ], robot.report.findings
+
+
+def test_what_a_partial_view_cannot_tell_is_no_finding(tmp_path: Path) -> None:
+    """Statuses lost on the way (a topic keeps one message: a recorder may miss one overwritten at
+    once), whole runs unseen, old begins a latched fleet-wide topic replays, a goal still EXECUTING
+    when the bag ends, and a stale RUNNING the bag ends on: none is a finding."""
+    run = Conversation()
+    for seq in (1, 2, 3):  # the fleet-wide topic's latched begins, published long before
+        message = Conversation().begin(seq, topic="/rmf/dynamic_event/begin").messages[0]
+        replayed = message[3]
+        replayed.start_time = _time(T0 - (10 - seq) * 60 * SECOND)
+        run.at(message[0], message[1], replayed)
+    run.status(3, 1, "standby", 0)  # its latched status
+    run.goal_statuses((1, EXECUTING)).feedback(1, "underway", 4).status(3, 2, "underway", 4)
+    run.goal_statuses((1, SUCCEEDED)).status(3, 0, "uninitialized", 0)  # the WAITING status was lost
+    run.begin(5, topic="/rmf/dynamic_event/begin").status(5, 2, "underway", 9)  # run 4 unseen, a WAITING lost
+    run.goal_statuses((2, EXECUTING)).feedback(2, "underway", 9, logs=(20,)).feedback(
+        2, "underway", 9, logs=(25,)
+    )
+    run.status(5, 2, "completed", 9).goal_statuses((2, SUCCEEDED))  # and the bag ends
+    report = check_bag(run.write(tmp_path / "bag", StoragePlugin.MCAP))
+    robot = _robot(report)
+    assert robot.partial and report.clean, robot.report.findings
 
 
 def test_the_fleet_wide_begin_topic_stands_for_a_robots_own(tmp_path: Path) -> None:
@@ -275,7 +408,9 @@ def test_dynevent_check_reads_a_bag_directory_or_file_and_exits_0_1_or_2(tmp_pat
     clean = _clean().write(tmp_path / "clean", StoragePlugin.MCAP)
     done = _check(str(clean))
     assert done.returncode == 0, done.stderr
-    assert done.stdout.splitlines()[-1] == f"{clean}: 1 robot(s), 1 judged, 14 messages, no violations"
+    assert (
+        done.stdout.splitlines()[-1] == f"{clean}: 1 robot(s), 1 judged in full, 14 messages, no violations"
+    )
     stale = Conversation().begin().status(1, 1, "standby", 0).goal(1, seq=0, event_type=3)
     bag = stale.write(tmp_path / "stale", StoragePlugin.SQLITE3)
     storage = next(bag.glob("*.db3"))

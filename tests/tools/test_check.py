@@ -240,6 +240,20 @@ def test_an_answer_to_a_rejected_goal() -> None:
     assert found(trace.check()) == [(trace.line, "R19.1", "answer_not_accepted")]
 
 
+@pytest.mark.spec("R19.1", "R8.2", "R8.4")
+def test_a_childs_end_shown_by_its_status_alone_owes_the_answer() -> None:
+    """A WAITING status shows the running child's end; no answer comes: the answer is missing (R19.1),
+    at that status, and nothing else is found.  An answer that comes late is taken, whatever it says
+    (how the child ended is not on the wire)."""
+    missing = Trace().started().status(1, 1, "standby", 6)
+    at_end = missing.line
+    missing.status(1, 0, "uninitialized", 0)  # the run goes on without it (a FINISHED, unseen)
+    assert found(missing.check()) == [(at_end, "R19.1", "answer_missing")]
+    late = Trace().started().status(1, 1, "standby", 6).next(2, 7).feedback(2, "underway", 7)
+    late.result(1, "aborted", "skipped", 6)  # three records on: past the lookahead
+    assert late.check().clean, found(late.check())
+
+
 def test_a_status_that_disagrees_with_the_state() -> None:
     trace = Trace().started().result(1, "succeeded", "completed", 6).status(1, 2, "completed", 6)
     assert found(trace.check()) == [(trace.line, "R2.2", "status_mismatch")]

@@ -288,6 +288,8 @@ class Violation(enum.Enum):
     STATUS_AFTER_CHILD_END = ("status_after_child_end", "R17.4")
     STATUS_AFTER_REPORT = ("status_after_report", "R17.5")
     STATUS_NOT_STATE = ("status_not_state", "R19.5")
+    STATUS_SEQ = ("status_seq", "R19.3")
+    STATUS_ID = ("status_id", "R6.2")
     # goal requests, the running slot and children
     REJECTED_ACCEPTABLE = ("rejected_acceptable", "R4.16")
     RACE_NOT_LOST = ("race_not_lost", "R5.2")
@@ -298,6 +300,7 @@ class Violation(enum.Enum):
     # feedback and logs
     FEEDBACK_NOT_RUNNING = ("feedback_not_running", "R7.1")
     LOG_SEQ = ("log_seq", "R7.3")
+    FEEDBACK_ID = ("feedback_id", "R7.1")
     # cancels, the end of a run, stubbornness, the description service
     CANCEL_ANSWERED_EARLY = ("cancel_answered_early", "R9.3")
     FINISHED_INACTIVE = ("finished_inactive", "R11.2")

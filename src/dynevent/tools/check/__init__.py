@@ -165,20 +165,20 @@ def _run_bag(source: str, as_json: bool) -> int:
 
 
 def format_bag(bag: Any) -> str:
-    """A bag's findings as text: per robot each violation at its bag time, or the partial view that
-    kept it from being judged; then a summary line."""
+    """A bag's findings as text: per robot each violation at its bag time, and the channels the bag
+    lacked (a partial view: only what the topics show was judged); then a summary line."""
     lines = []
     for robot in bag.robots:
         where = f"{bag.source}: {robot.name}"
-        if robot.report is None:
-            lines.append(f"{where}: partial view, not judged: the bag lacks {', '.join(robot.absent)}")
-            continue
         for finding in robot.report.findings:
             lines.append(
                 f"{where} @ {_bag_time(finding.line)}: {finding.rule} {finding.code}: {finding.message}"
             )
             lines.append(f"    expected: {finding.expected}")
-        if robot.absent:
+        if robot.partial:
+            lines.append(f"{where}: partial view, judged from its topics alone (statuses, begins, feedback, "
+                         f"goal statuses): the bag lacks {', '.join(robot.absent)}")  # fmt: skip
+        elif robot.absent:
             lines.append(f"{where}: partial view: the bag lacks {', '.join(robot.absent)}")
         if robot.refused:
             lines.append(f"{where}: {robot.refused} message(s) the mirrors refuse, not judged")
@@ -186,10 +186,10 @@ def format_bag(bag: Any) -> str:
         lines.append(
             f"{where}: {robot.report.records} records, {count or 'no'} violation{'s' if count != 1 else ''}"
         )
-    total = sum(len(robot.report.findings) for robot in bag.robots if robot.report)
-    judged = sum(1 for robot in bag.robots if robot.report is not None)
+    total = sum(len(robot.report.findings) for robot in bag.robots)
+    full = sum(1 for robot in bag.robots if not robot.partial)
     lines.append(
-        f"{bag.source}: {len(bag.robots)} robot(s), {judged} judged, {bag.messages} messages, "
+        f"{bag.source}: {len(bag.robots)} robot(s), {full} judged in full, {bag.messages} messages, "
         f"{total or 'no'} violation{'s' if total != 1 else ''}"
     )
     return "\n".join(lines) + "\n"
@@ -205,18 +205,18 @@ def bag_records(bag: Any) -> list[dict[str, Any]]:
     ``time``), a partial view per robot that lacked channels, then a summary."""
     rows: list[dict[str, Any]] = []
     for robot in bag.robots:
-        for finding in robot.report.findings if robot.report else ():
+        for finding in robot.report.findings:
             row = {"type": "violation", "file": bag.source, "robot": robot.name, **finding.to_dict()}
             row["time"] = _bag_time(row.pop("line"))
             rows.append(row)
         if robot.absent:
             rows.append({"type": "partial_view", "file": bag.source, "robot": robot.name,
-                         "absent": list(robot.absent), "judged": robot.report is not None})  # fmt: skip
+                         "absent": list(robot.absent), "full": not robot.partial})  # fmt: skip
         if robot.refused:
             rows.append(
                 {"type": "refused", "file": bag.source, "robot": robot.name, "messages": robot.refused}
             )
-    violations = sum(len(robot.report.findings) for robot in bag.robots if robot.report)
+    violations = sum(len(robot.report.findings) for robot in bag.robots)
     rows.append({"type": "summary", "file": bag.source, "robots": len(bag.robots),
                  "messages": bag.messages, "violations": violations})  # fmt: skip
     return rows

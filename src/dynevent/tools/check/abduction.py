@@ -53,6 +53,9 @@ class _Owed:
     output: outs.Output
     rule: str
     line: int = 0  # the line whose step owes it
+    exact: bool = (
+        True  # False: inferred from a status alone, whose answer is owed but whose content is not known
+    )
 
 
 def _channel(output: outs.Output) -> str | None:

@@ -19,15 +19,18 @@ their own: one pass over the bag, whatever its size, holding a few records
 per robot.
 
 A robot whose goals the bag lacks (no ``send_goal`` introspection topic) is a
-partial view: its statuses show child events no goal the bag holds explains, so it is
-not judged, and its :class:`RobotReport` says which channels were absent
-rather than report a violation the missing channel would cause.  A
-finding's ``line`` is the bag time of its message, in nanoseconds.
+partial view: its statuses show child events no goal the bag holds explains,
+so the machine cannot be run.  What its topics show by themselves is judged
+(:mod:`dynevent.tools.check.partial`), and its :class:`RobotReport` says which
+channels were absent, rather than report a violation the missing channel
+would cause.  A finding's ``line`` is the bag time of its message, in
+nanoseconds.
 """
 
 from __future__ import annotations
 
 import collections
+import contextlib
 import functools
 import heapq
 import importlib.resources
@@ -47,6 +50,7 @@ from dynevent.conformance.received import (
 )
 from dynevent.errors import BagError, DyneventError, InvalidMessage, InvalidName, MissingExtra, TraceError
 from dynevent.tools.check.observer import Checker
+from dynevent.tools.check.partial import GOAL_STATUSES, PartialJudge
 from dynevent.tools.check.trace import Record, Report, _Header
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
 from dynevent.wire.vocab import GoalStatus
@@ -94,22 +98,32 @@ CHANNELS = {
 
 #: service_msgs/ServiceEventInfo event types.
 _REQUEST_SENT, _REQUEST_RECEIVED, _RESPONSE_SENT, _RESPONSE_RECEIVED = 0, 1, 2, 3
-#: action_msgs/GoalStatus of a get_result response: the terminal ones, and "the server knows no such goal".
-_TERMINAL = {4: GoalStatus.SUCCEEDED, 5: GoalStatus.CANCELED, 6: GoalStatus.ABORTED}
+#: action_msgs/GoalStatus's statuses (0, unknown, is none of a goal's); the terminal ones answer it.
+_GOAL_STATUSES = {
+    1: GoalStatus.ACCEPTED,
+    2: GoalStatus.EXECUTING,
+    3: GoalStatus.CANCELING,
+    4: GoalStatus.SUCCEEDED,
+    5: GoalStatus.CANCELED,
+    6: GoalStatus.ABORTED,
+}
+_TERMINAL = {code: status for code, status in _GOAL_STATUSES.items() if status.is_terminal}
 
 
 @attrs.frozen
 class RobotReport:
     """One robot of a bag: the channels the bag recorded for it (keys of :data:`CHANNELS`, and
     ``"goal status"``, the action's goal statuses), the ones a full judgement needs that it lacks,
-    its report (None when the view was too partial to judge), and how many of its messages the
-    mirrors refused (a value the wire cannot carry: not judged)."""
+    its report, whether that report judged only what the topics show (``partial``: the bag lacks the
+    robot's goals, :mod:`dynevent.tools.check.partial`), and how many of its messages the mirrors
+    refused (a value the wire cannot carry: not judged)."""
 
     fleet: str
     robot: str
     channels: tuple[str, ...]
     absent: tuple[str, ...]
-    report: Report | None
+    report: Report
+    partial: bool = False
     refused: int = 0
 
     @property
@@ -130,7 +144,7 @@ class BagReport:
     @property
     def clean(self) -> bool:
         """No robot's judgement found a violation."""
-        return all(robot.report is None or robot.report.clean for robot in self.robots)
+        return all(robot.report.clean for robot in self.robots)
 
 
 def check_bag(path: str | Path) -> BagReport:
@@ -147,26 +161,45 @@ def check_bag(path: str | Path) -> BagReport:
         raise BagError(source, "not a rosbag2 recording: a bag directory holds a metadata.yaml")
     robots: dict[tuple[str, str], _Robot] = {}
     messages = other = 0
+    with _storage(source, reader_errors):
+        reader = reader_type(Path(path))
+        reader.open()
     try:
-        with reader_type(Path(path)) as reader:
+        with _storage(source, reader_errors):
             routes = _routes(reader.connections, robots)
             other = sum(item.msgcount for item in reader.connections if item.id not in routes)
-            store = typestore()
             wanted = [item for item in reader.connections if item.id in routes]
-            decode_as = {item.id: _stored_name(store, item.msgtype) for item in wanted}
-            for connection, time, raw in reader.messages(connections=wanted) if wanted else ():
-                robot, channel = routes[connection.id]
-                try:
-                    message = store.deserialize_cdr(raw, decode_as[connection.id])
-                except Exception as exc:  # a decoder's error, of any kind: the bag is not what it says
-                    raise BagError(source, f"{connection.topic} at {time}: cannot decode: {exc}") from None
-                messages += 1
-                robot.take(channel, time, message)
+        store = typestore()
+        decode_as = {item.id: _stored_name(store, item.msgtype) for item in wanted}
+        stream = iter(reader.messages(connections=wanted) if wanted else ())
+        while True:
+            with _storage(source, reader_errors):
+                item = next(stream, None)
+            if item is None:
+                break
+            connection, time, raw = item
+            robot, channel = routes[connection.id]
+            try:
+                message = store.deserialize_cdr(raw, decode_as[connection.id])
+            except Exception as exc:  # a decoder's error, of any kind: the bag is not what it says
+                raise BagError(source, f"{connection.topic} at {time}: cannot decode: {exc}") from None
+            messages += 1
+            robot.take(channel, time, message)
         reports = tuple(robot.finish(source) for _, robot in sorted(robots.items()))
-    except BagError:
-        raise
     except TraceError as exc:  # a record the observer cannot take, in the bag's order
         raise BagError(source, f"{exc.field} at bag time {exc.line}: {exc.problem}") from None
+    finally:
+        with _storage(source, reader_errors):
+            reader.close()
+    return BagReport(source=source, robots=reports, messages=messages, other=other)
+
+
+@contextlib.contextmanager
+def _storage(source: str, reader_errors: tuple[type[BaseException], ...]) -> Iterator[None]:
+    """Around a call into the storage library: what it raises for a file that is not a readable bag
+    (its own errors, and apsw's or zstandard's on a corrupt file) becomes one :class:`BagError` line."""
+    try:
+        yield
     except (FileNotFoundError, IsADirectoryError, PermissionError) as exc:
         raise BagError(source, f"cannot read: {exc.strerror or exc}") from None
     except reader_errors as exc:
@@ -177,7 +210,6 @@ def check_bag(path: str | Path) -> BagReport:
         raise BagError(
             source, f"not a readable rosbag2 recording: {type(exc).__name__}: {_one_line(exc)}"
         ) from None
-    return BagReport(source=source, robots=reports, messages=messages, other=other)
 
 
 def _one_line(exc: BaseException) -> str:
@@ -248,7 +280,7 @@ class _Robot:
 
     def __init__(self, fleet: str, robot: str) -> None:
         self.fleet, self.robot = fleet, robot
-        self.checker = Checker(_Header(fleet=fleet, robot=robot))
+        self._judge: Checker | PartialJudge | None = None  # made at the first record: the channels are known
         self.channels: set[str] = set()
         self.own_begins = False  # the bag recorded the robot's own begin topic
         self.refused = 0
@@ -286,8 +318,7 @@ class _Robot:
                     self._seen[key] = None
                     if len(self._seen) > _CALLS:
                         self._seen.popitem(last=False)
-                if self.judged:
-                    self._order(record, stamp)
+                self._order(record, stamp)
         except InvalidMessage:
             self.refused += 1
 
@@ -337,7 +368,20 @@ class _Robot:
             self._pass(goal[3])
         self._pass(record)
 
+    @property
+    def judge(self) -> Checker | PartialJudge:
+        """The observer, for a robot whose goals the bag holds; else the judge of what its topics show."""
+        if self._judge is None:
+            header = _Header(fleet=self.fleet, robot=self.robot)
+            self._judge = Checker(header) if self.judged else PartialJudge(header, SKEW)
+        return self._judge
+
     def _pass(self, record: Record) -> None:
+        if isinstance(self.judge, PartialJudge):
+            self.judge.push(record)
+            return
+        if record.kind == GOAL_STATUSES:
+            return  # what the goal statuses tell, the goals' own records tell
         if record.kind == "goal":
             self._goals[record.goal_uuid] = None
             if len(self._goals) > _CALLS:
@@ -346,7 +390,7 @@ class _Robot:
             if record.goal_uuid not in self._goals:
                 return  # the response to a goal the bag does not hold (lost, or before the recording)
             del self._goals[record.goal_uuid]
-        self.checker.push(record)
+        self.judge.push(record)
 
     def _paired(self, channel: str, event: Any) -> tuple[int, Any, Any, tuple[str, bytes, int]] | None:
         """A service event as (kind, request, response, call): a response event carries no request (ROS 2
@@ -371,19 +415,17 @@ class _Robot:
     @property
     def judged(self) -> bool:
         """Whether the bag recorded this robot's goals (its send_goal introspection): without them,
-        its statuses show child events no goal explains, and it is a partial view, not judged."""
+        its statuses show child events no goal explains, and it is a partial view."""
         return SEND_GOAL in self.channels
 
     def finish(self, source: str) -> RobotReport:
         channels = tuple(sorted(self.channels))
         absent = tuple(CHANNELS[name] for name in CHANNELS if name not in self.channels)
-        report = None
-        if self.judged:
-            while self._waiting:
-                self._release()
-            self.checker.source = f"{source}: {self.fleet}/{self.robot}"
-            report = self.checker.finish()
-        return RobotReport(self.fleet, self.robot, channels, absent, report, self.refused)
+        while self._waiting:
+            self._release()
+        self.judge.source = f"{source}: {self.fleet}/{self.robot}"
+        report = self.judge.finish()
+        return RobotReport(self.fleet, self.robot, channels, absent, report, not self.judged, self.refused)
 
 
 #: How long (bag time, nanoseconds) a record waits for records the server published before it; a
@@ -443,7 +485,12 @@ def _feedback(time: int, message: Any) -> Iterator[Record]:
 
 
 def _goal_status(time: int, message: Any) -> Iterator[Record]:
-    return iter(())  # recorded as a channel: what the goal statuses tell, the goals' own records tell
+    statuses = tuple(
+        (uuid_from_ros(item.goal_info.goal_id), _GOAL_STATUSES[int(item.status)])
+        for item in message.status_list
+        if int(item.status) in _GOAL_STATUSES
+    )
+    yield Record(line=time, kind=GOAL_STATUSES, time=time, message=statuses)
 
 
 def _send_goal(time: int, call: Any) -> Iterator[Record]:
