@@ -23,6 +23,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -48,9 +49,10 @@ _TOPICS = {
     ),
 }
 _GOAL_STATUS = {"succeeded": 4, "canceled": 5, "aborted": 6}
+STORAGES = ("mcap", "sqlite3")
 
 
-def write_bag(path: Path, lines: list[str], storage: str) -> None:
+def write_bag(path: Path, lines: Iterable[str], storage: str) -> None:
     """The trace's records as a recorder receives them, in a bag at ``path``."""
     import numpy as np
     from rosbags.rosbag2 import StoragePlugin, Writer
@@ -86,7 +88,9 @@ def write_bag(path: Path, lines: list[str], storage: str) -> None:
             for kind, (topic, msgtype) in _TOPICS.items()
         }
         calls: dict[str, int] = {}
-        for line in lines[1:]:
+        rows = iter(lines)
+        next(rows)  # the config line: no message
+        for line in rows:
             row = json.loads(line)
             now = round(row["time"] * 10**9)
             kind, uuid_hex = row["type"], row.get("goal_uuid", "")
@@ -158,12 +162,14 @@ def _check(path: Path) -> tuple[float, int, str, int]:
     return wall, records, summary, peak
 
 
-def make(directory: Path, cycles: int) -> None:
-    """Write the trace and the two bags into ``directory``."""
-    lines = list(cycle_lines(cycles))
-    Path(directory, "trace.jsonl").write_text("".join(lines), encoding="utf-8")
-    for storage in ("mcap", "sqlite3"):
-        write_bag(Path(directory, storage), lines, storage)
+def make(directory: Path, cycles: int, storages: list[str]) -> None:
+    """Write the trace and the bags into ``directory``, streamed (a bag of a gigabyte too)."""
+    trace = Path(directory, "trace.jsonl")
+    with trace.open("w", encoding="utf-8") as out:
+        out.writelines(cycle_lines(cycles))
+    for storage in storages:
+        with trace.open(encoding="utf-8") as lines:
+            write_bag(Path(directory, storage), lines, storage)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -171,23 +177,30 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cycles", type=int, default=20_000, help="child cycles (7 records each)")
     parser.add_argument("--write", action="store_true", help="record the result in bench/results.md")
     parser.add_argument(
+        "--storage", choices=STORAGES, action="append", help="only this storage format (default: both)"
+    )
+    parser.add_argument("--dir", help="write the inputs here (default: a temporary directory)")
+    parser.add_argument(
+        "--section", default="check-bags", help="the section of bench/results.md --write writes"
+    )
+    parser.add_argument(
         "--make", metavar="DIR", help=argparse.SUPPRESS
     )  # the inputs, in a process of their own
     args = parser.parse_args(argv)
+    storages = args.storage or list(STORAGES)
     if args.make:
-        make(Path(args.make), args.cycles)
+        make(Path(args.make), args.cycles, storages)
         return 0
     rows = []
-    with tempfile.TemporaryDirectory() as directory:
+    with tempfile.TemporaryDirectory(dir=args.dir) as directory:
         # made in another process, so that this one (whose children inherit its peak) stays small
-        subprocess.run(
-            [sys.executable, __file__, "--make", directory, "--cycles", str(args.cycles)], check=True
-        )
+        made = [sys.executable, __file__, "--make", directory, "--cycles", str(args.cycles)]
+        subprocess.run([*made, *(f"--storage={storage}" for storage in storages)], check=True)
         trace = Path(directory, "trace.jsonl")
         wall, records, _, peak = _check(trace)
         rows.append(("JSON-lines trace", os.path.getsize(trace), wall, records, peak))
         base = records / wall
-        for storage in ("mcap", "sqlite3"):
+        for storage in storages:
             bag = Path(directory, storage)
             size = sum(item.stat().st_size for item in bag.iterdir())
             wall, _, _, peak = _check(bag)
@@ -202,7 +215,10 @@ def main(argv: list[str] | None = None) -> int:
     )
     print(text)
     if args.write:
-        results.write_section("check-bags", ["## dynevent check on a bag and on the same trace", "", text])
+        title = "## dynevent check on a bag and on the same trace"
+        if args.section != "check-bags":
+            title += f" ({args.section})"
+        results.write_section(args.section, [title, "", text])
     return 0
 
 

@@ -300,6 +300,7 @@ def _without_ros(*args: str, blocked: str = "rclpy") -> subprocess.CompletedProc
         ),
         (["record", "--seconds", "0"], "dynevent record: --seconds: expected positive seconds"),
         (["record", "-o", "."], "dynevent record: --output .: exists already"),
+        (["record", "--all", "--robot", "r1"], "dynevent record: --all: records every robot of every fleet"),
         (["record", "-o", "no/such/dir/bag"], "dynevent record: --output no/such/dir/bag: its directory"),
         (
             ["send", "--end", "--trace", "no/such/dir/t"],

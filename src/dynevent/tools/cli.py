@@ -326,6 +326,9 @@ def _record(args: argparse.Namespace) -> int:
             raise RecordError(f"--seconds: expected positive seconds (got {args.seconds})")
         if args.output and Path(args.output).exists():
             raise RecordError(f"--output {args.output}: exists already (a bag is a new directory)")
+        if args.all and (args.fleet or args.robot):
+            named = "--fleet" if args.fleet else "--robot"
+            raise RecordError(f"--all: records every robot of every fleet, so {named} cannot narrow it")
         _check_directory("output", args.output, RecordError)
 
     return _ros_command("record", check, lambda record, _: record.run(args, _say))
@@ -349,6 +352,9 @@ def _add_record_command(commands: argparse._SubParsersAction[argparse.ArgumentPa
         "--fleet", action="append", metavar="FLEET", help="only this fleet's robots; repeatable"
     )
     parser.add_argument("--robot", action="append", metavar="ROBOT", help="only these robots; repeatable")
+    parser.add_argument(
+        "--all", action="store_true", help="every robot of every fleet, as they appear (the default)"
+    )
     parser.add_argument("--seconds", type=float, metavar="SECONDS", help="stop after this long")
     parser.set_defaults(run=_record)
 
