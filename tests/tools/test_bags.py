@@ -127,6 +127,12 @@ class Conversation:
         message = _type("action_msgs/msg/GoalStatusArray")(status_list=items)
         return self.at(f"{ACTION}/_action/status", "action_msgs/msg/GoalStatusArray", message)
 
+    def ask(self, n: int) -> Conversation:
+        """A client asks for goal ``n``'s answer (the server holds the call until the answer)."""
+        request = _type("rmf_task_msgs/action/DynamicEvent_GetResult_Request")(goal_id=_uuid(n))
+        self.calls += 1
+        return self._event("get_result", 1, self.calls, request=request)
+
     def result(self, n: int, goal_status: int, status: str, event_id: int) -> Conversation:
         request = _type("rmf_task_msgs/action/DynamicEvent_GetResult_Request")(goal_id=_uuid(n))
         result = _type("rmf_task_msgs/action/DynamicEvent_Result")(
@@ -197,8 +203,8 @@ def test_each_broken_conversation_is_found_at_its_bag_time_and_rule(
     stale_running.result(1, SUCCEEDED, "completed", 1).status(1, 2, "underway", 1)  # after its answer
     at_running = stale_running.now
     missing = Conversation().begin().status(1, 1, "standby", 0)
-    missing.goal(1, goal_id=1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
-    missing.status(1, 1, "standby", 1)  # the child ended: its NEXT's answer never came
+    missing.goal(1, goal_id=1).ask(1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
+    missing.status(1, 1, "standby", 1)  # the child ended: its NEXT's answer, asked for, never came
     at_unanswered = missing.now
     cases = {
         "stale": (stale, at_stale, "R4.2"),
@@ -213,6 +219,67 @@ def test_each_broken_conversation_is_found_at_its_bag_time_and_rule(
         first = robot.report.findings[0]
         assert (first.line, first.rule) == (at, rule), (name, robot.report.findings)
         assert len(robot.report.findings) == 1, (name, robot.report.findings)
+
+
+@pytest.mark.spec("R19.1", "R11.1")
+def test_an_answer_no_client_asked_for_is_not_missing_and_a_goal_status_shows_an_answer(
+    tmp_path: Path,
+) -> None:
+    """A bag holds an answer only where a client asked for it (a get_result call): an answer no
+    client asked for is not judged missing; the action's goal status shows an answer the bag lacks,
+    and how it ended: a FINISHED that ended aborted is not the machine's answer."""
+    never_asked = Conversation().begin().status(1, 1, "standby", 0)
+    never_asked.goal(1, goal_id=1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
+    never_asked.status(1, 1, "standby", 1)
+    assert check_bag(never_asked.write(tmp_path / "never", StoragePlugin.MCAP)).clean
+    shown = Conversation().begin().status(1, 1, "standby", 0)
+    shown.goal(1, goal_id=1).ask(1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
+    shown.goal_statuses((1, SUCCEEDED)).status(1, 1, "standby", 1)  # the get_result response was lost
+    assert check_bag(shown.write(tmp_path / "shown", StoragePlugin.MCAP)).clean
+
+
+@pytest.mark.spec("R2.2", "R19.1")
+def test_a_goal_whose_request_the_bag_lost_begins_the_judgement_anew(tmp_path: Path) -> None:
+    """A recorder that had not yet matched a new client's introspection publisher lost its first goal:
+    the status shows a child no goal explains.  The robot is judged anew from there (the goal named
+    in ``lost``), with no finding the loss caused, and a fault after it is still found."""
+
+    def run() -> Conversation:
+        lost = Conversation().begin().status(1, 1, "standby", 0)
+        lost.goal(1, goal_id=1).ask(1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
+        lost.result(1, SUCCEEDED, "completed", 1).status(1, 1, "standby", 1)
+        lost.goal(2, goal_id=2).ask(2).feedback(2, "underway", 2).status(1, 2, "underway", 2)
+        return lost.result(2, SUCCEEDED, "completed", 2)
+
+    def without_goal_2(conversation: Conversation) -> Conversation:
+        goals = [(time, message) for topic, _, time, message in conversation.messages if "send_goal" in topic]
+        at = next(time for time, message in goals if message.info.sequence_number == 2)
+        conversation.messages = [
+            item
+            for item in conversation.messages
+            if not (item[0].endswith("send_goal/_service_event") and item[2] >= at)
+        ]
+        return conversation
+
+    clean = without_goal_2(run().status(1, 1, "standby", 2))
+    robot = _robot(check_bag(clean.write(tmp_path / "clean", StoragePlugin.MCAP)))
+    assert robot.report.clean and not robot.partial, robot.report.findings
+    first_feedback = next(
+        time for topic, _, time, m in clean.messages if topic.endswith("feedback") and m.feedback.id == 2
+    )
+    assert robot.lost == ((first_feedback, "02" * 16),)
+    done = _check("--json", str(tmp_path / "clean"))
+    rows = [json.loads(line) for line in done.stdout.splitlines()]
+    assert done.returncode == 0 and [row for row in rows if row["type"] == "lost_request"] == [
+        {"type": "lost_request", "file": str(tmp_path / "clean"), "robot": f"{FLEET}/{ROBOT}",
+         "time": f"{first_feedback // SECOND}.{first_feedback % SECOND:09d}", "goal_uuid": "02" * 16}
+    ], rows  # fmt: skip
+    whole = run().status(1, 1, "standby", 2)
+    assert _robot(check_bag(whole.write(tmp_path / "whole", StoragePlugin.MCAP))).lost == ()
+    broken = without_goal_2(run().status(1, 2, "underway", 2))  # RUNNING after its answer
+    at = broken.now
+    robot = _robot(check_bag(broken.write(tmp_path / "broken", StoragePlugin.MCAP)))
+    assert [(f.line, f.rule) for f in robot.report.findings] == [(at, "R2.2")], robot.report.findings
 
 
 def test_a_second_different_answer_is_found_and_the_same_answer_twice_is_not(tmp_path: Path) -> None:

@@ -180,6 +180,9 @@ def format_bag(bag: Any) -> str:
                          f"goal statuses): the bag lacks {', '.join(robot.absent)}")  # fmt: skip
         elif robot.absent:
             lines.append(f"{where}: partial view: the bag lacks {', '.join(robot.absent)}")
+        for time, uuid in robot.lost:
+            lines.append(f"{where} @ {_bag_time(time)}: the bag lacks the request of goal {uuid}: "
+                         "judged anew from the status before it")  # fmt: skip
         if robot.refused:
             lines.append(f"{where}: {robot.refused} message(s) the mirrors refuse, not judged")
         count = len(robot.report.findings)
@@ -202,7 +205,8 @@ def _bag_time(nanoseconds: int) -> str:
 
 def bag_records(bag: Any) -> list[dict[str, Any]]:
     """The JSON lines of ``dynevent check --json`` for a bag: a violation per finding (its bag time in
-    ``time``), a partial view per robot that lacked channels, then a summary."""
+    ``time``), a partial view per robot that lacked channels, a lost request per goal whose request
+    the bag lacked, then a summary."""
     rows: list[dict[str, Any]] = []
     for robot in bag.robots:
         for finding in robot.report.findings:
@@ -212,6 +216,9 @@ def bag_records(bag: Any) -> list[dict[str, Any]]:
         if robot.absent:
             rows.append({"type": "partial_view", "file": bag.source, "robot": robot.name,
                          "absent": list(robot.absent), "full": not robot.partial})  # fmt: skip
+        for time, uuid in robot.lost:
+            rows.append({"type": "lost_request", "file": bag.source, "robot": robot.name,
+                         "time": _bag_time(time), "goal_uuid": uuid})  # fmt: skip
         if robot.refused:
             rows.append(
                 {"type": "refused", "file": bag.source, "robot": robot.name, "messages": robot.refused}

@@ -49,7 +49,7 @@ from dynevent.conformance.received import (
     uuid_from_ros,
 )
 from dynevent.errors import BagError, DyneventError, InvalidMessage, InvalidName, MissingExtra, TraceError
-from dynevent.tools.check.observer import Checker
+from dynevent.tools.check.observer import AnswerEvidence, Checker
 from dynevent.tools.check.partial import GOAL_STATUSES, PartialJudge
 from dynevent.tools.check.trace import Record, Report, _Header
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
@@ -115,8 +115,9 @@ class RobotReport:
     """One robot of a bag: the channels the bag recorded for it (keys of :data:`CHANNELS`, and
     ``"goal status"``, the action's goal statuses), the ones a full judgement needs that it lacks,
     its report, whether that report judged only what the topics show (``partial``: the bag lacks the
-    robot's goals, :mod:`dynevent.tools.check.partial`), and how many of its messages the mirrors
-    refused (a value the wire cannot carry: not judged)."""
+    robot's goals, :mod:`dynevent.tools.check.partial`), how many of its messages the mirrors
+    refused (a value the wire cannot carry: not judged), and the goals whose request the bag lacked
+    though it holds others (``lost``: the judgement began anew there, see :meth:`_Robot.lost`)."""
 
     fleet: str
     robot: str
@@ -125,6 +126,8 @@ class RobotReport:
     report: Report
     partial: bool = False
     refused: int = 0
+    #: where the bag lacked a goal's request: (the bag time of the first record naming the goal, its UUID)
+    lost: tuple[tuple[int, str], ...] = ()
 
     @property
     def name(self) -> str:
@@ -293,6 +296,13 @@ class _Robot:
         self._waiting_answers: dict[str, tuple[int, float, int, Record]] = {}
         self._last: collections.OrderedDict[str, int] = collections.OrderedDict()  # a goal's latest key
         self._goals: collections.OrderedDict[str, None] = collections.OrderedDict()  # awaiting a response
+        # the goals whose answer a client asked for, and those whose goal status showed their end
+        self._asked: collections.OrderedDict[str, None] = collections.OrderedDict()
+        self._settled: collections.OrderedDict[str, str] = collections.OrderedDict()
+        self._requested: collections.OrderedDict[str, None] = collections.OrderedDict()  # goals passed on
+        self._last_status: Record | None = None
+        self._before: list[Report] = []  # the judgements cut where the bag lost a goal's request
+        self.lost: list[tuple[int, str]] = []
         self._arrived = 0
 
     def take(self, channel: str, time: int, message: Any) -> None:
@@ -305,6 +315,8 @@ class _Robot:
                 if message is None:
                     return
                 call = message[3]
+                if channel == GET_RESULT and message[2] is None:
+                    _remember(self._asked, uuid_from_ros(message[1].goal_id), None)
             for record in _RECORDS[channel](time, message):
                 if record.kind in _EVENT_KINDS:
                     # one call seen by both the client's and the server's introspection is one record; an
@@ -380,9 +392,17 @@ class _Robot:
         if isinstance(self.judge, PartialJudge):
             self.judge.push(record)
             return
-        if record.kind == GOAL_STATUSES:
-            return  # what the goal statuses tell, the goals' own records tell
+        if record.kind == GOAL_STATUSES:  # the goals' own records tell the rest
+            for uuid, status in record.message:
+                if status.is_terminal:
+                    _remember(self._settled, uuid, status.value)
+            return
+        if record.kind in ("feedback", "result") and record.goal_uuid not in self._requested:
+            self.lost_request(record)
+        elif record.kind == "status":
+            self._last_status = record
         if record.kind == "goal":
+            _remember(self._requested, record.goal_uuid, None)
             self._goals[record.goal_uuid] = None
             if len(self._goals) > _CALLS:
                 self._goals.popitem(last=False)
@@ -412,6 +432,30 @@ class _Robot:
             return None
         return kind, request, response, call
 
+    def lost_request(self, record: Record) -> None:
+        """``record`` names a goal whose request the bag lacks (lost on the way: a recorder that had
+        not yet matched a new client's publisher; or sent before the recording began): the statuses
+        around it show a child no goal explains.  What was judged within :data:`SKEW` before it is let
+        go (its findings may be that goal's doing), and the judgement begins anew, as a trace that
+        begins mid-way does, at the first status not judged yet (else the last one judged)."""
+        assert isinstance(self._judge, Checker)
+        report, pending = self._judge.cut()
+        since = record.time - SKEW
+        kept = tuple(finding for finding in report.findings if finding.line < since)
+        self._before.append(attrs.evolve(report, findings=kept))
+        self.lost.append((record.time, record.goal_uuid))
+        self._judge = Checker(_Header(fleet=self.fleet, robot=self.robot))
+        first = next((index for index, item in enumerate(pending) if item.kind == "status"), None)
+        if first is not None:
+            pending = pending[first:]
+        elif self._last_status is not None:
+            pending = [self._last_status, *pending]
+        else:
+            pending = []
+        for item in pending:
+            self._judge.push(item)
+        _remember(self._requested, record.goal_uuid, None)  # what follows of it is the new judgement's
+
     @property
     def judged(self) -> bool:
         """Whether the bag recorded this robot's goals (its send_goal introspection): without them,
@@ -424,8 +468,24 @@ class _Robot:
         while self._waiting:
             self._release()
         self.judge.source = f"{source}: {self.fleet}/{self.robot}"
-        report = self.judge.finish()
-        return RobotReport(self.fleet, self.robot, channels, absent, report, not self.judged, self.refused)
+        if isinstance(self.judge, Checker):
+            report = self.judge.finish(AnswerEvidence(asked=self._asked, settled=self._settled))
+        else:
+            report = self.judge.finish()
+        for before in reversed(self._before):
+            records = before.records + report.records
+            report = attrs.evolve(report, records=records, findings=before.findings + report.findings)
+        return RobotReport(
+            self.fleet, self.robot, channels, absent, report, not self.judged, self.refused, tuple(self.lost)
+        )
+
+
+def _remember(books: collections.OrderedDict[str, Any], key: str, value: Any) -> None:
+    """Keep ``key`` in ``books``, the latest :data:`_CALLS` keys only."""
+    books[key] = value
+    books.move_to_end(key)
+    while len(books) > _CALLS:
+        books.popitem(last=False)
 
 
 #: How long (bag time, nanoseconds) a record waits for records the server published before it; a

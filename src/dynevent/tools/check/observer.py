@@ -4,7 +4,7 @@ feedback, answers), composed by :class:`_Observer`; :func:`check_records` drives
 from __future__ import annotations
 
 import collections
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Container, Iterable, Mapping
 
 import attrs
 
@@ -178,12 +178,19 @@ class _Books:
         self.state = saved
         return found
 
-    def answers_never_seen(self) -> None:
-        """At the trace's end: every answer owed by a step the trace showed, never seen, is missing."""
+    def answers_never_seen(self, evidence: AnswerEvidence | None = None) -> None:
+        """At the trace's end: every answer owed by a step the trace showed, never seen, is missing.
+        ``evidence`` (a reader that may not hold every answer, a bag) says which answers it could have
+        shown, and the goal statuses that showed others (see :class:`AnswerEvidence`)."""
         missing = Violation.ANSWER_MISSING
         for item in self.owed:
             if isinstance(item.output, outs.AnswerGoal):
                 uuid = item.output.goal_uuid
+                if evidence is not None:
+                    if uuid in evidence.settled:
+                        continue  # answered: its goal status shows it, though the bag lacks the answer
+                    if uuid not in evidence.asked:
+                        continue  # no client asked for it: no recording could hold it
                 if item.exact:
                     message = f"goal {uuid} never answered (by the end of the trace)"
                     expected = f"{answer_text(item.output.status.value, item.output.result)} ({item.rule})"
@@ -213,6 +220,18 @@ class _Books:
             if record.goal_uuid == uuid and record.kind in ("feedback", "result"):
                 return record
         return None
+
+
+@attrs.frozen
+class AnswerEvidence:
+    """What a reader that may not hold every answer (a bag) knows of them at the end: the goals whose
+    answer a client asked for (``asked``: a ``get_result`` request event), so that a recording could
+    hold it, and the goals whose goal status showed their end (``settled``: goal UUID to ``succeeded``,
+    ``canceled`` or ``aborted``), answered whether or not a client asked.  An owed answer is missing
+    only when it was asked for and not settled."""
+
+    asked: Container[str] = ()
+    settled: Mapping[str, str] = attrs.field(factory=dict)
 
 
 class _Requests:
@@ -1025,13 +1044,23 @@ class Checker:
         if len(self._window) > LOOKAHEAD:
             self._judge_first()
 
-    def finish(self) -> Report:
-        """Judge what is held, then what never came (answers owed); the report."""
+    def finish(self, evidence: AnswerEvidence | None = None) -> Report:
+        """Judge what is held, then what never came (answers owed; ``evidence``: which answers the
+        reader could have shown, see :class:`AnswerEvidence`); the report."""
         while self._window:
             self._judge_first()
         books = self._observer.books
-        books.answers_never_seen()
+        books.answers_never_seen(evidence)
         return Report(source=self.source, records=self._count, findings=tuple(books.findings))
+
+    def cut(self) -> tuple[Report, list[Record]]:
+        """Stop here, for a reader that goes on with a new observer (a bag that lost a goal's request):
+        the report of what was judged, in which no owed answer is missing yet, and the records pushed
+        but not judged."""
+        pending = list(self._window)
+        self._window.clear()
+        findings = tuple(self._observer.books.findings)
+        return Report(source=self.source, records=self._count, findings=findings), pending
 
     def _judge_first(self) -> None:
         window, books = self._window, self._observer.books
