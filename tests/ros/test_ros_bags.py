@@ -183,6 +183,25 @@ def test_a_recorded_session_with_introspection_is_judged_clean(tmp_path: Path, g
     robot = next(item for item in report.robots if item.robot == ROBOT)
     assert report.clean and robot.report is not None, report
     assert robot.report.records > 10 and robot.absent == (), robot
+    _read_by_others(bag)
+
+
+def _read_by_others(bag: Path) -> None:
+    """Readers that take each type from the definitions the bag holds decode what record wrote:
+    rosbags every topic, Foxglove's decoder the status, begin and goal status topics (ROS's parser
+    names no type an action derives), to the same messages."""
+    from rosbags.rosbag2 import Reader
+
+    from bag_readers import read_with_foxglove, read_with_rosbags
+
+    with Reader(bag) as reader:
+        counts = {connection.topic: connection.msgcount for connection in reader.connections}
+    by_rosbags = read_with_rosbags(bag)
+    assert {topic: len(items) for topic, items in by_rosbags.items()} == counts
+    by_foxglove, _ = read_with_foxglove(bag)
+    status = f"/rmf/dynamic_event/status/tinyRobot/{ROBOT}"
+    assert len(by_foxglove[status]) == counts[status] and by_foxglove[status][-1].dynamic_state == 0
+    assert [item.id for item in by_foxglove[status]] == [item.id for item in by_rosbags[status]]
 
 
 @pytest.mark.spec("R2.2", "R7.1", "R7.3", "R19.1")
@@ -196,6 +215,7 @@ def test_a_recorded_session_without_introspection_is_a_partial_view(tmp_path: Pa
     assert "goals and their responses (send_goal introspection)" in robot.absent
     assert {"status", "begin", "feedback", "goal status"} <= set(robot.channels), robot
     assert robot.report.records > 10, robot
+    _read_by_others(bag)
 
 
 @pytest.mark.spec("R2.2", "R8.4", "R17.4")

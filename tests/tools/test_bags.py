@@ -456,6 +456,45 @@ def test_bags_that_cannot_be_read_are_said_in_one_line(tmp_path: Path) -> None:
         check_bag(cut)
 
 
+def test_other_readers_decode_a_bag_from_the_definitions_it_holds(tmp_path: Path) -> None:
+    """The definitions dynevent writes beside each topic (what ``dynevent record`` writes) are enough
+    for a reader that has never seen the interface files: rosbags decodes every topic from them
+    alone, and Foxglove's ROS 2 decoder (ROS's own parser) every topic whose type a ``.msg`` can
+    name, to the same values."""
+    from bag_readers import read_with_foxglove, read_with_rosbags
+    from dynevent.tools.check.bags import message_definition
+
+    run = _topics(_partial_clean())
+    run.goal(9, goal_id=9).result(9, SUCCEEDED, "completed", 9)
+    bag = tmp_path / "bag"
+    with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        connections: dict[str, Any] = {}
+        for topic, msgtype, time, message in run.messages:
+            if topic not in connections:
+                definition = message_definition(msgtype)
+                connections[topic] = writer.add_connection(topic, msgtype, msgdef=definition, rihs01=UNHASHED)
+            writer.write(connections[topic], time, STORE.serialize_cdr(message, msgtype))
+    sent: dict[str, list[Any]] = {}
+    for topic, _, _, message in run.messages:
+        sent.setdefault(topic, []).append(message)
+    by_rosbags = read_with_rosbags(bag)
+    assert {topic: len(items) for topic, items in by_rosbags.items()} == {t: len(m) for t, m in sent.items()}
+    assert [m.id for m in by_rosbags[STATUS_TOPIC]] == [m.id for m in sent[STATUS_TOPIC]]
+    by_foxglove, skipped = read_with_foxglove(bag)
+    assert set(by_foxglove) == {STATUS_TOPIC, BEGIN_TOPIC, f"{ACTION}/_action/status"}, set(by_foxglove)
+    assert sum(skipped.values()) + sum(map(len, by_foxglove.values())) == len(run.messages)
+    for topic, items in by_foxglove.items():
+        assert len(items) == len(sent[topic]), topic
+    assert [(m.dynamic_event_seq, m.dynamic_state, m.status, m.id) for m in by_foxglove[STATUS_TOPIC]] == [
+        (m.dynamic_event_seq, m.dynamic_state, m.status, m.id) for m in sent[STATUS_TOPIC]
+    ]
+    statuses = by_foxglove[f"{ACTION}/_action/status"]
+    assert [[bytes(item.goal_info.goal_id.uuid) for item in m.status_list] for m in statuses] == [
+        [bytes(item.goal_info.goal_id.uuid) for item in m.status_list]
+        for m in sent[f"{ACTION}/_action/status"]
+    ]
+
+
 def test_a_bag_of_other_topics_has_no_robot(tmp_path: Path) -> None:
     other = Conversation()
     other.at("/chatter", "builtin_interfaces/msg/Time", _time(5))
