@@ -535,10 +535,22 @@ def test_dynevent_check_reads_a_bag_directory_or_file_and_exits_0_1_or_2(tmp_pat
     assert done.stderr.strip().endswith("not a rosbag2 recording: a bag directory holds a metadata.yaml")
     other = Conversation().at("/chatter", "builtin_interfaces/msg/Time", _time(5))
     done = _check(str(other.write(tmp_path / "other", StoragePlugin.MCAP)))
-    assert (
-        done.returncode == 2
-        and "nothing to check: no Dynamic Event names in it (1 other messages)" in done.stderr
-    )
+    assert done.returncode == 2 and done.stderr.strip().endswith(
+        "nothing to check: no message on a Dynamic Event name (1 other message)"
+    ), done.stderr
+    for storage in STORAGES:  # an empty bag, and one whose Dynamic Event topics hold no message
+        empty = Conversation().write(tmp_path / f"empty-{storage.name}", storage)
+        done = _check(str(empty))
+        assert done.returncode == 2 and done.stderr.strip().endswith(
+            "nothing to check: no message on a Dynamic Event name (0 other messages)"
+        ), done.stderr
+        silent = tmp_path / f"silent-{storage.name}"
+        with Writer(silent, version=9, storage_plugin=storage) as writer:
+            writer.add_connection(
+                STATUS_TOPIC, "rmf_task_msgs/msg/DynamicEventStatus", msgdef="", rihs01=UNHASHED
+            )
+        done = _check(str(silent))
+        assert done.returncode == 2 and "nothing to check: no message on a Dynamic Event name" in done.stderr
 
 
 def _received(run: Conversation, order: list[int]) -> None:

@@ -153,8 +153,9 @@ def _run_bag(source: str, as_json: bool) -> int:
         print(f"dynevent check: {exc}", file=sys.stderr)
         return 2
     if not bag.robots or not bag.messages:
-        print(f"dynevent check: {source}: nothing to check: no Dynamic Event names in it "
-              f"({bag.other} other messages)", file=sys.stderr)  # fmt: skip
+        others = f"{bag.other} other message{'' if bag.other == 1 else 's'}"
+        print(f"dynevent check: {source}: nothing to check: no message on a Dynamic Event name ({others})",
+              file=sys.stderr)  # fmt: skip
         return 2
     if as_json:
         for row in bag_records(bag):
