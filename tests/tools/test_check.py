@@ -254,6 +254,34 @@ def test_a_childs_end_shown_by_its_status_alone_owes_the_answer() -> None:
     assert late.check().clean, found(late.check())
 
 
+@pytest.mark.spec("R19.1")
+def test_the_observer_keeps_the_latest_closed_goals_only_and_still_finds_a_late_second_answer() -> None:
+    """Memory stays flat on a trace of any length: of the goals answered or refused, the observer keeps
+    the latest CLOSED_GOALS.  A second answer to a goal it let go is still a finding under R19.1 (an
+    answer to a goal it does not know); one to a goal it keeps is a second answer."""
+    from dynevent.tools.check.observer import CLOSED_GOALS, Checker
+
+    trace = Trace().begin().status(1, 1, "standby", 0)
+    cycles = CLOSED_GOALS + 50
+    for n in range(1, cycles + 1):
+        trace.next(n, n).feedback(n, "underway", n).status(1, 2, "underway", n)
+        trace.result(n, "succeeded", "completed", n).status(1, 1, "standby", n)
+    trace.next(cycles + 1, 0, accepted=False, dynamic_event_seq=0, reason="seq_mismatch")
+    trace.result(1, "aborted", "canceled", 1)
+    old = trace.line
+    trace.result(cycles, "aborted", "canceled", cycles)
+    from dynevent.tools.check.trace import read_trace
+
+    header, records = read_trace(trace.text().splitlines(keepends=True), "t.jsonl")
+    checker = Checker(header)
+    for record in records:
+        checker.push(record)
+    report = checker.finish()
+    assert len(checker._observer.books.goals) <= CLOSED_GOALS
+    assert found(report) == [(old, "R19.1", "answer_not_accepted"), (trace.line, "R19.1", "second_answer")]
+    assert report.findings[0].message.endswith(f"or closed before the latest {CLOSED_GOALS} closed goals")
+
+
 def test_a_status_that_disagrees_with_the_state() -> None:
     trace = Trace().started().result(1, "succeeded", "completed", 6).status(1, 2, "completed", 6)
     assert found(trace.check()) == [(trace.line, "R2.2", "status_mismatch")]

@@ -72,6 +72,8 @@ class _Books:
         self.state: State | None = None
         self.owed: list[_Owed] = []
         self.goals: dict[str, _GoalSeen] = {}
+        self.closed: collections.deque[str] = collections.deque()  # goals answered or refused, oldest first
+        self.forgotten = False  # a closed goal was let go
         self.findings: list[Finding] = []
         self.now = ins.NOW_RANGE[0]
         self.line = 0
@@ -209,6 +211,26 @@ class _Books:
                     )
                 )
         self.owed = [item for item in self.owed if not isinstance(item.output, outs.AnswerGoal)]
+
+    def close(self, uuid: str) -> None:
+        """Goal ``uuid`` was answered or refused: what is judged after that is a record naming it (a
+        second answer, feedback after the answer), which the latest :data:`CLOSED_GOALS` closed goals
+        keep; an older one is let go, so that memory stays flat on a trace of any length (a record
+        naming it is then one of a goal never requested: R19.1 still)."""
+        self.closed.append(uuid)
+        while len(self.closed) > CLOSED_GOALS:
+            old = self.closed.popleft()
+            seen = self.goals.get(old)
+            if seen is not None and (seen.answered is not None or (seen.responded and not seen.accepted)):
+                del self.goals[old]  # unless its UUID was taken again by a goal still open
+                self.forgotten = True
+
+    @property
+    def unknown_goal(self) -> str:
+        """What a goal the observer does not know is."""
+        if self.forgotten:
+            return f"never requested in this trace, or closed before the latest {CLOSED_GOALS} closed goals"
+        return "never requested in this trace"
 
     def answers_ahead(self) -> set[tuple[str, str]]:
         """The goal UUIDs and goal statuses of the answers among the records ahead."""
@@ -665,7 +687,7 @@ class _Feedback:
         seen = self.books.bind_unknown(uuid)
         label = f"feedback {feedback.status} id={feedback.id} for goal {uuid}"
         if seen is None or not seen.accepted:
-            what = "never requested in this trace" if seen is None else "rejected"
+            what = self.books.unknown_goal if seen is None else "rejected"
             self.books.flag(
                 Violation.FEEDBACK_NOT_RUNNING, f"{label}, {what}", "no feedback: no goal of it runs"
             )
@@ -843,7 +865,7 @@ class _Answers:
         seen = self.books.bind_unknown(uuid, failure in ("", Failure.SHUTDOWN.value))
         label = f"answer {answer_text(record.status, result, first_line=True)} for goal {uuid}"
         if seen is None or not seen.accepted:
-            what = "never requested in this trace" if seen is None else "rejected"
+            what = self.books.unknown_goal if seen is None else "rejected"
             self.books.flag(
                 Violation.ANSWER_NOT_ACCEPTED, f"{label}, {what}", "no answer: the goal was never accepted"
             )
@@ -990,11 +1012,18 @@ class _Observer:
         if books.state is None and self.runs.sync(record):
             return
         self._handlers[record.kind](record)
-        if record.kind == "result":
+        if record.kind in ("result", "goal_response"):
             seen = books.goals.get(record.goal_uuid)
-            if seen is not None and seen.answered is not None:
-                seen.goal = _ANSWERED  # what is judged after its answer is the line: memory stays flat
+            if seen is not None and seen.answered == record.line:
+                seen.goal = _ANSWERED  # what is judged after its answer is the line
+                books.close(record.goal_uuid)
+            elif seen is not None and record.kind == "goal_response" and seen.responded and not seen.accepted:
+                books.close(record.goal_uuid)
 
+
+#: How many closed (answered or refused) goals the observer remembers: a record naming one of the
+#: latest is judged against it (a second answer, feedback after the answer).
+CLOSED_GOALS = 4096
 
 #: How many records after the one being judged the observer looks at: a trace is checked in one pass
 #: with this many records held, whatever its length.
