@@ -16,7 +16,7 @@ import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 
 from dynevent.errors import BagError
-from dynevent.tools.check.bags import BagReport, _definitions, check_bag, typestore
+from dynevent.tools.check.bags import BagReport, _definitions, _stored_name, check_bag, typestore
 
 STORE = typestore()
 DEFINITIONS = _definitions()
@@ -154,8 +154,29 @@ class Conversation:
                     # the definition as rosbag2 keeps it (rosbags generates one for "msg" types only)
                     text = DEFINITIONS.get(msgtype, "")
                     connections[topic] = writer.add_connection(topic, msgtype, msgdef=text, rihs01=UNHASHED)
-                writer.write(connections[topic], time, STORE.serialize_cdr(message, msgtype))
+                writer.write(
+                    connections[topic], time, STORE.serialize_cdr(message, _stored_name(STORE, msgtype))
+                )
         return path
+
+    def cancel(self, n: int, kind: int, clock: int = 0) -> Conversation:
+        """An action-level cancel of goal ``n`` as a client's introspection records it (``kind`` 0: the
+        request sent, 3: the response received, accepted), stamped by a clock ``clock`` ns ahead."""
+        info = _type("service_msgs/msg/ServiceEventInfo")(
+            event_type=kind, stamp=_time(self.now + SECOND // 10 + clock),
+            client_gid=np.ones(16, dtype=np.uint8), sequence_number=1,
+        )  # fmt: skip
+        goal_info = _type("action_msgs/msg/GoalInfo")(goal_id=_uuid(n), stamp=_time(0))
+        request = _type("action_msgs/srv/msg/CancelGoal_Request")(goal_info=goal_info)
+        response = _type("action_msgs/srv/msg/CancelGoal_Response")(
+            return_code=0, goals_canceling=[goal_info]
+        )
+        event = _type("action_msgs/srv/msg/CancelGoal_Event")(
+            info=info, request=[request] if kind == 0 else [], response=[response] if kind == 3 else []
+        )
+        return self.at(
+            f"{ACTION}/_action/cancel_goal/_service_event", "action_msgs/srv/CancelGoal_Event", event
+        )
 
 
 SUCCEEDED, ABORTED = 4, 6
@@ -206,6 +227,8 @@ def test_each_broken_conversation_is_found_at_its_bag_time_and_rule(
     missing.goal(1, goal_id=1).ask(1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
     missing.status(1, 1, "standby", 1)  # the child ended: its NEXT's answer, asked for, never came
     at_unanswered = missing.now
+    missing.now += 2 * SECOND  # and the recording goes on
+    missing.at("/chatter", "builtin_interfaces/msg/Time", _time(5))
     cases = {
         "stale": (stale, at_stale, "R4.2"),
         "running": (stale_running, at_running, "R2.2"),
@@ -226,8 +249,10 @@ def test_an_answer_no_client_asked_for_is_not_missing_and_a_goal_status_shows_an
     tmp_path: Path,
 ) -> None:
     """A bag holds an answer only where a client asked for it (a get_result call): an answer no
-    client asked for is not judged missing; the action's goal status shows an answer the bag lacks,
-    and how it ended: a FINISHED that ended aborted is not the machine's answer."""
+    client asked for is not judged missing, a goal status that shows the goal's end shows an answer
+    the bag lacks (the response event lost), and one owed within a second of the recording's end
+    may have been on its way.  Asked for, and none of these, it is missing (the broken
+    conversations above)."""
     never_asked = Conversation().begin().status(1, 1, "standby", 0)
     never_asked.goal(1, goal_id=1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
     never_asked.status(1, 1, "standby", 1)
@@ -235,7 +260,13 @@ def test_an_answer_no_client_asked_for_is_not_missing_and_a_goal_status_shows_an
     shown = Conversation().begin().status(1, 1, "standby", 0)
     shown.goal(1, goal_id=1).ask(1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
     shown.goal_statuses((1, SUCCEEDED)).status(1, 1, "standby", 1)  # the get_result response was lost
+    shown.now += 2 * SECOND
+    shown.at("/chatter", "builtin_interfaces/msg/Time", _time(5))
     assert check_bag(shown.write(tmp_path / "shown", StoragePlugin.MCAP)).clean
+    stopped = Conversation().begin().status(1, 1, "standby", 0)
+    stopped.goal(1, goal_id=1).ask(1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
+    stopped.status(1, 1, "standby", 1)  # the recording stops here: the answer may have been on its way
+    assert check_bag(stopped.write(tmp_path / "stopped", StoragePlugin.MCAP)).clean
 
 
 @pytest.mark.spec("R2.2", "R19.1")
@@ -293,7 +324,7 @@ def test_a_second_different_answer_is_found_and_the_same_answer_twice_is_not(tmp
     assert findings and findings[0].rule == "R19.1", findings
 
 
-EXECUTING, CANCELED = 2, 5
+EXECUTING, CANCELING, CANCELED = 2, 3, 5
 
 
 def _topics(run: Conversation) -> Conversation:
@@ -454,6 +485,84 @@ def test_bags_that_cannot_be_read_are_said_in_one_line(tmp_path: Path) -> None:
     cut.write_bytes(data[: len(data) // 2])
     with pytest.raises(BagError, match=r"cut.mcap: "):
         check_bag(cut)
+
+
+def _correct_but_unusual() -> dict[str, Conversation]:
+    """What a correct server may be recorded doing that an unwary judge would flag."""
+    cases = {}
+    # a NEXT's own id far above the run's (id policy goal: any id above the last, R4.12, R6.2)
+    huge = Conversation().begin().status(1, 1, "standby", 5).goal_statuses((1, EXECUTING))
+    cases["huge_id"] = huge.feedback(1, "underway", 2**64 - 1).status(1, 2, "underway", 2**64 - 1)
+    # the next run's first child takes the id of the last run's, all within a second
+    rerun = Conversation().begin(1).status(1, 1, "standby", 0).goal_statuses((1, EXECUTING))
+    rerun.feedback(1, "underway", 1).status(1, 2, "underway", 1).goal_statuses((1, SUCCEEDED))
+    rerun.status(1, 1, "standby", 1).goal_statuses((1, SUCCEEDED), (2, SUCCEEDED)).status(
+        1, 0, "uninitialized", 0
+    )
+    rerun.begin(2).status(2, 1, "standby", 0).goal_statuses((1, SUCCEEDED), (2, SUCCEEDED), (3, EXECUTING))
+    rerun.feedback(3, "underway", 1).status(2, 2, "underway", 1)
+    rerun.now += SECOND // 2
+    cases["next_run_same_child_id"] = rerun.feedback(3, "underway", 1)
+    # a goal UUID taken again once the server let its result go (rclpy: after 15 minutes)
+    reuse = Conversation().begin(1).status(1, 1, "standby", 0).goal_statuses((1, EXECUTING))
+    reuse.feedback(1, "underway", 1).status(1, 2, "underway", 1).goal_statuses((1, SUCCEEDED))
+    reuse.status(1, 1, "standby", 1)
+    reuse.now += 901 * SECOND
+    reuse.goal_statuses().goal_statuses((1, EXECUTING)).feedback(1, "underway", 2)
+    cases["uuid_reuse"] = reuse.status(1, 2, "underway", 2)
+    # a client on another host (its clock 0.9 s ahead) cancels the running goal through the action
+    skewed = Conversation().begin().status(1, 1, "standby", 0).goal_statuses((1, EXECUTING))
+    skewed.feedback(1, "underway", 1).status(1, 2, "underway", 1)
+    skewed.cancel(1, 0, clock=9 * SECOND // 10).cancel(1, 3, clock=9 * SECOND // 10)
+    skewed.goal_statuses((1, CANCELING)).feedback(1, "canceled", 1)
+    skewed.goal_statuses((1, CANCELED)).status(1, 1, "standby", 1)
+    skewed.goal_statuses((1, CANCELED), (2, EXECUTING)).feedback(2, "underway", 2).status(1, 2, "underway", 2)
+    skewed.now += 3 * SECOND
+    cases["skewed_cancel"] = skewed.feedback(2, "underway", 2)
+    return cases
+
+
+@pytest.mark.spec("R6.2", "R2.2", "R19.1", "R18.2")
+@pytest.mark.parametrize("name", sorted(_correct_but_unusual()))
+def test_what_a_correct_server_may_be_recorded_doing_is_no_finding(tmp_path: Path, name: str) -> None:
+    run = _correct_but_unusual()[name]  # the topics, and a client's action-level cancel events
+    robot = _robot(check_bag(run.write(tmp_path / name, StoragePlugin.MCAP)))
+    assert robot.partial and robot.report.clean, robot.report.findings
+
+
+def test_a_lost_request_keeps_the_goals_whose_responses_are_to_come(tmp_path: Path) -> None:
+    """Client 1's NEXT A is lost to the recorder; client 2's NEXT B, sent as A starts, is refused busy
+    after the loss is noticed: B's response finds its goal in the judgement begun anew."""
+    goal = _type("rmf_task_msgs/action/DynamicEvent_Goal")(
+        dynamic_event_seq=1,
+        event_type=1,
+        category="go_to_place",
+        description='"pantry"',
+        id=2,
+        stubborn_period=0.0,
+    )
+    run = Conversation().begin().status(1, 1, "standby", 0)
+    request = _type("rmf_task_msgs/action/DynamicEvent_SendGoal_Request")(goal_id=_uuid(2), goal=goal)
+    run._event("send_goal", 0, 2, request=request)  # B sent (client 2's introspection)
+    run.status(1, 2, "underway", 1).feedback(1, "underway", 1)  # A runs: its request was lost
+    response = _type("rmf_task_msgs/action/DynamicEvent_SendGoal_Response")(accepted=False, stamp=_time(0))
+    run._event("send_goal", 3, 2, response=response)  # B refused
+    run.now += 2 * SECOND
+    robot = _robot(check_bag(run.status(1, 2, "underway", 1).write(tmp_path / "bag", StoragePlugin.MCAP)))
+    assert robot.report.clean and [uuid for _, uuid in robot.lost] == ["01" * 16], robot
+
+
+def test_introspection_without_contents_is_a_partial_view(tmp_path: Path) -> None:
+    """send_goal introspection in METADATA mode records events without the goals: a partial view."""
+    run = _topics(_partial_clean())
+    for call in (1, 2):
+        run._event("send_goal", 1, call)
+    robot = _robot(check_bag(run.write(tmp_path / "bag", StoragePlugin.MCAP)))
+    assert robot.partial and robot.report.clean and robot.lost == (), robot
+    assert (
+        robot.absent[0]
+        == "goals and their responses (send_goal introspection): recorded without contents (METADATA)"
+    )
 
 
 def test_other_readers_decode_a_bag_from_the_definitions_it_holds(tmp_path: Path) -> None:

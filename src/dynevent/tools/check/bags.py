@@ -172,23 +172,29 @@ def check_bag(path: str | Path) -> BagReport:
             routes = _routes(reader.connections, robots)
             other = sum(item.msgcount for item in reader.connections if item.id not in routes)
             wanted = [item for item in reader.connections if item.id in routes]
+            end = int(reader.end_time) - 1  # the recording's last message, on any topic
         store = typestore()
         decode_as = {item.id: _stored_name(store, item.msgtype) for item in wanted}
+        for connection in wanted:  # introspection without contents (METADATA) holds no goal
+            robot, channel = routes[connection.id]
+            if channel == SEND_GOAL and isinstance(robot, _Robot) and connection.msgcount:
+                with _storage(source, reader_errors):
+                    first = next(iter(reader.messages(connections=[connection])))
+                event = _decode(store, first, decode_as[connection.id], source)
+                robot.contents = bool(len(event.request) or len(event.response))
         stream = iter(reader.messages(connections=wanted) if wanted else ())
         while True:
             with _storage(source, reader_errors):
                 item = next(stream, None)
             if item is None:
                 break
-            connection, time, raw = item
+            connection, time, _ = item
+            end = max(end, time)
             robot, channel = routes[connection.id]
-            try:
-                message = store.deserialize_cdr(raw, decode_as[connection.id])
-            except Exception as exc:  # a decoder's error, of any kind: the bag is not what it says
-                raise BagError(source, f"{connection.topic} at {time}: cannot decode: {exc}") from None
+            message = _decode(store, item, decode_as[connection.id], source)
             messages += 1
             robot.take(channel, time, message)
-        reports = tuple(robot.finish(source) for _, robot in sorted(robots.items()))
+        reports = tuple(robot.finish(source, end) for _, robot in sorted(robots.items()))
     except TraceError as exc:  # a record the observer cannot take, in the bag's order
         raise BagError(source, f"{exc.field} at bag time {exc.line}: {exc.problem}") from None
     finally:
@@ -213,6 +219,15 @@ def _storage(source: str, reader_errors: tuple[type[BaseException], ...]) -> Ite
         raise BagError(
             source, f"not a readable rosbag2 recording: {type(exc).__name__}: {_one_line(exc)}"
         ) from None
+
+
+def _decode(store: Any, item: tuple[Any, int, bytes], msgtype: str, source: str) -> Any:
+    """A bag message, decoded; a decoder's error, of any kind, means the bag is not what it says."""
+    connection, time, raw = item
+    try:
+        return store.deserialize_cdr(raw, msgtype)
+    except Exception as exc:
+        raise BagError(source, f"{connection.topic} at {time}: cannot decode: {exc}") from None
 
 
 def _one_line(exc: BaseException) -> str:
@@ -286,6 +301,7 @@ class _Robot:
         self._judge: Checker | PartialJudge | None = None  # made at the first record: the channels are known
         self.channels: set[str] = set()
         self.own_begins = False  # the bag recorded the robot's own begin topic
+        self.contents = True  # its send_goal introspection holds the goals (not METADATA alone)
         self.refused = 0
         # the records taken lately: the client's copy of one comes close to the server's
         self._seen: collections.OrderedDict[tuple[Any, ...], None] = collections.OrderedDict()
@@ -295,7 +311,7 @@ class _Robot:
         self._waiting_goals: dict[str, tuple[int, float, int, Record]] = {}
         self._waiting_answers: dict[str, tuple[int, float, int, Record]] = {}
         self._last: collections.OrderedDict[str, int] = collections.OrderedDict()  # a goal's latest key
-        self._goals: collections.OrderedDict[str, None] = collections.OrderedDict()  # awaiting a response
+        self._goals: collections.OrderedDict[str, Record] = collections.OrderedDict()  # awaiting a response
         # the goals whose answer a client asked for, and those whose goal status showed their end
         self._asked: collections.OrderedDict[str, None] = collections.OrderedDict()
         self._settled: collections.OrderedDict[str, str] = collections.OrderedDict()
@@ -403,7 +419,7 @@ class _Robot:
             self._last_status = record
         if record.kind == "goal":
             _remember(self._requested, record.goal_uuid, None)
-            self._goals[record.goal_uuid] = None
+            self._goals[record.goal_uuid] = record
             if len(self._goals) > _CALLS:
                 self._goals.popitem(last=False)
         elif record.kind == "goal_response":
@@ -437,7 +453,8 @@ class _Robot:
         not yet matched a new client's publisher; or sent before the recording began): the statuses
         around it show a child no goal explains.  What was judged within :data:`SKEW` before it is let
         go (its findings may be that goal's doing), and the judgement begins anew, as a trace that
-        begins mid-way does, at the first status not judged yet (else the last one judged)."""
+        begins mid-way does, at the latest status before it (of the records not judged yet, with the
+        requests whose responses are to come, else the last status judged)."""
         assert isinstance(self._judge, Checker)
         report, pending = self._judge.cut()
         since = record.time - SKEW
@@ -445,14 +462,11 @@ class _Robot:
         self._before.append(attrs.evolve(report, findings=kept))
         self.lost.append((record.time, record.goal_uuid))
         self._judge = Checker(_Header(fleet=self.fleet, robot=self.robot))
-        first = next((index for index, item in enumerate(pending) if item.kind == "status"), None)
-        if first is not None:
-            pending = pending[first:]
-        elif self._last_status is not None:
-            pending = [self._last_status, *pending]
-        else:
-            pending = []
-        for item in pending:
+        statuses = [index for index, item in enumerate(pending) if item.kind == "status"]
+        seed = pending[statuses[-1]] if statuses else self._last_status  # the lost goal's start, or later
+        rest = pending[statuses[-1] + 1 :] if statuses else pending
+        awaiting = [goal for goal in self._goals.values() if goal not in rest]  # their responses are to come
+        for item in [seed, *awaiting, *rest] if seed is not None else [*awaiting, *rest]:
             self._judge.push(item)
         _remember(self._requested, record.goal_uuid, None)  # what follows of it is the new judgement's
 
@@ -460,16 +474,21 @@ class _Robot:
     def judged(self) -> bool:
         """Whether the bag recorded this robot's goals (its send_goal introspection): without them,
         its statuses show child events no goal explains, and it is a partial view."""
-        return SEND_GOAL in self.channels
+        return SEND_GOAL in self.channels and self.contents
 
-    def finish(self, source: str) -> RobotReport:
+    def finish(self, source: str, end: int) -> RobotReport:
+        """The robot's report; ``end`` is the bag time of the bag's last message: an answer owed by a
+        step within :data:`SKEW` of it may have been on its way when the recording stopped."""
         channels = tuple(sorted(self.channels))
         absent = tuple(CHANNELS[name] for name in CHANNELS if name not in self.channels)
+        if SEND_GOAL in self.channels and not self.contents:
+            absent = (f"{CHANNELS[SEND_GOAL]}: recorded without contents (METADATA)", *absent)
         while self._waiting:
             self._release()
         self.judge.source = f"{source}: {self.fleet}/{self.robot}"
         if isinstance(self.judge, Checker):
-            report = self.judge.finish(AnswerEvidence(asked=self._asked, settled=self._settled))
+            evidence = AnswerEvidence(asked=self._asked, settled=self._settled, until=end - SKEW)
+            report = self.judge.finish(evidence)
         else:
             report = self.judge.finish()
         for before in reversed(self._before):
@@ -494,7 +513,11 @@ SKEW = 1_000_000_000
 
 
 def _stamp(channel: str, message: Any, time: int) -> int:
-    """The time the server stamped on a message, when it is within :data:`SKEW` of the bag time."""
+    """The time the server stamped on a message, when it is within :data:`SKEW` of the bag time.  A
+    service event a client published (its request sent, its response received) has the client's
+    clock, which may be another host's: its bag time is used."""
+    if channel in _SERVICES and int(message.info.event_type) in (_REQUEST_SENT, _RESPONSE_RECEIVED):
+        return time
     source = {"status": "time", "begin": "start_time"}.get(channel)
     stamped = (
         getattr(message, source, None) if source else getattr(getattr(message, "info", None), "stamp", None)

@@ -193,6 +193,8 @@ class _Books:
                         continue  # answered: its goal status shows it, though the bag lacks the answer
                     if uuid not in evidence.asked:
                         continue  # no client asked for it: no recording could hold it
+                    if evidence.until is not None and item.line > evidence.until:
+                        continue  # the recording stopped while it may have been on its way
                 if item.exact:
                     message = f"goal {uuid} never answered (by the end of the trace)"
                     expected = f"{answer_text(item.output.status.value, item.output.result)} ({item.rule})"
@@ -254,6 +256,9 @@ class AnswerEvidence:
 
     asked: Container[str] = ()
     settled: Mapping[str, str] = attrs.field(factory=dict)
+    #: an answer owed by a step after this line (the recording's end, less the time an answer may
+    #: take to arrive) may have been on its way: not missing
+    until: int | None = None
 
 
 class _Requests:

@@ -13,12 +13,16 @@ unrecorded message can make false:
 - a begin whose seq goes backwards or repeats an ended run (R3.1), or whose
   description is not one (R1.5), or that names another robot (R3.3);
 - a goal whose feedback names two children (R7.1), feedback for a goal after
-  a later goal's child started (R19.2: two goals hold the running slot),
-  feedback after a goal's answer (R19.1), a log seq that repeats or goes
-  backwards (R7.3);
-- a goal status that changes after it was terminal (R19.1: a second answer);
-- a status still RUNNING the child of an answered goal a while after the
-  answer, while the server goes on publishing (R2.2, R8.4).
+  a later goal's child started (R19.2: two goals hold the running slot; R19.1
+  when the goal was answered), feedback after a goal's answer (R19.1), a log
+  seq that repeats or goes backwards (R7.3);
+- a goal status that changes after it was terminal, or a second, different
+  answer where a client's ``get_result`` events were recorded (R19.1);
+- a status still RUNNING the child of an answered goal, in that goal's run,
+  a while after the answer, while the server goes on publishing (R2.2, R8.4).
+
+A goal that leaves the action's goal status array (its result expired) is
+forgotten: its UUID may be used again.
 
 Records come in the server's order (:class:`~dynevent.tools.check.bags`
 orders them); "a while" is :data:`~dynevent.tools.check.bags.SKEW` of bag
@@ -39,7 +43,7 @@ from dynevent.server import machine
 from dynevent.tools.check.abduction import _same_status
 from dynevent.tools.check.observer import log_seq_faults
 from dynevent.tools.check.trace import Finding, Record, Report, _Header
-from dynevent.wire._fields import id_not_after, seq_after
+from dynevent.wire._fields import U64_MAX, seq_after
 from dynevent.wire._text import status_text
 from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Feedback
 from dynevent.wire.vocab import DynamicState, GoalStatus, Violation
@@ -60,6 +64,7 @@ class _Goal:
 
     order: int  # when its first feedback came, among the goals that had feedback (0: none yet)
     child: int | None = None  # the child its feedback named
+    seq: int | None = None  # the run of that child: the status's when its first feedback came
     status: GoalStatus | None = None  # its last goal status
     answered: int | None = None  # the bag time its answer (a terminal status, or a result) was seen
     results: int = 0  # the answers the bag holds (get_result introspection), each different
@@ -73,6 +78,7 @@ class _Due:
     due: int
     uuid: str
     child: int
+    seq: int
     line: int
 
 
@@ -94,6 +100,7 @@ class PartialJudge:
         self.goals: collections.OrderedDict[str, _Goal] = collections.OrderedDict()
         self.latest = 0  # the order of the goal whose feedback came first most lately
         self.due: collections.deque[_Due] = collections.deque()
+        self.listed: set[str] = set()  # the goals of the latest goal status array
 
     def push(self, record: Record) -> None:
         """Judge the next record."""
@@ -159,12 +166,7 @@ class PartialJudge:
                     f"status {status_text(message)} after run {seq} ended",
                     f"a new run, seq {seq} + 1 from its begin (R3.1): a run that ended stays ended",
                 )
-            elif (
-                seq == before
-                and active
-                and self.top_id is not None
-                and not id_not_after(self.top_id, message.id)
-            ):
+            elif seq == before and active and self.top_id is not None and message.id < self.top_id < U64_MAX:
                 self._flag(
                     record.line,
                     Violation.STATUS_ID,
@@ -174,8 +176,8 @@ class PartialJudge:
                 )
         if previous is None or previous.dynamic_event_seq != message.dynamic_event_seq or not active:
             self.top_id = None
-        if active and (self.top_id is None or id_not_after(self.top_id, message.id)):
-            self.top_id = message.id
+        if active and (self.top_id is None or message.id >= self.top_id or self.top_id == U64_MAX):
+            self.top_id = message.id  # (after the highest id, an adapter's next is 0: ids wrap, R6.2)
         self.status = message
 
     def _begin(self, record: Record) -> None:
@@ -244,6 +246,7 @@ class PartialJudge:
             goal.order = self.latest
         if goal.child is None:
             goal.child = feedback.id
+            goal.seq = None if self.status is None else self.status.dynamic_event_seq
         elif feedback.id != goal.child:
             self._flag(
                 record.line,
@@ -273,6 +276,12 @@ class PartialJudge:
             )
 
     def _goal_statuses(self, record: Record) -> None:
+        listed = {uuid for uuid, _ in record.message}
+        for uuid in (
+            self.listed - listed
+        ):  # its result expired (rclpy: 15 minutes): its UUID may be used again
+            self.goals.pop(uuid, None)
+        self.listed = listed
         for uuid, status in record.message:
             goal = self._goal(uuid)
             if goal.status is not None and goal.status.is_terminal and status is not goal.status:
@@ -302,13 +311,17 @@ class PartialJudge:
         if goal.answered is not None:
             return
         goal.answered = time
-        if goal.child is not None:
-            self.due.append(_Due(due=time + self.margin, uuid=uuid, child=goal.child, line=time))
+        if goal.child is not None and goal.seq is not None:
+            self.due.append(_Due(time + self.margin, uuid, goal.child, goal.seq, line=time))
 
     def _settle(self, due: _Due) -> None:
         """The server has published since a goal's answer: the status must have left its child."""
         status = self.status
-        if status is None or status.dynamic_state != DynamicState.RUNNING or status.id != due.child:
+        if (
+            status is None
+            or status.dynamic_state != DynamicState.RUNNING
+            or (status.dynamic_event_seq, status.id) != (due.seq, due.child)
+        ):
             return
         self._flag(
             due.line,
