@@ -364,12 +364,12 @@ class _Robot:
         answer = self._waiting_answers.get(record.goal_uuid) if record.kind == "feedback" else None
         if answer is not None:
             key: tuple[int, float] = (answer[0], answer[1] - 0.5)
-        elif record.goal_uuid:
+        elif record.goal_uuid and record.kind not in _OPENING:
             key = (max(stamp, self._last.get(record.goal_uuid, stamp)), float(self._arrived))
-        else:
+        else:  # a goal's request and response go by their own stamps: what names it goes after them
             key = (stamp, float(self._arrived))
         if record.goal_uuid:
-            self._last[record.goal_uuid] = key[0]
+            self._last[record.goal_uuid] = max(key[0], self._last.get(record.goal_uuid, key[0]))
             while len(self._last) > _CALLS:
                 self._last.popitem(last=False)
         entry = (key[0], key[1], self._arrived, record)
@@ -532,6 +532,9 @@ def _stamp(channel: str, message: Any, time: int) -> int:
 #: a robot keeps.
 _SERVICES = frozenset({SEND_GOAL, GET_RESULT, CANCEL_GOAL})
 _CALLS = 1024
+#: The records that open a goal: each goes by its own stamp, never after a record that names the goal
+#: but was received first (its start's feedback, say).
+_OPENING = frozenset({"goal", "goal_response"})
 #: The records a service event gives.
 _EVENT_KINDS = frozenset({"goal", "goal_response", "result", "cancel_request", "cancel_response"})
 
