@@ -705,7 +705,8 @@ def test_a_goal_goes_before_what_names_it_and_a_response_needs_its_goal(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Two hosts' clocks: the NEXT's request event is stamped after its response and the feedback;
-    the goal goes first, then its response by its own stamp, as the server sent them.  A response whose request the bag lost is left out, never unreadable."""
+    the goal goes first, then its response by its own stamp, as the server sent them.  A response
+    whose request the bag lost is left out, never unreadable."""
     run = _clean()
     _received(run, [0, 1, 2, 4, 3, 5])  # the request's stamp after the feedback's
     run.messages[2][3].info.stamp = _time(run.messages[3][2] + SECOND // 20)
@@ -734,6 +735,23 @@ def test_a_goal_received_after_its_starts_status_and_feedback_goes_before_them(
     passed = _passed(monkeypatch, run.write(tmp_path / "bag", StoragePlugin.MCAP))
     assert passed[:3] == ["begin", "status", "goal"], passed
     assert check_bag(tmp_path / "bag").clean
+
+
+def test_feedback_received_between_its_childs_end_and_its_answer_is_read_as_sent_before_both(
+    tmp_path: Path,
+) -> None:
+    """Seen over DDS under load: the child's last feedback reached the recorder after the WAITING
+    status of the child's end and before the answer, which the server sent before that status.  It
+    was sent before both: read so, no finding."""
+    run = Conversation().begin().status(1, 1, "standby", 0)
+    run.goal(1, goal_id=1).ask(1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
+    run.status(1, 1, "standby", 1)
+    ended = run.now  # the step that answered the goal and published this status
+    run.feedback(1, "underway", 1).result(1, SUCCEEDED, "completed", 1)
+    run.messages[-1][3].info.stamp = _time(ended + 1_000_000)  # the answer, sent in that step
+    run.now += 2 * SECOND
+    robot = _robot(check_bag(run.status(1, 1, "standby", 1).write(tmp_path / "bag", StoragePlugin.MCAP)))
+    assert robot.report.clean, robot.report.findings
 
 
 def test_feedback_received_after_its_goals_answer_is_read_as_sent_before_it(tmp_path: Path) -> None:

@@ -1054,11 +1054,34 @@ def _response_ahead(books: _Books, record: Record, window: Iterable[Record]) -> 
             begin = next((ahead for ahead in window if ahead.kind == "begin"), None)
             if begin is not None and begin.message.dynamic_event_seq == seq:
                 return begin
+        late = _late_feedback(books, record.message, list(window))
+        if late is not None:
+            return late
         # the status of an accepted goal's start, before its response
         return next((ahead for ahead in window if awaited(ahead) and ahead.accepted), None)
     if record.kind not in ("feedback", "result"):
         return None
     return next((ahead for ahead in window if awaited(ahead) and ahead.goal_uuid == record.goal_uuid), None)
+
+
+def _late_feedback(books: _Books, status: DynamicEventStatus, ahead: list[Record]) -> Record | None:
+    """The running goal's feedback, among the records ahead, received after a status that shows its
+    child's end and before the goal's answer: sent before both (the answer goes before the status of
+    its step), delivered late (a recorder under load; feedback has no stamp to put it back by)."""
+    running = books.state.running if books.state is not None else None
+    if running is None or not running.started:
+        return None
+    ended = (
+        status.dynamic_state != DynamicState.RUNNING
+        or status.id != running.child_id
+        or status.status in ENDED_CHILD_STATUSES
+    )
+    uuid = running.goal_uuid
+    for index, item in enumerate(ahead if ended else ()):
+        answered = any(later.kind == "result" and later.goal_uuid == uuid for later in ahead[index + 1 :])
+        if item.kind == "feedback" and item.goal_uuid == uuid and answered:
+            return item
+    return None
 
 
 class Checker:
