@@ -231,3 +231,44 @@ def test_a_partial_view_of_rmf_ros2_finds_the_running_status_after_a_childs_end(
     assert [(finding.rule, finding.code) for finding in robot.report.findings] == [
         ("R2.2", "status_mismatch")
     ], robot.report.findings
+
+
+def test_record_shows_its_progress_on_a_terminal_and_stops_at_its_time(tmp_path: Path) -> None:
+    """On a terminal, record keeps one progress line (topics, messages, bytes) up to date, then clears
+    it and says what it recorded; --seconds stops it cleanly (the bag closed, metadata.yaml written)."""
+    import os
+    import pty
+    import re
+    import select
+    import subprocess
+    import sys
+    import time
+
+    from ros_support import child_env, finish
+
+    primary, secondary = pty.openpty()
+    bag = tmp_path / "bag"
+    command = [sys.executable, "-m", "dynevent", "record", "-o", str(bag), "--seconds", "4"]
+    process = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=secondary, stderr=subprocess.PIPE,
+                               text=True, env=child_env())  # fmt: skip
+    os.close(secondary)
+    output = b""
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        ready, _, _ = select.select([primary], [], [], 1.0)
+        if not ready:
+            continue
+        try:
+            chunk = os.read(primary, 4096)
+        except OSError:  # the terminal closed: the process ended
+            break
+        if not chunk:
+            break
+        output += chunk
+    os.close(primary)
+    done = finish(process, 30)
+    text = output.decode("utf-8", "replace")
+    assert done.returncode == 0, text + (done.stderr or "")
+    assert re.search(r"\r\x1b\[Krecording \S+: \d+ topics, [\d,]+ messages, [\d,]+ bytes", text), text
+    assert re.search(r"recorded \d+ messages \(\d+ bytes\) on \d+ topics into ", text), text
+    assert (bag / "metadata.yaml").is_file()
