@@ -117,7 +117,7 @@ class RobotReport:
     its report, whether that report judged only what the topics show (``partial``: the bag lacks the
     robot's goals, :mod:`dynevent.tools.check.partial`), how many of its messages the mirrors
     refused (a value the wire cannot carry: not judged), and the goals whose request the bag lacked
-    though it holds others (``lost``: the judgement began anew there, see :meth:`_Robot.lost`)."""
+    though it holds others (``lost``: the judgement began anew there, see :meth:`_Robot.lost_request`)."""
 
     fleet: str
     robot: str
