@@ -724,3 +724,20 @@ def test_check_reads_a_trace_as_a_stream_holding_a_few_records(monkeypatch: pyte
     report = check_trace(lines(), "long")
     assert report.clean and report.records == len(ahead) == 2102
     assert max(ahead) == observer.LOOKAHEAD
+
+
+def test_a_size_limit_refusal_before_the_json_check_is_legal_without_a_config() -> None:
+    """R4.8 runs before R4.9: a server with a small description limit refuses a NEXT whose description
+    is not JSON as ``description_invalid``.  Without a config record, check cannot rule that limit
+    out, so the refusal is no finding (it once was an ``R4.9 wrong_reason``: the order of the checks
+    was rebuilt from the declaration order of the reasons instead of asked of the machine)."""
+    trace = Trace(config=False).begin().status(1, 1, "standby", 5)
+    trace.next(1, 6, accepted=False, reason="description_invalid", description="not json")
+    assert found(trace.check()) == []
+
+
+def test_a_refusal_the_configuration_cannot_explain_is_still_found_without_a_config() -> None:
+    """A NEXT with a JSON description refused ``description_not_json``: no configuration gives that."""
+    trace = Trace(config=False).begin().status(1, 1, "standby", 5)
+    trace.next(1, 6, accepted=False, reason="description_not_json")
+    assert found(trace.check()) == [(trace.line, "R4.16", "rejected_acceptable")]

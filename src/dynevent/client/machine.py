@@ -99,7 +99,6 @@ from dynevent.wire.description import DEFAULT_CATEGORY
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.units import to_nanoseconds
 from dynevent.wire.vocab import (
-    ENDED_CHILD_STATUSES,
     DynamicState,
     EventType,
     Failure,
@@ -547,7 +546,7 @@ def _on_status(state: ClientState, event: StatusReceived) -> ClientTransition:
     state = attrs.evolve(state, phase=phase, seq=seq, current_id=message.id, status=message.status)
     if phase is not DynamicState.INACTIVE:
         state = _seen_id(state, seq, message.id)
-    if phase is DynamicState.RUNNING and message.status in ENDED_CHILD_STATUSES:
+    if machine.child_ended(message):
         state = _child_ended(state, message.id)  # R20.2: the child's final status names its end
     outputs: list[ClientOutput] = []
     if (phase, seq, message.id, message.status) != before:

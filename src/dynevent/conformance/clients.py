@@ -32,13 +32,11 @@ from dynevent.wire._fields import SECOND
 from dynevent.wire._text import goal_text, status_text
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import (
-    ENDED_CHILD_STATUSES,
     ClientViolation,
+    Compatibility,
     DynamicState,
     EventType,
     GoalStatus,
-    IdPolicy,
-    RejectReason,
 )
 
 __all__ = ["NEVER_ACCEPTED", "ONE_CLIENT", "ClientFinding", "ClientJudge"]
@@ -47,15 +45,7 @@ __all__ = ["NEVER_ACCEPTED", "ONE_CLIENT", "ClientFinding", "ClientJudge"]
 ONE_CLIENT = "a client"
 
 #: The reasons for which no state accepts a goal (R22.7): what the goal itself gets wrong.
-NEVER_ACCEPTED = frozenset(
-    {
-        RejectReason.UNINITIALIZED_EVENT_TYPE,
-        RejectReason.UNKNOWN_EVENT_TYPE,
-        RejectReason.DESCRIPTION_NOT_JSON,
-        RejectReason.DESCRIPTION_INVALID,
-        RejectReason.NON_FINITE_STUBBORN_PERIOD,
-    }
-)
+NEVER_ACCEPTED = machine.REFUSED_IN_EVERY_STATE
 
 
 @attrs.frozen
@@ -105,6 +95,8 @@ class ClientJudge:
         self.fleet, self.robot = fleet, robot
         self.grace = round(grace * SECOND)
         self.config = config or ServerConfig()
+        # a client is judged by the standard's checks (R22), under the server's id policy (R22.6)
+        self._judging = attrs.evolve(self.config, compatibility=Compatibility.STANDARD)
         self._statuses: collections.deque[_Published] = collections.deque()
         self._sent: dict[str, tuple[str, Goal, int]] = {}  # goal UUID: client, goal, arrival
         self._accepted: dict[str, int] = {}  # goal UUID: when accepted
@@ -195,25 +187,41 @@ class ClientJudge:
         if not readable:
             return []  # nothing published yet: the client could know nothing
         knew = "the status was " + " or ".join(status_text(status) for status in readable[-3:])
-        if all(status.dynamic_event_seq != goal.dynamic_event_seq for status in readable):
-            return [(ClientViolation.STALE_SEQ, knew)]
-        if all(status.dynamic_state == DynamicState.INACTIVE for status in readable):
-            return [(ClientViolation.AFTER_FINISHED, knew)]
+        told = self._refused_by_every_status(goal, readable)
+        if told in (ClientViolation.STALE_SEQ, ClientViolation.AFTER_FINISHED):
+            return [(told, knew)]
         if self._own(client, uuid, goal, arrived, EventType.FINISHED, answered=True):
             return [(ClientViolation.AFTER_FINISHED, "its own FINISHED of this run had succeeded")]
-        same_run = [status for status in readable if status.dynamic_event_seq == goal.dynamic_event_seq]
-        live = [status for status in same_run if _runs_a_child(status)]
-        if goal.event_type in (EventType.NEXT, EventType.FINISHED):
-            if all(_runs_a_child(status) for status in readable):
-                return [(ClientViolation.NEXT_WHILE_RUNNING, knew)]
-            if self._own(client, uuid, goal, arrived, EventType.NEXT, answered=False):
-                return [(ClientViolation.NEXT_WHILE_RUNNING, "its own NEXT of this run was not answered yet")]
-        if goal.event_type == EventType.CANCEL and all(status.id != goal.id for status in live):
-            return [(ClientViolation.CANCEL_NOT_RUNNING, knew)]
-        stale = goal.id != 0 and all(goal.id <= status.id for status in same_run)
-        if goal.event_type == EventType.NEXT and stale and self.config.id_policy is IdPolicy.GOAL:
-            return [(ClientViolation.STALE_ID, knew)]
-        return []
+        if told is ClientViolation.NEXT_WHILE_RUNNING:
+            return [(told, knew)]
+        if goal.event_type in (EventType.NEXT, EventType.FINISHED) and self._own(
+            client, uuid, goal, arrived, EventType.NEXT, answered=False
+        ):
+            return [(ClientViolation.NEXT_WHILE_RUNNING, "its own NEXT of this run was not answered yet")]
+        return [] if told is None else [(told, knew)]
+
+    def _refused_by_every_status(
+        self, goal: Goal, readable: list[DynamicEventStatus]
+    ) -> ClientViolation | None:
+        """What the client breaks when the machine, in the state each status it could read implies
+        (R20.2 included), refuses the goal for the same reason the client could know (R22.2 to
+        R22.6).  What a run holds (a child, its ids) is read from the statuses of the goal's own run
+        where the client could read one: a status of another run says nothing of it."""
+        config = attrs.evolve(self._judging, categories={goal.category or "-": machine.any_description})
+        told: list[tuple[bool, ClientViolation]] = []
+        for status in readable:
+            decision = machine.accept(machine.state_from_status(status), goal, config)
+            violation = (
+                ClientViolation.of_refusal(decision.reason) if isinstance(decision, outs.Rejected) else None
+            )
+            if violation is None:
+                return None
+            told.append((status.dynamic_event_seq == goal.dynamic_event_seq, violation))
+        own_run = {violation for same, violation in told if same}
+        if len(own_run) == 1 and own_run <= _OF_THE_RUN:
+            return own_run.pop()
+        every = {violation for _, violation in told}
+        return every.pop() if len(every) == 1 else None
 
     def _never_acceptable(self, goal: Goal) -> str | None:
         """The machine's own refusal, in a state where only the goal itself can be wrong (R22.7)."""
@@ -260,10 +268,10 @@ class ClientJudge:
         return [finding]
 
 
-def _runs_a_child(status: DynamicEventStatus) -> bool:
-    """RUNNING with a child's status that is not final (R20.2: a final one means the robot waits)."""
-    return status.dynamic_state == DynamicState.RUNNING and status.status not in ENDED_CHILD_STATUSES
-
+# the violations that concern what a run holds (its child, its ids), not which run it is
+_OF_THE_RUN = frozenset(
+    {ClientViolation.NEXT_WHILE_RUNNING, ClientViolation.CANCEL_NOT_RUNNING, ClientViolation.STALE_ID}
+)
 
 #: How long what is known of a goal is kept after it ended (a client's goals are minutes apart at most).
 _MEMORY = 60 * SECOND

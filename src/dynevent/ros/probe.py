@@ -38,6 +38,7 @@ from dynevent.ros.client import introspect
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.server import latched
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
+from dynevent.server import machine
 from dynevent.tools import probe_cases
 from dynevent.tools.check.trace import TraceWriter
 from dynevent.tools.probe_cases import Case, Finding, Verdict
@@ -56,7 +57,7 @@ from dynevent.wire.names import (
     description_service,
     status_topic,
 )
-from dynevent.wire.vocab import ENDED_CHILD_STATUSES, DynamicState, EventType, GoalStatus, Tier
+from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, Status, Tier
 
 __all__ = ["Exchange", "Link", "Options", "Probe", "main", "run"]
 
@@ -65,6 +66,8 @@ _TERMINAL = {
     RosGoalStatus.STATUS_CANCELED: GoalStatus.CANCELED,
     RosGoalStatus.STATUS_ABORTED: GoalStatus.ABORTED,
 }
+_STANDBY, _UNDERWAY = Status.STANDBY.value, Status.UNDERWAY.value
+_COMPLETED, _CANCELED = Status.COMPLETED.value, Status.CANCELED.value
 _U32 = 2**32
 _U64 = 2**64
 #: How long the description case looks for the service, which a server need not offer (D17).
@@ -305,11 +308,9 @@ class Options:
     introspection: bool = False
 
 
-def _waits(status: DynamicEventStatus) -> bool:
-    """Whether a status says the robot waits for a NEXT in an active run (R20.2)."""
-    if status.dynamic_state == DynamicState.WAITING:
-        return True
-    return status.dynamic_state == DynamicState.RUNNING and status.status in ENDED_CHILD_STATUSES
+def _waits_or_ended(status: DynamicEventStatus) -> bool:
+    """The robot waits for a NEXT (R20.2 included), or its run has ended."""
+    return machine.robot_waits(status) or status.dynamic_state == DynamicState.INACTIVE
 
 
 class _Unreachable(Exception):
@@ -393,10 +394,10 @@ class Probe:
         and the robot is not waiting; else the case is missing.  Waiting is WAITING, or RUNNING with
         a child's final status (R20.2: what rmf_ros2 keeps publishing after a child ends)."""
         timeout = self.options.timeout
-        status = self.link.wait_status(_waits, 0.5)
+        status = self.link.wait_status(machine.robot_waits, 0.5)
         if status is None and self.options.begin_command:
             self._run_begin_command()
-        status = status or self.link.wait_status(_waits, timeout)
+        status = status or self.link.wait_status(machine.robot_waits, timeout)
         if status is None:
             raise _Unreachable(f"no active run (a WAITING status) within {timeout:g} s")
         return status
@@ -492,7 +493,8 @@ class Probe:
                 self.send(stop)
                 exchange.answered(self.options.timeout)
             self.link.wait_status(
-                lambda s: _waits(s) or s.dynamic_state == DynamicState.INACTIVE, self.options.timeout
+                lambda s: machine.robot_waits(s) or s.dynamic_state == DynamicState.INACTIVE,
+                self.options.timeout,
             )
 
 
@@ -511,7 +513,7 @@ def _status_waiting(probe: Probe, case: Case) -> Finding:
     seq = status.dynamic_event_seq
     begins = [begin.dynamic_event_seq for begin in probe.link.begins]
     probe.note(f"status WAITING seq={seq} id={status.id} {status.status}; begins seen for runs {begins}")
-    if status.status != "standby":
+    if status.status != _STANDBY:
         return Finding(case, Verdict.FAIL, expected="WAITING, standby", seen=f"WAITING, {status.status}")
     if seq not in begins:
         return Finding(case, Verdict.FAIL, expected=f"a begin for run {seq}", seen=f"begins for {begins}")
@@ -536,7 +538,7 @@ def _seq_stale(probe: Probe, case: Case) -> Finding:
 
 def _seq_future(probe: Probe, case: Case) -> Finding:
     status = probe.waiting()
-    goal = _goal(status, EventType.FINISHED, dynamic_event_seq=(status.dynamic_event_seq + 1) % _U32)
+    goal = _goal(status, EventType.FINISHED, dynamic_event_seq=machine.next_seq(status.dynamic_event_seq))
     return probe.refused(case, goal)
 
 
@@ -588,7 +590,7 @@ def _runs_a_child(probe: Probe, case: Case) -> Finding:
     status_, result = answer
     if ids != [goal.id] or (status_, result.status, result.id) != (
         GoalStatus.SUCCEEDED,
-        "completed",
+        _COMPLETED,
         goal.id,
     ):
         return Finding(
@@ -614,9 +616,7 @@ def _status_after_child(probe: Probe, case: Case) -> Finding:
     exchange = probe.send(goal)
     if not exchange.answers:
         raise _Unreachable(f"the child did not end within {probe.options.timeout:g} s")
-    after = probe.link.wait_status(
-        lambda s: s.id == goal.id and s.status != "underway", probe.options.timeout
-    )
+    after = probe.link.wait_status(lambda s: s.id == goal.id and s.status != _UNDERWAY, probe.options.timeout)
     if after is None:
         return Finding(
             case,
@@ -627,7 +627,7 @@ def _status_after_child(probe: Probe, case: Case) -> Finding:
         )
     phase = DynamicState(after.dynamic_state).name
     probe.note(f"status {phase} seq={after.dynamic_event_seq} id={after.id} {after.status}")
-    if after.dynamic_state == DynamicState.WAITING and after.status == "standby":
+    if after.dynamic_state == DynamicState.WAITING and after.status == _STANDBY:
         return Finding(case, Verdict.PASS, expected=f"WAITING, standby, id {goal.id}", seen="so")
     divergence = "D2" if after.dynamic_state == DynamicState.RUNNING else None
     return Finding(case, Verdict.FAIL, expected=f"WAITING, standby, id {goal.id}",
@@ -660,7 +660,7 @@ def _cancel_running_child(probe: Probe, case: Case) -> Finding:
             )
         if len(running.answers) != 1 or len(cancel.answers) != 1:
             return Finding(case, Verdict.FAIL, expected=expected, seen="a goal answered twice")
-        if cancel_answer[0] is not GoalStatus.SUCCEEDED or next_answer[1].status != "canceled":
+        if cancel_answer[0] is not GoalStatus.SUCCEEDED or next_answer[1].status != _CANCELED:
             seen = f"CANCEL {_describe_answer(cancel)}; NEXT {_describe_answer(running)}"
             return Finding(case, Verdict.FAIL, expected=expected, seen=seen)
         return Finding(case, Verdict.PASS, expected=expected, seen="so")
@@ -672,7 +672,7 @@ def _finished(probe: Probe, case: Case) -> Finding:
     exchange = probe.send(_goal(status, EventType.FINISHED))
     expected = "succeeded, completed; then INACTIVE"
     answer = exchange.answer
-    if answer is None or (answer[0], answer[1].status) != (GoalStatus.SUCCEEDED, "completed"):
+    if answer is None or (answer[0], answer[1].status) != (GoalStatus.SUCCEEDED, _COMPLETED):
         return Finding(case, Verdict.FAIL, expected=expected, seen=_describe_answer(exchange))
     seq = status.dynamic_event_seq
     if not probe.link.wait_seen(
@@ -705,7 +705,7 @@ def _ran(exchange: Exchange, child_id: int) -> str | None:
     status, result = exchange.answer
     if ids != [child_id] or (status, result.status, result.id) != (
         GoalStatus.SUCCEEDED,
-        "completed",
+        _COMPLETED,
         child_id,
     ):
         return f"feedback ids {ids}; {_describe_answer(exchange)}"
@@ -746,7 +746,9 @@ def _stateless_id(probe: Probe, case: Case) -> Finding:
     first = probe.next_goal(status)
     if not probe.send(first).answers:
         raise _Unreachable(f"the first child did not end within {probe.options.timeout:g} s")
-    after = probe.link.wait_status(lambda s: s.id == first.id and _waits(s), probe.options.timeout)
+    after = probe.link.wait_status(
+        lambda s: s.id == first.id and machine.robot_waits(s), probe.options.timeout
+    )
     if after is None:
         raise _Unreachable(f"no status after child {first.id} ended within {probe.options.timeout:g} s")
     phase = DynamicState(after.dynamic_state).name
@@ -931,7 +933,7 @@ def _seq_wrap(probe: Probe, case: Case) -> Finding:
         if not ended.answers:
             raise _Unreachable(f"the FINISHED that ends run {_LAST_SEQ} was {_describe_answer(ended)}")
         probe.link.wait_status(
-            lambda s: s.dynamic_event_seq != _LAST_SEQ and _waits(s), probe.options.timeout
+            lambda s: s.dynamic_event_seq != _LAST_SEQ and machine.robot_waits(s), probe.options.timeout
         )
         status = probe.waiting()
     seqs = [s.dynamic_event_seq for s in probe.link.history() if s.dynamic_state != DynamicState.INACTIVE]

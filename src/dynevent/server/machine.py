@@ -40,6 +40,8 @@ from dynevent.wire.messages import (
 )
 from dynevent.wire.names import validate_token
 from dynevent.wire.vocab import (
+    ENDED_CHILD_STATUSES,
+    TASK_SIGNAL_LOGS,
     Compatibility,
     DynamicState,
     EventType,
@@ -53,9 +55,12 @@ from dynevent.wire.vocab import (
 __all__ = [
     "CHILD_END_RULE",
     "CHILD_RESULT_RULE",
+    "CONFIGURED_REFUSALS",
     "DEFERRED_START_RULE",
     "EXECUTION_FAILURES",
     "FINISHED_RULE",
+    "REFUSED_IN_EVERY_STATE",
+    "REQUEST_CHECKS",
     "START_RULE",
     "TRANSITIONS",
     "UNKNOWN_GOAL",
@@ -63,6 +68,7 @@ __all__ = [
     "Edge",
     "Position",
     "QueuedGoal",
+    "RequestCheck",
     "RunningGoal",
     "ServerConfig",
     "State",
@@ -71,9 +77,18 @@ __all__ = [
     "Validator",
     "accept",
     "any_description",
+    "begin_description",
+    "check_index",
+    "child_ended",
+    "could_refuse_first",
+    "first_refusal",
+    "next_child_id",
+    "next_seq",
     "phase_of",
     "race_lost",
     "reported_id",
+    "robot_waits",
+    "runs_a_child",
     "state_from_status",
     "status_message",
     "status_of",
@@ -457,33 +472,86 @@ def _status_key(state: State) -> tuple[int, bool, bool, str, int]:
 UNKNOWN_GOAL = "0" * 32
 
 
+def child_ended(message: DynamicEventStatus) -> bool:
+    """R20.2: a RUNNING status carrying a child's final status (:data:`ENDED_CHILD_STATUSES`) names
+    a child that has ended (or is about to, R7.4): a client takes the robot as waiting."""
+    return message.dynamic_state == _RUNNING and message.status in ENDED_CHILD_STATUSES
+
+
+def runs_a_child(message: DynamicEventStatus) -> bool:
+    """A status that shows a child running: RUNNING, and not a child's final status (R2.2, R20.2)."""
+    return message.dynamic_state == _RUNNING and message.status not in ENDED_CHILD_STATUSES
+
+
+def robot_waits(message: DynamicEventStatus) -> bool:
+    """A status that shows the robot waiting for its next goal: WAITING, or a child's end (R20.2)."""
+    return message.dynamic_state == _WAITING or child_ended(message)
+
+
+def next_seq(seq: int) -> int:
+    """The seq of the run that begins after run ``seq`` (R3.1), wrapping from 2**32 - 1 to 0 (R3.2)."""
+    return (seq + 1) & U32_MAX
+
+
+def next_child_id(goal: Goal, last_id: int, config: ServerConfig) -> int:
+    """The id of the child a NEXT ``goal`` starts in a run whose highest id is ``last_id`` (R6.2): the
+    goal's own id, unless it is 0 or the adapter numbers children (id policy ``adapter``), then
+    ``last_id + 1``."""
+    if config.id_policy is _GOAL_IDS and goal.id != 0:
+        return goal.id
+    return (last_id + 1) & U64_MAX
+
+
+def begin_description(description: str, config: ServerConfig) -> str:
+    """The description a begin message carries for a run that begins with ``description`` (R3.3):
+    as given, or re-serialised compact with its keys sorted in rmf_ros2 mode (R17.6).  The text is
+    JSON (a :class:`~dynevent.server.inputs.Begin` checked it); anything else is kept as it is."""
+    if config.compatibility is not _RMF_ROS2:
+        return description
+    try:
+        return _json.dumps_sorted(_json.parse(description))
+    except (_json.JsonProblem, ValueError):  # unreachable from a Begin; the machine cannot raise
+        return description
+
+
 def state_from_status(
-    message: DynamicEventStatus, fleet: str = "fleet", robot: str = "robot", *, last_id: int = 0
+    message: DynamicEventStatus,
+    fleet: str = "fleet",
+    robot: str = "robot",
+    *,
+    last_id: int = 0,
+    child_end: bool = True,
 ) -> State:
-    """The server state a status message describes, as far as it can (R2.2).
+    """The server state a status message describes, as far as it can (R2.2, R20.2).
 
     INACTIVE gives an inactive state of that seq.  WAITING gives an active
     run whose highest id used is the message's id (R2.2); the dynamic event's
     own id is taken to be that id too, which holds until its first child.
     RUNNING gives a run whose running goal is unknown (:data:`UNKNOWN_GOAL`),
     with a child of the message's id, started unless the status is ``queued``
-    (a start deferred by an interruption, R6.3).  ``last_id``, when higher than
-    the message's id, is the highest id the caller knows was used in the run (a
-    client's own goals, say).  Raises ``ValueError`` for a ``dynamic_state``
-    that is none of 0, 1, 2.
+    (a start deferred by an interruption, R6.3).  A RUNNING status with a
+    child's final status (:func:`child_ended`) gives a waiting run whose
+    highest id is the message's (R20.2: the child has ended, status
+    ``standby`` as after any child's end, R8.4), its dynamic event's own id
+    unknown (0); ``child_end=False`` reads it as the child still running, as
+    a judge that follows the goal to its answer does.  ``last_id``, when higher
+    than the message's id, is the highest id the caller knows was used in the
+    run (a client's own goals, say).  Raises ``ValueError`` for a
+    ``dynamic_state`` that is none of 0, 1, 2.
     """
     base = State.new(fleet, robot)
     seq, phase = message.dynamic_event_seq, message.dynamic_state
     if phase == DynamicState.INACTIVE:
         return _replace_state(base, seq=seq, last_id=last_id)
-    if phase == DynamicState.WAITING:
+    if phase == DynamicState.WAITING or (child_end and child_ended(message)):
+        waiting = phase == DynamicState.WAITING
         return _replace_state(
             base,
             seq=seq,
             active=True,
-            event_id=message.id,
+            event_id=message.id if waiting else 0,
             description="{}",
-            status=message.status,
+            status=message.status if waiting else _STANDBY,
             last_id=max(message.id, last_id),
         )
     if phase == DynamicState.RUNNING:
@@ -515,92 +583,341 @@ def _reject(rule: str, reason: RejectReason, text: str, failure: str = "", **val
     return outs.Rejected(reason=reason, text=text, execution_failure=failure, rule=rule, **values)
 
 
-def _check_description(goal: Goal, config: ServerConfig) -> tuple[Any, outs.Rejected | None]:
-    """Check a NEXT goal's category, then parse and validate its description (R4.7 to R4.10)."""
-    failure = _PARSE_FAILURE
-    validator = config.categories.get(goal.category)
-    if validator is None:
-        supported = tuple(sorted(config.categories))
-        problem = f"category {goal.category!r} is not supported; supported: {', '.join(supported) or 'none'}"
-        return None, _reject("R4.7", RejectReason.UNSUPPORTED_CATEGORY, problem, categories=supported)
-    text = goal.description
-    size = _json.utf8_size(text)
-    if size > config.max_description_length:
-        problem = f"description is {size} bytes, above the limit of {config.max_description_length}"
-        return None, _reject(
-            "R4.8", RejectReason.DESCRIPTION_INVALID, problem, f"{failure}\n -- {problem}", errors=(problem,)
-        )
+# The checks of R4, one function a rule, each ``(state, goal, config, found) -> Rejected | None``;
+# ``found`` is a one-item list where R4.9 leaves the parsed description for R4.10 and the start.
+
+
+def _shutting_down(state: State, goal: Goal, config: ServerConfig, found: list[Any]) -> outs.Rejected | None:
+    if not state.shutdown:
+        return None
+    return _reject("R4.1", RejectReason.SHUTTING_DOWN, "the server is shutting down", Failure.SHUTDOWN.value)
+
+
+def _seq_mismatch(state: State, goal: Goal, config: ServerConfig, found: list[Any]) -> outs.Rejected | None:
+    if goal.dynamic_event_seq == state.seq:
+        return None
+    return _reject(
+        "R4.2",
+        RejectReason.SEQ_MISMATCH,
+        f"Expected {state.seq}, received {goal.dynamic_event_seq}",
+        expected_seq=state.seq,
+        received_seq=goal.dynamic_event_seq,
+    )
+
+
+def _inactive(state: State, goal: Goal, config: ServerConfig, found: list[Any]) -> outs.Rejected | None:
+    if state.active:
+        return None
+    return _reject("R4.3", RejectReason.INACTIVE, "no dynamic event is active for this robot")
+
+
+def _uninitialized_type(
+    state: State, goal: Goal, config: ServerConfig, found: list[Any]
+) -> outs.Rejected | None:
+    if goal.event_type != _UNINITIALIZED_TYPE:
+        return None
+    return _reject(
+        "R4.4",
+        RejectReason.UNINITIALIZED_EVENT_TYPE,
+        "event_type is 0 (UNINITIALIZED): the goal was default-initialized",
+        Failure.EVENT_TYPE.value,
+    )
+
+
+def _unknown_type(state: State, goal: Goal, config: ServerConfig, found: list[Any]) -> outs.Rejected | None:
+    if goal.event_type <= _FINISHED:
+        return None
+    return _reject(
+        "R4.5",
+        RejectReason.UNKNOWN_EVENT_TYPE,
+        f"event_type {goal.event_type} is none of NEXT (1), CANCEL (2), FINISHED (3)",
+        Failure.EVENT_TYPE.value,
+    )
+
+
+def _busy(state: State, goal: Goal, config: ServerConfig, found: list[Any]) -> outs.Rejected | None:
+    running = state.running
+    if running is None:
+        return None
+    return _reject(
+        "R4.6",
+        RejectReason.BUSY,
+        f"event {running.child_id} is running: only a CANCEL with its id is accepted",
+        current_id=running.child_id,
+    )
+
+
+def _unsupported_category(
+    state: State, goal: Goal, config: ServerConfig, found: list[Any]
+) -> outs.Rejected | None:
+    if goal.category in config.categories:
+        return None
+    supported = tuple(sorted(config.categories))
+    problem = f"category {goal.category!r} is not supported; supported: {', '.join(supported) or 'none'}"
+    return _reject("R4.7", RejectReason.UNSUPPORTED_CATEGORY, problem, categories=supported)
+
+
+def _description_too_long(
+    state: State, goal: Goal, config: ServerConfig, found: list[Any]
+) -> outs.Rejected | None:
+    size = _json.utf8_size(goal.description)
+    if size <= config.max_description_length:
+        return None
+    problem = f"description is {size} bytes, above the limit of {config.max_description_length}"
+    return _reject(
+        "R4.8",
+        RejectReason.DESCRIPTION_INVALID,
+        problem,
+        f"{_PARSE_FAILURE}\n -- {problem}",
+        errors=(problem,),
+    )
+
+
+def _description_not_json(
+    state: State, goal: Goal, config: ServerConfig, found: list[Any]
+) -> outs.Rejected | None:
     try:
-        parsed = _json.parse(text)
+        found[0] = _json.parse(goal.description)
     except _json.JsonProblem as exc:
-        return None, _reject(
+        return _reject(
             "R4.9",
             RejectReason.DESCRIPTION_NOT_JSON,
             f"the description of the {goal.category!r} event is {exc}",
-            f"{failure}\n -- {exc}",
+            f"{_PARSE_FAILURE}\n -- {exc}",
             errors=(str(exc),),
         )
+    return None
+
+
+def _description_invalid(
+    state: State, goal: Goal, config: ServerConfig, found: list[Any]
+) -> outs.Rejected | None:
+    validator = config.categories[goal.category]  # R4.7 ran first
     try:
-        found = validator(goal.category, parsed)
-        errors = () if type(found) in (tuple, list) and not found else tuple(str(error) for error in found)
+        errors = validator(goal.category, found[0])
+        errors = () if type(errors) in (tuple, list) and not errors else tuple(str(error) for error in errors)
     except Exception as exc:  # a faulty validator must not break the machine
         errors = (f"the validator raised {type(exc).__name__}: {exc}",)
-    if errors:
-        return None, _reject(
-            "R4.10",
-            RejectReason.DESCRIPTION_INVALID,
-            f"the description does not fit the {goal.category!r} category: " + "; ".join(errors),
-            failure + "".join(f"\n -- {error}" for error in errors),
-            errors=errors,
-        )
-    return parsed, None
+    if not errors:
+        return None
+    return _reject(
+        "R4.10",
+        RejectReason.DESCRIPTION_INVALID,
+        f"the description does not fit the {goal.category!r} category: " + "; ".join(errors),
+        _PARSE_FAILURE + "".join(f"\n -- {error}" for error in errors),
+        errors=errors,
+    )
 
 
-def _check_next(state: State, goal: Goal, config: ServerConfig) -> tuple[Any, outs.Rejected | None]:
-    """A NEXT goal's own checks (R4.7 to R4.12), in the spec's order; its parsed description."""
-    parsed, problem = _check_description(goal, config)  # R4.7 to R4.10
-    if problem is not None:
-        return None, problem
-    if not math.isfinite(goal.stubborn_period):
-        return None, _reject(
-            "R4.11",
-            RejectReason.NON_FINITE_STUBBORN_PERIOD,
-            f"stubborn_period {goal.stubborn_period} is not a finite number",
-        )
-    if _stale(state, goal, config):
-        if goal.id == 0:
-            text = f"id 0 asks the server for the next id, and none is left above {state.last_id}"
-        else:
-            text = f"id {goal.id} is not greater than {state.last_id}, the highest id used in this run"
-        return None, _reject(
-            "R4.12", RejectReason.STALE_ID, text, current_id=state.last_id, requested_id=goal.id
-        )
-    return parsed, None
+def _non_finite_stubborn(
+    state: State, goal: Goal, config: ServerConfig, found: list[Any]
+) -> outs.Rejected | None:
+    if math.isfinite(goal.stubborn_period):
+        return None
+    return _reject(
+        "R4.11",
+        RejectReason.NON_FINITE_STUBBORN_PERIOD,
+        f"stubborn_period {goal.stubborn_period} is not a finite number",
+    )
 
 
-def _check_cancel(running: RunningGoal | None, goal: Goal) -> outs.Rejected | None:
-    """A CANCEL goal's own checks (R4.13, R4.14): a child runs, and the goal names it."""
-    if running is None:
-        return _reject(
-            "R4.13", RejectReason.CANCEL_IDLE, "no event is running to cancel", Failure.IDLE_CANCEL.value
-        )
-    if goal.id != running.child_id:
-        return _reject(
-            "R4.14",
-            RejectReason.CANCEL_ID_MISMATCH,
-            f"the running event is {running.child_id}, the CANCEL names {goal.id}",
-            Failure.CANCEL_ID.value,
-            current_id=running.child_id,
-            requested_id=goal.id,
-        )
-    return None
+def _stale_id(state: State, goal: Goal, config: ServerConfig, found: list[Any]) -> outs.Rejected | None:
+    if not _stale(state, goal, config):
+        return None
+    if goal.id == 0:
+        text = f"id 0 asks the server for the next id, and none is left above {state.last_id}"
+    else:
+        text = f"id {goal.id} is not greater than {state.last_id}, the highest id used in this run"
+    return _reject("R4.12", RejectReason.STALE_ID, text, current_id=state.last_id, requested_id=goal.id)
+
+
+def _cancel_idle(state: State, goal: Goal, config: ServerConfig, found: list[Any]) -> outs.Rejected | None:
+    if state.running is not None:
+        return None
+    return _reject(
+        "R4.13", RejectReason.CANCEL_IDLE, "no event is running to cancel", Failure.IDLE_CANCEL.value
+    )
+
+
+def _cancel_id_mismatch(
+    state: State, goal: Goal, config: ServerConfig, found: list[Any]
+) -> outs.Rejected | None:
+    running = state.running
+    if running is None or goal.id == running.child_id:  # R4.13 decides an idle CANCEL
+        return None
+    return _reject(
+        "R4.14",
+        RejectReason.CANCEL_ID_MISMATCH,
+        f"the running event is {running.child_id}, the CANCEL names {goal.id}",
+        Failure.CANCEL_ID.value,
+        current_id=running.child_id,
+        requested_id=goal.id,
+    )
+
+
+_ALL_TYPES = frozenset({_UNINITIALIZED_TYPE, _NEXT, _CANCEL, _FINISHED, _FINISHED + 1})  # 4: any above 3
+_ONLY_NEXT = frozenset({_NEXT})
+_ONLY_CANCEL = frozenset({_CANCEL})
+_ONLY_UNINITIALIZED = frozenset({_UNINITIALIZED_TYPE})
+_ABOVE_FINISHED = frozenset({_FINISHED + 1})
+
+
+@attrs.frozen
+class RequestCheck:
+    """One check of R4, as :data:`REQUEST_CHECKS` lists them in the order :func:`accept` walks.
+
+    ``event_types`` are the goal types it checks (4 stands for every type above FINISHED);
+    ``standard_only`` marks a check that rmf_ros2 mode leaves out (R17.1); ``configured`` one whose
+    verdict a server's configuration decides (its categories and their validators, its description
+    limit), so that a judge who does not know the configuration cannot rule it out; ``goal_only`` one
+    that reads the goal alone, so that no state of any server accepts a goal it refuses (R22.7).
+    """
+
+    rule: str
+    reason: RejectReason
+    event_types: frozenset[int]
+    check: Callable[[State, Goal, ServerConfig, list[Any]], outs.Rejected | None] = attrs.field(
+        repr=False, eq=False
+    )
+    standard_only: bool = False
+    configured: bool = False
+    goal_only: bool = False
+
+
+#: The checks of R4, in the order :func:`accept` runs them: the first that refuses decides.
+REQUEST_CHECKS: tuple[RequestCheck, ...] = (
+    RequestCheck("R4.1", RejectReason.SHUTTING_DOWN, _ALL_TYPES, _shutting_down),
+    RequestCheck("R4.2", RejectReason.SEQ_MISMATCH, _ALL_TYPES, _seq_mismatch),
+    RequestCheck("R4.3", RejectReason.INACTIVE, _ALL_TYPES, _inactive),
+    RequestCheck(
+        "R4.4",
+        RejectReason.UNINITIALIZED_EVENT_TYPE,
+        _ONLY_UNINITIALIZED,
+        _uninitialized_type,
+        standard_only=True,
+        goal_only=True,
+    ),
+    RequestCheck(
+        "R4.5",
+        RejectReason.UNKNOWN_EVENT_TYPE,
+        _ABOVE_FINISHED,
+        _unknown_type,
+        standard_only=True,
+        goal_only=True,
+    ),
+    RequestCheck("R4.6", RejectReason.BUSY, _ALL_TYPES - _ONLY_CANCEL, _busy),
+    RequestCheck(
+        "R4.7", RejectReason.UNSUPPORTED_CATEGORY, _ONLY_NEXT, _unsupported_category, configured=True
+    ),
+    RequestCheck(
+        "R4.8",
+        RejectReason.DESCRIPTION_INVALID,
+        _ONLY_NEXT,
+        _description_too_long,
+        configured=True,
+        goal_only=True,
+    ),
+    RequestCheck(
+        "R4.9", RejectReason.DESCRIPTION_NOT_JSON, _ONLY_NEXT, _description_not_json, goal_only=True
+    ),
+    RequestCheck(
+        "R4.10",
+        RejectReason.DESCRIPTION_INVALID,
+        _ONLY_NEXT,
+        _description_invalid,
+        configured=True,
+        goal_only=True,
+    ),
+    RequestCheck(
+        "R4.11", RejectReason.NON_FINITE_STUBBORN_PERIOD, _ONLY_NEXT, _non_finite_stubborn, goal_only=True
+    ),
+    RequestCheck("R4.12", RejectReason.STALE_ID, _ONLY_NEXT, _stale_id),
+    RequestCheck("R4.13", RejectReason.CANCEL_IDLE, _ONLY_CANCEL, _cancel_idle, standard_only=True),
+    RequestCheck(
+        "R4.14", RejectReason.CANCEL_ID_MISMATCH, _ONLY_CANCEL, _cancel_id_mismatch, standard_only=True
+    ),
+)
+
+#: The refusals no state of any server turns into an acceptance: the goal itself is at fault (R22.7).
+REFUSED_IN_EVERY_STATE = frozenset(check.reason for check in REQUEST_CHECKS if check.goal_only)
+#: The refusals a server's configuration decides (its categories, their validators, its limit).
+CONFIGURED_REFUSALS = frozenset(check.reason for check in REQUEST_CHECKS if check.configured)
+
+_CHECK_INDEX = {check.rule: index for index, check in enumerate(REQUEST_CHECKS)}
+#: The description's checks, which a NEXT's start runs again (R6.1).
+_DESCRIPTION_CHECKS = tuple(
+    check.check for check in REQUEST_CHECKS if check.rule in ("R4.7", "R4.8", "R4.9", "R4.10")
+)
+
+
+def _walk(standard: bool, event_type: int) -> tuple[Callable[..., outs.Rejected | None], ...]:
+    """The checks :func:`accept` runs for a goal of ``event_type`` (4: any above FINISHED), in order;
+    in rmf_ros2 mode without those R17.1 leaves out."""
+    return tuple(
+        check.check
+        for check in REQUEST_CHECKS
+        if event_type in check.event_types and (standard or not check.standard_only)
+    )
+
+
+def _deferred(event_type: int) -> tuple[Callable[..., outs.Rejected | None], ...]:
+    """The checks rmf_ros2 mode leaves out (R17.1) for a goal of ``event_type``."""
+    return tuple(
+        check.check for check in REQUEST_CHECKS if event_type in check.event_types and check.standard_only
+    )
+
+
+# What accept walks, by event type (index 4: any above FINISHED), built once from REQUEST_CHECKS:
+# indexing a tuple beats filtering the table for every goal.
+_STANDARD_WALKS = tuple(_walk(True, event_type) for event_type in range(5))
+_RMF_ROS2_WALKS = tuple(_walk(False, event_type) for event_type in range(5))
+_DEFERRED = tuple(_deferred(event_type) for event_type in range(5))
+
+
+def first_refusal(reason: RejectReason) -> int:
+    """The place in :data:`REQUEST_CHECKS` of the first check that can refuse with ``reason``
+    (``len(REQUEST_CHECKS)`` for ``race``, which no request check gives)."""
+    return next(
+        (index for index, check in enumerate(REQUEST_CHECKS) if check.reason is reason), len(REQUEST_CHECKS)
+    )
+
+
+def check_index(rule: str) -> int:
+    """The place of the check ``rule`` (``"R4.9"``) in :data:`REQUEST_CHECKS`; ``len(REQUEST_CHECKS)``
+    for a rule that is no request check (an acceptance, say)."""
+    return _CHECK_INDEX.get(rule, len(REQUEST_CHECKS))
+
+
+def could_refuse_first(reason: RejectReason, decision: outs.Decision, *, config_known: bool) -> bool:
+    """Could a server have refused with ``reason`` where :func:`accept` gave ``decision``?
+
+    Yes when it is the decision's own reason; and, for a judge who does not know the server's
+    configuration, when a check that a configuration decides (:attr:`RequestCheck.configured`) can
+    refuse with ``reason`` and runs before the decision's check.
+    """
+    if isinstance(decision, outs.Rejected) and decision.reason is reason:
+        return True
+    if config_known:
+        return False
+    limit = check_index(decision.rule)
+    return any(check.reason is reason and check.configured for check in REQUEST_CHECKS[:limit])
+
+
+def _check_description(state: State, goal: Goal, config: ServerConfig) -> tuple[Any, outs.Rejected | None]:
+    """A NEXT's category and description checks (R4.7 to R4.10); its parsed description."""
+    found: list[Any] = [None]
+    for check in _DESCRIPTION_CHECKS:
+        problem = check(state, goal, config, found)
+        if problem is not None:
+            return None, problem
+    return found[0], None
 
 
 def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
     """Would the server accept ``goal`` now?  A pure query (R4).
 
-    The checks run in the order of docs/spec.md section 4 and the first that
-    fails decides.  Usable as it is in a ROS ``handle_goal`` callback.
+    The checks of :data:`REQUEST_CHECKS` run in their order and the first that
+    refuses decides.  Usable as it is in a ROS ``handle_goal`` callback.
     """
     if not isinstance(goal, Goal):
         raise WrongInput("accept(state, goal, ...)", "a dynevent.wire.messages.Goal", goal)
@@ -609,61 +926,19 @@ def accept(state: State, goal: Goal, config: ServerConfig) -> outs.Decision:
 
 def _decide(state: State, goal: Goal, config: ServerConfig) -> tuple[outs.Decision, Any]:
     """:func:`accept`'s decision, and a NEXT's parsed description when it is accepted (else None)."""
-    if state.shutdown:
-        return _reject(
-            "R4.1", RejectReason.SHUTTING_DOWN, "the server is shutting down", Failure.SHUTDOWN.value
-        ), None
-    if goal.dynamic_event_seq != state.seq:
-        return _reject(
-            "R4.2",
-            RejectReason.SEQ_MISMATCH,
-            f"Expected {state.seq}, received {goal.dynamic_event_seq}",
-            expected_seq=state.seq,
-            received_seq=goal.dynamic_event_seq,
-        ), None
-    if not state.active:
-        return _reject("R4.3", RejectReason.INACTIVE, "no dynamic event is active for this robot"), None
     event_type = goal.event_type
+    kind = event_type if event_type <= _FINISHED else _FINISHED + 1
+    found: list[Any] = [None]
     standard = config.compatibility is _STANDARD
-    if standard and event_type == _UNINITIALIZED_TYPE:
-        return _reject(
-            "R4.4",
-            RejectReason.UNINITIALIZED_EVENT_TYPE,
-            "event_type is 0 (UNINITIALIZED): the goal was default-initialized",
-            Failure.EVENT_TYPE.value,
-        ), None
-    if standard and event_type > _FINISHED:
-        return _reject(
-            "R4.5",
-            RejectReason.UNKNOWN_EVENT_TYPE,
-            f"event_type {event_type} is none of NEXT (1), CANCEL (2), FINISHED (3)",
-            Failure.EVENT_TYPE.value,
-        ), None
-    running = state.running
-    if running is not None and event_type != _CANCEL:
-        return _reject(
-            "R4.6",
-            RejectReason.BUSY,
-            f"event {running.child_id} is running: only a CANCEL with its id is accepted",
-            current_id=running.child_id,
-        ), None
-    parsed = None
-    if event_type == _NEXT:
-        parsed, problem = _check_next(state, goal, config)  # R4.7 to R4.12
+    for check in (_STANDARD_WALKS if standard else _RMF_ROS2_WALKS)[kind]:
+        problem = check(state, goal, config, found)
         if problem is not None:
             return problem, None
-    elif event_type == _CANCEL and standard:
-        problem = _check_cancel(running, goal)  # R4.13, R4.14
-        if problem is not None:
-            return problem, None
-    if not standard and (
-        event_type == _UNINITIALIZED_TYPE
-        or event_type > _FINISHED
-        or (event_type == _CANCEL and (running is None or goal.id != running.child_id))
-    ):
-        # a check R17.1 leaves out would refuse it
-        return outs.Accepted(event_type=event_type, rule="R17.1"), None
-    return outs.Accepted(event_type=event_type, rule="R4.16"), parsed
+    if not standard:
+        for check in _DEFERRED[kind]:
+            if check(state, goal, config, found) is not None:  # a check R17.1 leaves out would refuse it
+                return outs.Accepted(event_type=event_type, rule="R17.1"), None
+    return outs.Accepted(event_type=event_type, rule="R4.16"), found[0]
 
 
 def _stale(state: State, goal: Goal, config: ServerConfig) -> bool:
@@ -671,13 +946,6 @@ def _stale(state: State, goal: Goal, config: ServerConfig) -> bool:
     if config.id_policy is not _GOAL_IDS:
         return False
     return state.last_id == U64_MAX if goal.id == 0 else goal.id <= state.last_id
-
-
-def _child_id(state: State, goal: Goal, config: ServerConfig) -> int:
-    """R6.2: the goal's id names the child, unless it is 0 or the adapter numbers children."""
-    if config.id_policy is _GOAL_IDS and goal.id != 0:
-        return goal.id
-    return (state.last_id + 1) & U64_MAX
 
 
 # --------------------------------------------------------------------------- step helpers
@@ -799,15 +1067,10 @@ def _on_begin(state: State, event: ins.Begin, config: ServerConfig) -> Transitio
     if state.active:
         return _ignored("R3.4", state, event.KIND, "a dynamic event is already active")
     outputs: list[outs.Output] = []
-    seq = (state.seq + 1) & U32_MAX  # R3.1
+    seq = next_seq(state.seq)  # R3.1
     if seq == 0:
         outputs.append(outs.SeqWrapped(previous=state.seq, seq=seq, rule="R3.2"))
-    description = event.description
-    if config.compatibility is Compatibility.RMF_ROS2:  # R17.6: re-serialised, compact, keys sorted
-        try:
-            description = _json.dumps_sorted(_json.parse(description))
-        except (_json.JsonProblem, ValueError):  # unreachable: Begin checked it; the machine cannot raise
-            description = event.description
+    description = begin_description(event.description, config)  # R3.3, R17.6
     after = _replace_state(
         state,
         seq=seq,
@@ -955,14 +1218,14 @@ def _start_next(
     :data:`_UNCHECKED` has it checked again.
     """
     if parsed is _UNCHECKED:
-        parsed, problem = _check_description(goal, config)
+        parsed, problem = _check_description(state, goal, config)
         if problem is not None:  # rmf_ros2 has no string for R4.7: it never re-checks the category
             failure = problem.execution_failure or f"{_PARSE_FAILURE}\n -- {problem.text}"
             outputs.append(
                 outs.AnswerGoal(goal_uuid=uuid, status=_ABORTED, result=_result(failure, "", 0), rule="R6.1")
             )
             return None
-    child_id = _child_id(state, goal, config)
+    child_id = next_child_id(goal, state.last_id, config)
     logs: tuple[LogEntry, ...] = ()
     log_seq = state.log_seq
     period = goal.stubborn_period
@@ -1188,7 +1451,7 @@ def _on_task_signal(state: State, event: ins.TaskCancel | ins.TaskKill, config: 
     if state.task_signal in (Status.KILLED.value, signal):
         return _ignored("R18.7", state, event.KIND, f"the task was already {state.task_signal}")
     outputs: list[outs.Output] = []
-    entry = _log_entry(state.log_seq, f"Received signal to {'kill' if kill else 'cancel'}", "info", event.now)
+    entry = _log_entry(state.log_seq, TASK_SIGNAL_LOGS[signal], "info", event.now)
     outputs.append(outs.Log(entry=entry, rule="R13.1"))
     after = _replace_state(state, task_signal=signal, status=signal, log_seq=(state.log_seq + 1) & U32_MAX)
     running = after.running

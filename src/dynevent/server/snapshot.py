@@ -25,7 +25,7 @@ from dynevent.wire._codec import CodecError, decode, encode
 from dynevent.wire._fields import SECOND, U32_MAX, U64_MAX
 from dynevent.wire.description import EventDescription
 from dynevent.wire.names import validate_robot, validate_token
-from dynevent.wire.vocab import EventType, Status
+from dynevent.wire.vocab import TASK_SIGNAL_LOGS, EventType, Status
 
 #: A day in nanoseconds: a refresh instant may lie up to one refresh period past the last ``now``.
 SECONDS_NS = 86_400 * SECOND
@@ -37,6 +37,7 @@ FORMAT = "dynevent.state"
 VERSION = 1
 
 _STATUSES = frozenset(status.value for status in Status)
+_TASK_SIGNALS = frozenset({"", *TASK_SIGNAL_LOGS})  # none, or the status a task signal gives (R13)
 _STATE_FIELDS = frozenset(attrs.fields_dict(State))
 
 
@@ -73,9 +74,12 @@ def state_problems(state: State) -> list[tuple[str, str]]:
             found.append((f"$.state.{field}", f"out of range [0, {high}]"))
     if state.status not in _STATUSES:
         found.append(("$.state.status", f"unknown status {state.status!r}"))
-    if state.task_signal not in ("", "canceled", "killed"):
+    if state.task_signal not in _TASK_SIGNALS:
         found.append(
-            ("$.state.task_signal", f"expected '', 'canceled' or 'killed', got {state.task_signal!r}")
+            (
+                "$.state.task_signal",
+                f"expected '', {' or '.join(map(repr, TASK_SIGNAL_LOGS))}, got {state.task_signal!r}",
+            )
         )
     uuids = [queued.goal_uuid for queued in state.queued] + list(state.cancels)
     running = state.running

@@ -72,7 +72,6 @@ from dynevent.server.machine import ServerConfig, State
 from dynevent.testing.strategies import messages
 from dynevent.wire import _json
 from dynevent.wire._fields import SECOND, U32_MAX, U64_MAX
-from dynevent.wire._json import dumps_sorted, parse
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import (
     Compatibility,
@@ -156,7 +155,10 @@ _FAULTS: tuple[str, ...] = (
     "cancel_id",
     "fields",
 )
-_ADVANCE_STATUSES: tuple[str, ...] = ("completed", "completed", "underway", "failed", "canceled")
+_ADVANCE_STATUSES: tuple[str, ...] = tuple(
+    status.value
+    for status in (Status.COMPLETED, Status.COMPLETED, Status.UNDERWAY, Status.FAILED, Status.CANCELED)
+)
 _SIGNALS: Mapping[str, Callable[..., ins.Input]] = {
     "interrupt": ins.Interrupt,
     "resume": ins.Resume,
@@ -580,8 +582,7 @@ class _Children(_Model):
                 raise self._fail(
                     Violation.ONE_CHILD, f"StartChild for a goal of event type {record.goal.event_type}"
                 )
-            named = self.config.id_policy is IdPolicy.GOAL and record.goal.id != 0
-            expected = record.goal.id if named else (self.last_id + 1) & U64_MAX
+            expected = machine.next_child_id(record.goal, self.last_id, self.config)  # R6.2
             if output.id != expected:
                 raise self._fail(
                     Violation.CHILD_ID,
@@ -597,7 +598,7 @@ class _Children(_Model):
                 Violation.BEGIN_MESSAGE,
                 f"a begin message (seq {output.message.dynamic_event_seq}) without a begin",
             )
-        expected = (self.seq + 1) & U32_MAX
+        expected = machine.next_seq(self.seq)  # R3.1
         if output.message.dynamic_event_seq != expected:
             raise self._fail(
                 Violation.BEGIN_MESSAGE,
@@ -608,9 +609,7 @@ class _Children(_Model):
         self.seq = expected
         self.active = True
         self.event_id = event.event_id
-        self.description = event.description
-        if self.config.compatibility is Compatibility.RMF_ROS2:  # R17.6
-            self.description = dumps_sorted(parse(event.description))
+        self.description = machine.begin_description(event.description, self.config)  # R3.3, R17.6
         self.last_id = event.event_id
         self.status = Status.STANDBY.value
         self.task_signal = ""

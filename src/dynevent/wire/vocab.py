@@ -12,6 +12,7 @@ import enum
 
 __all__ = [
     "ENDED_CHILD_STATUSES",
+    "TASK_SIGNAL_LOGS",
     "TERMINAL_GOAL_STATUSES",
     "ClientViolation",
     "Compatibility",
@@ -106,6 +107,13 @@ ENDED_CHILD_STATUSES = frozenset(
         Status.KILLED.value,
     }
 )
+
+#: The log line a task signal writes (R13.1), by the status it gives the dynamic event: rmf_ros2's
+#: own words, which a judge reads back to tell a signal from a child's progress.
+TASK_SIGNAL_LOGS: dict[str, str] = {
+    Status.CANCELED.value: "Received signal to cancel",
+    Status.KILLED.value: "Received signal to kill",
+}
 
 
 class GoalStatus(str, enum.Enum):
@@ -254,6 +262,22 @@ class ClientViolation(enum.Enum):
     STALE_ID = ("stale_id", "R22.6", "id 0, or above the id the status shows")
     NEVER_ACCEPTABLE = ("never_acceptable", "R22.7", "a goal some state accepts")
     RUN_LEFT_OPEN = ("run_left_open", "R22.8", "a FINISHED at the end of the run it drove")
+
+    @classmethod
+    def of_refusal(cls, reason: RejectReason) -> ClientViolation | None:
+        """What a client breaks by sending a goal that every status it could read says is refused
+        with ``reason`` (R22.2 to R22.6); None for a refusal the client could not know of."""
+        return _VIOLATION_OF_REFUSAL.get(reason)
+
+
+_VIOLATION_OF_REFUSAL = {
+    RejectReason.SEQ_MISMATCH: ClientViolation.STALE_SEQ,
+    RejectReason.INACTIVE: ClientViolation.AFTER_FINISHED,
+    RejectReason.BUSY: ClientViolation.NEXT_WHILE_RUNNING,
+    RejectReason.CANCEL_IDLE: ClientViolation.CANCEL_NOT_RUNNING,
+    RejectReason.CANCEL_ID_MISMATCH: ClientViolation.CANCEL_NOT_RUNNING,
+    RejectReason.STALE_ID: ClientViolation.STALE_ID,
+}
 
 
 class Violation(enum.Enum):

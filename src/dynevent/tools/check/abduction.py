@@ -15,18 +15,24 @@ from dynevent.server.machine import (
     State,
 )
 from dynevent.tools.check.trace import (
-    _SIGNAL_LOGS,
     _STATUSES,
     _TIERS,
     Record,
 )
 from dynevent.wire.messages import DynamicEventStatus, Feedback, Goal, Result
 from dynevent.wire.vocab import (
+    TASK_SIGNAL_LOGS,
     DynamicState,
     EventType,
     Failure,
     Status,
 )
+
+# the input behind each task signal's log line (R13.1)
+_SIGNALS: dict[str, type[ins.TaskCancel] | type[ins.TaskKill]] = {
+    Status.CANCELED.value: ins.TaskCancel,
+    Status.KILLED.value: ins.TaskKill,
+}
 
 
 @attrs.define
@@ -153,9 +159,9 @@ def candidates(state: State, record: Record, now: int) -> Iterator[list[ins.Inpu
         feedback: Feedback = record.message
         texts = [entry.text for entry in feedback.logs]
         if running is not None and running.goal_uuid == uuid:
-            for signal_text, signal in _SIGNAL_LOGS.items():
+            for signal_status, signal_text in TASK_SIGNAL_LOGS.items():
                 if signal_text in texts:
-                    yield [signal(now=now)]
+                    yield [_SIGNALS[signal_status](now=now)]
             if running.started:
                 status = feedback.status if feedback.status in _STATUSES else running.child_status
                 last = feedback.logs[-1] if feedback.logs else None

@@ -37,8 +37,6 @@ from dynevent.tools.check.abduction import (
     simulate,
 )
 from dynevent.tools.check.trace import (
-    _CONFIG_REASONS,
-    _REASON_ORDER,
     Finding,
     Record,
     Report,
@@ -332,19 +330,15 @@ class _Requests:
 
     def same_reason(self, decision: outs.Rejected, record: Record) -> bool:
         reason = record.reason
-        if reason is None or reason is decision.reason:
-            return True
-        return (
-            not self.books.config_known
-            and reason in _CONFIG_REASONS
-            and _REASON_ORDER[reason] < _REASON_ORDER[decision.reason]
+        return reason is None or machine.could_refuse_first(
+            reason, decision, config_known=self.books.config_known
         )
 
     def unknowable(self, goal: Goal, record: Record) -> bool:
         """Could an unknown configuration have refused this NEXT?"""
         if self.books.config_known or goal.event_type != EventType.NEXT:
             return False
-        return record.reason is None or record.reason in _CONFIG_REASONS
+        return record.reason is None or record.reason in machine.CONFIGURED_REFUSALS
 
     def explain_response(self, goal: Goal, record: Record) -> None:
         """The response may follow starts of accepted goals whose outputs come later: try them."""
@@ -437,7 +431,7 @@ class _Runs:
         if record.kind == "status":
             message: DynamicEventStatus = record.message
             try:
-                self.books.state = state_from_status(message)
+                self.books.state = state_from_status(message, child_end=False)  # its answer is still to come
                 # a status names the highest id used (R2.2), not the dynamic event's own id
                 self.books.event_id_unknown = message.dynamic_state != DynamicState.INACTIVE
                 self.books.start_uncertain = (
@@ -1071,11 +1065,7 @@ def _late_feedback(books: _Books, status: DynamicEventStatus, ahead: list[Record
     running = books.state.running if books.state is not None else None
     if running is None or not running.started:
         return None
-    ended = (
-        status.dynamic_state != DynamicState.RUNNING
-        or status.id != running.child_id
-        or status.status in ENDED_CHILD_STATUSES
-    )
+    ended = not machine.runs_a_child(status) or status.id != running.child_id
     uuid = running.goal_uuid
     for index, item in enumerate(ahead if ended else ()):
         answered = any(later.kind == "result" and later.goal_uuid == uuid for later in ahead[index + 1 :])

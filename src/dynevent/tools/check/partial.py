@@ -131,7 +131,7 @@ class PartialJudge:
     def _status(self, record: Record) -> None:
         message: DynamicEventStatus = record.message
         try:
-            state = machine.state_from_status(message)
+            state = machine.state_from_status(message, child_end=False)
         except ValueError as exc:
             self._flag(
                 record.line,

@@ -62,13 +62,6 @@ _TIERS = frozenset(tier.value for tier in Tier)
 _TERMINAL = {
     status.value: status for status in (GoalStatus.SUCCEEDED, GoalStatus.ABORTED, GoalStatus.CANCELED)
 }
-_SIGNAL_LOGS: dict[str, type[ins.TaskCancel] | type[ins.TaskKill]] = {
-    "Received signal to cancel": ins.TaskCancel,
-    "Received signal to kill": ins.TaskKill,
-}
-# Reasons that depend on the configuration, which a trace without a config record does not give.
-_CONFIG_REASONS = frozenset({RejectReason.UNSUPPORTED_CATEGORY, RejectReason.DESCRIPTION_INVALID})
-_REASON_ORDER = {reason: index for index, reason in enumerate(RejectReason)}
 
 
 @attrs.frozen(kw_only=True)
