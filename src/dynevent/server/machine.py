@@ -872,6 +872,14 @@ def _deferred(event_type: int) -> tuple[Callable[..., outs.Rejected | None], ...
 _STANDARD_WALKS = tuple(_walk(True, event_type) for event_type in range(5))
 _RMF_ROS2_WALKS = tuple(_walk(False, event_type) for event_type in range(5))
 _DEFERRED = tuple(_deferred(event_type) for event_type in range(5))
+# The checks of the state's gates, which an active run with an empty slot and the goal's seq passes.
+_GATES = frozenset(check.check for check in REQUEST_CHECKS if check.rule in ("R4.1", "R4.2", "R4.3", "R4.6"))
+_STANDARD_PAST_GATES = tuple(
+    tuple(check for check in walk if check not in _GATES) for walk in _STANDARD_WALKS
+)
+_RMF_ROS2_PAST_GATES = tuple(
+    tuple(check for check in walk if check not in _GATES) for walk in _RMF_ROS2_WALKS
+)
 
 
 def first_refusal(reason: RejectReason) -> int:
@@ -930,7 +938,12 @@ def _decide(state: State, goal: Goal, config: ServerConfig) -> tuple[outs.Decisi
     kind = event_type if event_type <= _FINISHED else _FINISHED + 1
     found: list[Any] = [None]
     standard = config.compatibility is _STANDARD
-    for check in (_STANDARD_WALKS if standard else _RMF_ROS2_WALKS)[kind]:
+    if state.active and state.running is None and goal.dynamic_event_seq == state.seq and not state.shutdown:
+        # R4.1, R4.2, R4.3 and R4.6 cannot refuse: walk the rest (saves a fifth of an accepted NEXT)
+        walk = (_STANDARD_PAST_GATES if standard else _RMF_ROS2_PAST_GATES)[kind]
+    else:
+        walk = (_STANDARD_WALKS if standard else _RMF_ROS2_WALKS)[kind]
+    for check in walk:
         problem = check(state, goal, config, found)
         if problem is not None:
             return problem, None
