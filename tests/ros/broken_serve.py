@@ -11,6 +11,7 @@ from collections.abc import Callable
 from typing import Any
 
 import attrs
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from dynevent.ros import server as ros_server
 from dynevent.server import machine
@@ -19,18 +20,37 @@ from dynevent.tools.cli import main
 from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReason, Tier
 
 
-def _accept_despite(reason: RejectReason) -> None:
+def _accept_despite(reason: RejectReason, only: EventType | None = None) -> None:
     """The request check (``accept``, and the steps of a goal's request and submission, which share
-    it) lets through what it should refuse for ``reason``."""
+    it) lets through what it should refuse for ``reason`` (for goals of event type ``only``, when
+    given: a server that branches on the event type before it checks)."""
     original = machine._decide
 
     def decide(state: Any, goal: Any, config: Any) -> Any:
         decision, parsed = original(state, goal, config)
-        if isinstance(decision, outs.Rejected) and decision.reason is reason:
+        if (
+            isinstance(decision, outs.Rejected)
+            and decision.reason is reason
+            and (only is None or goal.event_type == only)
+        ):
             return outs.Accepted(event_type=goal.event_type), parsed
         return decision, parsed
 
     machine._decide = decide
+
+
+def _volatile_topics() -> None:
+    """The status and begin topics are published volatile, not transient-local (R1.4): a late
+    subscriber gets nothing, and one that asks for transient-local (as R1.4 has clients do) never
+    matches them."""
+
+    def volatile(depth: int) -> QoSProfile:
+        return QoSProfile(
+            history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE,
+            durability=DurabilityPolicy.VOLATILE,
+        )  # fmt: skip
+
+    ros_server.latched = volatile
 
 
 def _rewrite(change: Callable[[Any, outs.Output], outs.Output | None]) -> None:
@@ -106,6 +126,10 @@ def ignores_clamp(server: Any, output: outs.Output) -> outs.Output | None:
 
 DEFECTS: dict[str, Callable[[], None]] = {
     "accepts_stale_seq": lambda: _accept_despite(RejectReason.SEQ_MISMATCH),
+    "accepts_stale_next": lambda: _accept_despite(RejectReason.SEQ_MISMATCH, EventType.NEXT),
+    "accepts_stale_cancel": lambda: _accept_despite(RejectReason.SEQ_MISMATCH, EventType.CANCEL),
+    "accepts_cancel_after_the_run": lambda: _accept_despite(RejectReason.INACTIVE, EventType.CANCEL),
+    "volatile_status": _volatile_topics,
     "accepts_unknown_category": lambda: _accept_despite(RejectReason.UNSUPPORTED_CATEGORY),
     "accepts_when_busy": lambda: _accept_despite(RejectReason.BUSY),
     "never_answers_cancel": lambda: _rewrite(never_answers_cancel),

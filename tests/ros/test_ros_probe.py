@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -82,7 +83,8 @@ def _verdicts(output: str) -> dict[str, str]:
     for line in output.splitlines():
         words = line.split()
         if words and words[0] in ids and words[0] not in verdicts:
-            numbered = len(words) > 2 and words[2].startswith("(D")  # fail (D7), known (D7)
+            # fail (D7), known (D7), missing (allowed)
+            numbered = len(words) > 2 and (words[2].startswith("(D") or words[2] == "(allowed)")
             verdicts[words[0]] = " ".join(words[1:3]) if numbered else words[1]
     return verdicts
 
@@ -160,15 +162,18 @@ def test_the_rmf_ros2_mode_fails_exactly_at_its_recorded_divergences(tmp_path: P
         assert f'<h2 id="{case}">{case}: fail ({number})</h2>' in page
     assert known.returncode == 0, known.stdout + known.stderr
     expected.update({case: f"known ({number})" for case, number in RMF_ROS2_FAILS.items()})
-    expected["begin.seq_wrap"] = "missing"  # the first probe saw the one wrap: the runs are at 1 now
+    # the first probe saw the one wrap: the runs are at 1 now, and --known rmf_ros2 expects it missing
+    expected["begin.seq_wrap"] = "missing (allowed)"
     assert _verdicts(known.stdout) == expected, known.stdout
     assert code == 0, serve.output
 
 
 def test_no_server_is_exit_2_in_one_line(tmp_path: Path) -> None:
-    done = _probe("nobodyHere", "--timeout", "1")
+    done = _probe("nobodyHere", "--server-wait", "1")
     assert done.returncode == 2
-    assert done.stdout.strip() == "no Dynamic Event server for tinyRobot/nobodyHere within 1 s"
+    line = done.stdout.strip()
+    assert line.startswith("no Dynamic Event server for tinyRobot/nobodyHere within 1 s; "), line
+    assert "\n" not in line
     assert "Traceback" not in done.stderr
 
 
@@ -176,14 +181,20 @@ def test_no_server_is_exit_2_in_one_line(tmp_path: Path) -> None:
 BROKEN = {
     # a goal for the run before the wrap is stale too
     "accepts_stale_seq": {
-        "request.seq_stale": "fail", "request.seq_future": "fail", "begin.seq_wrap": "fail",
+        "request.seq_stale": "fail", "request.seq_future": "fail", "request.seq_stale_next": "fail",
+        "request.seq_future_next": "fail", "cancel.seq_stale": "fail", "cancel.seq_future": "fail",
+        "begin.seq_wrap": "fail",
     },
+    # a server that checks the seq of a FINISHED only would pass every case but these
+    "accepts_stale_next": {"request.seq_stale_next": "fail", "request.seq_future_next": "fail"},
+    "accepts_stale_cancel": {"cancel.seq_stale": "fail", "cancel.seq_future": "fail"},
+    "accepts_cancel_after_the_run": {"finished.cancel_after": "fail"},
     "accepts_unknown_category": {"request.category_unknown": "fail"},
     "accepts_when_busy": {"next.busy": "fail"},
     # the CANCEL that ends a child after next.busy and cancel.wrong_id goes unanswered too (R19.1)
     "never_answers_cancel": {
-        "next.busy": "fail", "cancel.wrong_id": "fail", "cancel.running_child": "fail",
-        "cancel.both_answered": "fail",
+        "next.busy": "fail", "cancel.wrong_id": "fail", "cancel.seq_stale": "fail",
+        "cancel.seq_future": "fail", "cancel.running_child": "fail", "cancel.both_answered": "fail",
     },
     # every case that runs a child to its end waits for an answer that never comes (R19.1)
     "hangs_next": {
@@ -197,7 +208,10 @@ BROKEN = {
         "next.runs_a_child": "fail", "next.id_zero": "fail", "next.id_chosen": "fail",
         "next.stateless_id": "fail", "next.race": "fail",
     },
-    "ignores_finished": {"finished.ends_the_run": "fail", "finished.next_after": "missing"},
+    "ignores_finished": {
+        "finished.ends_the_run": "fail", "finished.next_after": "missing", "finished.cancel_after": "missing",
+        "finished.finished_after": "missing",
+    },
     "ignores_clamp": {"stubborn.clamp_notice": "fail (D11)"},
 }  # fmt: skip
 
@@ -228,6 +242,83 @@ def test_a_broken_server_is_caught_by_the_case_of_the_rule_it_breaks(tmp_path: P
             assert f"{case} ({', '.join(rules[case])}): fail" in done.stdout, done.stdout
 
 
+def test_a_volatile_status_is_caught_and_the_run_stops_early(tmp_path: Path) -> None:
+    """A server whose status and begin topics are volatile (R1.4 says transient-local) fails
+    status.latched; the probe says at once that no status came, and after three cases in a row wait
+    out the timeout it runs no more, saying why (it once took over 4 minutes, 10 s a case)."""
+    config = _config(tmp_path, rebegin=0.3)
+    serve = Child([str(Path(__file__).resolve().parent / "broken_serve.py"), "volatile_status",
+                   "--robot", "brokenVolatile", "--config", str(config)])  # fmt: skip
+    serve.wait_line("serving ")
+    try:
+        started = time.monotonic()
+        done = _probe("brokenVolatile", "--timeout", "2")
+        took = time.monotonic() - started
+    finally:
+        serve.stop()
+    assert done.returncode == 1, done.stdout + done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0].startswith("no status from tinyRobot/brokenVolatile within 2 s"), done.stdout
+    assert _verdicts(done.stdout)["status.latched"] == "fail", done.stdout
+    assert "stopped answering" in done.stdout
+    assert took < silent_bound(2.0), f"{took:.1f} s"
+
+
+def silent_bound(timeout: float) -> float:
+    """The bound docs/probe.md gives for a run against a server that answers nothing, in seconds, and
+    the probe's own start (rclpy, DDS discovery)."""
+    return timeout * 7 + 15
+
+
+def test_a_silent_server_ends_the_run_within_its_bound(tmp_path: Path) -> None:
+    """A server on the graph that publishes nothing and answers no goal: the run ends within
+    docs/probe.md's bound, every case failed or not run, none passed, and the exit status says so."""
+    silent = Child([str(Path(__file__).resolve().parent / "silent_server.py"), "silentRobot"])
+    silent.wait_line("serving silently")
+    try:
+        started = time.monotonic()
+        done = _probe("silentRobot", "--timeout", "2")
+        took = time.monotonic() - started
+    finally:
+        silent.stop()
+    assert done.returncode == 1, done.stdout + done.stderr
+    verdicts = _verdicts(done.stdout)
+    assert len(verdicts) == len(CASES) and "pass" not in verdicts.values(), done.stdout
+    assert sum(1 for verdict in verdicts.values() if verdict == "missing") >= len(CASES) - 6, done.stdout
+    assert done.stdout.splitlines()[0].startswith("no status from tinyRobot/silentRobot"), done.stdout
+    assert "stopped answering" in done.stdout
+    assert took < silent_bound(2.0), f"{took:.1f} s"
+    print(f"probe against a silent server, --timeout 2: {took:.1f} s")
+
+
+def test_missing_cases_fail_the_run_unless_allowed(tmp_path: Path) -> None:
+    """Without a place, the cases that send the robot somewhere are not run: the first line says so,
+    the run exits 3 (it once exited 0, a green CI for a server mostly not tested), and 0 when those
+    cases are allowed to be missing."""
+    serve = _serve(tmp_path, "probeNoPlace", "standard")
+    try:
+        command = [sys.executable, "-m", "dynevent", "probe", "--robot", "probeNoPlace", "--timeout", "5",
+                   "--cases", "request.*", "next.runs_a_child"]  # fmt: skip
+        plain = finish(subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                        env=child_env()), 120)  # fmt: skip
+        allowed = finish(subprocess.Popen([*command, "--allow-missing", "next.*", "request.seq_*_next"],
+                                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                          env=child_env()), 120)  # fmt: skip
+    finally:
+        serve.stop()
+    assert plain.returncode == 3, plain.stdout + plain.stderr
+    lines = plain.stdout.splitlines()
+    assert lines[0] == (
+        "no --place, and no run's description names one: the 3 case(s) that send the robot somewhere "
+        "will not run"
+    ), plain.stdout
+    assert lines[1].startswith("3 of 10 case(s) not run: no place to send the robot to"), plain.stdout
+    assert _verdicts(plain.stdout)["next.runs_a_child"] == "missing"
+    assert allowed.returncode == 0, allowed.stdout + allowed.stderr
+    assert "3 of 10 case(s) not run, 3 of them expected" in allowed.stdout
+    assert _verdicts(allowed.stdout)["next.runs_a_child"] == "missing (allowed)"
+
+
 def test_a_begin_command_that_cannot_run_makes_the_cases_missing_not_a_crash(tmp_path: Path) -> None:
     """No run is active (the robot's run ended and serve begins no other), so the probe runs the
     begin command; one that cannot run is said, per case, and nothing crashes."""
@@ -238,7 +329,7 @@ def test_a_begin_command_that_cannot_run_makes_the_cases_missing_not_a_crash(tmp
                       "--begin-command", "no-such-command-here")  # fmt: skip
     finally:
         serve.stop()
-    assert done.returncode == 0, done.stdout + done.stderr  # missing is not a failure
+    assert done.returncode == 3, done.stdout + done.stderr  # not run: not a failure, not a pass
     assert _verdicts(done.stdout) == {"request.seq_stale": "missing"}, done.stdout
     assert "--begin-command 'no-such-command-here' did not run" in done.stdout
     assert "Traceback" not in done.stderr

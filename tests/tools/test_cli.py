@@ -344,5 +344,6 @@ def dynevent_package_dir() -> str:
 def test_probe_lists_its_cases_without_ros() -> None:
     done = _without_ros("probe", "--list", "--cases", "R4.2")
     assert done.returncode == 0 and done.stderr == ""
-    assert done.stdout.splitlines()[-1] == "3 case(s)"  # the stale and future seq, and the wrap
+    # the stale and future seq with a FINISHED, a NEXT and a CANCEL, and the wrap
+    assert done.stdout.splitlines()[-1] == "7 case(s)"
     assert done.stdout.startswith("request.seq_stale")

@@ -6,6 +6,7 @@ import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import attrs
 import pytest
 
 from dynevent.tools import probe_cases
@@ -23,7 +24,7 @@ def test_every_case_cites_rules_of_the_spec_and_divergences_of_the_record() -> N
     for case in CASES:
         assert case.rules and set(case.rules) <= SPEC_RULES, case
         assert set(case.divergences) <= DIVERGENCES, case
-        assert case.needs in ("status", "run", "child"), case
+        assert case.needs in ("status", "run", "place", "child"), case
     assert KNOWN["rmf_ros2"] == {"D2", "D7", "D8", "D9", "D10", "D11"}
 
 
@@ -31,8 +32,20 @@ def test_every_case_cites_rules_of_the_spec_and_divergences_of_the_record() -> N
     ("patterns", "ids"),
     [
         ((), [case.id for case in CASES]),
-        (("cancel",), ["cancel.wrong_id", "cancel.running_child", "cancel.both_answered"]),
-        (("request.seq_*",), ["request.seq_stale", "request.seq_future"]),
+        (
+            ("cancel",),
+            [
+                "cancel.wrong_id",
+                "cancel.seq_stale",
+                "cancel.seq_future",
+                "cancel.running_child",
+                "cancel.both_answered",
+            ],
+        ),
+        (
+            ("request.seq_*",),
+            ["request.seq_stale", "request.seq_future", "request.seq_stale_next", "request.seq_future_next"],
+        ),
         (("R4.1*",), ["request.cancel_idle", "next.id_stale", "next.race", "cancel.wrong_id"]),
         (
             ("R9.3", "finished.next_after"),
@@ -48,12 +61,64 @@ def test_cases_are_chosen_by_id_section_or_rule(patterns: tuple[str, ...], ids: 
 CASE = Case("request.event_type_0", "a goal of event_type 0 is refused", ("R4.4",), divergences=("D7",))
 
 
+def test_a_case_not_run_is_never_a_pass() -> None:
+    """A run in which a case was not run exits 3, unless that case was expected to be missing
+    (--allow-missing, --known); a failure outranks it; the report says first how many were not run
+    and why, and a missing case says why it was not run instead of a blank expectation."""
+    place = "no place to send the robot to: give --place"
+    missing = [Finding(CASE, Verdict.MISSING, seen=place), Finding(CASE, Verdict.MISSING, seen=place)]
+    ran = Finding(CASE, Verdict.PASS, expected="rejected", seen="so")
+    assert probe_cases.exit_status([*missing, ran]) == probe_cases.EXIT_NOT_RUN == 3
+    allowed = [attrs.evolve(finding, expected_missing=True) for finding in missing]
+    assert probe_cases.exit_status([*allowed, ran]) == 0
+    failing = Finding(CASE, Verdict.FAIL, expected="rejected", seen="accepted")
+    assert probe_cases.exit_status([*missing, failing]) == 1
+    text = probe_cases.format_findings([*missing, ran])
+    assert text.splitlines()[0] == f"2 of 3 case(s) not run: {place} (2)"
+    assert f"  not run:  {place}" in text and "expected: \n" not in text and "  expected: " not in text
+    assert probe_cases.format_findings([*allowed, ran]).splitlines()[0] == (
+        f"2 of 3 case(s) not run, 2 of them expected: {place} (2)"
+    )
+    assert "missing (allowed)" in probe_cases.format_findings(allowed)
+    assert probe_cases.not_run_summary([ran]) is None
+    report = probe_cases.report([*missing, ran], "tinyRobot/r1")
+    assert f"2 of 3 case(s) not run: {place} (2)" in report.splitlines()[2]
+    assert "- seen: as expected" in report and "- seen: so" not in report
+    assert f"- not run: {place}" in report
+
+
+def test_known_missing_is_the_seq_wrap_for_rmf_ros2() -> None:
+    assert {"rmf_ros2": frozenset({"begin.seq_wrap"})} == probe_cases.KNOWN_MISSING
+    assert {case.id for case in CASES} >= probe_cases.KNOWN_MISSING["rmf_ros2"]
+
+
+@pytest.mark.parametrize(
+    ("description", "place"),
+    [
+        (
+            '{"estimate": {"category": "go_to_place", "description": {"one_of": [{"waypoint": "pantry"}]}}}',
+            "pantry",
+        ),
+        ('{"estimate": {"category": "go_to_place", "description": "lounge"}}', "lounge"),
+        ('{"estimate": {"category": "go_to_place", "description": {"place": "dock"}}}', "dock"),
+        ('{"estimate": {"category": "go_to_place", "description": 3}}', None),
+        ('{"estimate": {"category": "perform_action", "description": {"category": "x"}}}', None),
+        ('{"estimate": {"category": "go_to_place", "description": {"one_of": []}}}', None),
+        ("{}", None),
+        ("[1]", None),
+        ("not json", None),
+    ],
+)
+def test_a_run_s_place_is_its_go_to_place_estimate(description: str, place: str | None) -> None:
+    assert probe_cases.place_of_run(description) == place
+
+
 def test_a_known_divergence_is_shown_and_does_not_fail_the_run() -> None:
     failing = Finding(CASE, Verdict.FAIL, expected="rejected", seen="accepted", divergence="D7")
     assert probe_cases.exit_status([failing]) == 1
     known = Finding(CASE, Verdict.FAIL, expected="rejected", seen="accepted", divergence="D7", known=True)
     assert probe_cases.exit_status([known]) == 0
-    assert probe_cases.exit_status([Finding(CASE, Verdict.MISSING), Finding(CASE, Verdict.PASS)]) == 0
+    assert probe_cases.exit_status([Finding(CASE, Verdict.MISSING), Finding(CASE, Verdict.PASS)]) == 3
     text = probe_cases.format_findings([failing, known, Finding(CASE, Verdict.PASS)])
     assert "fail (D7)" in text and "known (D7)" in text
     assert text.rstrip().endswith("1 pass, 2 fail (1 of the failures known)")

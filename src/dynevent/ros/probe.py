@@ -36,6 +36,7 @@ from dynevent.errors import InvalidMessage, ProbeError
 from dynevent.ros import convert
 from dynevent.ros.client import introspect
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
+from dynevent.ros.graph import no_server_text
 from dynevent.ros.server import latched
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.server import machine
@@ -109,6 +110,10 @@ class Exchange:
         return self.answers[0] if self.answers else None
 
 
+# the records of what the probe itself sends
+_SENT = frozenset({"goal", "cancel_request"})
+
+
 class Link:
     """Raw access to one robot: its status and begin topics, and an action client without a client
     machine, so that the probe can send what a well-behaved client never would."""
@@ -120,6 +125,9 @@ class Link:
         self.statuses: list[DynamicEventStatus] = []
         self.begins: list[DynamicEventDescription] = []
         self._changed = threading.Condition()
+        #: how many messages the server has sent the probe (statuses, begins, responses, feedback, answers)
+        self.heard = 0
+        self._heard_lock = threading.Lock()
         # a deep reader history: the writer keeps the last message for late subscribers (R1.4), and
         # the probe, subscribed all along, must miss none of those that follow (an INACTIVE status
         # followed at once by the next run's)
@@ -157,6 +165,9 @@ class Link:
             self._trace.comment(text)
 
     def _record(self, kind: str, **fields: Any) -> None:
+        if kind not in _SENT:
+            with self._heard_lock:
+                self.heard += 1
         if self._trace is not None:
             self._trace.observe(kind, **fields)
 
@@ -306,6 +317,27 @@ class Options:
     trace: str | None = None
     stubborn_minimum: float = 2.0
     introspection: bool = False
+    #: how long to wait for the robot's server to appear (DDS discovery can take seconds: apart from
+    #: the timeout of each wait of a case)
+    server_wait: float = 10.0
+    #: the cases that may be missing without failing the run: ids, globs, sections or rules
+    allow_missing: tuple[str, ...] = ()
+    #: the cases ``--known`` expects to be missing (:data:`~dynevent.tools.probe_cases.KNOWN_MISSING`)
+    known_missing: frozenset[str] = frozenset()
+
+
+#: How many cases in a row may wait out the timeout, the server sending nothing meanwhile, before the
+#: probe takes it as silent and reports the rest as not run (the vector runner stops after three
+#: timeouts in a row too).
+SILENT_AFTER = 3
+
+#: Why the cases after :data:`SILENT_AFTER` timeouts in a row are not run.
+STOPPED_ANSWERING = (
+    f"the server stopped answering ({SILENT_AFTER} cases in a row waited out --timeout and heard nothing)"
+)
+
+#: Why a case that sends the robot somewhere is not run.
+NO_PLACE = "no place to send the robot to: give --place (or begin runs whose estimate names one)"
 
 
 def _waits_or_ended(status: DynamicEventStatus) -> bool:
@@ -315,6 +347,10 @@ def _waits_or_ended(status: DynamicEventStatus) -> bool:
 
 class _Unreachable(Exception):
     """A case cannot be carried out: its finding is ``missing``."""
+
+
+class _TimedOut(_Unreachable):
+    """A case cannot be carried out because the server did not show what it waited for in time."""
 
 
 def _describe_goal(goal: Goal) -> str:
@@ -346,6 +382,7 @@ class Probe:
         self.options = options
         self.messages: list[str] = []
         self.exchanges: list[Exchange] = []
+        self.timeouts_in_a_row = 0  # cases that waited out the timeout, one after the other
 
     # ---------------------------------------------------------------- carrying out
 
@@ -354,18 +391,47 @@ class Probe:
         self.exchanges = []
         self.link.mark(f"case {case.id}")
         started = time.monotonic()
+        heard = self.link.heard
+        timed_out = False
         try:
+            if case.needs in ("child", "place") and self.options.place is None:
+                raise _Unreachable(NO_PLACE)
             finding = _CASES[case.id](self, case)
         except _Unreachable as exc:
             finding = Finding(case, Verdict.MISSING, seen=str(exc))
+            timed_out = isinstance(exc, _TimedOut)
         finding = self._answered_once(finding)
-        finding = attrs.evolve(
+        # silent: the case waited out the timeout and the server sent nothing at all meanwhile
+        silent = (timed_out or finding.absent) and self.link.heard == heard
+        self.timeouts_in_a_row = self.timeouts_in_a_row + 1 if silent else 0
+        return self._settled(finding, started)
+
+    def _settled(self, finding: Finding, started: float) -> Finding:
+        """The finding with the case's messages and time, and whether --known or --allow-missing
+        expected its failure or its absence."""
+        case = finding.case
+        missing = finding.verdict is Verdict.MISSING
+        return attrs.evolve(
             finding,
             messages=tuple(self.messages),
             seconds=time.monotonic() - started,
             known=finding.verdict is Verdict.FAIL and finding.divergence in self.options.known,
+            expected_missing=missing
+            and (
+                case.id in self.options.known_missing or probe_cases.matches(case, self.options.allow_missing)
+            ),
         )
-        return finding
+
+    @property
+    def silent(self) -> bool:
+        """Has the server stopped answering: :data:`SILENT_AFTER` cases in a row waited out the timeout
+        with no message from it?"""
+        return self.timeouts_in_a_row >= SILENT_AFTER
+
+    def not_run(self, case: Case, why: str) -> Finding:
+        """The finding of a case the probe did not carry out."""
+        self.messages = []
+        return self._settled(Finding(case, Verdict.MISSING, seen=why), time.monotonic())
 
     def note(self, text: str) -> None:
         self.messages.append(text)
@@ -399,7 +465,7 @@ class Probe:
             self._run_begin_command()
         status = status or self.link.wait_status(machine.robot_waits, timeout)
         if status is None:
-            raise _Unreachable(f"no active run (a WAITING status) within {timeout:g} s")
+            raise _TimedOut(f"no active run (a WAITING status) within {timeout:g} s")
         return status
 
     def _run_begin_command(self) -> None:
@@ -421,7 +487,7 @@ class Probe:
     def any_status(self) -> DynamicEventStatus:
         status = self.link.wait_status(lambda s: True, self.options.timeout)
         if status is None:
-            raise _Unreachable(f"no status within {self.options.timeout:g} s")
+            raise _TimedOut(f"no status within {self.options.timeout:g} s")
         return status
 
     def send(self, goal: Goal, *, answer: bool = True) -> Exchange:
@@ -448,7 +514,7 @@ class Probe:
 
     def next_goal(self, status: DynamicEventStatus, goal_id: int | None = None) -> Goal:
         if self.options.place is None:
-            raise _Unreachable("no place to send the robot to: give --place")
+            raise _Unreachable(NO_PLACE)
         return Goal(
             dynamic_event_seq=status.dynamic_event_seq,
             event_type=EventType.NEXT,
@@ -484,7 +550,7 @@ class Probe:
             lambda s: s.dynamic_state == DynamicState.RUNNING and s.id == goal.id, self.options.timeout
         )
         if running is None:
-            raise _Unreachable(f"the child {goal.id} never showed RUNNING within {self.options.timeout:g} s")
+            raise _TimedOut(f"the child {goal.id} never showed RUNNING within {self.options.timeout:g} s")
         try:
             yield exchange, goal.id
         finally:
@@ -502,10 +568,14 @@ class Probe:
 
 
 def _status_latched(probe: Probe, case: Case) -> Finding:
-    probe.any_status()
+    expected = "a late subscriber receives the status"
+    if probe.link.wait_status(lambda status: True, probe.options.timeout) is None:
+        # a server with no transient-local status (a volatile one never matches this subscriber)
+        seen = f"no status within {probe.options.timeout:g} s"
+        return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=True)
     if probe.link.late_subscriber_hears(probe.options.timeout):
         return Finding(case, Verdict.PASS, expected="a status", seen="a status")
-    return Finding(case, Verdict.FAIL, expected="a late subscriber receives the status", seen="nothing")
+    return Finding(case, Verdict.FAIL, expected=expected, seen="nothing")
 
 
 def _status_waiting(probe: Probe, case: Case) -> Finding:
@@ -615,7 +685,7 @@ def _status_after_child(probe: Probe, case: Case) -> Finding:
     goal = probe.next_goal(status)
     exchange = probe.send(goal)
     if not exchange.answers:
-        raise _Unreachable(f"the child did not end within {probe.options.timeout:g} s")
+        raise _TimedOut(f"the child did not end within {probe.options.timeout:g} s")
     after = probe.link.wait_status(lambda s: s.id == goal.id and s.status != _UNDERWAY, probe.options.timeout)
     if after is None:
         return Finding(
@@ -684,16 +754,58 @@ def _finished(probe: Probe, case: Case) -> Finding:
     return Finding(case, Verdict.PASS, expected=expected, seen="so")
 
 
-def _next_after(probe: Probe, case: Case) -> Finding:
+def _ended(probe: Probe) -> DynamicEventStatus:
+    """The status of a run that has ended: the latest, or the last INACTIVE one seen."""
     status = probe.any_status()
     if status.dynamic_state != DynamicState.INACTIVE:
         ended = [s for s in probe.link.statuses if s.dynamic_state == DynamicState.INACTIVE]
         if not ended:
             raise _Unreachable("no run has ended (no INACTIVE status seen)")
         status = ended[-1]
-    goal = Goal(dynamic_event_seq=status.dynamic_event_seq, event_type=EventType.NEXT,
-                category=probe.options.category, description="{}", id=status.id + 1)  # fmt: skip
+    return status
+
+
+def _next_after(probe: Probe, case: Case) -> Finding:
+    # a NEXT the server would run but for R4.3: a server that refuses it only for its description
+    # would pass a NEXT without a place
+    return probe.refused(case, probe.next_goal(_ended(probe)))
+
+
+def _cancel_after(probe: Probe, case: Case) -> Finding:
+    status = _ended(probe)
+    return probe.refused(case, _goal(status, EventType.CANCEL, id=status.id))
+
+
+def _finished_after(probe: Probe, case: Case) -> Finding:
+    return probe.refused(case, _goal(_ended(probe), EventType.FINISHED))
+
+
+def _seq_stale_next(probe: Probe, case: Case) -> Finding:
+    status = probe.waiting()
+    goal = attrs.evolve(probe.next_goal(status), dynamic_event_seq=(status.dynamic_event_seq - 1) % _U32)
     return probe.refused(case, goal)
+
+
+def _seq_future_next(probe: Probe, case: Case) -> Finding:
+    status = probe.waiting()
+    goal = attrs.evolve(probe.next_goal(status), dynamic_event_seq=machine.next_seq(status.dynamic_event_seq))
+    return probe.refused(case, goal)
+
+
+def _cancel_seq(probe: Probe, case: Case, seq_of: Callable[[int], int]) -> Finding:
+    """A CANCEL naming the running child, but for another run than the child's."""
+    with probe.child() as (_, child_id):
+        status = probe.link.status or probe.any_status()
+        seq = seq_of(status.dynamic_event_seq)
+        return probe.refused(case, _goal(status, EventType.CANCEL, id=child_id, dynamic_event_seq=seq))
+
+
+def _cancel_seq_stale(probe: Probe, case: Case) -> Finding:
+    return _cancel_seq(probe, case, lambda seq: (seq - 1) % _U32)
+
+
+def _cancel_seq_future(probe: Probe, case: Case) -> Finding:
+    return _cancel_seq(probe, case, machine.next_seq)
 
 
 def _ran(exchange: Exchange, child_id: int) -> str | None:
@@ -745,12 +857,12 @@ def _stateless_id(probe: Probe, case: Case) -> Finding:
     status = probe.waiting()
     first = probe.next_goal(status)
     if not probe.send(first).answers:
-        raise _Unreachable(f"the first child did not end within {probe.options.timeout:g} s")
+        raise _TimedOut(f"the first child did not end within {probe.options.timeout:g} s")
     after = probe.link.wait_status(
         lambda s: s.id == first.id and machine.robot_waits(s), probe.options.timeout
     )
     if after is None:
-        raise _Unreachable(f"no status after child {first.id} ended within {probe.options.timeout:g} s")
+        raise _TimedOut(f"no status after child {first.id} ended within {probe.options.timeout:g} s")
     phase = DynamicState(after.dynamic_state).name
     probe.note(
         f"status {phase} seq={after.dynamic_event_seq} id={after.id} {after.status}: the client's only state"
@@ -796,7 +908,7 @@ def _log_seq(probe: Probe, case: Case) -> Finding:
     for _ in range(2):
         exchange = probe.send(probe.next_goal(probe.waiting()))
         if not exchange.answers:
-            raise _Unreachable(f"a child did not end within {probe.options.timeout:g} s")
+            raise _TimedOut(f"a child did not end within {probe.options.timeout:g} s")
         children.append([entry for feedback in exchange.feedback for entry in feedback.logs])
     entries = [entry for logs in children for entry in logs]
     probe.note(f"log seqs of the two children: {[[entry.seq for entry in logs] for logs in children]}")
@@ -894,7 +1006,7 @@ def _action_cancel_running(probe: Probe, case: Case) -> Finding:
 def _action_cancel_answered(probe: Probe, case: Case) -> Finding:
     exchange = probe.send(probe.next_goal(probe.waiting()))
     if not exchange.answers:
-        raise _Unreachable(f"the child did not end within {probe.options.timeout:g} s")
+        raise _TimedOut(f"the child did not end within {probe.options.timeout:g} s")
     accepted = probe.cancel(exchange)
     if accepted is None:
         return Finding(
@@ -945,7 +1057,7 @@ def _seq_wrap(probe: Probe, case: Case) -> Finding:
     last = len(seqs) - 1 - seqs[::-1].index(_LAST_SEQ)
     after = [seq for seq in seqs[last:] if seq != _LAST_SEQ]
     if not after:
-        raise _Unreachable(f"no run began after run {_LAST_SEQ} within {probe.options.timeout:g} s")
+        raise _TimedOut(f"no run began after run {_LAST_SEQ} within {probe.options.timeout:g} s")
     probe.link.wait_begin(after[0], probe.options.timeout)
     begins = sorted({begin.dynamic_event_seq for begin in probe.link.begins})
     probe.note(f"the run after {_LAST_SEQ}: {after[0]}; begins seen for runs {begins}")
@@ -964,6 +1076,8 @@ _CASES: dict[str, Callable[[Probe, Case], Finding]] = {
     "describe.query": _describe_query,
     "request.seq_stale": _seq_stale,
     "request.seq_future": _seq_future,
+    "request.seq_stale_next": _seq_stale_next,
+    "request.seq_future_next": _seq_future_next,
     "request.event_type_0": _event_type_0,
     "request.event_type_unknown": _event_type_unknown,
     "request.category_unknown": _category_unknown,
@@ -980,12 +1094,16 @@ _CASES: dict[str, Callable[[Probe, Case], Finding]] = {
     "feedback.log_seq": _log_seq,
     "stubborn.clamp_notice": _clamp_notice,
     "cancel.wrong_id": _cancel_wrong_id,
+    "cancel.seq_stale": _cancel_seq_stale,
+    "cancel.seq_future": _cancel_seq_future,
     "cancel.running_child": _cancel_running_child,
     "cancel.both_answered": _cancel_both_answered,
     "action.cancel_running": _action_cancel_running,
     "action.cancel_answered": _action_cancel_answered,
     "finished.ends_the_run": _finished,
     "finished.next_after": _next_after,
+    "finished.cancel_after": _cancel_after,
+    "finished.finished_after": _finished_after,
     "begin.seq_wrap": _seq_wrap,
 }
 
@@ -1001,6 +1119,8 @@ def main(args: Any, cases: list[Case], say: Callable[[str], None]) -> int:
         fleet=args.fleet, robot=args.robot, place=args.place, category=args.category, timeout=args.timeout,
         begin_command=args.begin_command, known=probe_cases.KNOWN.get(args.known or "", frozenset()),
         trace=args.trace, stubborn_minimum=args.stubborn_minimum, introspection=args.introspection,
+        allow_missing=tuple(args.allow_missing), server_wait=args.server_wait,
+        known_missing=probe_cases.KNOWN_MISSING.get(args.known or "", frozenset()),
     )  # fmt: skip
     live = sys.stdout.isatty()
 
@@ -1013,7 +1133,7 @@ def main(args: Any, cases: list[Case], say: Callable[[str], None]) -> int:
     if live:
         sys.stdout.write("\r\033[K")
     if findings is None:
-        return 2
+        return probe_cases.EXIT_USAGE
     say(probe_cases.format_findings(findings).rstrip("\n"))
     server = f"{options.fleet}/{options.robot}"
     outputs: dict[str, Callable[[], str]] = {
@@ -1050,12 +1170,15 @@ def run(
     spinner = Spinner(executor, "dynevent-probe")
     spinner.start()
     try:
-        if not link.wait_for_server(options.timeout):
-            say(f"no Dynamic Event server for {options.fleet}/{options.robot} within {options.timeout:g} s")
+        if not link.wait_for_server(options.server_wait):
+            say(no_server_text(node, options.fleet, options.robot, options.server_wait))
             return None
-        probe = Probe(link, options)
+        probe = Probe(link, _ready(link, options, cases, say))
         findings = []
         for case in cases:
+            if probe.silent:
+                findings.append(probe.not_run(case, STOPPED_ANSWERING))
+                continue
             if progress is not None:
                 progress(f"{case.id} ...")
             findings.append(probe.run(case))
@@ -1067,6 +1190,32 @@ def run(
             close_down([node])
         if trace is not None:
             trace.close()
+
+
+def _ready(link: Link, options: Options, cases: list[Case], say: Callable[[str], None]) -> Options:
+    """Say, before any case runs, what the run will lack: a status (R1.4: a late subscriber gets one at
+    once), or a place for the cases that send the robot somewhere (taken, without ``--place``, from
+    the go_to_place estimate of the run's description when it names one)."""
+    if link.wait_status(lambda status: True, options.timeout) is None:
+        say(
+            f"no status from {options.fleet}/{options.robot} within {options.timeout:g} s: its status topic "
+            "should hold the latest status for a late subscriber (transient-local, R1.4)"
+        )
+    if options.place is not None:
+        return options
+    placed = [case for case in cases if case.needs in ("child", "place")]
+    for begin in reversed(link.begins):
+        named = probe_cases.place_of_run(begin.description)
+        if named is not None:
+            say(
+                f"place: {named} (the go_to_place estimate of run {begin.dynamic_event_seq}; "
+                "--place chooses another)"
+            )
+            return attrs.evolve(options, place=named)
+    if placed:
+        say(f"no --place, and no run's description names one: the {len(placed)} case(s) that send the robot "
+            "somewhere will not run")  # fmt: skip
+    return options
 
 
 def _open_trace(options: Options) -> TraceWriter | None:

@@ -22,14 +22,23 @@ from __future__ import annotations
 import enum
 import fnmatch
 import html
+import json
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Sequence
 
 import attrs
 
+from dynevent.descriptions.reading import GoToPlace, read
+from dynevent.errors import DyneventError
+
 __all__ = [
     "CASES",
+    "EXIT_FAILED",
+    "EXIT_NOT_RUN",
+    "EXIT_OK",
+    "EXIT_USAGE",
     "KNOWN",
+    "KNOWN_MISSING",
     "Case",
     "Finding",
     "Verdict",
@@ -37,6 +46,9 @@ __all__ = [
     "format_findings",
     "format_list",
     "junit_xml",
+    "matches",
+    "not_run_summary",
+    "place_of_run",
     "probe_summary",
     "report",
     "select",
@@ -56,7 +68,8 @@ class Verdict(enum.Enum):
 @attrs.frozen
 class Case:
     """One probe case: ``needs`` is ``"status"`` (a status on the graph), ``"run"`` (an active
-    dynamic event, WAITING) or ``"child"`` (an active run and a place to send the robot to).
+    dynamic event, WAITING), ``"place"`` (a place to send the robot to, for a NEXT the server must
+    refuse for another reason only) or ``"child"`` (an active run and a place).
     ``traced`` says whether ``dynevent check``, reading the probe's ``--trace``, can see the case's
     failure too (not when a passive observer cannot tell the failure from a moment the spec allows)."""
 
@@ -88,6 +101,7 @@ class Finding:
     known: bool = False
     seconds: float = 0.0
     absent: bool = False  # the failure is a message that did not come within the timeout
+    expected_missing: bool = False  # missing, as --allow-missing or --known said it may be
 
 
 #: Every case, in the order they run (the ones that end a run come last).
@@ -97,8 +111,11 @@ CASES: tuple[Case, ...] = (
     Case("status.waiting", "an active run's status is WAITING with the run's seq", ("R2.1", "R2.2", "R3.1")),
     Case("describe.query", "the description query answers with the run's description, status and id",
          ("R16.2",)),
-    Case("request.seq_stale", "a goal for an earlier run is refused", ("R4.2",)),
-    Case("request.seq_future", "a goal for a run that has not begun is refused", ("R4.2",)),
+    Case("request.seq_stale", "a FINISHED for an earlier run is refused", ("R4.2",)),
+    Case("request.seq_future", "a FINISHED for a run that has not begun is refused", ("R4.2",)),
+    Case("request.seq_stale_next", "a NEXT for an earlier run is refused", ("R4.2",), needs="child"),
+    Case("request.seq_future_next", "a NEXT for a run that has not begun is refused", ("R4.2",),
+         needs="child"),
     Case("request.event_type_0", "a goal of event_type 0 is refused", ("R4.4",), divergences=("D7",)),
     Case("request.event_type_unknown", "a goal of event_type 4 is refused", ("R4.5",), divergences=("D7",)),
     # which categories a server supports is its configuration, which a trace tapped at a client lacks
@@ -127,6 +144,10 @@ CASES: tuple[Case, ...] = (
          "start feedback", ("R12.2",), needs="child", divergences=("D11",)),
     Case("cancel.wrong_id", "a CANCEL naming another event is refused", ("R4.14",), needs="child",
          divergences=("D8",)),
+    Case("cancel.seq_stale", "a CANCEL of the running child for an earlier run is refused", ("R4.2",),
+         needs="child"),
+    Case("cancel.seq_future", "a CANCEL of the running child for a run that has not begun is refused",
+         ("R4.2",), needs="child"),
     Case("cancel.running_child", "a CANCEL of the running child ends it: both goals answered once",
          ("R9.3", "R8.2", "R8.3", "R19.1"), needs="child"),
     Case("cancel.both_answered", "two CANCELs of the running child wait for its end and are both "
@@ -137,7 +158,9 @@ CASES: tuple[Case, ...] = (
          needs="child"),
     Case("finished.ends_the_run", "FINISHED ends the run: succeeded, completed, then INACTIVE",
          ("R11.1", "R11.2", "R2.2")),
-    Case("finished.next_after", "a NEXT after the run ended is refused", ("R4.3",), needs="status"),
+    Case("finished.next_after", "a NEXT after the run ended is refused", ("R4.3",), needs="place"),
+    Case("finished.cancel_after", "a CANCEL after the run ended is refused", ("R4.3",), needs="status"),
+    Case("finished.finished_after", "a FINISHED after the run ended is refused", ("R4.3",), needs="status"),
     Case("begin.seq_wrap", "after run 4294967295 the next run is run 0, and a goal for 4294967295 is "
          "refused", ("R3.2", "R3.1", "R4.2")),
 )  # fmt: skip
@@ -146,6 +169,29 @@ CASES: tuple[Case, ...] = (
 #: The divergences a ``--known`` name covers: every one docs/divergences.md records is rmf_ros2's.
 KNOWN: dict[str, frozenset[str]] = {"rmf_ros2": frozenset(d for case in CASES for d in case.divergences)}
 
+#: The cases a ``--known`` name expects to be missing, each with why: a fleet adapter reaches the seq
+#: wrap only after four billion dynamic events.
+KNOWN_MISSING: dict[str, frozenset[str]] = {"rmf_ros2": frozenset({"begin.seq_wrap"})}
+
+#: The exit statuses of ``dynevent probe`` (docs/probe.md has the table).
+EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_NOT_RUN = 0, 1, 2, 3
+
+
+def place_of_run(description: str) -> str | None:
+    """The place a run's description names for the robot, for the cases that send it somewhere: the
+    first waypoint (by name) of a ``go_to_place`` estimate, as a task's dynamic event carries it
+    (``{"estimate": {"category": "go_to_place", "description": ...}}``); None when it names none."""
+    try:
+        estimate = json.loads(description).get("estimate")
+        if not isinstance(estimate, dict) or estimate.get("category") != "go_to_place":
+            return None
+        reading = read("go_to_place", estimate.get("description"))
+    except (ValueError, AttributeError, DyneventError):
+        return None
+    assert isinstance(reading, GoToPlace)  # what read gives for go_to_place
+    names = [place.waypoint for place in reading.one_of if isinstance(place.waypoint, str)]
+    return names[0] if names else None
+
 
 def select(patterns: Iterable[str] = ()) -> list[Case]:
     """The cases any pattern names (all when none): a case id or glob (``request.*``), a section
@@ -153,12 +199,7 @@ def select(patterns: Iterable[str] = ()) -> list[Case]:
     wanted = list(patterns)
     if not wanted:
         return list(CASES)
-    chosen = []
-    for case in CASES:
-        names = (case.id, case.section, *case.rules)
-        if any(fnmatch.fnmatchcase(name, pattern) for pattern in wanted for name in names):
-            chosen.append(case)
-    return chosen
+    return [case for case in CASES if matches(case, wanted)]
 
 
 def format_list(cases: Sequence[Case]) -> str:
@@ -169,6 +210,8 @@ def format_list(cases: Sequence[Case]) -> str:
 
 
 def _label(finding: Finding) -> str:
+    if finding.verdict is Verdict.MISSING and finding.expected_missing:
+        return "missing (allowed)"
     if finding.verdict is Verdict.FAIL and finding.known:
         return f"known ({finding.divergence})"
     if finding.verdict is Verdict.FAIL and finding.divergence:
@@ -179,13 +222,20 @@ def _label(finding: Finding) -> str:
 def format_findings(findings: Sequence[Finding]) -> str:
     """A line per case, the account of every failure, and the counts."""
     width = max((len(finding.case.id) for finding in findings), default=0)
-    lines = [f"{finding.case.id:{width}}  {_label(finding):14}  {finding.case.title}" for finding in findings]
+    opening = not_run_summary(findings)
+    lines = [opening, ""] if opening else []
+    lines += [
+        f"{finding.case.id:{width}}  {_label(finding):14}  {finding.case.title}" for finding in findings
+    ]
     for finding in findings:
         if finding.verdict in (Verdict.FAIL, Verdict.MISSING, Verdict.NON_STRICT):
             lines.append("")
             lines.append(f"{finding.case.id} ({', '.join(finding.case.rules)}): {_label(finding)}")
-            lines.append(f"  expected: {finding.expected}")
-            lines.append(f"  seen:     {finding.seen}")
+            if finding.verdict is Verdict.MISSING:
+                lines.append(f"  not run:  {finding.seen}")
+            else:
+                lines.append(f"  expected: {finding.expected}")
+                lines.append(f"  seen:     {finding.seen}")
             lines.extend(f"  | {message}" for message in finding.messages)
     lines.append("")
     lines.append(probe_summary(findings))
@@ -193,8 +243,37 @@ def format_findings(findings: Sequence[Finding]) -> str:
 
 
 def exit_status(findings: Sequence[Finding]) -> int:
-    """0 when nothing failed (a known divergence does not count), else 1."""
-    return 1 if any(finding.verdict is Verdict.FAIL and not finding.known for finding in findings) else 0
+    """1 when a case failed (a known divergence does not count); else 3 when a case was not run
+    (missing) that no ``--allow-missing`` or ``--known`` expected; else 0.  A conformance run never
+    passes what it did not test."""
+    if any(finding.verdict is Verdict.FAIL and not finding.known for finding in findings):
+        return EXIT_FAILED
+    if any(finding.verdict is Verdict.MISSING and not finding.expected_missing for finding in findings):
+        return EXIT_NOT_RUN
+    return EXIT_OK
+
+
+def matches(case: Case, patterns: Iterable[str]) -> bool:
+    """Does any pattern name ``case``: its id or a glob of it, its section, or one of its rules?"""
+    names = (case.id, case.section, *case.rules)
+    return any(fnmatch.fnmatchcase(name, pattern) for pattern in patterns for name in names)
+
+
+def not_run_summary(findings: Sequence[Finding]) -> str | None:
+    """The line that opens a report when cases were not run: how many, and why, most frequent first;
+    None when every case ran."""
+    missing = [finding for finding in findings if finding.verdict is Verdict.MISSING]
+    if not missing:
+        return None
+    reasons: dict[str, int] = {}
+    for finding in missing:
+        reasons[finding.seen] = reasons.get(finding.seen, 0) + 1
+    why = "; ".join(
+        f"{reason} ({count})" for reason, count in sorted(reasons.items(), key=lambda item: -item[1])
+    )
+    expected = sum(1 for finding in missing if finding.expected_missing)
+    allowed = f", {expected} of them expected" if expected else ""
+    return f"{len(missing)} of {len(findings)} case(s) not run{allowed}: {why}"
 
 
 def junit_xml(findings: Sequence[Finding], server: str = "") -> str:
@@ -250,9 +329,11 @@ def report(findings: Sequence[Finding], server: str, *, html_form: bool = False)
     ]
     if html_form:
         return _report_html(title, rows, findings)
+    opening = not_run_summary(findings)
     lines = [
         f"# {title}",
         "",
+        *([opening, ""] if opening else []),
         probe_summary(findings),
         "",
         "| case | verdict | rules | checks |",
@@ -272,7 +353,11 @@ def _facts(finding: Finding) -> list[tuple[str, str]]:
     facts = [("rules", f"{', '.join(finding.case.rules)} (docs/spec.md)")]
     if finding.divergence:
         facts.append(("divergence", f"{finding.divergence} (docs/divergences.md)"))
-    facts += [("expected", finding.expected or "-"), ("seen", finding.seen or "-")]
+    if finding.verdict is Verdict.MISSING:
+        facts.append(("not run", finding.seen or "-"))
+    else:
+        seen = "as expected" if finding.verdict is Verdict.PASS else finding.seen or "-"
+        facts += [("expected", finding.expected or "-"), ("seen", seen)]
     return [*facts, ("time", f"{finding.seconds:.3f} s")]
 
 
@@ -294,6 +379,7 @@ def _report_html(title: str, rows: list[tuple[str, str, str, str]], findings: Se
         f'<html lang="en"><head><meta charset="utf-8"><title>{escape(title)}</title>'
         f"<style>{_STYLE}</style></head><body>",
         f"<h1>{escape(title)}</h1>",
+        *([f"<p><strong>{escape(opening)}</strong></p>"] if (opening := not_run_summary(findings)) else []),
         f"<p>{escape(probe_summary(findings))}</p>",
         "<table><tr><th>case</th><th>verdict</th><th>rules</th><th>checks</th></tr>",
     ]
