@@ -763,3 +763,26 @@ def test_feedback_received_after_its_goals_answer_is_read_as_sent_before_it(tmp_
     later = _clean(lambda run: (setattr(run, "now", run.now + 2 * SECOND), run.feedback(1, "underway", 1)))
     findings = _robot(check_bag(later.write(tmp_path / "later", StoragePlugin.MCAP))).report.findings
     assert [(finding.rule, finding.code) for finding in findings][:1] == [("R19.1", "after_answer")], findings
+
+
+def test_a_robot_without_goals_in_an_introspected_recording_is_said_to_have_had_none(tmp_path: Path) -> None:
+    """Introspection was on (another robot's goals are in the bag): a robot whose goals the bag does not
+    hold had none, and the line says so instead of calling the recording short of introspection."""
+    run = _clean()
+    other = f"/rmf/dynamic_event/status/{FLEET}/idle"
+    message = _type("rmf_task_msgs/msg/DynamicEventStatus")(
+        dynamic_event_seq=0, dynamic_state=0, status="uninitialized", id=0, time=_time(run.now)
+    )
+    bag = run.at(other, "rmf_task_msgs/msg/DynamicEventStatus", message).write(
+        tmp_path / "two", StoragePlugin.MCAP
+    )
+    done = _check(str(bag))
+    assert done.returncode == 0, done.stdout + done.stderr
+    lines = [line for line in done.stdout.splitlines() if f"{FLEET}/idle" in line]
+    assert lines == [
+        f"{bag}: {FLEET}/idle: this robot had no goals in the recording (the action's introspection was on): "
+        "judged from its topics alone",
+        f"{bag}: {FLEET}/idle: 1 records, no violations",
+    ], done.stdout
+    alone = _topics(_partial_clean()).write(tmp_path / "topics", StoragePlugin.MCAP)
+    assert "partial view, judged from its topics alone" in _check(str(alone)).stdout

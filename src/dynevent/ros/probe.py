@@ -33,7 +33,7 @@ from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 
 from dynevent.errors import InvalidMessage, ProbeError
-from dynevent.ros import convert
+from dynevent.ros import convert, spinning
 from dynevent.ros.client import introspect
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.graph import no_server_text
@@ -320,6 +320,8 @@ class Options:
     #: how long to wait for the robot's server to appear (DDS discovery can take seconds: apart from
     #: the timeout of each wait of a case)
     server_wait: float = 10.0
+    #: the command line's ROS arguments (``--ros-args ...``), given to rclpy
+    ros_args: tuple[str, ...] = ()
     #: the cases that may be missing without failing the run: ids, globs, sections or rules
     allow_missing: tuple[str, ...] = ()
     #: the cases ``--known`` expects to be missing (:data:`~dynevent.tools.probe_cases.KNOWN_MISSING`)
@@ -1120,6 +1122,7 @@ def main(args: Any, cases: list[Case], say: Callable[[str], None]) -> int:
         begin_command=args.begin_command, known=probe_cases.KNOWN.get(args.known or "", frozenset()),
         trace=args.trace, stubborn_minimum=args.stubborn_minimum, introspection=args.introspection,
         allow_missing=tuple(args.allow_missing), server_wait=args.server_wait,
+        ros_args=tuple(getattr(args, "ros_args", ())),
         known_missing=probe_cases.KNOWN_MISSING.get(args.known or "", frozenset()),
     )  # fmt: skip
     live = sys.stdout.isatty()
@@ -1160,7 +1163,7 @@ def run(
 ) -> list[Finding] | None:
     """Carry out ``cases`` against the robot; the findings, or None when no server was found."""
     trace = _open_trace(options)
-    rclpy.init()
+    spinning.init(options.ros_args)
     node = rclpy.create_node("dynevent_probe")
     link = Link(node, options.fleet, options.robot, trace)
     if options.introspection:

@@ -34,6 +34,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from dynevent.errors import InvalidName, RecordError
+from dynevent.ros import spinning
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.tools.check import bags
@@ -182,7 +183,7 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
         writer.open()
     except (OSError, WriterError) as exc:
         raise RecordError(f"--output {output}: cannot write: {exc}") from None
-    rclpy.init()
+    spinning.init(getattr(args, "ros_args", ()))
     node = rclpy.create_node("dynevent_record")
     live = sys.stdout.isatty()
 

@@ -13,8 +13,10 @@ when no server or status was found within the timeout.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
@@ -24,7 +26,9 @@ from dynevent import descriptions
 from dynevent.errors import (
     SendError,  # defined there with every error; importable here too
 )
-from dynevent.ros.client import DynamicEventClient, GoalWaitTimeout
+from dynevent.ros import spinning
+from dynevent.ros.client import DynamicEventClient, GoalRun, GoalWaitTimeout
+from dynevent.ros.graph import no_server_text
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.server import outputs as outs
 from dynevent.tools import explain
@@ -58,7 +62,7 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
         return max(timeout - (time.monotonic() - started), 0.0)
 
     trace = _open_trace(args)
-    rclpy.init()
+    spinning.init(getattr(args, "ros_args", ()))
     node = rclpy.create_node("dynevent_send")
     # a description of the field's categories is checked here as every server checks its shape
     # (R4.18): one the robot would refuse is refused here, with the server's errors, and never sent
@@ -72,8 +76,7 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
     spinner = Spinner(executor, "dynevent-send")
     spinner.start()
     try:
-        if not client.wait_for_server(left()):
-            say(f"no Dynamic Event server for {args.fleet}/{args.robot} within {timeout:g} s")
+        if not _found(client, node, args, left, say):
             return 2
         if not client.wait_for_status(left()):
             say(f"no status from {args.fleet}/{args.robot} within {timeout:g} s")
@@ -94,10 +97,13 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
         else:
             goal_run = client.finish()
         try:
-            result = goal_run.wait(left())
+            with _interruptible():
+                result = goal_run.wait(left())
         except GoalWaitTimeout:
             say(f"no answer within {timeout:g} s")
             return 1
+        except _Interrupted as stop:
+            return _stop_goal(client, goal_run, event_type, stop.signal, say)
         if isinstance(result, cl.Refused):
             rejection = result.rejection
             say(f"not sent: the robot would refuse it: {rejection.reason.value}: {rejection.text}")
@@ -113,6 +119,102 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
             close_down([node])
         if trace is not None:
             trace.close()
+
+
+#: How long, after Ctrl-C or SIGTERM, send waits for the goal it sent to be cancelled and answered.
+STOP_BOUND = 10.0
+#: How long send looks for the robot's server before it says which servers the graph has.
+LOOK = 3.0
+
+
+def _found(
+    client: DynamicEventClient,
+    node: object,
+    args: argparse.Namespace,
+    left: Callable[[], float],
+    say: Callable[[str], None],
+) -> bool:
+    """Is the robot's server there?  After a few seconds without it, say which servers the graph has,
+    and wait on (to the timeout) only under ``--wait``."""
+    if client.wait_for_server(min(LOOK, left())):
+        return True
+    if getattr(args, "wait", False) and left() > 0:
+        say(
+            no_server_text(node, args.fleet, args.robot, LOOK)
+            + f"; waiting (--wait) up to {left():.0f} s more"
+        )
+        if client.wait_for_server(left()):
+            return True
+    say(
+        no_server_text(
+            node, args.fleet, args.robot, float(args.timeout) if getattr(args, "wait", False) else LOOK
+        )
+    )
+    return False
+
+
+class _Interrupted(Exception):
+    """Ctrl-C or SIGTERM while a goal of send's was open."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signal = signum
+
+
+@contextlib.contextmanager
+def _interruptible() -> Iterator[None]:
+    """SIGINT and SIGTERM raise :class:`_Interrupted` in the main thread while the goal is open."""
+
+    def interrupt(signum: int, frame: object) -> None:
+        raise _Interrupted(signum)
+
+    previous = {signum: signal.signal(signum, interrupt) for signum in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+def _stop_goal(
+    client: DynamicEventClient,
+    goal_run: GoalRun,
+    event_type: EventType,
+    signum: int,
+    say: Callable[[str], None],
+) -> int:
+    """Ctrl-C (or SIGTERM) while the goal was open: a NEXT's child is cancelled (a CANCEL goal naming
+    it, once it runs), and send waits, at most :data:`STOP_BOUND` seconds, for the goal's answer;
+    what happened is printed.  The exit status is 128 + the signal, as a shell gives it."""
+    name = signal.Signals(signum).name
+    deadline = time.monotonic() + STOP_BOUND
+    if event_type == EventType.NEXT:
+        say(
+            f"{name}: cancelling the child (a CANCEL naming it); waiting up to {STOP_BOUND:g} s "
+            "for the answer"
+        )
+        cancelled = False
+        while not goal_run.done() and time.monotonic() < deadline and not cancelled:
+            cancel = client.cancel()
+            cancelled = not (cancel.done() and isinstance(cancel.result, cl.Refused))
+            if not cancelled:
+                time.sleep(0.1)  # its child has not started yet: the CANCEL would name nothing
+    else:
+        say(f"{name}: waiting up to {STOP_BOUND:g} s for the answer to the goal already sent")
+    try:
+        with _interruptible():
+            result = goal_run.wait(max(deadline - time.monotonic(), 0.0))
+    except GoalWaitTimeout:
+        say(f"no answer within {STOP_BOUND:g} s of {name}: the goal may still be open on the robot")
+        return 128 + signum
+    except _Interrupted:
+        say(f"{name} again: leaving without the answer")
+        return 128 + signum
+    if isinstance(result, cl.Refused):
+        say(f"{name}: the goal was not sent")
+    else:
+        say(f"outcome: {result.kind.value}: {result.text}")
+    return 128 + signum
 
 
 def _open_trace(args: argparse.Namespace) -> TraceWriter | None:

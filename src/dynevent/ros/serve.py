@@ -26,7 +26,7 @@ import queue
 import signal
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import attrs
@@ -40,7 +40,7 @@ from dynevent.errors import (
     InvalidMessage,
     ServeError,  # defined there with every error; importable here too
 )
-from dynevent.ros import convert
+from dynevent.ros import convert, spinning
 from dynevent.ros.convert import RosDescription, describe_type
 from dynevent.ros.server import ChildExecution, DynamicEventServer, latched
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
@@ -417,8 +417,10 @@ def run(
     seconds: float | None,
     say: Callable[[str], None],
     watch: Watch | None = None,
+    ros_args: Sequence[str] = (),
 ) -> int:
-    """Serve until SIGINT or SIGTERM (or ``seconds``); 0, or 2 for a store or configuration refused."""
+    """Serve until SIGINT or SIGTERM (or ``seconds``); 0, or 2 for a store or configuration refused.
+    ``ros_args`` are the command line's ROS arguments (``--ros-args ...``), given to rclpy."""
     store = StateStore(state_path) if state_path is not None else None  # InvalidStore: nothing written
     stored = store.load() if store is not None else {}
     try:
@@ -427,7 +429,7 @@ def run(
         raise ServeError(str(exc)) from None
     log = LiveLog(say)
     index, count = config.shard
-    rclpy.init()
+    spinning.init(ros_args)
     # Single-threaded executors, one per lane: a multi-threaded one adds its own work and Python's
     # GIL runs one thread at a time anyway.  rclpy's EventsExecutor (rclpy 9.1.2, rclpy.experimental)
     # cannot serve the binding: it refuses guard conditions and hangs at 100% CPU on an action server
@@ -448,7 +450,9 @@ def run(
     names = list(robots.servers)
     shown = ", ".join(names if len(names) <= 10 else [*names[:10], f"... ({len(names) - 10} more)"])
     part = "" if count == 1 else f" (shard {index}/{count} of {len(config.robots)})"
-    log(f"serving {len(names)} robot(s) of fleet {config.fleet}{part}: {shown}")
+    mode = "as rmf_ros2 behaves" if config.compatibility == "rmf_ros2" else "as the spec says"
+    log(f"serving {len(names)} robot(s) of fleet {config.fleet}{part}, {config.compatibility} mode ({mode}): "
+        f"{shown}")  # fmt: skip
     stop.wait(seconds)
     now = time.time_ns()
     for judged in robots.judged:  # before the shutdown ends every run

@@ -22,12 +22,30 @@ import contextlib
 import faulthandler
 import threading
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
 
 from rclpy.executors import ExternalShutdownException
 
-__all__ = ["CLOSE_BOUND", "Spinner", "bounded_close", "close_down"]
+from dynevent.errors import LocalError
+
+__all__ = ["CLOSE_BOUND", "Spinner", "bounded_close", "close_down", "init"]
+
+
+def init(ros_args: Sequence[str] = ()) -> None:
+    """``rclpy.init`` with the command line's ROS arguments (``--ros-args`` and what follows it:
+    remaps, ``__ns:=``, ``--log-level``, ``-p`` parameters), as any ROS 2 program takes them.  Arguments
+    rcl refuses are one line, :class:`~dynevent.errors.LocalError`, naming them."""
+    import rclpy
+
+    try:
+        rclpy.init(args=["dynevent", *ros_args])
+    except Exception as exc:  # rcl's parse errors (RCLError, RCLInvalidROSArgsError) are not exported
+        rclpy.try_shutdown()
+        raise LocalError(
+            f"{' '.join(ros_args)}: ROS refused these arguments: {str(exc).splitlines()[0]}"
+        ) from None
+
 
 #: How often :meth:`Spinner.stop` wakes the spinning thread while it waits for it to leave (seconds).
 WAKE_EVERY = 0.1

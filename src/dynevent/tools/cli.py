@@ -313,7 +313,7 @@ def _serve(args: argparse.Namespace) -> int:
     def run(serve: Any, config: Any) -> int:
         watch = serve.Watch(judge=not args.no_judge, grace=args.grace, report=args.report, trace=args.trace,
                             introspection=args.introspection)  # fmt: skip
-        return int(serve.run(config, args.state, args.seconds, _say, watch))
+        return int(serve.run(config, args.state, args.seconds, _say, watch, args.ros_args))
 
     return _ros_command("serve", check, run)
 
@@ -565,11 +565,18 @@ def _add_send_command(commands: argparse._SubParsersAction[argparse.ArgumentPars
         help="send one Dynamic Event goal to a robot over ROS 2 and print what becomes of it",
         description="Send one goal (NEXT, CANCEL or FINISHED) to a robot's Dynamic Event server, with "
         "the seq and id its status implies; print the feedback as it arrives and the outcome; explain "
-        "a refusal.  Exit status: 0 when the goal succeeded, 1 when it did not, 2 on bad usage or "
-        "when no server answered within the timeout.",
+        "a refusal.  Ctrl-C (or SIGTERM) while the goal is open cancels it and waits, at most 10 s, for "
+        "its answer.  ROS 2's own arguments follow --ros-args.  Exit status: 0 when the goal succeeded, "
+        "1 when it did not, 2 on bad usage or when no server or status was found, 130 (143) after "
+        "Ctrl-C (SIGTERM).",
     )
-    parser.add_argument("--fleet", default="tinyRobot")
-    parser.add_argument("--robot", default="tinyRobot1")
+    parser.add_argument("--fleet", default="tinyRobot", help="the robot's fleet (default: %(default)s)")
+    parser.add_argument("--robot", default="tinyRobot1", help="the robot to send to (default: %(default)s)")
+    parser.add_argument(
+        "--wait", action="store_true",
+        help="wait for the robot's server to appear, up to --timeout (by default send looks for 3 s, then "
+        "says which servers the graph has)",
+    )  # fmt: skip
     parser.add_argument("--place", nargs="+", metavar="PLACE", help='NEXT go_to_place {"one_of": [PLACE...]}')
     parser.add_argument("--cancel", action="store_true", help="CANCEL the running event")
     parser.add_argument("--end", action="store_true", help="FINISHED: the dynamic event is over")
@@ -615,6 +622,20 @@ def _add_send_command(commands: argparse._SubParsersAction[argparse.ArgumentPars
     parser.set_defaults(run=_send)
 
 
+#: The commands that run rclpy, and so take ROS 2's own arguments after ``--ros-args``.
+ROS_COMMANDS = frozenset({"serve", "send", "probe", "record"})
+
+
+def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
+    """The command line without its ROS arguments, and those: ``--ros-args`` and what follows it, up to
+    a ``--`` that ends them (ROS 2's convention: ``dynevent send --place A --ros-args -r __ns:=/x``)."""
+    if "--ros-args" not in argv:
+        return argv, []
+    start = argv.index("--ros-args")
+    end = argv.index("--", start) if "--" in argv[start:] else len(argv)
+    return argv[:start] + argv[end + 1 :], argv[start:end]
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``dynevent`` command; return its exit code."""
     parser = argparse.ArgumentParser(prog="dynevent", description=_DESCRIPTION, epilog=_EPILOG)
@@ -629,7 +650,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     _add_send_command(commands)
     _add_probe_command(commands)
     _add_record_command(commands)
+    argv, ros_args = split_ros_args(sys.argv[1:] if argv is None else list(argv))
     args = parser.parse_args(argv)
+    args.ros_args = ros_args
+    if ros_args and args.command not in ROS_COMMANDS:
+        parser.error(
+            f"--ros-args is for the ROS 2 commands ({', '.join(sorted(ROS_COMMANDS))}), not {args.command}"
+        )
     if args.command is None:  # bare `dynevent`: what it can do, not a run of one of its commands
         parser.print_help()
         return 0

@@ -168,7 +168,11 @@ def _run_bag(source: str, as_json: bool) -> int:
 def format_bag(bag: Any) -> str:
     """A bag's findings as text: per robot each violation at its bag time, and the channels the bag
     lacked (a partial view: only what the topics show was judged); then a summary line."""
+    from dynevent.tools.check.bags import SEND_GOAL
+
     lines = []
+    # introspection was on where any robot's goals were recorded: a robot without any had no goals
+    introspected = any(SEND_GOAL in robot.channels for robot in bag.robots)
     for robot in bag.robots:
         where = f"{bag.source}: {robot.name}"
         for finding in robot.report.findings:
@@ -176,7 +180,10 @@ def format_bag(bag: Any) -> str:
                 f"{where} @ {_bag_time(finding.line)}: {finding.rule} {finding.code}: {finding.message}"
             )
             lines.append(f"    expected: {finding.expected}")
-        if robot.partial:
+        if robot.partial and introspected and SEND_GOAL not in robot.channels:
+            lines.append(f"{where}: this robot had no goals in the recording (the action's introspection "
+                         "was on): judged from its topics alone")  # fmt: skip
+        elif robot.partial:
             lines.append(f"{where}: partial view, judged from its topics alone (statuses, begins, feedback, "
                          f"goal statuses): the bag lacks {', '.join(robot.absent)}")  # fmt: skip
         elif robot.absent:
