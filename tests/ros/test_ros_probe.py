@@ -190,11 +190,12 @@ BROKEN = {
     "accepts_stale_cancel": {"cancel.seq_stale": "fail", "cancel.seq_future": "fail"},
     "accepts_cancel_after_the_run": {"finished.cancel_after": "fail"},
     "accepts_unknown_category": {"request.category_unknown": "fail"},
-    "accepts_when_busy": {"next.busy": "fail"},
+    "accepts_when_busy": {"next.busy": "fail", "next.busy_finished": "fail"},
     # the CANCEL that ends a child after next.busy and cancel.wrong_id goes unanswered too (R19.1)
     "never_answers_cancel": {
-        "next.busy": "fail", "cancel.wrong_id": "fail", "cancel.seq_stale": "fail",
-        "cancel.seq_future": "fail", "cancel.running_child": "fail", "cancel.both_answered": "fail",
+        "next.busy": "fail", "next.busy_finished": "fail", "cancel.wrong_id": "fail",
+        "cancel.seq_stale": "fail", "cancel.seq_future": "fail", "cancel.running_child": "fail",
+        "cancel.both_answered": "fail",
     },
     # every case that runs a child to its end waits for an answer that never comes (R19.1)
     "hangs_next": {

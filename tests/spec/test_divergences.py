@@ -604,6 +604,87 @@ def test_a_restored_state_goes_on_with_its_run() -> None:
 # --------------------------------------------------------------------------- the document and this file
 
 
+# --------------------------------------------------------------------------- D26
+
+
+@pytest.mark.spec("R3.1", "R2.2")
+def test_a_run_begins_waiting_standby() -> None:
+    """The status a run's begin publishes, and the one a late client reads, says WAITING ``standby``
+    (the deployed adapter's latched status then says WAITING ``uninitialized``)."""
+    run = Run()
+    published = [output for output in run.begin(event_id=1) if isinstance(output, outs.PublishStatus)]
+    assert published == [status(run.seq, WAITING, "standby", 1)]
+    assert status_message(run.state, T0) == published[0].message
+
+
+# --------------------------------------------------------------------------- D27
+
+
+@pytest.mark.spec("R12.1", "R12.3")
+def test_a_stubborn_hold_refreshes_whatever_the_robot_reported() -> None:
+    """A NEXT with a stubborn period, its child's end, then ticks: the hold begins where the robot was
+    last seen (nowhere, here) and each refresh is a value (the deployed full_control adapter crashes
+    at the first refresh, reading navigation parameters its robots lack)."""
+    run = running(child_id=5, stubborn=3.0)
+    assert run.child_end("completed")[1] == outs.StubbornBegin(
+        period=3.0, since=T0, map_name=None, x=0.0, y=0.0
+    )
+    refreshed = run.tick("L1", 1.0, 2.0, now=T0 + 10**9)
+    assert refreshed == (outs.StubbornHold(period=3.0, since=T0 + 10**9, map_name="L1", x=1.0, y=2.0),)
+    assert run.state.stubborn is not None
+
+
+# --------------------------------------------------------------------------- D28
+
+
+@pytest.mark.spec("R8.4", "R9.3")
+def test_the_status_after_a_cancelled_child_says_waiting_standby() -> None:
+    """A CANCEL ends the child; the status then says WAITING ``standby`` with the child's id (the
+    deployed adapter says WAITING ``canceled``; after a completed child, RUNNING ``completed``, D2)."""
+    run = running(child_id=5)
+    run.request(u(2), cancel_goal(run.seq, 5))
+    run.start(u(2))
+    outputs = run.child_end("canceled")
+    assert outputs[-1] == status(run.seq, WAITING, "standby", 5)
+
+
+# --------------------------------------------------------------------------- D29
+
+
+@pytest.mark.spec("R13.1", "R9.3")
+def test_a_cancel_goal_logs_nothing_of_a_task_signal() -> None:
+    """``Received signal to cancel`` is a task signal's log line (R13.1); a CANCEL goal's child end
+    writes none (the deployed adapter's go_to_place child writes it on any cancel)."""
+    run = running(child_id=5)
+    run.request(u(2), cancel_goal(run.seq, 5))
+    outputs = run.start(u(2)) + run.child_end("canceled")
+    logs = [output.entry.text for output in outputs if isinstance(output, outs.Log)]
+    assert "Received signal to cancel" not in logs
+    assert run.state.task_signal == ""
+
+
+# --------------------------------------------------------------------------- D30
+
+
+@pytest.mark.spec("R4.6", "R11.1")
+def test_a_finished_while_a_child_runs_is_refused_busy() -> None:
+    run = running(child_id=5)
+    assert run.request(u(2), finished_goal(run.seq)) == (rejected(u(2), RejectReason.BUSY, current_id=5),)
+    assert run.phase is RUNNING and run.state.active
+
+
+# --------------------------------------------------------------------------- D31
+
+
+@pytest.mark.spec("R10.3", "R8.2")
+def test_an_action_level_cancel_of_the_running_next_stops_its_child() -> None:
+    run = running(child_id=5)
+    outputs = run.cancel(u(1))
+    assert outs.CancelResponse(goal_uuid=u(1), accepted=True) in outputs
+    assert outs.CancelChild(id=5) in outputs
+    assert run.child_end("canceled")[0] == answer(u(1), CANCELED, text="canceled", id=5)
+
+
 _META = {
     "test_the_document_and_this_file_name_the_same_tests",
     "test_the_document_cites_rules_of_the_spec_that_its_tests_cite",

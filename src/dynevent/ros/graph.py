@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from rclpy.action import get_action_names_and_types
+from rclpy.action import get_action_server_names_and_types_by_node
 
 from dynevent.errors import InvalidName
 from dynevent.wire.names import NameKind, parse_name
@@ -16,13 +16,20 @@ __all__ = ["no_server_text", "servers_seen"]
 def servers_seen(node: Any) -> list[tuple[str, str]]:
     """The (fleet, robot) of every Dynamic Event action server ``node`` sees on the graph, sorted."""
     seen = set()
-    for name, _types in get_action_names_and_types(node):
+    # by node, servers only: an action's name is on the graph as soon as any client of it is (this
+    # process's own, say)
+    for name, namespace in node.get_node_names_and_namespaces():
         try:
-            parsed = parse_name(name)
-        except InvalidName:
-            continue  # another action
-        if parsed.kind is NameKind.ACTION:
-            seen.add((parsed.fleet, parsed.robot))
+            served = get_action_server_names_and_types_by_node(node, name, namespace)
+        except Exception:  # a node gone between the two calls
+            continue
+        for action, _types in served:
+            try:
+                parsed = parse_name(action)
+            except InvalidName:
+                continue  # another action
+            if parsed.kind is NameKind.ACTION:
+                seen.add((parsed.fleet, parsed.robot))
     return sorted(seen)
 
 

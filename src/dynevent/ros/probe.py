@@ -311,6 +311,9 @@ class Options:
     robot: str
     place: str | None = None
     category: str = "go_to_place"
+    #: more places, taken in turn after ``place`` by the NEXTs that send the robot somewhere, so that a
+    #: child does not end at once where the robot already stands
+    more_places: tuple[str, ...] = ()
     timeout: float = 10.0
     begin_command: str | None = None
     known: frozenset[str] = frozenset()
@@ -385,6 +388,7 @@ class Probe:
         self.messages: list[str] = []
         self.exchanges: list[Exchange] = []
         self.timeouts_in_a_row = 0  # cases that waited out the timeout, one after the other
+        self._places_sent = 0
 
     # ---------------------------------------------------------------- carrying out
 
@@ -517,11 +521,14 @@ class Probe:
     def next_goal(self, status: DynamicEventStatus, goal_id: int | None = None) -> Goal:
         if self.options.place is None:
             raise _Unreachable(NO_PLACE)
+        places = (self.options.place, *self.options.more_places)
+        place = places[self._places_sent % len(places)]
+        self._places_sent += 1
         return Goal(
             dynamic_event_seq=status.dynamic_event_seq,
             event_type=EventType.NEXT,
             category=self.options.category,
-            description=json.dumps({"one_of": [self.options.place]}),
+            description=json.dumps({"one_of": [place]}),
             id=status.id + 1 if goal_id is None else goal_id,
         )
 
@@ -542,28 +549,39 @@ class Probe:
 
     @contextmanager
     def child(self) -> Iterator[tuple[Exchange, int]]:
-        """A running child (its NEXT accepted and the status RUNNING with its id); cancelled after."""
+        """A running child (its NEXT accepted and the status RUNNING with a new child); cancelled after.
+        The child's id is the one the status names: the NEXT's own where the server follows R6.2, the
+        server's where it numbers children itself (D10), as a client that keeps no state reads it."""
         status = self.waiting()
         goal = self.next_goal(status)
         exchange = self.send(goal, answer=False)
         if not exchange.accepted:
             raise _Unreachable(f"the NEXT that should run a child was {_describe_answer(exchange)}")
-        running = self.link.wait_status(
-            lambda s: s.dynamic_state == DynamicState.RUNNING and s.id == goal.id, self.options.timeout
-        )
+
+        def new_child(s: DynamicEventStatus) -> bool:
+            return (
+                machine.runs_a_child(s)
+                and s.dynamic_event_seq == goal.dynamic_event_seq
+                and (s.id == goal.id or s.id > status.id)
+            )
+
+        running = self.link.wait_status(new_child, self.options.timeout)
         if running is None:
-            raise _TimedOut(f"the child {goal.id} never showed RUNNING within {self.options.timeout:g} s")
+            raise _TimedOut(
+                f"the child of NEXT {goal.id} never showed RUNNING within {self.options.timeout:g} s"
+            )
+        if running.id != goal.id:
+            self.note(f"the server numbered the child {running.id} (the NEXT's id was {goal.id})")
         try:
-            yield exchange, goal.id
+            yield exchange, running.id
         finally:
             if not exchange.answers:
-                stop = Goal(dynamic_event_seq=goal.dynamic_event_seq, event_type=EventType.CANCEL, id=goal.id)
+                stop = Goal(
+                    dynamic_event_seq=goal.dynamic_event_seq, event_type=EventType.CANCEL, id=running.id
+                )
                 self.send(stop)
                 exchange.answered(self.options.timeout)
-            self.link.wait_status(
-                lambda s: machine.robot_waits(s) or s.dynamic_state == DynamicState.INACTIVE,
-                self.options.timeout,
-            )
+            self.link.wait_status(_waits_or_ended, self.options.timeout)
 
 
 # -------------------------------------------------------------------- the cases
@@ -586,7 +604,9 @@ def _status_waiting(probe: Probe, case: Case) -> Finding:
     begins = [begin.dynamic_event_seq for begin in probe.link.begins]
     probe.note(f"status WAITING seq={seq} id={status.id} {status.status}; begins seen for runs {begins}")
     if status.status != _STANDBY:
-        return Finding(case, Verdict.FAIL, expected="WAITING, standby", seen=f"WAITING, {status.status}")
+        divergence = "D26" if status.status == Status.UNINITIALIZED.value else None
+        return Finding(case, Verdict.FAIL, expected="WAITING, standby", seen=f"WAITING, {status.status}",
+                       divergence=divergence)  # fmt: skip
     if seq not in begins:
         return Finding(case, Verdict.FAIL, expected=f"a begin for run {seq}", seen=f"begins for {begins}")
     return Finding(case, Verdict.PASS, expected="WAITING, standby, begun", seen="so")
@@ -688,21 +708,23 @@ def _status_after_child(probe: Probe, case: Case) -> Finding:
     exchange = probe.send(goal)
     if not exchange.answers:
         raise _TimedOut(f"the child did not end within {probe.options.timeout:g} s")
-    after = probe.link.wait_status(lambda s: s.id == goal.id and s.status != _UNDERWAY, probe.options.timeout)
+    answer = exchange.answer
+    child = answer[1].id if answer is not None and answer[1].id else goal.id  # R8.1: the result names it
+    after = probe.link.wait_status(lambda s: s.id == child and s.status != _UNDERWAY, probe.options.timeout)
     if after is None:
         return Finding(
             case,
             Verdict.FAIL,
-            expected=f"WAITING, id {goal.id}",
+            expected=f"WAITING, id {child}",
             seen="no status after the child",
             absent=True,
         )
     phase = DynamicState(after.dynamic_state).name
     probe.note(f"status {phase} seq={after.dynamic_event_seq} id={after.id} {after.status}")
     if after.dynamic_state == DynamicState.WAITING and after.status == _STANDBY:
-        return Finding(case, Verdict.PASS, expected=f"WAITING, standby, id {goal.id}", seen="so")
+        return Finding(case, Verdict.PASS, expected=f"WAITING, standby, id {child}", seen="so")
     divergence = "D2" if after.dynamic_state == DynamicState.RUNNING else None
-    return Finding(case, Verdict.FAIL, expected=f"WAITING, standby, id {goal.id}",
+    return Finding(case, Verdict.FAIL, expected=f"WAITING, standby, id {child}",
                    seen=f"{phase}, {after.status}, id {after.id}", divergence=divergence)  # fmt: skip
 
 
@@ -710,6 +732,15 @@ def _busy(probe: Probe, case: Case) -> Finding:
     with probe.child() as (_, child_id):
         status = probe.link.status or probe.any_status()
         return probe.refused(case, probe.next_goal(status, goal_id=child_id + 1))
+
+
+def _busy_finished(probe: Probe, case: Case) -> Finding:
+    with probe.child():
+        status = probe.link.status or probe.any_status()
+        finding = probe.refused(case, _goal(status, EventType.FINISHED))
+        if finding.verdict is Verdict.FAIL and "succeeded" in finding.seen:
+            finding = attrs.evolve(finding, divergence="D30")  # the run ended under the running child
+        return finding
 
 
 def _cancel_wrong_id(probe: Probe, case: Case) -> Finding:
@@ -850,21 +881,23 @@ def _id_chosen(probe: Probe, case: Case) -> Finding:
     finding = _ran_finding(
         probe, case, exchange, chosen, f"child {chosen} (the NEXT's id) runs and completes"
     )
-    if finding.verdict is Verdict.FAIL and _ran(exchange, status.id + 1) is None:
-        finding = attrs.evolve(finding, divergence="D10")  # the id was ignored: the server numbered it
+    answer = exchange.answer
+    ran_another = answer is not None and answer[0] is GoalStatus.SUCCEEDED and answer[1].id != chosen
+    if finding.verdict is Verdict.FAIL and ran_another:  # the id ignored: the server numbered the child
+        finding = attrs.evolve(finding, divergence="D10")
     return finding
 
 
 def _stateless_id(probe: Probe, case: Case) -> Finding:
     status = probe.waiting()
     first = probe.next_goal(status)
-    if not probe.send(first).answers:
+    ran = probe.send(first)
+    if not ran.answers:
         raise _TimedOut(f"the first child did not end within {probe.options.timeout:g} s")
-    after = probe.link.wait_status(
-        lambda s: s.id == first.id and machine.robot_waits(s), probe.options.timeout
-    )
+    child = ran.answers[0][1].id or first.id  # R8.1: the result names the child (D10: maybe not first.id)
+    after = probe.link.wait_status(lambda s: s.id == child and machine.robot_waits(s), probe.options.timeout)
     if after is None:
-        raise _TimedOut(f"no status after child {first.id} ended within {probe.options.timeout:g} s")
+        raise _TimedOut(f"no status after child {child} ended within {probe.options.timeout:g} s")
     phase = DynamicState(after.dynamic_state).name
     probe.note(
         f"status {phase} seq={after.dynamic_event_seq} id={after.id} {after.status}: the client's only state"
@@ -995,7 +1028,7 @@ def _action_cancel_running(probe: Probe, case: Case) -> Finding:
         if accepted is None:
             return Finding(case, Verdict.FAIL, expected=expected, seen="no cancel response", absent=True)
         if not accepted:
-            return Finding(case, Verdict.FAIL, expected=expected, seen="the cancel refused")
+            return Finding(case, Verdict.FAIL, expected=expected, seen="the cancel refused", divergence="D31")
         if running.answer is None:
             return Finding(case, Verdict.FAIL, expected=expected, seen="the NEXT not answered", absent=True)
         if running.answer[0] is not GoalStatus.CANCELED:
@@ -1092,6 +1125,7 @@ _CASES: dict[str, Callable[[Probe, Case], Finding]] = {
     "next.id_stale": _id_stale,
     "next.status_after_child": _status_after_child,
     "next.busy": _busy,
+    "next.busy_finished": _busy_finished,
     "next.race": _race,
     "feedback.log_seq": _log_seq,
     "stubborn.clamp_notice": _clamp_notice,
@@ -1118,7 +1152,8 @@ def implemented() -> frozenset[str]:
 def main(args: Any, cases: list[Case], say: Callable[[str], None]) -> int:
     """``dynevent probe``: run the cases, print the findings, write ``--junit``; the exit status."""
     options = Options(
-        fleet=args.fleet, robot=args.robot, place=args.place, category=args.category, timeout=args.timeout,
+        fleet=args.fleet, robot=args.robot, place=args.place[0] if args.place else None,
+        more_places=tuple(args.place[1:]) if args.place else (), category=args.category, timeout=args.timeout,
         begin_command=args.begin_command, known=probe_cases.KNOWN.get(args.known or "", frozenset()),
         trace=args.trace, stubborn_minimum=args.stubborn_minimum, introspection=args.introspection,
         allow_missing=tuple(args.allow_missing), server_wait=args.server_wait,

@@ -28,7 +28,7 @@ from dynevent.errors import (
 )
 from dynevent.ros import spinning
 from dynevent.ros.client import DynamicEventClient, GoalRun, GoalWaitTimeout
-from dynevent.ros.graph import no_server_text
+from dynevent.ros.graph import no_server_text, servers_seen
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.server import outputs as outs
 from dynevent.tools import explain
@@ -135,10 +135,15 @@ def _found(
     say: Callable[[str], None],
 ) -> bool:
     """Is the robot's server there?  After a few seconds without it, say which servers the graph has,
-    and wait on (to the timeout) only under ``--wait``."""
+    and wait on (to the timeout) only under ``--wait``, or when the graph names the robot's action
+    already (its server is there, its discovery not yet whole)."""
     if client.wait_for_server(min(LOOK, left())):
         return True
-    if getattr(args, "wait", False) and left() > 0:
+    if (args.fleet, args.robot) in servers_seen(node) and left() > 0:
+        # on the graph, not yet discovered whole (a fleet adapter's took up to 3 s here): wait on
+        if client.wait_for_server(left()):
+            return True
+    elif getattr(args, "wait", False) and left() > 0:
         say(
             no_server_text(node, args.fleet, args.robot, LOOK)
             + f"; waiting (--wait) up to {left():.0f} s more"

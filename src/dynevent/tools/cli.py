@@ -73,6 +73,11 @@ def _add_check_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         "trace", metavar="TRACE", help="the trace file, - for standard input, or a rosbag2 recording"
     )
     parser.add_argument("--json", action="store_true", help="one JSON object per violation, then a summary")
+    parser.add_argument(
+        "--compatibility", choices=["standard", "rmf_ros2"], default="standard",
+        help="judge the server as the spec says (default), or as `dynevent serve --compatibility rmf_ros2` "
+        "behaves: what is left is where it differs from that emulation (a trace's config record wins)",
+    )  # fmt: skip
     parser.set_defaults(run=_lazy("dynevent.tools.check"))
 
 
@@ -508,10 +513,11 @@ def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         "other missing case makes the exit status 3",
     )  # fmt: skip
     parser.add_argument(
-        "--place",
-        help="a place the robot can go to, for the cases that send it somewhere (default: the go_to_place "
-        "estimate of the run's description, when it names one)",
-    )
+        "--place", nargs="+", metavar="PLACE",
+        help="places the robot can go to, for the cases that send it somewhere, taken in turn so that a "
+        "child does not end at once where the robot stands (default: the go_to_place estimate of the "
+        "run's description, when it names one)",
+    )  # fmt: skip
     parser.add_argument(
         "--category",
         default="go_to_place",

@@ -108,7 +108,8 @@ class Finding:
 CASES: tuple[Case, ...] = (
     Case("status.latched", "a late subscriber receives the robot's status (transient-local)",
          ("R1.4", "R2.2"), needs="status"),
-    Case("status.waiting", "an active run's status is WAITING with the run's seq", ("R2.1", "R2.2", "R3.1")),
+    Case("status.waiting", "an active run's status is WAITING with the run's seq", ("R2.1", "R2.2", "R3.1"),
+         divergences=("D26",)),
     Case("describe.query", "the description query answers with the run's description, status and id",
          ("R16.2",)),
     Case("request.seq_stale", "a FINISHED for an earlier run is refused", ("R4.2",)),
@@ -136,6 +137,8 @@ CASES: tuple[Case, ...] = (
     Case("next.status_after_child", "after a child ends the status is WAITING with its id", ("R2.2", "R8.4"),
          needs="child", divergences=("D2",), traced=False),
     Case("next.busy", "a NEXT while a child runs is refused", ("R4.6",), needs="child"),
+    Case("next.busy_finished", "a FINISHED while a child runs is refused", ("R4.6",), needs="child",
+         divergences=("D30",)),
     Case("next.race", "two NEXTs at once: one child runs, the other NEXT is refused or aborted, each "
          "answered once", ("R4.16", "R5.2", "R19.2", "R19.1"), needs="child"),
     Case("feedback.log_seq", "log entries are numbered one by one per robot, across children, in known tiers",
@@ -153,7 +156,7 @@ CASES: tuple[Case, ...] = (
     Case("cancel.both_answered", "two CANCELs of the running child wait for its end and are both "
          "answered with its result", ("R9.3", "R8.3", "R19.1"), needs="child"),
     Case("action.cancel_running", "an action-level cancel of the running NEXT is accepted and the NEXT "
-         "answered canceled", ("R10.3", "R8.2"), needs="child"),
+         "answered canceled", ("R10.3", "R8.2"), needs="child", divergences=("D31",)),
     Case("action.cancel_answered", "an action-level cancel of an answered goal is refused", ("R10.5",),
          needs="child"),
     Case("finished.ends_the_run", "FINISHED ends the run: succeeded, completed, then INACTIVE",

@@ -41,6 +41,8 @@ import sys
 from collections.abc import Iterable, Iterator
 from typing import Any
 
+import attrs
+
 from dynevent.errors import (
     TraceError,  # defined there with every error; importable here too
 )
@@ -56,6 +58,7 @@ from dynevent.tools.check.trace import (
     stream_trace,
 )
 from dynevent.wire import _json
+from dynevent.wire.vocab import Compatibility
 
 __all__ = [
     "RECORD_TYPES",
@@ -72,14 +75,22 @@ __all__ = [
 ]
 
 
-def check_trace(text: str | Iterable[str], source: str = "<trace>") -> Report:
+def check_trace(
+    text: str | Iterable[str],
+    source: str = "<trace>",
+    *,
+    compatibility: Compatibility | str = Compatibility.STANDARD,
+) -> Report:
     """Check a trace (its text, or its lines) in observer mode; each violation is a :class:`Finding`.
 
-    Raises :class:`TraceError` (naming ``source``, the line and the field)
-    when the trace cannot be read.
+    ``compatibility="rmf_ros2"`` judges the server as ``dynevent serve --compatibility rmf_ros2``
+    behaves (R17, and the adapter's own numbering of children), where the trace has no config record
+    that says otherwise: what is left is where the server differs from that emulation.  Raises
+    :class:`TraceError` (naming ``source``, the line and the field) when the trace cannot be read.
     """
     lines = text.splitlines() if isinstance(text, str) else text
     header, records = stream_trace(lines, source)
+    header = attrs.evolve(header, compatibility=Compatibility(compatibility))
     return check_records(header, records, source)
 
 
@@ -114,14 +125,15 @@ def trace_records(report: Report) -> list[dict[str, Any]]:
 
 def _run(args: argparse.Namespace) -> int:
     source = args.trace
+    compatibility = Compatibility(getattr(args, "compatibility", None) or Compatibility.STANDARD)
     if source != "-" and (os.path.isdir(source) or source.endswith(BAG_SUFFIXES)):
-        return _run_bag(source, args.json)
+        return _run_bag(source, args.json, compatibility)
     try:
         if source == "-":
-            report = _check_stream(sys.stdin.buffer, "<stdin>")
+            report = _check_stream(sys.stdin.buffer, "<stdin>", compatibility)
         else:
             with open(source, "rb") as stream:
-                report = _check_stream(stream, source)
+                report = _check_stream(stream, source, compatibility)
     except OSError as exc:
         print(f"dynevent check: {source}: cannot read: {exc.strerror or exc}", file=sys.stderr)
         return 2
@@ -143,12 +155,12 @@ def _run(args: argparse.Namespace) -> int:
 BAG_SUFFIXES = (".mcap", ".db3")
 
 
-def _run_bag(source: str, as_json: bool) -> int:
+def _run_bag(source: str, as_json: bool, compatibility: Compatibility) -> int:
     from dynevent.errors import BagError, MissingExtra
     from dynevent.tools.check.bags import check_bag
 
     try:
-        bag = check_bag(source)
+        bag = check_bag(source, compatibility=compatibility)
     except (BagError, MissingExtra) as exc:
         print(f"dynevent check: {exc}", file=sys.stderr)
         return 2
@@ -237,7 +249,7 @@ def bag_records(bag: Any) -> list[dict[str, Any]]:
     return rows
 
 
-def _check_stream(stream: Any, source: str) -> Report:
+def _check_stream(stream: Any, source: str, compatibility: Compatibility = Compatibility.STANDARD) -> Report:
     """Check a trace read line by line from a binary stream, with a progress line on a terminal."""
     try:
         size: int | None = os.fstat(stream.fileno()).st_size or None
@@ -245,7 +257,7 @@ def _check_stream(stream: Any, source: str) -> Report:
         size = None
     progress = Progress(f"dynevent check: {source}", size)
     try:
-        return check_trace(_text_lines(stream, source, progress), source)
+        return check_trace(_text_lines(stream, source, progress), source, compatibility=compatibility)
     finally:
         progress.close()
 

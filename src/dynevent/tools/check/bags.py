@@ -53,7 +53,7 @@ from dynevent.tools.check.observer import AnswerEvidence, Checker
 from dynevent.tools.check.partial import GOAL_STATUSES, PartialJudge
 from dynevent.tools.check.trace import Record, Report, _Header
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
-from dynevent.wire.vocab import GoalStatus
+from dynevent.wire.vocab import Compatibility, GoalStatus
 
 __all__ = [
     "HIDDEN_SUFFIXES",
@@ -150,8 +150,9 @@ class BagReport:
         return all(robot.report.clean for robot in self.robots)
 
 
-def check_bag(path: str | Path) -> BagReport:
-    """Judge every Dynamic Event conversation of the bag at ``path``.
+def check_bag(path: str | Path, *, compatibility: Compatibility | str = Compatibility.STANDARD) -> BagReport:
+    """Judge every Dynamic Event conversation of the bag at ``path``; ``compatibility="rmf_ros2"``
+    judges each server as ``dynevent serve --compatibility rmf_ros2`` behaves.
 
     Raises :class:`~dynevent.errors.MissingExtra` without ``rosbags``, and
     :class:`~dynevent.errors.BagError` for a bag that cannot be read (no such
@@ -169,7 +170,7 @@ def check_bag(path: str | Path) -> BagReport:
         reader.open()
     try:
         with _storage(source, reader_errors):
-            routes = _routes(reader.connections, robots)
+            routes = _routes(reader.connections, robots, Compatibility(compatibility))
             other = sum(item.msgcount for item in reader.connections if item.id not in routes)
             wanted = [item for item in reader.connections if item.id in routes]
             end = int(reader.end_time) - 1  # the recording's last message, on any topic
@@ -254,7 +255,9 @@ def _rosbags() -> tuple[Any, tuple[type[BaseException], ...]]:
     return Reader, (ReaderError, ValueError, OSError, EOFError)
 
 
-def _routes(connections: Any, robots: dict[tuple[str, str], _Robot]) -> dict[int, tuple[_Robot, str]]:
+def _routes(
+    connections: Any, robots: dict[tuple[str, str], _Robot], compatibility: Compatibility
+) -> dict[int, tuple[_Robot, str]]:
     """Each connection (by id) on a Dynamic Event name: the robot it belongs to and its channel."""
     routes: dict[int, tuple[_Robot, str]] = {}
     fleet_wide = []
@@ -281,13 +284,13 @@ def _routes(connections: Any, robots: dict[tuple[str, str], _Robot]) -> dict[int
         if connection.msgtype != TYPES[channel]:
             continue  # a Dynamic Event name with another type: not this protocol's
         key = (parsed.fleet, parsed.robot)
-        robot = robots.setdefault(key, _Robot(*key))
+        robot = robots.setdefault(key, _Robot(*key, compatibility=compatibility))
         if connection.msgcount:  # a topic subscribed to in vain holds nothing to judge
             robot.channels.add(channel)
             robot.own_begins = robot.own_begins or channel == "begin"
         routes[connection.id] = (robot, channel)
     for connection in fleet_wide:  # a robot's begins, where its own begin topic was not recorded
-        routes[connection.id] = (_FleetBegins(robots), "begin")  # type: ignore[assignment]
+        routes[connection.id] = (_FleetBegins(robots, compatibility), "begin")  # type: ignore[assignment]
     return routes
 
 
@@ -296,8 +299,11 @@ class _Robot:
     record each goal, response and answer: a record the same as one taken before is taken once (an
     answer that differs is a second answer, which the judgement sees)."""
 
-    def __init__(self, fleet: str, robot: str) -> None:
+    def __init__(
+        self, fleet: str, robot: str, *, compatibility: Compatibility | str = Compatibility.STANDARD
+    ) -> None:
         self.fleet, self.robot = fleet, robot
+        self.compatibility = Compatibility(compatibility)
         self._judge: Checker | PartialJudge | None = None  # made at the first record: the channels are known
         self.channels: set[str] = set()
         self.own_begins = False  # the bag recorded the robot's own begin topic
@@ -400,7 +406,7 @@ class _Robot:
     def judge(self) -> Checker | PartialJudge:
         """The observer, for a robot whose goals the bag holds; else the judge of what its topics show."""
         if self._judge is None:
-            header = _Header(fleet=self.fleet, robot=self.robot)
+            header = _Header(fleet=self.fleet, robot=self.robot, compatibility=self.compatibility)
             self._judge = Checker(header) if self.judged else PartialJudge(header, SKEW)
         return self._judge
 
@@ -461,7 +467,7 @@ class _Robot:
         kept = tuple(finding for finding in report.findings if finding.line < since)
         self._before.append(attrs.evolve(report, findings=kept))
         self.lost.append((record.time, record.goal_uuid))
-        self._judge = Checker(_Header(fleet=self.fleet, robot=self.robot))
+        self._judge = Checker(_Header(fleet=self.fleet, robot=self.robot, compatibility=self.compatibility))
         statuses = [index for index, item in enumerate(pending) if item.kind == "status"]
         seed = pending[statuses[-1]] if statuses else self._last_status  # the lost goal's start, or later
         rest = pending[statuses[-1] + 1 :] if statuses else pending
@@ -543,14 +549,15 @@ class _FleetBegins:
     """The fleet-wide begin topic: each begin goes to its robot, unless that robot's own begin
     topic was recorded (the same begin, twice)."""
 
-    def __init__(self, robots: dict[tuple[str, str], _Robot]) -> None:
+    def __init__(self, robots: dict[tuple[str, str], _Robot], compatibility: Compatibility) -> None:
         self.robots = robots
+        self.compatibility = compatibility
 
     def take(self, channel: str, time: int, message: Any) -> None:
         key = (str(message.fleet), str(message.robot))
         robot = self.robots.get(key)
         if robot is None:
-            robot = self.robots[key] = _Robot(*key)
+            robot = self.robots[key] = _Robot(*key, compatibility=self.compatibility)
         if not robot.own_begins:
             robot.take(channel, time, message)
 

@@ -48,6 +48,7 @@ from dynevent.wire._text import answer_text, goal_text, status_text
 from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
 from dynevent.wire.vocab import (
     ENDED_CHILD_STATUSES,
+    Compatibility,
     DynamicState,
     EventType,
     Failure,
@@ -66,7 +67,12 @@ class _Books:
 
     def __init__(self, header: _Header) -> None:
         self.config_known = header.config is not None
-        self.config = header.config if header.config is not None else ServerConfig()
+        if header.config is not None:
+            self.config = header.config
+        elif header.compatibility is Compatibility.RMF_ROS2:  # the categories are learned from the goals
+            self.config = ServerConfig.rmf_ros2({})
+        else:
+            self.config = ServerConfig()
         self.state: State | None = None
         self.owed: list[_Owed] = []
         self.goals: dict[str, _GoalSeen] = {}

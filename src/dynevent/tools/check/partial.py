@@ -46,7 +46,7 @@ from dynevent.tools.check.trace import Finding, Record, Report, _Header
 from dynevent.wire._fields import U64_MAX, seq_after
 from dynevent.wire._text import status_text
 from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Feedback
-from dynevent.wire.vocab import DynamicState, GoalStatus, Violation
+from dynevent.wire.vocab import Compatibility, DynamicState, GoalStatus, Violation
 
 __all__ = ["GOAL_STATUSES", "PartialJudge"]
 
@@ -90,6 +90,7 @@ class PartialJudge:
     def __init__(self, header: _Header, margin: int, source: str = "<bag>") -> None:
         self.source = source
         self.names = (header.fleet, header.robot)
+        self.compatibility = header.compatibility
         self.margin = margin
         self.findings: list[Finding] = []
         self.records = 0
@@ -323,6 +324,8 @@ class PartialJudge:
             or (status.dynamic_event_seq, status.id) != (due.seq, due.child)
         ):
             return
+        if self.compatibility is Compatibility.RMF_ROS2 and machine.child_ended(status):
+            return  # rmf_ros2 keeps publishing the child's end while the robot waits (R17.4)
         self._flag(
             due.line,
             Violation.STATUS_MISMATCH,

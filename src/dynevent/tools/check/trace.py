@@ -26,6 +26,7 @@ from dynevent.wire import _json
 from dynevent.wire._fields import SECOND
 from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
 from dynevent.wire.vocab import (
+    Compatibility,
     GoalStatus,
     RejectReason,
     Status,
@@ -230,6 +231,8 @@ class _Header:
     fleet: str | None = None
     robot: str | None = None
     config: ServerConfig | None = None
+    #: how the server is judged where no config record says: as the spec says, or as rmf_ros2 behaves
+    compatibility: Compatibility = Compatibility.STANDARD
 
 
 def _header(data: dict[str, Any], source: str, line: int) -> _Header:

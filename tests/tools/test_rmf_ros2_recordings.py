@@ -1,0 +1,184 @@
+"""The deployed server's recordings as ground truth (tests/data/rmf_ros2/, lab/rmf_ros2/README.md).
+
+Open-RMF's own fleet adapter (rmf_ros2, kilted d6243d3e) was run in the lab and driven by dynevent's
+``send`` and ``probe`` and by rmf_demos' client, each session recorded with ``dynevent record``.  No
+RMF is needed here: ``dynevent check`` judges each recording, and must find exactly what
+docs/divergences.md lists for rmf_ros2, each finding named by its D-number (or, where the finding
+is check's own misreading of what a recording lacks, by the open item that says so).  A change to
+check, or a finding the page does not list, fails here.
+"""
+
+from __future__ import annotations
+
+import collections
+import re
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("rosbags", reason="the bags extra (rosbags) reads the recordings")
+
+from dynevent.tools.check.bags import check_bag
+from dynevent.tools.check.trace import Finding
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "rmf_ros2"
+DOC = Path(__file__).resolve().parents[2] / "docs" / "divergences.md"
+
+#: Open items: findings that are check's own misreading of what a recording does not hold.
+OPEN = {
+    # the bag holds the client's record of a goal's response, stamped when it arrived, after the
+    # statuses the server published on accepting it: check reads those as a child no goal explains
+    "response_seen_late",
+    # a task cancel is visible only as its log line and the INACTIVE that follows: check keeps the
+    # child running
+    "task_signal_unseen",
+}
+
+
+def label(finding: Finding) -> str:
+    """The D-number (or open item) a finding of a recording stands for; ``?`` for one not listed."""
+    rule, code, message, expected = finding.rule, finding.code, finding.message, finding.expected
+    if code == "log_seq":
+        return "D9"
+    if code == "child_id":
+        return "D10"
+    if code == "clamp_not_reported":
+        return "D11"
+    if code == "status_mismatch" and re.search(r"status WAITING seq=\d+ id=0 uninitialized", message):
+        return "D26"
+    if code == "status_mismatch" and re.search(r"status WAITING seq=\d+ id=\d+ canceled", message):
+        return "D28"
+    if code == "status_mismatch" and "status RUNNING" in message and expected.startswith("WAITING"):
+        return "response_seen_late"
+    if code == "status_mismatch" and "status INACTIVE" in message and "canceled" in expected:
+        return "task_signal_unseen"
+    if rule == "R3.4" and code == "begin_while_active":
+        return "task_signal_unseen"
+    if code == "status_mismatch" and "still, after goal" in message and "completed" in message:
+        return "D2"
+    if code in ("accepted_cancel_idle", "accepted_cancel_id_mismatch"):
+        return "D8"
+    if code == "accepted_stale_id":
+        return "D10"
+    if rule == "R10.3" and code == "cancel_response":
+        return "D31"
+    if code == "status_mismatch" and "status INACTIVE" in message and "completed" in expected:
+        return "D30"
+    if code == "feedback_not_running" and "whose event has ended" in message:
+        return "D30"
+    return "?"
+
+
+#: What check finds in each recording, in each mode: {(label, rule, code): count}.
+SEND = {
+    ("D10", "R6.2", "child_id"): 2,
+    ("D26", "R2.2", "status_mismatch"): 3,
+    ("D28", "R2.2", "status_mismatch"): 2,
+    ("D9", "R7.3", "log_seq"): 9,
+    ("response_seen_late", "R2.2", "status_mismatch"): 7,
+    ("task_signal_unseen", "R2.2", "status_mismatch"): 1,
+    ("task_signal_unseen", "R3.4", "begin_while_active"): 1,
+}
+STUBBORN = {
+    ("D11", "R12.2", "clamp_not_reported"): 1,
+    ("D26", "R2.2", "status_mismatch"): 1,
+    ("D9", "R7.3", "log_seq"): 1,
+}
+
+EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
+    # serve's rmf_ros2 mode does not yet reproduce what these show (D10's numbering two apart, D28):
+    # the two modes find the same; a mended emulation makes the rmf_ros2 rows shorter
+    ("send", "standard"): SEND,
+    ("send", "rmf_ros2"): SEND,
+    ("demos", "standard"): {
+        ("D9", "R7.3", "log_seq"): 6,
+    },
+    ("demos", "rmf_ros2"): {
+        ("D9", "R7.3", "log_seq"): 6,
+    },
+    ("stubborn", "standard"): STUBBORN,
+    ("stubborn", "rmf_ros2"): STUBBORN,
+    # in rmf_ros2 mode R17.1 explains the CANCELs accepted then aborted (D8)
+    ("probe", "standard"): {
+        ("?", "R2.2", "status_mismatch"): 3,
+        ("?", "R4.6", "accepted_busy"): 1,
+        ("?", "R5.2", "race_not_lost"): 2,
+        ("?", "R6.4", "feedback_status"): 2,
+        ("?", "R7.1", "feedback_not_running"): 2,
+        ("?", "R9.1", "goal_status"): 1,
+        ("D10", "R4.12", "accepted_stale_id"): 1,
+        ("D10", "R6.2", "child_id"): 11,
+        ("D26", "R2.2", "status_mismatch"): 2,
+        ("D28", "R2.2", "status_mismatch"): 5,
+        ("D30", "R2.2", "status_mismatch"): 1,
+        ("D30", "R8.2", "feedback_not_running"): 2,
+        ("D31", "R10.3", "cancel_response"): 1,
+        ("D8", "R4.13", "accepted_cancel_idle"): 3,
+        ("D8", "R4.14", "accepted_cancel_id_mismatch"): 1,
+        ("D9", "R7.3", "log_seq"): 40,
+        ("response_seen_late", "R2.2", "status_mismatch"): 22,
+    },
+    ("probe", "rmf_ros2"): {
+        ("?", "R2.2", "status_mismatch"): 4,
+        ("?", "R4.6", "accepted_busy"): 1,
+        ("?", "R5.2", "race_not_lost"): 1,
+        ("?", "R6.4", "feedback_status"): 2,
+        ("?", "R7.1", "feedback_not_running"): 2,
+        ("D10", "R6.2", "child_id"): 12,
+        ("D26", "R2.2", "status_mismatch"): 2,
+        ("D28", "R2.2", "status_mismatch"): 5,
+        ("D30", "R2.2", "status_mismatch"): 1,
+        ("D31", "R10.3", "cancel_response"): 1,
+        ("D9", "R7.3", "log_seq"): 40,
+        ("response_seen_late", "R2.2", "status_mismatch"): 22,
+    },
+}
+
+
+def _found(name: str, compatibility: str) -> collections.Counter[tuple[str, str, str]]:
+    report = check_bag(DATA / name, compatibility=compatibility)
+    return collections.Counter(
+        (label(finding), finding.rule, finding.code)
+        for robot in report.robots
+        for finding in robot.report.findings
+    )
+
+
+#: The recordings whose reading check does not yet explain in full: their findings without a D-number
+#: (``?``) are the open work of calibrating check against the deployed adapter (the probe drives it
+#: through every corner; the ids the adapter gives its children, D10, lead check's later
+#: expectations astray), counted so that any change shows.
+NOT_YET_EXPLAINED = {"probe"}
+
+
+@pytest.mark.parametrize(("name", "compatibility"), sorted(EXPECTED))
+def test_check_finds_exactly_what_the_divergences_page_lists(name: str, compatibility: str) -> None:
+    found = _found(name, compatibility)
+    if name not in NOT_YET_EXPLAINED:
+        assert all(label != "?" for label, _, _ in found), f"a finding no D-number explains: {found}"
+    assert dict(found) == EXPECTED[name, compatibility]
+
+
+def test_every_label_is_a_d_number_of_the_page_that_names_its_recording() -> None:
+    text = DOC.read_text(encoding="utf-8")
+    sections = dict(re.findall(r"^## (D\d+)\.(.*?)(?=^## |\Z)", text, flags=re.MULTILINE | re.DOTALL))
+    for (name, _), counts in EXPECTED.items():
+        for label_, _, _ in counts:
+            if label_ in OPEN or label_ == "?":
+                continue
+            assert label_ in sections, f"{label_} is no section of docs/divergences.md"
+            assert "**Observed**" in sections[label_], f"{label_} has no Observed line"
+            observed = sections[label_].split("**Observed**", 1)[1].split("\n- **", 1)[0]
+            assert f"`{name}`" in observed or "every recording" in observed, (
+                f"{label_}'s Observed line does not name the recording `{name}`"
+            )
+
+
+def test_the_recordings_are_small_and_carry_their_provenance() -> None:
+    size = sum(path.stat().st_size for path in DATA.rglob("*") if path.is_file())
+    assert size < 4_000_000, f"{size} bytes"
+    readme = (DATA / "README.md").read_text(encoding="utf-8")
+    for name, _ in EXPECTED:
+        assert (DATA / name / "metadata.yaml").exists()
+        assert f"`{name}`" in readme
+    assert "d6243d3e" in readme
