@@ -39,9 +39,11 @@ __all__ = [
     "LocalError",
     "MalformedMessage",
     "MissingExtra",
+    "NotSpinning",
     "ProbeError",
     "RecordError",
     "RemoteError",
+    "RobotNotReady",
     "SendError",
     "ServeError",
     "TraceError",
@@ -288,6 +290,14 @@ class DuplicateRobot(LocalError):
 
 class GoalWaitTimeout(DyneventError, TimeoutError):
     """:meth:`dynevent.ros.GoalRun.wait` reached its bound before the goal was over."""
+
+
+class NotSpinning(LocalError):
+    """A client waited for what only its node's callbacks bring, and nothing spins its node."""
+
+
+class RobotNotReady(LocalError, TimeoutError):
+    """:meth:`dynevent.ros.RobotClient.ready` reached its bound: the message says what was missing."""
 
 
 class SendError(LocalError):

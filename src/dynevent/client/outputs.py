@@ -103,6 +103,27 @@ class Refused(_ClientOutput):
     rejection: Rejected
     goal: Goal | None
 
+    # what a caller reads first of an Outcome, so that a result can be read the same either way
+    @property
+    def kind(self) -> OutcomeKind:
+        """:attr:`OutcomeKind.REJECTED`: the goal was refused, here, before it was sent."""
+        return OutcomeKind.REJECTED
+
+    @property
+    def text(self) -> str:
+        """Why, in a sentence: the rejection's."""
+        return f"not sent: {self.rejection.text}"
+
+    @property
+    def reason(self) -> RejectReason:
+        """The reason the server would give."""
+        return self.rejection.reason
+
+    @property
+    def id(self) -> int:
+        """The id the goal would have named (0 when no goal could be built)."""
+        return 0 if self.goal is None else self.goal.id
+
 
 @attrs.frozen(kw_only=True)
 class Outcome(_ClientOutput):

@@ -8,7 +8,9 @@ install (apt or source, Jazzy or newer) or the registry's ROS wheels.
 - :class:`~dynevent.ros.server.DynamicEventServer`: one robot's server on a
   node (several on one node make a fleet);
 - :class:`~dynevent.ros.client.DynamicEventClient`: the client machine over an
-  rclpy action client and the status and begin subscriptions;
+  rclpy action client and the status and begin subscriptions, on a node you spin;
+- :class:`~dynevent.ros.robot.RobotClient` and :class:`~dynevent.ros.robot.AsyncRobotClient`: the
+  same with a node, a context and a spinning thread of their own (blocking, or asyncio);
 - :mod:`dynevent.ros.convert`: the mirrors to and from the rosidl classes.
 """
 
@@ -26,13 +28,16 @@ except ImportError as exc:  # pragma: no cover - depends on the environment
     ) from exc
 
 from dynevent.ros.client import DynamicEventClient, GoalRun
+from dynevent.ros.robot import AsyncRobotClient, RobotClient
 from dynevent.ros.server import ChildEvents, ChildExecution, DynamicEventServer, StubbornHolds
 
 __all__ = [
+    "AsyncRobotClient",
     "ChildEvents",
     "ChildExecution",
     "DynamicEventClient",
     "DynamicEventServer",
     "GoalRun",
+    "RobotClient",
     "StubbornHolds",
 ]

@@ -38,6 +38,7 @@ from dynevent import client as cl
 from dynevent.errors import (
     GoalWaitTimeout,  # defined there with every error; importable here too
     InvalidMessage,
+    NotSpinning,
 )
 from dynevent.ros import convert
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
@@ -83,6 +84,8 @@ class GoalRun:
         self._on_progress = on_progress
         self._over = threading.Event()
         self._future: Any = Future()
+        self._callbacks: list[Callable[[cl.Outcome | cl.Refused], None]] = []
+        self._callbacks_lock = threading.Lock()
 
     def done(self) -> bool:
         """The goal is over (or was never sent)."""
@@ -104,10 +107,24 @@ class GoalRun:
         if self._on_progress is not None:
             self._on_progress(progress)
 
+    def add_done_callback(self, callback: Callable[[cl.Outcome | cl.Refused], None]) -> None:
+        """Call ``callback`` with the result when the goal is over (at once when it is): on the
+        executor's thread, or on the caller's when the goal is already over."""
+        with self._callbacks_lock:
+            if self.result is None:
+                self._callbacks.append(callback)
+                return
+            result = self.result
+        callback(result)
+
     def _end(self, result: cl.Outcome | cl.Refused) -> None:
-        self.result = result
+        with self._callbacks_lock:
+            self.result = result
+            callbacks, self._callbacks = self._callbacks, []
         self._over.set()
         self._future.set_result(result)
+        for callback in callbacks:
+            callback(result)
 
 
 class DynamicEventClient:
@@ -180,11 +197,18 @@ class DynamicEventClient:
 
     def wait_for_status(self, timeout: float) -> bool:
         """Wait (at most ``timeout`` seconds, from another thread than the executor's) for a status.
+        Raises :class:`~dynevent.errors.NotSpinning` at once when the node is in no executor.
 
         The status must be of the newest run the client has heard of: a begin
         can arrive before its run's status, and a goal built from the older
         status would only be refused.
         """
+        if getattr(self._node, "executor", None) is None:
+            raise NotSpinning(
+                f"nothing spins node {self._node.get_name()!r}: add it to an executor that spins in "
+                "another thread (its callbacks bring the status), or use dynevent.ros.RobotClient, "
+                "which spins its own node"
+            )
         with self._views:
             return self._views.wait_for(
                 lambda: self._status_seen and self._state.seq == self._state.newest_seq, timeout

@@ -123,8 +123,10 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
 
 #: How long, after Ctrl-C or SIGTERM, send waits for the goal it sent to be cancelled and answered.
 STOP_BOUND = 10.0
-#: How long send looks for the robot's server before it says which servers the graph has.
+#: How long send looks for the robot's server before it says which other servers the graph has.
 LOOK = 3.0
+#: How often send looks at the graph again while it waits for the robot's server.
+WAKE = 0.5
 
 
 def _found(
@@ -134,27 +136,22 @@ def _found(
     left: Callable[[], float],
     say: Callable[[str], None],
 ) -> bool:
-    """Is the robot's server there?  After a few seconds without it, say which servers the graph has,
-    and wait on (to the timeout) only under ``--wait``, or when the graph names the robot's action
-    already (its server is there, its discovery not yet whole)."""
-    if client.wait_for_server(min(LOOK, left())):
-        return True
-    if (args.fleet, args.robot) in servers_seen(node) and left() > 0:
-        # on the graph, not yet discovered whole (a fleet adapter's took up to 3 s here): wait on
-        if client.wait_for_server(left()):
+    """Is the robot's server there?  Discovery can take seconds (a fleet adapter's took 3 s here, and
+    more on a loaded machine), so send waits on, to the timeout, while the graph shows no Dynamic
+    Event server yet or shows this robot's; once the graph shows other robots' servers and, after
+    :data:`LOOK` seconds, not this one's, it says which it sees and stops, unless ``--wait``."""
+    waited = float(args.timeout)
+    started = waited - left()
+    keep_waiting = bool(getattr(args, "wait", False))
+    while left() > 0:
+        if client.wait_for_server(min(WAKE, left())):
             return True
-    elif getattr(args, "wait", False) and left() > 0:
-        say(
-            no_server_text(node, args.fleet, args.robot, LOOK)
-            + f"; waiting (--wait) up to {left():.0f} s more"
-        )
-        if client.wait_for_server(left()):
-            return True
-    say(
-        no_server_text(
-            node, args.fleet, args.robot, float(args.timeout) if getattr(args, "wait", False) else LOOK
-        )
-    )
+        seen = servers_seen(node)
+        elapsed = waited - left() - started
+        if not keep_waiting and elapsed >= LOOK and seen and (args.fleet, args.robot) not in seen:
+            say(no_server_text(node, args.fleet, args.robot, round(elapsed)))
+            return False
+    say(no_server_text(node, args.fleet, args.robot, waited))
     return False
 
 

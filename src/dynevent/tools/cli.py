@@ -580,8 +580,8 @@ def _add_send_command(commands: argparse._SubParsersAction[argparse.ArgumentPars
     parser.add_argument("--robot", default="tinyRobot1", help="the robot to send to (default: %(default)s)")
     parser.add_argument(
         "--wait", action="store_true",
-        help="wait for the robot's server to appear, up to --timeout (by default send looks for 3 s, then "
-        "says which servers the graph has)",
+        help="wait for the robot's server up to --timeout even when the graph shows other robots' servers "
+        "(by default send stops after 3 s then, naming the servers it sees)",
     )  # fmt: skip
     parser.add_argument("--place", nargs="+", metavar="PLACE", help='NEXT go_to_place {"one_of": [PLACE...]}')
     parser.add_argument("--cancel", action="store_true", help="CANCEL the running event")

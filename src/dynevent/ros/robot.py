@@ -1,0 +1,233 @@
+"""A client of one robot that cannot be left unspun: it owns its ROS context, node and spinning thread.
+
+:class:`RobotClient` is the blocking form, a context manager::
+
+    with RobotClient("tinyRobot", "tinyRobot1") as robot:
+        robot.ready(10.0)
+        outcome = robot.next("go_to_place", '"pantry"').wait(90.0)
+        robot.finish().wait(10.0)
+
+:class:`AsyncRobotClient` is the same for an asyncio program: every command is awaitable, rclpy spins
+in its own thread, and each answer is handed to the event loop thread-safely, so a coroutine that
+waits costs nothing::
+
+    async with AsyncRobotClient("tinyRobot", "tinyRobot1") as robot:
+        await robot.ready(10.0)
+        outcome = await robot.next("go_to_place", '"pantry"')
+
+Both start ROS 2 in a context of their own (``ros_args`` are ROS 2's command-line arguments: remaps,
+``--log-level``...), so that several clients, and a program's own rclpy use, do not meet; each
+close-down is bounded.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+
+from dynevent import client as cl
+from dynevent.errors import LocalError, RobotNotReady
+from dynevent.ros.client import DynamicEventClient, GoalRun
+from dynevent.ros.graph import no_server_text
+from dynevent.ros.spinning import Spinner, bounded_close, close_down
+from dynevent.tools.check.trace import TraceWriter
+
+__all__ = ["AsyncRobotClient", "RobotClient"]
+
+Result = cl.Outcome | cl.Refused
+
+
+class RobotClient:
+    """A :class:`~dynevent.ros.client.DynamicEventClient` of ``fleet``/``robot`` with its own ROS
+    context, node (``node_name``) and spinning thread, started by ``with`` (or :meth:`open`) and
+    stopped at its end (or :meth:`close`).  The commands return a :class:`~dynevent.ros.GoalRun`.
+    ``categories``, ``validators`` and ``trace`` are the client's (see DynamicEventClient)."""
+
+    def __init__(
+        self,
+        fleet: str,
+        robot: str,
+        *,
+        node_name: str = "dynevent_client",
+        ros_args: Sequence[str] = (),
+        categories: Any = None,
+        validators: Any = None,
+        trace: TraceWriter | None = None,
+    ) -> None:
+        self.fleet, self.robot = fleet, robot
+        self._settings = (node_name, tuple(ros_args), categories, validators, trace)
+        self._context: Any = None
+        self._node: Any = None
+        self._client: DynamicEventClient | None = None
+        self._spinner: Spinner | None = None
+
+    # ---------------------------------------------------------------- life
+
+    def open(self) -> RobotClient:
+        """Start ROS in a context of this client's, make its node and client, and spin them."""
+        if self._client is not None:
+            return self
+        node_name, ros_args, categories, validators, trace = self._settings
+        context = rclpy.Context()
+        try:
+            rclpy.init(args=["dynevent", *ros_args], context=context)
+        except Exception as exc:  # rcl's parse errors are not exported
+            raise LocalError(f"{' '.join(ros_args)}: ROS refused these arguments: {exc}") from None
+        self._context = context
+        self._node = rclpy.create_node(node_name, context=context)
+        # the client is made whole before an executor thread can meet it (docs/ros.md)
+        self._client = DynamicEventClient(
+            self._node, self.fleet, self.robot, categories=categories, validators=validators, trace=trace
+        )
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(self._node)
+        self._spinner = Spinner(executor, f"dynevent-{self.fleet}-{self.robot}")
+        self._spinner.start()
+        return self
+
+    def close(self) -> None:
+        """Stop spinning and destroy the client, its node and its context (bounded)."""
+        if self._client is None:
+            return
+        with bounded_close():
+            assert self._spinner is not None
+            self._spinner.stop()
+            self._client.destroy()
+            close_down([self._node], self._context)
+        self._client = self._node = self._context = self._spinner = None
+
+    def __enter__(self) -> RobotClient:
+        return self.open()
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ---------------------------------------------------------------- use
+
+    @property
+    def client(self) -> DynamicEventClient:
+        """The binding's client this one spins (open)."""
+        if self._client is None:
+            raise LocalError(f"the client of {self.fleet}/{self.robot} is not open: use `with` or open()")
+        return self._client
+
+    @property
+    def state(self) -> cl.ClientState:
+        """The client machine's view of the robot and of the open goals."""
+        return self.client.state
+
+    def ready(self, timeout: float = 10.0) -> None:
+        """Wait, at most ``timeout`` seconds in all, for the robot's server and its status; raises
+        :class:`~dynevent.errors.RobotNotReady` saying which was missing (and which servers the graph
+        has)."""
+        client = self.client
+        if not client.wait_for_server(timeout):
+            raise RobotNotReady(no_server_text(self._node, self.fleet, self.robot, timeout))
+        if not client.wait_for_status(timeout):
+            raise RobotNotReady(f"no status from {self.fleet}/{self.robot} within {timeout:g} s")
+
+    def next(
+        self,
+        category: str,
+        description: str,
+        *,
+        stubborn_period: float = 0.0,
+        timeout: float | None = None,
+        on_progress: Callable[[cl.Progress], None] | None = None,
+    ) -> GoalRun:
+        """A NEXT: run this event (see :meth:`DynamicEventClient.next`)."""
+        return self.client.next(
+            category, description, stubborn_period=stubborn_period, timeout=timeout, on_progress=on_progress
+        )
+
+    def cancel(self, on_progress: Callable[[cl.Progress], None] | None = None) -> GoalRun:
+        """A CANCEL naming the running child."""
+        return self.client.cancel(on_progress)
+
+    def finish(self) -> GoalRun:
+        """FINISHED: the dynamic event is over."""
+        return self.client.finish()
+
+
+class AsyncRobotClient:
+    """:class:`RobotClient` for asyncio: ``async with``, and every command awaitable on the running
+    loop.  ``on_progress`` callbacks are called on the loop's thread."""
+
+    def __init__(self, fleet: str, robot: str, **settings: Any) -> None:
+        self._robot = RobotClient(fleet, robot, **settings)
+        self._loop: asyncio.AbstractEventLoop | None = None
+
+    async def __aenter__(self) -> AsyncRobotClient:
+        self._loop = asyncio.get_running_loop()
+        await asyncio.to_thread(self._robot.open)
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        await asyncio.to_thread(self._robot.close)
+
+    @property
+    def state(self) -> cl.ClientState:
+        """The client machine's view of the robot and of the open goals."""
+        return self._robot.state
+
+    async def ready(self, timeout: float = 10.0) -> None:
+        """Wait for the robot's server and status (see :meth:`RobotClient.ready`), off the loop."""
+        await asyncio.to_thread(self._robot.ready, timeout)
+
+    def _awaitable(self, run: GoalRun) -> asyncio.Future[Result]:
+        loop = self._loop
+        if loop is None:
+            raise LocalError("use `async with AsyncRobotClient(...)` first")
+        future: asyncio.Future[Result] = loop.create_future()
+
+        def done(result: Result) -> None:
+            if not future.done():
+                future.set_result(result)
+
+        def hand_over(result: Result) -> None:
+            loop.call_soon_threadsafe(done, result)
+
+        run.add_done_callback(hand_over)
+        return future
+
+    def _on_loop(
+        self, callback: Callable[[cl.Progress], None] | None
+    ) -> Callable[[cl.Progress], None] | None:
+        loop = self._loop
+        if callback is None or loop is None:
+            return callback
+        report = callback
+
+        def hand_over(progress: cl.Progress) -> None:
+            loop.call_soon_threadsafe(report, progress)
+
+        return hand_over
+
+    def next(
+        self,
+        category: str,
+        description: str,
+        *,
+        stubborn_period: float = 0.0,
+        timeout: float | None = None,
+        on_progress: Callable[[cl.Progress], None] | None = None,
+    ) -> asyncio.Future[Result]:
+        """A NEXT; await it for its :class:`~dynevent.client.Outcome` (or a
+        :class:`~dynevent.client.Refused`)."""
+        run = self._robot.next(
+            category, description, stubborn_period=stubborn_period, timeout=timeout,
+            on_progress=self._on_loop(on_progress),
+        )  # fmt: skip
+        return self._awaitable(run)
+
+    def cancel(self, on_progress: Callable[[cl.Progress], None] | None = None) -> asyncio.Future[Result]:
+        """A CANCEL naming the running child; await it for its outcome."""
+        return self._awaitable(self._robot.cancel(self._on_loop(on_progress)))
+
+    def finish(self) -> asyncio.Future[Result]:
+        """FINISHED; await it for its outcome."""
+        return self._awaitable(self._robot.finish())
