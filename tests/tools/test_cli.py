@@ -347,3 +347,36 @@ def test_probe_lists_its_cases_without_ros() -> None:
     # the stale and future seq with a FINISHED, a NEXT and a CANCEL, and the wrap
     assert done.stdout.splitlines()[-1] == "7 case(s)"
     assert done.stdout.startswith("request.seq_stale")
+
+
+def test_every_option_of_the_commands_has_help_that_names_its_default() -> None:
+    """ROS 2's command-line manners: every option says what it is, and what it is when not given."""
+    import argparse
+
+    from dynevent.tools import cli
+
+    parser = argparse.ArgumentParser()
+    commands = parser.add_subparsers()
+    for add in (cli._add_serve_command, cli._add_send_command, cli._add_probe_command,
+                cli._add_record_command, cli._add_check_command):  # fmt: skip
+        add(commands)
+    silent = []
+    for name, sub in commands.choices.items():
+        for action in sub._actions:
+            text = action.help or ""
+            defaulted = action.default not in (None, False, [], argparse.SUPPRESS)
+            if not text or (defaulted and "default" not in text):
+                silent.append(f"{name} {'/'.join(action.option_strings) or action.dest}")
+    assert silent == []
+
+
+def test_ros_arguments_are_split_off_as_ros_2_programs_take_them() -> None:
+    from dynevent.tools.cli import split_ros_args
+
+    assert split_ros_args(["send", "--end"]) == (["send", "--end"], [])
+    assert split_ros_args(["send", "--end", "--ros-args", "-r", "__ns:=/x", "--log-level", "debug"]) == (
+        ["send", "--end"], ["--ros-args", "-r", "__ns:=/x", "--log-level", "debug"],
+    )  # fmt: skip
+    assert split_ros_args(["send", "--ros-args", "-r", "__ns:=/x", "--", "--end"]) == (
+        ["send", "--end"], ["--ros-args", "-r", "__ns:=/x"],
+    )  # fmt: skip
