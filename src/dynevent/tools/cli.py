@@ -280,7 +280,11 @@ def _ros_module(command: str) -> Any:
             f"dynevent {command}: needs ROS 2 (rclpy, rmf_task_msgs); {missing} is not importable",
             file=sys.stderr,
         )
-        print(f"  get it: bash {script} VENV OUT, then . OUT/env.sh and use VENV's python", file=sys.stderr)
+        out = Path.cwd() / "build" / "ros"
+        print(
+            f"  get it, into this environment: bash {script} {sys.prefix} {out} && . {out}/env.sh",
+            file=sys.stderr,
+        )
         return None
 
 

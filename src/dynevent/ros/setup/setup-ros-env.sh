@@ -8,7 +8,7 @@
 #                         [--force] [VENV_DIR [OUT_DIR]]
 # (in a source tree: tests/ros/setup-ros-env.sh; in an installed wheel:
 #  SITE_PACKAGES/dynevent/ros/setup/setup-ros-env.sh, where `dynevent serve` names it)
-#   VENV_DIR  default REPO/.venv-ros   (jazzy: REPO/.venv-ros-jazzy); required outside a source tree
+#   VENV_DIR  default REPO/.venv, the README's (jazzy: REPO/.venv-ros-jazzy); required outside a source tree
 #   OUT_DIR   default REPO/build/ros   (jazzy: REPO/build/ros-jazzy); required outside a source tree
 #   --with-project  also `pip install -e REPO[test]` into the venv (a source tree only)
 #   --force         redo the pip install and the colcon build
@@ -54,7 +54,9 @@ if [ -z "$repo" ]; then
   [ ${#positional[@]} -eq 2 ] || die "outside a source tree, give VENV_DIR and OUT_DIR"
   [ "$with_project" = 0 ] || die "--with-project needs a source tree; pip install dynevent into VENV_DIR instead"
 fi
-venv=${positional[0]:-$repo/.venv-ros$suffix}
+# kilted goes into the README's environment: one venv has the project and ROS 2 (one distro a venv)
+if [ "$distro" = kilted ]; then default_venv=$repo/.venv; else default_venv=$repo/.venv-ros$suffix; fi
+venv=${positional[0]:-$default_venv}
 out=${positional[1]:-$repo/build/ros$suffix}
 mkdir -p "$out/logs"
 venv=$(mkdir -p "$(dirname "$venv")" && cd "$(dirname "$venv")" && pwd)/$(basename "$venv")
@@ -195,6 +197,11 @@ export RMW_IMPLEMENTATION=rmw_fastrtps_cpp
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
 unset ROS_STATIC_PEERS ROS_LOCALHOST_ONLY
 export DYNEVENT_ROS_DISTRO=$distro
+# this venv's python and dynevent first on PATH: the environment that has ROS 2
+case ":\${PATH}:" in
+  *":\$_dynevent_venv/bin:"*) ;;
+  *) export PATH="\$_dynevent_venv/bin:\$PATH" ;;
+esac
 export DYNEVENT_ROS_PYTHON="\$_dynevent_venv/bin/python"
 unset _dynevent_venv _dynevent_overlay
 EOF
