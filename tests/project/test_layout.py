@@ -103,3 +103,15 @@ def test_the_reader_sees_a_wrong_way_import(tmp_path: Path) -> None:
     )
     found = _imports("dynevent.server.machine", path)
     assert {"dynevent.tools.explain", "dynevent.client.step", "dynevent.server.holder"} <= found
+
+
+def test_the_ros_client_and_server_import_neither_each_other() -> None:
+    """What both need (the topics' QoS, introspection) is in dynevent.ros.qos: no import circle, even
+    one made lazy inside a function."""
+    package = Path(__file__).resolve().parents[2] / "src" / "dynevent" / "ros"
+    for module, other in (("client", "server"), ("server", "client")):
+        tree = ast.parse((package / f"{module}.py").read_text(encoding="utf-8"))
+        imported = {
+            node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and node.module
+        }
+        assert f"dynevent.ros.{other}" not in imported, f"ros/{module}.py imports ros/{other}.py"

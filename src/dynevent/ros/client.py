@@ -42,7 +42,7 @@ from dynevent.errors import (
 )
 from dynevent.ros import convert
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
-from dynevent.ros.server import latched
+from dynevent.ros.qos import introspect, latched
 from dynevent.server.inputs import NOW_RANGE
 from dynevent.tools.check.trace import TraceWriter
 from dynevent.wire.messages import Result
@@ -392,16 +392,3 @@ class DynamicEventClient:
             response = DynamicEvent.Impl.SendGoalService.Response(accepted=True)
             handle = ClientGoalHandle(self._action, convert.uuid_to_ros(uuid), response)
             handle.get_result_async().add_done_callback(lambda done, uuid=uuid: self._on_result(uuid, done))
-
-
-def introspect(action: Any, node: Any) -> bool:
-    """Turn on the introspection, with contents, of an rclpy action client or server: its service
-    events are published (``<action>/_action/<service>/_service_event``).  False where rclpy cannot."""
-    configure = getattr(action, "configure_introspection", None)
-    if configure is None:
-        return False
-    from rclpy.qos import QoSProfile
-    from rclpy.service_introspection import ServiceIntrospectionState
-
-    configure(node.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
-    return True

@@ -37,7 +37,7 @@ from dynevent.ros import convert, spinning
 from dynevent.ros.client import introspect
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.graph import no_server_text
-from dynevent.ros.server import latched
+from dynevent.ros.qos import latched
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.server import machine
 from dynevent.tools import probe_cases

@@ -42,7 +42,8 @@ from dynevent.errors import (
 )
 from dynevent.ros import convert, spinning
 from dynevent.ros.convert import RosDescription, describe_type
-from dynevent.ros.server import ChildExecution, DynamicEventServer, latched
+from dynevent.ros.qos import latched
+from dynevent.ros.server import ChildExecution, DynamicEventServer
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs

@@ -41,12 +41,13 @@ from typing import Any, Protocol
 from action_msgs.msg import GoalStatus as RosGoalStatus
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile
 from rclpy.task import Future
 
 from dynevent.errors import InvalidMessage, InvalidValue
 from dynevent.ros import convert
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
+from dynevent.ros.qos import introspect, latched
 from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
@@ -67,16 +68,6 @@ from dynevent.wire.names import (
 from dynevent.wire.vocab import GoalStatus, Status, Tier
 
 __all__ = ["ChildEvents", "ChildExecution", "DynamicEventServer", "StubbornHolds", "latched"]
-
-
-def latched(depth: int) -> QoSProfile:
-    """The QoS of the Dynamic Event topics: reliable, transient-local, keeping ``depth`` messages (R1.4)."""
-    return QoSProfile(
-        history=HistoryPolicy.KEEP_LAST,
-        depth=depth,
-        reliability=ReliabilityPolicy.RELIABLE,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL,
-    )
 
 
 class ChildExecution:
@@ -280,7 +271,6 @@ class _Entities:
         """Turn on the introspection of the action server (the requests' contents) and follow its
         ``send_goal`` service events with ``on_goal``: how a server learns which client sent a goal
         (R22.1).  False where rclpy cannot."""
-        from dynevent.ros.client import introspect  # the client module imports this one
 
         if not introspect(self.action, self.node):
             return False

@@ -1,0 +1,33 @@
+"""What the binding's endpoints share: the QoS of the Dynamic Event topics, and turning on an action's
+service introspection.  A module of its own, so that the client and the server import neither
+each other."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+__all__ = ["introspect", "latched"]
+
+
+def latched(depth: int) -> QoSProfile:
+    """The QoS of the Dynamic Event topics: reliable, transient-local, keeping ``depth`` messages (R1.4)."""
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST,
+        depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL,
+    )
+
+
+def introspect(action: Any, node: Any) -> bool:
+    """Turn on the introspection, with contents, of an rclpy action client or server: its service
+    events are published (``<action>/_action/<service>/_service_event``).  False where rclpy cannot."""
+    configure = getattr(action, "configure_introspection", None)
+    if configure is None:
+        return False
+    from rclpy.service_introspection import ServiceIntrospectionState
+
+    configure(node.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
+    return True
