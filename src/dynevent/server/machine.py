@@ -81,7 +81,6 @@ __all__ = [
     "check_index",
     "child_ended",
     "could_refuse_first",
-    "first_refusal",
     "next_child_id",
     "next_seq",
     "phase_of",
@@ -880,14 +879,6 @@ _STANDARD_PAST_GATES = tuple(
 _RMF_ROS2_PAST_GATES = tuple(
     tuple(check for check in walk if check not in _GATES) for walk in _RMF_ROS2_WALKS
 )
-
-
-def first_refusal(reason: RejectReason) -> int:
-    """The place in :data:`REQUEST_CHECKS` of the first check that can refuse with ``reason``
-    (``len(REQUEST_CHECKS)`` for ``race``, which no request check gives)."""
-    return next(
-        (index for index, check in enumerate(REQUEST_CHECKS) if check.reason is reason), len(REQUEST_CHECKS)
-    )
 
 
 def check_index(rule: str) -> int:
