@@ -685,6 +685,19 @@ def test_an_action_level_cancel_of_the_running_next_stops_its_child() -> None:
     assert run.child_end("canceled")[0] == answer(u(1), CANCELED, text="canceled", id=5)
 
 
+# --------------------------------------------------------------------------- D32
+
+
+@pytest.mark.spec("R8.2", "R7.1")
+def test_a_childs_end_is_in_its_goals_answer_not_its_feedback() -> None:
+    """The child's final status reaches the client in its goal's answer; the machine publishes no
+    feedback at the end (the deployed adapter sends one more feedback with the final status first)."""
+    run = running(child_id=5)
+    outputs = run.child_end("completed")
+    assert not [output for output in outputs if isinstance(output, outs.PublishFeedback)]
+    assert outputs[0] == answer(u(1), SUCCEEDED, text="completed", id=5)
+
+
 _META = {
     "test_the_document_and_this_file_name_the_same_tests",
     "test_the_document_cites_rules_of_the_spec_that_its_tests_cite",

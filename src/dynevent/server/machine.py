@@ -477,6 +477,16 @@ def child_ended(message: DynamicEventStatus) -> bool:
     return message.dynamic_state == _RUNNING and message.status in ENDED_CHILD_STATUSES
 
 
+def ends_a_child(status: str) -> bool:
+    """Whether a child reporting ``status`` has ended: a final status (R8.1)."""
+    return status in ENDED_CHILD_STATUSES
+
+
+def ends_early(status: str) -> bool:
+    """Whether a child ending with ``status`` ended early, and its goal is not answered succeeded (R8.2)."""
+    return status in _EARLY_END
+
+
 def runs_a_child(message: DynamicEventStatus) -> bool:
     """A status that shows a child running: RUNNING, and not a child's final status (R2.2, R20.2)."""
     return message.dynamic_state == _RUNNING and message.status not in ENDED_CHILD_STATUSES

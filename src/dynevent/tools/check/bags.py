@@ -158,6 +158,20 @@ def check_bag(path: str | Path, *, compatibility: Compatibility | str = Compatib
     :class:`~dynevent.errors.BagError` for a bag that cannot be read (no such
     file, not a bag, truncated or corrupt, a message that cannot be decoded).
     """
+    return _read(path, Compatibility(compatibility), keep=False)[0]
+
+
+def bag_records(path: str | Path) -> dict[tuple[str, str], list[Record]]:
+    """Each robot's records in the bag at ``path``, by (fleet, robot), in the order the server
+    made them (as :func:`check_bag` judges them; what :mod:`dynevent.conformance.replay` replays).
+    Raises as :func:`check_bag` does."""
+    robots = _read(path, Compatibility.STANDARD, keep=True)[1]
+    return {key: robot.kept for key, robot in sorted(robots.items())}
+
+
+def _read(
+    path: str | Path, compatibility: Compatibility, *, keep: bool
+) -> tuple[BagReport, dict[tuple[str, str], _Robot]]:
     source = str(path)
     rosbags = _rosbags()
     reader_type, reader_errors = rosbags
@@ -170,7 +184,7 @@ def check_bag(path: str | Path, *, compatibility: Compatibility | str = Compatib
         reader.open()
     try:
         with _storage(source, reader_errors):
-            routes = _routes(reader.connections, robots, Compatibility(compatibility))
+            routes = _routes(reader.connections, robots, compatibility, keep)
             other = sum(item.msgcount for item in reader.connections if item.id not in routes)
             wanted = [item for item in reader.connections if item.id in routes]
             end = int(reader.end_time) - 1  # the recording's last message, on any topic
@@ -201,7 +215,7 @@ def check_bag(path: str | Path, *, compatibility: Compatibility | str = Compatib
     finally:
         with _storage(source, reader_errors):
             reader.close()
-    return BagReport(source=source, robots=reports, messages=messages, other=other)
+    return BagReport(source=source, robots=reports, messages=messages, other=other), robots
 
 
 @contextlib.contextmanager
@@ -256,7 +270,7 @@ def _rosbags() -> tuple[Any, tuple[type[BaseException], ...]]:
 
 
 def _routes(
-    connections: Any, robots: dict[tuple[str, str], _Robot], compatibility: Compatibility
+    connections: Any, robots: dict[tuple[str, str], _Robot], compatibility: Compatibility, keep: bool = False
 ) -> dict[int, tuple[_Robot, str]]:
     """Each connection (by id) on a Dynamic Event name: the robot it belongs to and its channel."""
     routes: dict[int, tuple[_Robot, str]] = {}
@@ -284,13 +298,13 @@ def _routes(
         if connection.msgtype != TYPES[channel]:
             continue  # a Dynamic Event name with another type: not this protocol's
         key = (parsed.fleet, parsed.robot)
-        robot = robots.setdefault(key, _Robot(*key, compatibility=compatibility))
+        robot = robots.setdefault(key, _Robot(*key, compatibility=compatibility, keep=keep))
         if connection.msgcount:  # a topic subscribed to in vain holds nothing to judge
             robot.channels.add(channel)
             robot.own_begins = robot.own_begins or channel == "begin"
         routes[connection.id] = (robot, channel)
     for connection in fleet_wide:  # a robot's begins, where its own begin topic was not recorded
-        routes[connection.id] = (_FleetBegins(robots, compatibility), "begin")  # type: ignore[assignment]
+        routes[connection.id] = (_FleetBegins(robots, compatibility, keep), "begin")  # type: ignore[assignment]
     return routes
 
 
@@ -300,7 +314,12 @@ class _Robot:
     answer that differs is a second answer, which the judgement sees)."""
 
     def __init__(
-        self, fleet: str, robot: str, *, compatibility: Compatibility | str = Compatibility.STANDARD
+        self,
+        fleet: str,
+        robot: str,
+        *,
+        compatibility: Compatibility | str = Compatibility.STANDARD,
+        keep: bool = False,
     ) -> None:
         self.fleet, self.robot = fleet, robot
         self.compatibility = Compatibility(compatibility)
@@ -326,6 +345,8 @@ class _Robot:
         self._before: list[Report] = []  # the judgements cut where the bag lost a goal's request
         self.lost: list[tuple[int, str]] = []
         self._arrived = 0
+        self.keep = keep  # keep every record passed on, in ``kept`` (bag_records)
+        self.kept: list[Record] = []
 
     def take(self, channel: str, time: int, message: Any) -> None:
         self.channels.add(channel)
@@ -411,6 +432,8 @@ class _Robot:
         return self._judge
 
     def _pass(self, record: Record) -> None:
+        if self.keep:
+            self.kept.append(record)
         if isinstance(self.judge, PartialJudge):
             self.judge.push(record)
             return
@@ -549,15 +572,18 @@ class _FleetBegins:
     """The fleet-wide begin topic: each begin goes to its robot, unless that robot's own begin
     topic was recorded (the same begin, twice)."""
 
-    def __init__(self, robots: dict[tuple[str, str], _Robot], compatibility: Compatibility) -> None:
+    def __init__(
+        self, robots: dict[tuple[str, str], _Robot], compatibility: Compatibility, keep: bool = False
+    ) -> None:
         self.robots = robots
         self.compatibility = compatibility
+        self.keep = keep
 
     def take(self, channel: str, time: int, message: Any) -> None:
         key = (str(message.fleet), str(message.robot))
         robot = self.robots.get(key)
         if robot is None:
-            robot = self.robots[key] = _Robot(*key, compatibility=self.compatibility)
+            robot = self.robots[key] = _Robot(*key, compatibility=self.compatibility, keep=self.keep)
         if not robot.own_begins:
             robot.take(channel, time, message)
 
