@@ -6,10 +6,12 @@ takes is measured, not asserted: docs/probe.md.)"""
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 import time
 import xml.etree.ElementTree as ET
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -17,6 +19,7 @@ from ros_support import Child, child_env, finish
 
 from dynevent.ros import probe
 from dynevent.tools.check import check_trace
+from dynevent.tools.check.trace import Finding
 from dynevent.tools.probe_cases import CASES
 
 #: What the rmf_ros2 mode of serve reproduces of rmf_ros2, case by case: the D-number the probe names.
@@ -28,6 +31,7 @@ RMF_ROS2_FAILS = {
     "next.id_stale": "D10",
     "next.status_after_child": "D2",
     "cancel.wrong_id": "D8",
+    "cancel.running_child": "D28",
 }
 
 
@@ -89,12 +93,23 @@ def _verdicts(output: str) -> dict[str, str]:
     return verdicts
 
 
-def _check_agrees(trace: Path, junit: Path, *, only_failed: bool = True) -> set[str]:
+def _waiting_canceled(finding: Finding) -> bool:
+    """check's finding of D28: the status after a cancelled child's end says WAITING ``canceled``."""
+    return (
+        finding.rule == "R2.2"
+        and re.search(r"status WAITING seq=\d+ id=\d+ canceled", finding.message) is not None
+    )
+
+
+def _check_agrees(
+    trace: Path, junit: Path, *, only_failed: bool = True, everywhere: Callable[[Finding], bool] | None = None
+) -> set[str]:
     """``dynevent check`` on the probe's trace agrees with the probe's verdicts: it finds a violation
     within every case the probe failed on a message it saw (not one that never came) whose failure a
     trace shows (``Case.traced``); with ``only_failed``, within no case the probe passed.  (A defect
     that shows in every message, a wrong feedback id, is found by check in every case, and by the
-    probe in the case of its rule: so not ``only_failed`` for broken servers.)  The cases it found."""
+    probe in the case of its rule: so not ``only_failed`` for broken servers; ``everywhere`` names
+    the findings of such a defect that check may make in the other cases.)  The cases it found."""
     text = trace.read_text("utf-8")
     case_at: dict[int, str] = {}
     current = ""
@@ -104,18 +119,23 @@ def _check_agrees(trace: Path, junit: Path, *, only_failed: bool = True) -> set[
         case_at[number] = current
     report = check_trace(text, str(trace))
     found = {case_at[finding.line] for finding in report.findings}
+    elsewhere = {
+        case_at[finding.line] for finding in report.findings if everywhere is None or not everywhere(finding)
+    }
     failed, seen = set(), set()
     for test in ET.parse(junit).getroot().iter("testcase"):
         properties = {item.get("name"): item.get("value") for item in test.iter("property")}
         if str(properties["verdict"]).startswith(("fail", "known")):
             failed.add(test.get("name"))
-            if "absent" not in properties:
+            # a RUNNING status with the child's end (D2) is one a passive observer cannot tell from
+            # the moment R20.2 allows a server: check does not see it
+            if "absent" not in properties and "(D2)" not in str(properties["verdict"]):
                 seen.add(test.get("name"))
     traced = {case.id for case in CASES if case.traced}
     findings = [finding.to_dict() for finding in report.findings]
     assert seen & traced <= found, findings
     if only_failed:
-        assert found <= failed, findings
+        assert elsewhere <= failed, findings
     assert failed or report.clean, findings
     return found
 
@@ -156,7 +176,9 @@ def test_the_rmf_ros2_mode_fails_exactly_at_its_recorded_divergences(tmp_path: P
     expected["describe.query"] = "info"  # no description service (D17): the spec leaves it open
     expected.update({case: f"fail ({number})" for case, number in RMF_ROS2_FAILS.items()})
     assert _verdicts(strict.stdout) == expected, strict.stdout
-    _check_agrees(tmp_path / "t", tmp_path / "j.xml")
+    # D28 shows wherever a child is cancelled, the probe's own clean-ups too: the probe judges it in
+    # cancel.running_child, check at every such end
+    _check_agrees(tmp_path / "t", tmp_path / "j.xml", everywhere=_waiting_canceled)
     page = (tmp_path / "report.html").read_text("utf-8")
     for case, number in RMF_ROS2_FAILS.items():
         assert f'<h2 id="{case}">{case}: fail ({number})</h2>' in page
@@ -203,7 +225,8 @@ BROKEN = {
         "stubborn.clamp_notice": "fail", "next.stateless_id": "missing", "next.status_after_child": "missing",
         "feedback.log_seq": "missing", "action.cancel_answered": "missing",
     },
-    "running_after_child": {"next.status_after_child": "fail (D2)"},
+    # R8.4 after a completed child, and after a cancelled one
+    "running_after_child": {"next.status_after_child": "fail (D2)", "cancel.running_child": "fail (D2)"},
     # every case that holds a child's feedback to its id
     "wrong_feedback_id": {
         "next.runs_a_child": "fail", "next.id_zero": "fail", "next.id_chosen": "fail",

@@ -335,9 +335,10 @@ def _check_step(
         and isinstance(event, (ins.ChildProgress, ins.ChildFinished))
         and not (isinstance(event, ins.ChildFinished) and before.task_signal)
     ):  # R17.4, R17.5: what rmf_ros2's wire shows, published every time
+        freed = isinstance(event, ins.ChildFinished) and before.cancels  # a CANCEL freed the slot (R17.4)
         wire = DynamicEventStatus(
             dynamic_event_seq=before.seq,
-            dynamic_state=DynamicState.RUNNING,
+            dynamic_state=DynamicState.WAITING if freed else DynamicState.RUNNING,
             status=event.status,
             id=running.child_id,
             time=machine.status_message(after, event.now).time,

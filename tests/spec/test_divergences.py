@@ -456,6 +456,20 @@ def test_rmf_ros2_mode_publishes_running_at_a_childs_end() -> None:
     assert run.request(u(2), next_goal(run.seq, 0)) == accepted(u(2))
 
 
+@pytest.mark.spec("R17.4", "R9.3")
+def test_rmf_ros2_mode_publishes_waiting_at_the_end_of_a_cancelled_child() -> None:
+    """After a CANCEL goal the message says WAITING with the child's final status, as the deployed
+    adapter's does once its CANCEL has freed the slot (D28); the machine itself kept the robot RUNNING
+    until the end, and answers both goals then (D1 is not reproduced)."""
+    run = running(config=RMF_ROS2, uuid=u(1))
+    run.request(u(2), cancel_goal(run.seq, 2))
+    run.start(u(2))
+    assert run.phase is RUNNING
+    outputs = run.child_end("canceled")
+    assert outputs[-1] == status(run.seq, WAITING, "canceled", 2)
+    assert answer(u(2), SUCCEEDED, text="canceled", id=2) in outputs
+
+
 @pytest.mark.spec("R20.2", "R17.4")
 def test_dynevents_client_reads_rmf_ros2s_running_after_a_childs_end_as_waiting() -> None:
     from dynevent import client

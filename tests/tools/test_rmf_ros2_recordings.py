@@ -32,6 +32,10 @@ OPEN = {
     # a task cancel is visible only as its log line and the INACTIVE that follows: check keeps the
     # child running
     "task_signal_unseen",
+    # a client records its CANCEL's request after sending it, and the server may act on it first:
+    # check reads the status of the cancelled child's end before the CANCEL, as the child still
+    # running (the replay pulls such a CANCEL ahead, dynevent.conformance.replay.CLIENT_LAG)
+    "cancel_seen_late",
 }
 
 
@@ -47,7 +51,7 @@ def label(finding: Finding) -> str:
     if code == "status_mismatch" and re.search(r"status WAITING seq=\d+ id=0 uninitialized", message):
         return "D26"
     if code == "status_mismatch" and re.search(r"status WAITING seq=\d+ id=\d+ canceled", message):
-        return "D28"
+        return "cancel_seen_late" if expected.startswith("RUNNING") else "D28"
     if code == "status_mismatch" and "status RUNNING" in message and expected.startswith("WAITING"):
         return "response_seen_late"
     if code == "status_mismatch" and "status INACTIVE" in message and "canceled" in expected:
@@ -73,8 +77,8 @@ def label(finding: Finding) -> str:
 SEND = {
     ("D10", "R6.2", "child_id"): 2,
     ("D26", "R2.2", "status_mismatch"): 3,
-    ("D28", "R2.2", "status_mismatch"): 2,
     ("D9", "R7.3", "log_seq"): 9,
+    ("cancel_seen_late", "R2.2", "status_mismatch"): 2,
     ("response_seen_late", "R2.2", "status_mismatch"): 7,
     ("task_signal_unseen", "R2.2", "status_mismatch"): 1,
     ("task_signal_unseen", "R3.4", "begin_while_active"): 1,
@@ -86,10 +90,10 @@ STUBBORN = {
 }
 
 EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
-    # serve's rmf_ros2 mode does not yet reproduce what these show (D10's numbering two apart, D28):
-    # the two modes find the same; a mended emulation makes the rmf_ros2 rows shorter
+    # the status of a cancelled child's end, read before its late CANCEL, is what serve's rmf_ros2
+    # mode publishes at that end (WAITING canceled, R17.4): only the standard mode finds it
     ("send", "standard"): SEND,
-    ("send", "rmf_ros2"): SEND,
+    ("send", "rmf_ros2"): {key: count for key, count in SEND.items() if key[0] != "cancel_seen_late"},
     ("demos", "standard"): {
         ("D9", "R7.3", "log_seq"): 6,
     },
@@ -109,9 +113,10 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("D10", "R4.12", "accepted_stale_id"): 1,
         ("D10", "R6.2", "child_id"): 11,
         ("D26", "R2.2", "status_mismatch"): 2,
-        ("D28", "R2.2", "status_mismatch"): 5,
+        ("D28", "R2.2", "status_mismatch"): 1,
         ("D30", "R2.2", "status_mismatch"): 1,
         ("D30", "R8.2", "feedback_not_running"): 2,
+        ("cancel_seen_late", "R2.2", "status_mismatch"): 4,
         ("D31", "R10.3", "cancel_response"): 1,
         ("D8", "R4.13", "accepted_cancel_idle"): 3,
         ("D8", "R4.14", "accepted_cancel_id_mismatch"): 1,
@@ -126,10 +131,10 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("?", "R7.1", "feedback_not_running"): 2,
         ("D10", "R6.2", "child_id"): 12,
         ("D26", "R2.2", "status_mismatch"): 2,
-        ("D28", "R2.2", "status_mismatch"): 5,
         ("D30", "R2.2", "status_mismatch"): 1,
         ("D31", "R10.3", "cancel_response"): 1,
         ("D9", "R7.3", "log_seq"): 40,
+        ("cancel_seen_late", "R2.2", "status_mismatch"): 4,
         ("response_seen_late", "R2.2", "status_mismatch"): 22,
     },
 }

@@ -753,6 +753,7 @@ def _cancel_running_child(probe: Probe, case: Case) -> Finding:
     expected = "CANCEL succeeded; the NEXT answered once, its child canceled"
     with probe.child() as (running, child_id):
         status = probe.link.status or probe.any_status()
+        since = len(probe.link.history())
         cancel = probe.send(_goal(status, EventType.CANCEL, id=child_id))
         running.answered(probe.options.timeout)
         probe.note(f"the NEXT: {_describe_answer(running)}")
@@ -766,7 +767,29 @@ def _cancel_running_child(probe: Probe, case: Case) -> Finding:
         if cancel_answer[0] is not GoalStatus.SUCCEEDED or next_answer[1].status != _CANCELED:
             seen = f"CANCEL {_describe_answer(cancel)}; NEXT {_describe_answer(running)}"
             return Finding(case, Verdict.FAIL, expected=expected, seen=seen)
-        return Finding(case, Verdict.PASS, expected=expected, seen="so")
+        return _status_after_cancel(probe, case, child_id, since)
+
+
+def _status_after_cancel(probe: Probe, case: Case, child_id: int, since: int) -> Finding:
+    """R8.4: once a cancelled child has ended, the status says WAITING ``standby`` with its id; every
+    status after the CANCEL that shows the robot waiting must say so (rmf_ros2's says WAITING
+    ``canceled``, D28, or RUNNING with the child's end, D2)."""
+    expected = f"WAITING, standby, id {child_id}"
+
+    def shows_the_end(status: DynamicEventStatus) -> bool:
+        return status.id == child_id and machine.robot_waits(status)
+
+    if not probe.link.wait_seen(shows_the_end, since, probe.options.timeout):
+        return Finding(case, Verdict.FAIL, expected=expected, seen="no status after the child", absent=True)
+    for after in filter(shows_the_end, probe.link.history()[since:]):
+        if after.dynamic_state == DynamicState.WAITING and after.status == _STANDBY:
+            continue
+        phase = DynamicState(after.dynamic_state).name
+        probe.note(f"status {phase} seq={after.dynamic_event_seq} id={after.id} {after.status}")
+        divergence = "D2" if after.dynamic_state == DynamicState.RUNNING else "D28"
+        seen = f"{phase}, {after.status}, id {after.id}"
+        return Finding(case, Verdict.FAIL, expected=expected, seen=seen, divergence=divergence)
+    return Finding(case, Verdict.PASS, expected=expected, seen="so")
 
 
 def _finished(probe: Probe, case: Case) -> Finding:

@@ -446,11 +446,14 @@ def status_of(
     )
 
 
-def _running_status(state: State, status: str, child_id: int, now: int) -> DynamicEventStatus:
-    """A RUNNING status message naming a child, whatever the state (rmf_ros2 mode, R17.4, R17.5)."""
+def _running_status(
+    state: State, status: str, child_id: int, now: int, dynamic_state: int = _RUNNING
+) -> DynamicEventStatus:
+    """A status message naming a child, RUNNING unless told otherwise, whatever the state (rmf_ros2
+    mode, R17.4, R17.5)."""
     return _make_status(
         dynamic_event_seq=state.seq,
-        dynamic_state=_RUNNING,
+        dynamic_state=dynamic_state,
         status=status,
         id=child_id,
         time=_time(now),
@@ -1384,8 +1387,10 @@ def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerCon
             anchor=anchor,
         )
     after = _copy_at_child_end(state, None, (), _STANDBY, stubborn)  # R8.4
-    if config.compatibility is _RMF_ROS2:  # published while the slot is still held
-        stale = _running_status(after, event.status, running.child_id, event.now)
+    if config.compatibility is _RMF_ROS2:  # published while the slot is still held (R17.4)...
+        # ...unless a CANCEL goal ended the child: it freed the slot first (WAITING, D28)
+        phase = _WAITING if state.cancels else _RUNNING
+        stale = _running_status(after, event.status, running.child_id, event.now, phase)
         outputs.append(outs.PublishStatus(message=stale, rule="R17.4"))
         return Transition(after, tuple(outputs))
     # the slot is free where a goal held it: the status changed (R2.3)

@@ -750,6 +750,8 @@ class Observer(_Goals, _Children):
             return None  # the run ends: R13.4 and R2.3 as in standard mode
         if not isinstance(event, (ins.ChildProgress, ins.ChildFinished)):
             return None
+        if isinstance(event, ins.ChildFinished) and self.cancels:  # a CANCEL freed the slot first (R17.4)
+            return machine.status_of(self.seq, True, event.status, running.child_id, None, event.now)
         return machine.status_of(self.seq, True, event.status, self.last_id, running.child_id, event.now)
 
     def _effect(

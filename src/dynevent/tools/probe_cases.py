@@ -151,8 +151,9 @@ CASES: tuple[Case, ...] = (
          needs="child"),
     Case("cancel.seq_future", "a CANCEL of the running child for a run that has not begun is refused",
          ("R4.2",), needs="child"),
-    Case("cancel.running_child", "a CANCEL of the running child ends it: both goals answered once",
-         ("R9.3", "R8.2", "R8.3", "R19.1"), needs="child"),
+    Case("cancel.running_child", "a CANCEL of the running child ends it: both goals answered once, "
+         "then WAITING standby", ("R9.3", "R8.2", "R8.3", "R19.1", "R8.4"), needs="child",
+         divergences=("D28",)),
     Case("cancel.both_answered", "two CANCELs of the running child wait for its end and are both "
          "answered with its result", ("R9.3", "R8.3", "R19.1"), needs="child"),
     Case("action.cancel_running", "an action-level cancel of the running NEXT is accepted and the NEXT "
