@@ -19,6 +19,7 @@ from pathlib import Path
 import attrs
 import pytest
 
+from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.machine import ServerConfig, State, status_message
 from dynevent.wire.messages import DescriptionResponse
@@ -710,6 +711,23 @@ def test_a_childs_end_is_in_its_goals_answer_not_its_feedback() -> None:
     outputs = run.child_end("completed")
     assert not [output for output in outputs if isinstance(output, outs.PublishFeedback)]
     assert outputs[0] == answer(u(1), SUCCEEDED, text="completed", id=5)
+
+
+@pytest.mark.spec("R17.7", "R8.2")
+def test_rmf_ros2_mode_sends_a_childs_end_as_feedback_before_its_answer() -> None:
+    run = running(config=RMF_ROS2, uuid=u(1))  # child 2, numbered by the adapter
+    outputs = run.child_end("completed")
+    assert outputs[0] == feedback(u(1), "completed", 2)
+    assert outputs[1] == answer(u(1), SUCCEEDED, text="completed", id=2)
+
+
+@pytest.mark.spec("R17.7", "R13.4")
+def test_rmf_ros2_mode_sends_the_end_as_feedback_under_a_task_cancel_too() -> None:
+    run = running(config=RMF_ROS2, uuid=u(1))
+    run.step(ins.TaskCancel(now=T0))
+    outputs = run.child_end("canceled")
+    assert outputs[0] == feedback(u(1), "canceled", 2)
+    assert outputs[1] == answer(u(1), ABORTED, text="canceled", id=2)
 
 
 _META = {

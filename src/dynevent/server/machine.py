@@ -1360,7 +1360,11 @@ def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerCon
     running = state.running
     if running is None or not running.started:
         return _ignored("R18.4", state, event.KIND, "no child event is running")
-    outputs = _answers_at_child_end(state, running, event.status)
+    outputs: list[outs.Output] = []
+    if config.compatibility is _RMF_ROS2:  # the child's end as feedback first (R17.7)
+        feedback = _make_feedback(status=event.status, id=running.child_id, logs=())
+        outputs.append(outs.PublishFeedback(goal_uuid=running.goal_uuid, feedback=feedback, rule="R17.7"))
+    outputs += _answers_at_child_end(state, running, event.status)
     if state.task_signal:  # the dynamic event ends with the signal (R13.4)
         after = _replace_state(state, running=None, cancels=())
         after = _end_dynamic_event(after, state.task_signal, outputs, task_over=True)

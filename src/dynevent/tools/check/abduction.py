@@ -168,6 +168,8 @@ def candidates(state: State, record: Record, now: int) -> Iterator[list[ins.Inpu
                 tier = last.tier if last is not None and last.tier in _TIERS else "info"
                 log_text = last.text[: ins.MAX_LOG_TEXT_LENGTH] if last is not None else None
                 yield [ins.ChildProgress(status=status, log_text=log_text, tier=tier, now=now)]
+                if machine.ends_a_child(status) and not feedback.logs:
+                    yield [ins.ChildFinished(status=status, now=now)]  # its end as feedback (R17.7)
             else:
                 yield [ins.Resume(now=now)]
         if any(item.goal_uuid == uuid for item in state.queued):
@@ -227,6 +229,12 @@ def abduce(
     exact: list[_Found] = []
     for events in candidates(state, record, now):
         after, owed = simulate(state, events, config)
+        if kind is outs.AnswerGoal:  # a feedback owed before the answer (R17.7) may have come already
+            owed = [
+                item
+                for item in owed
+                if item.channel != channel or not isinstance(item.output, outs.PublishFeedback)
+            ]
         first = next((item for item in owed if item.channel.startswith("goal:")), None)
         if first is None or first.channel != channel or not isinstance(first.output, kind):
             continue
