@@ -335,6 +335,7 @@ class _Robot:
         self._waiting: list[tuple[int, float, int, Record]] = []
         self._waiting_goals: dict[str, tuple[int, float, int, Record]] = {}
         self._waiting_answers: dict[str, tuple[int, float, int, Record]] = {}
+        self._waiting_responses: dict[str, tuple[int, float, int, Record]] = {}
         self._last: collections.OrderedDict[str, int] = collections.OrderedDict()  # a goal's latest key
         self._goals: collections.OrderedDict[str, Record] = collections.OrderedDict()  # awaiting a response
         # the goals whose answer a client asked for, and those whose goal status showed their end
@@ -404,6 +405,8 @@ class _Robot:
         self._arrived += 1
         if record.kind == "goal":
             self._waiting_goals[record.goal_uuid] = entry
+        elif record.kind == "goal_response":
+            self._waiting_responses[record.goal_uuid] = entry
         elif record.kind == "result":
             self._waiting_answers[record.goal_uuid] = entry
         while self._waiting and self._waiting[0][0] <= record.time - SKEW:
@@ -411,16 +414,22 @@ class _Robot:
 
     def _release(self) -> None:
         """Pass on the first record waiting; a goal stamped later than a record that names it (two
-        hosts' clocks) goes first."""
+        hosts' clocks) goes first, and so does its response: a client stamps the response when it
+        receives it, after the server has begun to send the goal's feedback."""
         entry = heapq.heappop(self._waiting)
         record = entry[3]
         if self._waiting_answers.get(record.goal_uuid) is entry:
             del self._waiting_answers[record.goal_uuid]
-        goal = self._waiting_goals.pop(record.goal_uuid, None) if record.goal_uuid else None
-        if goal is not None and goal is not entry:
-            self._waiting.remove(goal)
-            heapq.heapify(self._waiting)
-            self._pass(goal[3])
+        if self._waiting_responses.get(record.goal_uuid) is entry:
+            del self._waiting_responses[record.goal_uuid]
+        uuid = record.goal_uuid
+        goal = self._waiting_goals.pop(uuid, None) if uuid else None
+        response = self._waiting_responses.pop(uuid, None) if uuid and record.kind != "goal" else None
+        for first in (goal, response):
+            if first is not None and first is not entry:
+                self._waiting.remove(first)
+                heapq.heapify(self._waiting)
+                self._pass(first[3])
         self._pass(record)
 
     @property

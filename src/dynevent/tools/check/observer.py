@@ -284,6 +284,25 @@ class _Requests:
             return
         self.books.goals[record.goal_uuid] = _GoalSeen(goal=record.message, line=record.line)
 
+    def ended_unseen(self) -> bool:
+        """Whether an accepted goal the machine finds busy found the running child ended: a child
+        whose last report was a final status (R20.2), of a goal the trace picked up mid-way (its
+        request, so its answer too, may be missing from a recording).  The child is then taken as
+        ended, as a client takes it, and its answer is not judged."""
+        state = self.books.st
+        running = state.running
+        if running is None or not running.started or state.task_signal:
+            return False
+        bound = self.books.goals.get(running.goal_uuid)
+        if not machine.ends_a_child(running.child_status) or bound is None or bound.line != 0:
+            return False
+        if bound.answered is not None:
+            return False
+        after, _ = self.books.simulate([ins.ChildFinished(status=running.child_status, now=self.books.now)])
+        self.books.state = after
+        bound.owed = True
+        return True
+
     def on_goal_response(self, record: Record) -> None:
         if record.goal_uuid in self.duplicates:
             self.duplicates.discard(record.goal_uuid)
@@ -294,6 +313,9 @@ class _Requests:
         seen.responded, seen.accepted = True, record.accepted
         goal = seen.goal
         decision = machine.accept(self.books.st, goal, self.books.config_for(goal))
+        busy = isinstance(decision, outs.Rejected) and decision.reason is RejectReason.BUSY
+        if busy and record.accepted and self.ended_unseen():
+            decision = machine.accept(self.books.st, goal, self.books.config_for(goal))
         if not self.agrees(decision, record):
             self.explain_response(goal, record)
             decision = machine.accept(self.books.st, goal, self.books.config_for(goal))
