@@ -11,7 +11,13 @@ Two servers, each in a process of its own, serve the same action type
   feedback and succeeds: the least a server doing the same exchange does;
 - ``peer_status``: the same, plus the two status messages the protocol
   requires of every goal (RUNNING when it starts, WAITING when it ends), which
-  dynevent publishes and the bare peer does not.
+  dynevent publishes and the bare peer does not;
+- ``dynevent_rmf_ros2``: dynevent's server in ``rmf_ros2`` mode, as ``dynevent
+  serve --compatibility rmf_ros2`` configures it, with the same children;
+- with ``--adapter FLEET/ROBOT --adapter-pid PID --place PLACE``, a live
+  server too: Open-RMF's own fleet adapter (lab/rmf_ros2/), sent NEXTs to the
+  place its robot stands at, so that each child ends at once (the adapter
+  plans, finds the robot there, and completes).
 
 One client (a plain rclpy ``ActionClient``, the same for both) sends NEXT
 goals one after another and times each from the send to the result, with the
@@ -21,6 +27,7 @@ p90 of each, and dynevent's cost on top of rclpy's as a fraction of the bare
 round trip.  Needs a ROS 2 environment with ``rmf_task_msgs``.
 
     python bench/ros_roundtrip.py [--goals N] [--quick] [--write]
+    python bench/ros_roundtrip.py --adapter tinyRobot/tinyRobot1 --adapter-pid PID --place hall
 
 ``--write`` records the result as the ``ros-roundtrip`` section of bench/results.md.
 """
@@ -28,6 +35,7 @@ round trip.  Needs a ROS 2 environment with ``rmf_task_msgs``.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import random
 import statistics
@@ -54,7 +62,7 @@ from rmf_task_msgs.action import DynamicEvent
 kind, fleet, robot = sys.argv[1:4]
 rclpy.init()
 node = rclpy.create_node("bench_server_" + kind)
-if kind == "dynevent":
+if kind in ("dynevent", "dynevent_rmf_ros2"):
     from dynevent.server.machine import ServerConfig, any_description
     from dynevent.ros import DynamicEventServer
 
@@ -67,10 +75,13 @@ if kind == "dynevent":
         def interrupt(self, execution): pass
         def resume(self, execution): pass
 
-    config = ServerConfig(categories={"go_to_place": any_description})
+    categories = {"go_to_place": any_description}
+    config = ServerConfig(categories=categories)
+    if kind == "dynevent_rmf_ros2":
+        config = ServerConfig.rmf_ros2(categories)
     server = DynamicEventServer(node, fleet, robot, config, Children())
     server.begin("{}", 0)
-else:
+if kind in ("peer", "peer_status"):
     status = None
     if kind == "peer_status":
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -110,20 +121,41 @@ stop.wait(600)
 
 #: The servers measured: dynevent, the bare peer, and the peer that also publishes the two status
 #: messages the protocol requires of every goal (RUNNING at its start, WAITING at its end).
-KINDS = ("dynevent", "peer", "peer_status")
+KINDS = ("dynevent", "dynevent_rmf_ros2", "peer", "peer_status")
 
 
 class Client:
     """A plain rclpy action client for one robot; times goals from send to result."""
 
-    def __init__(self, node: Any, fleet: str, robot: str) -> None:
+    def __init__(
+        self, node: Any, fleet: str, robot: str, description: str = '"a"', live: bool = False
+    ) -> None:
         from rclpy.action import ActionClient
         from rmf_task_msgs.action import DynamicEvent
 
         self.goal_type = DynamicEvent.Goal
+        self.description = description
+        self.seq = 1
         self.action = ActionClient(node, DynamicEvent, f"rmf/dynamic_event/command/{fleet}/{robot}")
         if not self.action.wait_for_server(timeout_sec=20):
             raise SystemExit(f"no server for {fleet}/{robot}")
+        if live:  # a live server's run: its seq from the status topic
+            from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+            from rmf_task_msgs.msg import DynamicEventStatus
+
+            latched = QoSProfile(
+                depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+            )
+            heard = threading.Event()
+
+            def on_status(message: Any) -> None:
+                self.seq = message.dynamic_event_seq
+                heard.set()
+
+            topic = f"rmf/dynamic_event/status/{fleet}/{robot}"
+            self.subscription = node.create_subscription(DynamicEventStatus, topic, on_status, latched)
+            if not heard.wait(20):
+                raise SystemExit(f"no status from {fleet}/{robot}")
 
     def round_trip(self, goal_id: int, timeout: float = 10.0) -> tuple[float, int, str]:
         """Seconds from send until both the result and a feedback are in; the feedback count, the status.
@@ -152,7 +184,11 @@ class Client:
             handle.get_result_async().add_done_callback(on_result)
 
         goal = self.goal_type(
-            dynamic_event_seq=1, event_type=1, category="go_to_place", description='"a"', id=0
+            dynamic_event_seq=self.seq,
+            event_type=1,
+            category="go_to_place",
+            description=self.description,
+            id=0,
         )
         started = time.perf_counter()
         self.action.send_goal_async(goal, feedback_callback=on_feedback).add_done_callback(on_response)
@@ -181,9 +217,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--batch", type=int, default=50, help="goals per batch, alternating servers")
     parser.add_argument("--quick", action="store_true", help="40 goals each: a smoke run")
     parser.add_argument("--write", action="store_true", help="record the result in bench/results.md")
+    parser.add_argument(
+        "--adapter", metavar="FLEET/ROBOT", help="also a live server: Open-RMF's fleet adapter"
+    )
+    parser.add_argument("--adapter-pid", type=int, help="the live server's process, for its CPU")
+    parser.add_argument("--place", help="where the live server's robot stands (each child then ends at once)")
     args = parser.parse_args(argv)
+    if args.adapter and (args.adapter_pid is None or not args.place or "/" not in args.adapter):
+        parser.error("--adapter FLEET/ROBOT needs --adapter-pid and --place")
     goals = 40 if args.quick else args.goals
-    os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 200)))
+    if not args.adapter:  # a live server is found in the domain the environment names
+        os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 200)))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 
     import rclpy
@@ -205,8 +249,14 @@ def main(argv: list[str] | None = None) -> int:
     threading.Thread(target=executor.spin, daemon=True).start()
     try:
         clients = {kind: Client(node, "bench", kind) for kind in servers}
-        times: dict[str, list[float]] = {kind: [] for kind in servers}
-        cpu: dict[str, float] = {kind: 0.0 for kind in servers}
+        pids = {kind: process.pid for kind, process in servers.items()}
+        if args.adapter:
+            fleet, robot = args.adapter.split("/", 1)
+            place = json.dumps({"one_of": [args.place]})
+            clients["rmf_ros2 adapter"] = Client(node, fleet, robot, description=place, live=True)
+            pids["rmf_ros2 adapter"] = args.adapter_pid
+        times: dict[str, list[float]] = {kind: [] for kind in clients}
+        cpu: dict[str, float] = {kind: 0.0 for kind in clients}
         for client in clients.values():  # warm-up
             for index in range(10):
                 client.round_trip(index)
@@ -214,13 +264,13 @@ def main(argv: list[str] | None = None) -> int:
         while sent < goals:
             batch = min(args.batch, goals - sent)
             for kind, client in clients.items():
-                before = _cpu_seconds(servers[kind].pid)
+                before = _cpu_seconds(pids[kind])
                 for index in range(batch):
                     elapsed, feedback, status = client.round_trip(sent + index)
                     if status != "completed" or feedback < 1:
                         raise SystemExit(f"{kind}: goal ended {status!r} with {feedback} feedback")
                     times[kind].append(elapsed)
-                cpu[kind] += _cpu_seconds(servers[kind].pid) - before
+                cpu[kind] += _cpu_seconds(pids[kind]) - before
             sent += batch
     finally:
         for process in servers.values():
@@ -252,9 +302,15 @@ def main(argv: list[str] | None = None) -> int:
         f"dynevent's cost on top of the bare round trip: **{extra:+.1%}** of it (target: within +5%);",
         f"on top of the peer that also publishes the two status messages: **{extra_status:+.1%}**.",
     ]
+    if args.adapter:
+        ratio = medians["rmf_ros2 adapter"] / medians["peer"]
+        lines.append(
+            f"Open-RMF's fleet adapter ({args.adapter}, its child a go_to_place to where the robot "
+            f"stands): **{ratio:.1f}x** the bare round trip."
+        )
     print("\n".join(lines))
     if args.write:
-        results.write_section("ros-roundtrip", lines)
+        results.write_section("ros-roundtrip-adapter" if args.adapter else "ros-roundtrip", lines)
         print(f"wrote {results.RESULTS}", file=sys.stderr)
     return 0
 
