@@ -659,6 +659,58 @@ def test_a_rejected_timed_out_goal_is_rejected() -> None:
     assert only_outcome(outputs).kind is OutcomeKind.REJECTED
 
 
+# --------------------------------------------------------------------------- withdrawal
+
+
+def test_withdrawing_a_running_next_cancels_its_child_at_once() -> None:
+    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', now=0))
+    state, _ = feed(
+        state, FeedbackReceived(goal_uuid=send.goal_uuid, feedback=Feedback(status="underway", id=6))
+    )
+    state, cancel = sent(client.request_withdraw(state, send.goal_uuid, now=0))
+    assert cancel.goal == Goal(dynamic_event_seq=1, event_type=EventType.CANCEL, id=6)
+    state, outputs = feed(state, answer(send.goal_uuid, GoalStatus.SUCCEEDED, "canceled", 6))
+    outcome = only_outcome(outputs)
+    assert (outcome.kind, outcome.id) == (OutcomeKind.CANCELED, 6)  # not a timeout: the caller withdrew it
+
+
+def test_a_withdrawn_next_is_cancelled_once_its_child_is_known() -> None:
+    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', now=0))
+    transition = client.request_withdraw(state, send.goal_uuid, now=0)
+    assert transition.outputs == ()  # not accepted yet: the CANCEL would name nothing
+    state, outputs = feed(
+        transition.state,
+        GoalResponse(goal_uuid=send.goal_uuid, accepted=True),
+        FeedbackReceived(goal_uuid=send.goal_uuid, feedback=Feedback(status="queued", id=9)),
+    )
+    cancels = [output for output in outputs if isinstance(output, SendGoal)]
+    assert [cancel.goal.id for cancel in cancels] == [9]  # the server's number for the child (D10)
+    state, outputs = feed(state, status(1, RUNNING, 9, "underway"))
+    assert not any(isinstance(output, SendGoal) for output in outputs)  # one CANCEL, not two
+
+
+def test_a_withdrawn_next_times_out_no_more_and_a_refused_one_sends_nothing() -> None:
+    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', timeout=1, now=0))
+    state = client.request_withdraw(state, send.goal_uuid, now=0).state
+    assert client.next_deadline(state) is None
+    state, outputs = feed(state, Tick(now=5 * SECOND))
+    assert outputs == []
+    _, outputs = feed(state, GoalResponse(goal_uuid=send.goal_uuid, accepted=False))
+    assert only_outcome(outputs).kind is OutcomeKind.REJECTED
+
+
+def test_withdrawing_what_is_not_an_open_next_is_ignored_with_why() -> None:
+    state, send = sent(client.request_finish(waiting(), now=0))
+    (ignored,) = client.request_withdraw(state, send.goal_uuid, now=0).outputs
+    assert isinstance(ignored, Ignored) and "only a NEXT" in ignored.why
+    (ignored,) = client.request_withdraw(state, "e" * 32, now=0).outputs
+    assert isinstance(ignored, Ignored) and "not open" in ignored.why
+    state, send = sent(client.request_next(waiting(), "go_to_place", '"a"', now=0))
+    state = client.request_withdraw(state, send.goal_uuid, now=0).state
+    (ignored,) = client.request_withdraw(state, send.goal_uuid, now=0).outputs
+    assert isinstance(ignored, Ignored) and "already withdrawn" in ignored.why
+
+
 # --------------------------------------------------------------------------- purity
 
 
@@ -714,7 +766,7 @@ BOOK_ITEMS = st.tuples(
             st.just("feedback"), st.builds(Feedback, status=st.just("underway"), id=st.sampled_from((6, 7)))
         ),
         st.tuples(st.just("result"), st.sampled_from(TERMINAL), messages(Result)),
-        st.sampled_from((("next",), ("next_timeout",), ("cancel",), ("finish",))),
+        st.sampled_from((("next",), ("next_timeout",), ("cancel",), ("finish",), ("withdraw",))),
     ),
 )
 
@@ -732,6 +784,8 @@ def _book_step(state: ClientState, item: Any, uuid: str) -> client.ClientTransit
         return client.request_cancel(state, now=0)
     if item[0] == "finish":
         return client.request_finish(state, now=0)
+    if item[0] == "withdraw":
+        return client.request_withdraw(state, uuid, now=0)
     timeout = 1 if item[0] == "next_timeout" else None
     return client.request_next(state, "go_to_place", '"a"', timeout=timeout, now=0)
 

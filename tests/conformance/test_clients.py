@@ -232,9 +232,12 @@ def test_the_client_machine_never_breaks_a_client_rule(seed: int) -> None:
     for _ in range(40):
         if not session.server.active:
             session.begin()
-        command = rng.choice(["next", "next", "next", "cancel", "cancel", "wait", "finish"])
+        command = rng.choice(["next", "next", "next", "cancel", "cancel", "withdraw", "wait", "finish"])
         if command == "next":
             session.request_next("go_to_place", '"pantry"')
+        elif command == "withdraw":
+            for goal in session.client.goals:
+                session.request_withdraw(goal.goal_uuid)
         elif command == "cancel":
             session.request_cancel()
         elif command == "finish":

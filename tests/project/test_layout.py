@@ -29,6 +29,8 @@ ALLOWED: dict[str, frozenset[str]] = {
     # judging is conformance (docs/design): ros reads the client judge from below
     "ros": frozenset({"errors", "wire", "server", "client", "conformance", "descriptions", "tools"}),
     "testing": frozenset({"errors", "wire", "server", "conformance"}),
+    # behaviour trees over a robot client (its type only: the tree's author opens the client)
+    "bt": frozenset({"errors", "wire", "client", "ros"}),
 }
 
 

@@ -28,6 +28,7 @@ from dynevent.client.machine import (
     request_cancel,
     request_finish,
     request_next,
+    request_withdraw,
     step,
 )
 from dynevent.client.outputs import (
@@ -69,5 +70,6 @@ __all__ = [
     "request_cancel",
     "request_finish",
     "request_next",
+    "request_withdraw",
     "step",
 ]

@@ -116,6 +116,7 @@ __all__ = [
     "request_cancel",
     "request_finish",
     "request_next",
+    "request_withdraw",
     "step",
 ]
 
@@ -142,7 +143,8 @@ class OpenGoal:
     ``accepted`` once the server accepted it; ``child_id`` and
     ``child_status`` (NEXT) once feedback named the child; ``deadline`` the
     instant a NEXT with a timeout times out, ``timed_out`` once a tick
-    reached it.
+    reached it; ``withdrawn`` once the caller withdrew the NEXT
+    (:func:`request_withdraw`).
     """
 
     goal_uuid: str
@@ -152,6 +154,12 @@ class OpenGoal:
     child_status: str = ""
     deadline: int | None = None
     timed_out: bool = False
+    withdrawn: bool = False
+
+    @property
+    def cancel_owed(self) -> bool:
+        """A NEXT whose child this client is to cancel once it is known to run (timed out or withdrawn)."""
+        return self.goal.event_type == EventType.NEXT and (self.timed_out or self.withdrawn)
 
 
 def _validators(value: Any) -> Mapping[str, Validator] | None:
@@ -475,9 +483,37 @@ def request_finish(state: ClientState, *, now: int) -> ClientTransition:
     return _send(state, goal)
 
 
+def request_withdraw(state: ClientState, goal_uuid: str, *, now: int) -> ClientTransition:
+    """The caller no longer wants this open NEXT of its own: cancel its child once it is known to run.
+
+    The CANCEL goal naming the child is sent at once when the child is known
+    to run, else as soon as feedback (or a RUNNING status naming the goal's
+    id) shows it, as for a timeout; no CANCEL is added to one of this client's
+    already open.  The NEXT's outcome then says how the child ended
+    (``canceled``, or ``completed`` if it ended first); a NEXT refused or
+    ended before its child ran sends nothing.  A goal that is not an open
+    NEXT of this client is :class:`Ignored`, with why.  This is what a
+    behaviour tree's halt, or an interrupted command line, asks of a NEXT.
+    """
+    now = _check_now("request_withdraw", now)
+    goal = state.goal(goal_uuid)
+    if goal is None:
+        return ClientTransition(state, (Ignored(input="withdraw", why=f"goal {goal_uuid} is not open"),))
+    if goal.goal.event_type != EventType.NEXT:
+        kind = EventType(goal.goal.event_type).name
+        why = f"goal {goal_uuid} is a {kind}: only a NEXT's child can be withdrawn"
+        return ClientTransition(state, (Ignored(input="withdraw", why=why),))
+    if goal.withdrawn:
+        why = f"goal {goal_uuid} is already withdrawn"
+        return ClientTransition(state, (Ignored(input="withdraw", why=why),))
+    withdrawn = attrs.evolve(goal, withdrawn=True)
+    state, sent = _owed_cancel(_replace(state, withdrawn), withdrawn)
+    return ClientTransition(state, sent)
+
+
 def next_deadline(state: ClientState) -> int | None:
     """The earliest instant a tick would time a goal out (``None`` if none): when to tick next."""
-    deadlines = [goal.deadline for goal in state.goals if goal.deadline is not None and not goal.timed_out]
+    deadlines = [goal.deadline for goal in state.goals if goal.deadline is not None and not goal.cancel_owed]
     return min(deadlines) if deadlines else None
 
 
@@ -494,10 +530,11 @@ def _remove(state: ClientState, uuid: str) -> ClientState:
     return attrs.evolve(state, goals=tuple(other for other in state.goals if other.goal_uuid != uuid))
 
 
-def _timeout_cancel(state: ClientState, goal: OpenGoal) -> tuple[ClientState, tuple[ClientOutput, ...]]:
-    """Send the CANCEL of a timed-out NEXT once its child is known to run and no CANCEL of ours is open."""
+def _owed_cancel(state: ClientState, goal: OpenGoal) -> tuple[ClientState, tuple[ClientOutput, ...]]:
+    """Send the CANCEL a timed-out or withdrawn NEXT is owed, once its child is known to run and no
+    CANCEL of ours naming it is open."""
     seq = goal.goal.dynamic_event_seq
-    if not goal.timed_out or seq != state.seq or _run_over(state, seq):
+    if not goal.cancel_owed or seq != state.seq or _run_over(state, seq):
         return state, ()
     child = goal.child_id
     if (
@@ -552,8 +589,8 @@ def _on_status(state: ClientState, event: StatusReceived) -> ClientTransition:
     if (phase, seq, message.id, message.status) != before:
         outputs.append(ViewChanged(phase=phase, seq=seq, current_id=message.id, status=message.status))
     for goal in state.goals:
-        if goal.goal.event_type == EventType.NEXT and goal.timed_out:
-            state, sent = _timeout_cancel(state, goal)
+        if goal.cancel_owed:
+            state, sent = _owed_cancel(state, goal)
             outputs.extend(sent)
     return ClientTransition(state, tuple(outputs))
 
@@ -568,7 +605,7 @@ def _on_response(state: ClientState, event: GoalResponse) -> ClientTransition:
         return _unknown(state, event, event.goal_uuid)
     if event.accepted:
         goal = attrs.evolve(goal, accepted=True)
-        state, sent = _timeout_cancel(_replace(state, goal), goal)
+        state, sent = _owed_cancel(_replace(state, goal), goal)
         return ClientTransition(state, sent)
     if goal.accepted:
         return ClientTransition(
@@ -609,7 +646,7 @@ def _on_feedback(state: ClientState, event: FeedbackReceived) -> ClientTransitio
     outputs: list[ClientOutput] = [
         Progress(goal_uuid=goal.goal_uuid, status=feedback.status, id=feedback.id, logs=feedback.logs)
     ]
-    state, sent = _timeout_cancel(state, goal)
+    state, sent = _owed_cancel(state, goal)
     outputs.extend(sent)
     return ClientTransition(state, tuple(outputs))
 
@@ -674,13 +711,13 @@ def _on_tick(state: ClientState, event: Tick) -> ClientTransition:
     outputs: list[ClientOutput] = []
     for goal in state.goals:
         deadline = goal.deadline
-        if deadline is None or goal.timed_out or event.now < deadline:
+        if deadline is None or goal.cancel_owed or event.now < deadline:  # a withdrawn goal times out no more
             continue
         expired = attrs.evolve(goal, timed_out=True)
         state = _replace(state, expired)
         child = goal.child_id if goal.child_id is not None else goal.goal.id
         outputs.append(TimedOut(goal_uuid=goal.goal_uuid, id=child, deadline=deadline))
-        state, sent = _timeout_cancel(state, expired)
+        state, sent = _owed_cancel(state, expired)
         outputs.extend(sent)
     return ClientTransition(state, tuple(outputs))
 

@@ -241,6 +241,18 @@ class DynamicEventClient:
         """Tell the robot that the dynamic event is over (a FINISHED goal)."""
         return self._command(lambda state, now: cl.request_finish(state, now=now), None)
 
+    def withdraw(self, run: GoalRun) -> None:
+        """No longer want this NEXT: its child is cancelled (a CANCEL naming it) as soon as it is known
+        to run, at once if it is (:func:`dynevent.client.request_withdraw`); ``run`` then ends with how
+        the child ended.  Nothing is sent for a run already over or never sent."""
+        uuid = run.goal_uuid
+        if uuid is None or run.done():
+            return
+        with self._lock:
+            transition = cl.request_withdraw(self._state, uuid, now=self.now())
+            self._state = transition.state
+        self._carry_out(transition.outputs)
+
     def introspect(self) -> bool:
         """Publish this client's action service events (ROS 2 introspection, with contents), so that
         a recording holds its goals and answers; False where rclpy cannot."""

@@ -152,6 +152,11 @@ class RobotClient:
         """FINISHED: the dynamic event is over."""
         return self.client.finish()
 
+    def withdraw(self, run: GoalRun) -> None:
+        """No longer want this NEXT: its child is cancelled once it is known to run
+        (:meth:`DynamicEventClient.withdraw`)."""
+        self.client.withdraw(run)
+
 
 class AsyncRobotClient:
     """:class:`RobotClient` for asyncio: ``async with``, and every command awaitable on the running

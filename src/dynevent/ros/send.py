@@ -195,12 +195,7 @@ def _stop_goal(
             f"{name}: cancelling the child (a CANCEL naming it); waiting up to {STOP_BOUND:g} s "
             "for the answer"
         )
-        cancelled = False
-        while not goal_run.done() and time.monotonic() < deadline and not cancelled:
-            cancel = client.cancel()
-            cancelled = not (cancel.done() and isinstance(cancel.result, cl.Refused))
-            if not cancelled:
-                time.sleep(0.1)  # its child has not started yet: the CANCEL would name nothing
+        client.withdraw(goal_run)  # the client machine sends the CANCEL once the child is known to run
     else:
         say(f"{name}: waiting up to {STOP_BOUND:g} s for the answer to the goal already sent")
     try:

@@ -560,6 +560,10 @@ class Loopback:
         """:func:`dynevent.client.request_cancel` now."""
         return self._command("request_cancel", cl.request_cancel(self.client, now=self.now))
 
+    def request_withdraw(self, goal_uuid: str) -> tuple[ClientOutput, ...]:
+        """:func:`dynevent.client.request_withdraw` now: cancel this NEXT's child once it runs."""
+        return self._command("request_withdraw", cl.request_withdraw(self.client, goal_uuid, now=self.now))
+
     def request_finish(self) -> tuple[ClientOutput, ...]:
         """:func:`dynevent.client.request_finish` now."""
         return self._command("request_finish", cl.request_finish(self.client, now=self.now))
