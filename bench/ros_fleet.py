@@ -16,6 +16,13 @@ servers doing the same exchanges, with no protocol).  Two measurements:
     python bench/ros_fleet.py [--robots 100] [--seconds 60] [--duration 0.2] [--write]
     python bench/ros_fleet.py --idle 1,100,1000 [--window 20] [--write]
     python bench/ros_fleet.py --robots 2000 --drive 200 --shards 1,2 [--write]
+    python bench/ros_fleet.py --start 100,1000 [--write]
+
+- ``--start 100,1000``: how long each server takes from its launch until it serves every robot
+  (prints ``serving``): dynevent serve with its client judge (the default) and without it, beside
+  the bare peer making the same entities (with the action servers' introspection, as the judge
+  has), with rclpy's default DDS participant and with the one serve uses
+  (dynevent.ros.participant: a participant that ignores its own endpoints).
 
 ``--write`` records the result as the ``ros-fleet`` or ``ros-fleet-idle`` section of
 bench/results.md.
@@ -43,9 +50,24 @@ if str(ROOT) not in sys.path:  # run as a script: make `bench` importable
 from bench import results as recorded  # noqa: E402
 
 TICKS = os.sysconf("SC_CLK_TCK")
+PEER = str(ROOT / "bench" / "peers" / "ros_bare_fleet.py")
 SERVERS = {
     "dynevent": lambda config: [sys.executable, "-m", "dynevent", "serve", "--config", str(config)],
-    "peer": lambda config: [sys.executable, str(ROOT / "bench" / "peers" / "ros_bare_fleet.py"), str(config)],
+    "peer": lambda config: [sys.executable, PEER, str(config)],
+}
+#: The servers whose start ``--start`` measures: serve as it runs (its judge on), serve without its
+#: judge, and the bare peer making the same entities with rclpy's participant and with serve's.
+STARTS = {
+    "dynevent serve": SERVERS["dynevent"],
+    "dynevent serve --no-judge": lambda config: [*SERVERS["dynevent"](config), "--no-judge"],
+    "bare peer, rclpy's participant": lambda config: [sys.executable, PEER, str(config), "--introspection"],
+    "bare peer, serve's participant": lambda config: [
+        sys.executable,
+        PEER,
+        str(config),
+        "--introspection",
+        "--ignore-own",
+    ],
 }
 
 
@@ -59,7 +81,13 @@ class Server:
     ready (each printed ``serving``); ``started`` is how long that took, in seconds."""
 
     def __init__(
-        self, kind: str, robots: list[str], duration: float, shards: int = 1, start_timeout: float = 900
+        self,
+        kind: str,
+        robots: list[str],
+        duration: float,
+        shards: int = 1,
+        start_timeout: float = 900,
+        command: Any = None,
     ) -> None:
         folder = Path(tempfile.mkdtemp(prefix="dynevent-fleet-"))
         config = folder / "fleet.json"
@@ -71,9 +99,10 @@ class Server:
         )
         began = time.monotonic()
         parts = [[]] if shards == 1 else [["--shard", f"{index}/{shards}"] for index in range(1, shards + 1)]
+        launch = command or SERVERS[kind]
         self.processes = [
             subprocess.Popen(
-                SERVERS[kind](config) + part, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
+                launch(config) + part, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
             )
             for part in parts
         ]
@@ -95,12 +124,12 @@ class Server:
     def cpu(self) -> float:
         return sum(_cpu_seconds(process.pid) for process in self.processes)
 
-    def stop(self) -> None:
+    def stop(self, bound: float = 60) -> None:
         for process in self.processes:
             process.terminate()
         for process in self.processes:
             try:
-                process.wait(timeout=60)
+                process.wait(timeout=bound)
             except subprocess.TimeoutExpired:
                 process.kill()
                 process.wait(timeout=30)
@@ -130,6 +159,30 @@ def idle(counts: list[int], window: float, settle: float) -> list[str]:
         "",
         "| robots | dynevent serve | bare rclpy peer |",
         "|---|---|---|",
+        *rows,
+    ]
+
+
+def start(counts: list[int]) -> list[str]:
+    rows = []
+    for count in counts:
+        robots = [f"r{index:04d}" for index in range(count)]
+        cells = []
+        for kind, command in STARTS.items():
+            server = Server(kind, robots, 1.0, command=command)
+            cells.append(f"{server.started:.1f} s")
+            server.stop(bound=5)  # then killed: only the start is measured
+        rows.append(f"| {count} | " + " | ".join(cells) + " |")
+        print(rows[-1], flush=True)
+    return [
+        "## ROS 2: a fleet's start (bench/ros_fleet.py --start)",
+        "",
+        "From the launch of the server process until it serves every robot (prints `serving`).",
+        "",
+        *recorded.machine_description(("dynevent", "rclpy")),
+        "",
+        "| robots | " + " | ".join(STARTS) + " |",
+        "|---" * (len(STARTS) + 1) + "|",
         *rows,
     ]
 
@@ -252,10 +305,17 @@ def main(argv: list[str] | None = None) -> int:
         help="load: dynevent serve split over each of these numbers of processes (--shard), no peer",
     )
     parser.add_argument("--drive", type=int, help="load: drive only this many of the robots")
+    parser.add_argument("--start", metavar="N,N,...", help="measure the start of these fleet sizes")
     parser.add_argument("--write", action="store_true", help="record the result in bench/results.md")
     args = parser.parse_args(argv)
     os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 200)))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    if args.start:
+        lines = start([int(count) for count in args.start.split(",")])
+        print("\n".join(lines))
+        if args.write:
+            recorded.write_section("ros-fleet-start", lines)
+        return 0
     if args.idle:
         lines = idle([int(count) for count in args.idle.split(",")], args.window, args.settle)
         print("\n".join(lines))

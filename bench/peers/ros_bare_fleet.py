@@ -7,7 +7,12 @@ runs a simulated child of ``DURATION`` seconds on a one-shot timer, then publish
 succeeds with ``completed``.  Nothing is checked: it is the least a server doing the same exchange
 does, the floor dynevent's binding is measured against.
 
-    python ros_bare_fleet.py CONFIG   (the JSON file serve reads: fleet, robots, categories)
+    python ros_bare_fleet.py CONFIG [--introspection] [--ignore-own]
+
+CONFIG is the JSON file serve reads (fleet, robots, categories).  ``--introspection`` turns on each
+action server's service events as serve's judge does; ``--ignore-own`` gives the process's DDS
+participant the property serve gives its own (dynevent.ros.participant), so that a start measured
+beside serve's makes the same entities the same way.
 """
 
 from __future__ import annotations
@@ -27,11 +32,13 @@ from rclpy.task import Future
 from rmf_task_msgs.action import DynamicEvent
 from rmf_task_msgs.msg import DynamicEventDescription, DynamicEventStatus
 
+from dynevent.ros.participant import ignore_own_endpoints
+from dynevent.ros.qos import EVENTS_KEPT, introspect
 from dynevent.ros.server import latched as _latched  # the same QoS as serve's topics
 
 
 class Robot:
-    def __init__(self, node: Any, fleet: str, robot: str, duration: float) -> None:
+    def __init__(self, node: Any, fleet: str, robot: str, duration: float, introspection: bool) -> None:
         self.node, self.duration, self.last = node, duration, 1
         self.status = node.create_publisher(
             DynamicEventStatus, f"rmf/dynamic_event/status/{fleet}/{robot}", _latched(1)
@@ -42,6 +49,8 @@ class Robot:
         self.action = ActionServer(
             node, DynamicEvent, f"rmf/dynamic_event/command/{fleet}/{robot}", self.execute
         )
+        if introspection:
+            introspect(self.action, node, _latched(EVENTS_KEPT))
         self.status.publish(DynamicEventStatus(dynamic_event_seq=1, dynamic_state=1, status="standby", id=1))
 
     async def execute(self, goal_handle: Any) -> Any:
@@ -70,9 +79,12 @@ class Robot:
 def main() -> None:
     config = json.loads(Path(sys.argv[1]).read_text(encoding="utf-8"))
     duration = float(config["categories"]["go_to_place"]["duration"])
+    if "--ignore-own" in sys.argv[2:]:
+        ignore_own_endpoints()
+    introspection = "--introspection" in sys.argv[2:]
     rclpy.init()
     node = rclpy.create_node("bench_bare_fleet")
-    robots = [Robot(node, config["fleet"], robot, duration) for robot in config["robots"]]
+    robots = [Robot(node, config["fleet"], robot, duration, introspection) for robot in config["robots"]]
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     stop = threading.Event()

@@ -8,7 +8,7 @@ from typing import Any
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-__all__ = ["introspect", "latched"]
+__all__ = ["EVENTS_KEPT", "introspect", "latched"]
 
 
 def latched(depth: int) -> QoSProfile:
@@ -21,13 +21,19 @@ def latched(depth: int) -> QoSProfile:
     )
 
 
-def introspect(action: Any, node: Any) -> bool:
+#: How many of its latest service events a server keeps for a follower that joins late (its judge
+#: follows a robot from its first goal on: that goal's event is among them).
+EVENTS_KEPT = 16
+
+
+def introspect(action: Any, node: Any, qos: QoSProfile | None = None) -> bool:
     """Turn on the introspection, with contents, of an rclpy action client or server: its service
-    events are published (``<action>/_action/<service>/_service_event``).  False where rclpy cannot."""
+    events are published (``<action>/_action/<service>/_service_event``) with ``qos`` (reliable,
+    volatile, 100 deep when None).  False where rclpy cannot."""
     configure = getattr(action, "configure_introspection", None)
     if configure is None:
         return False
     from rclpy.service_introspection import ServiceIntrospectionState
 
-    configure(node.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
+    configure(node.get_clock(), qos or QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
     return True

@@ -40,11 +40,11 @@ from dynevent.errors import (
     InvalidMessage,
     ServeError,  # defined there with every error; importable here too
 )
-from dynevent.ros import convert, spinning
+from dynevent.ros import convert, participant, spinning
 from dynevent.ros.convert import RosDescription, describe_type
 from dynevent.ros.qos import latched
 from dynevent.ros.server import ChildExecution, DynamicEventServer
-from dynevent.ros.spinning import Spinner, bounded_close, close_down
+from dynevent.ros.spinning import CLOSE_BOUND, Spinner, bounded_close, close_down
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.machine import ServerConfig, State
@@ -204,6 +204,8 @@ class _Judged:
         self.clients = clients
         self.trace = trace
         self.named = False  # introspection names the clients; else every goal is ONE_CLIENT's
+        #: Starts following the robot's goal events (at its first goal); None once done, or never.
+        self.follow: Callable[[], None] | None = None
         self.goals = 0
         self._lock = threading.Lock()
 
@@ -212,6 +214,10 @@ class _Judged:
             self.trace.step(event, outputs)
         if self.judge is None:
             return
+        follow = self.follow
+        if follow is not None and isinstance(event, (ins.GoalRequested, ins.GoalSubmitted)):
+            self.follow = None
+            follow()
         with self._lock:
             if isinstance(event, (ins.GoalRequested, ins.GoalSubmitted)) and not self.named:
                 self._report(self.judge.goal(ONE_CLIENT, event.goal_uuid, event.goal, event.now))
@@ -301,6 +307,32 @@ class _Lane:
         self.spinner.stop()
 
 
+class _JudgeLane:
+    """The node that follows the robots' ``send_goal`` service events for the judge, in a context (a
+    DDS participant) of its own: serve's participants match none of their own endpoints
+    (:mod:`dynevent.ros.participant`), so the events are heard as another process would hear them."""
+
+    def __init__(self, name: str, ros_args: Sequence[str]) -> None:
+        self.context = participant.own_context(ros_args)
+        self.node = rclpy.create_node(name, context=self.context)
+        self.node.get_logger().set_level(LoggingSeverity.WARN)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.spinner = Spinner(self.executor, f"dynevent-serve-{name}")
+
+    def spin(self) -> None:
+        self.executor.add_node(self.node)
+        self.spinner.start()
+
+    def close(self) -> None:
+        self.spinner.stop()
+        close_down([self.node], self.context)
+
+
+#: How much longer than :data:`~dynevent.ros.spinning.CLOSE_BOUND` a close-down may take per robot
+#: served (seconds): destroying the entities of a fleet costs more the more there are.
+CLOSE_PER_ROBOT = 0.1
+
+
 class _Robots:
     """The robots one ``dynevent serve`` process serves: their servers, lanes, live log and re-begins."""
 
@@ -311,6 +343,7 @@ class _Robots:
         store: StateStore | None,
         say: Callable[[str], None],
         watch: Watch | None = None,
+        ros_args: Sequence[str] = (),
     ) -> None:
         self.config = config
         self.store = store
@@ -327,6 +360,7 @@ class _Robots:
             for start in range(0, max(len(robots), 1), LANE)
         ]
         self.lane_of = {robot: self.lanes[position // LANE] for position, robot in enumerate(robots)}
+        self.judge_lane = _JudgeLane(f"{base}_judge", ros_args) if self.watch.judge else None
         self.node = self.lanes[0].node  # the fleet-wide begin publisher and the begin commands
         self.begins = DynamicEventServer.fleet_begin_publisher(self.node)
         self.servers: dict[str, DynamicEventServer] = {}
@@ -384,7 +418,13 @@ class _Robots:
             on_step=judged.on_step,
         )
         if self.watch.judge or self.watch.introspection:  # a recording of serve then holds the goals
-            judged.named = server.introspect(judged.on_goal_event)
+            judged.named = server.introspect()
+        if self.judge_lane is not None and judged.named:
+            # the judge follows a robot's goal events, which name the clients, from its first goal on
+            # (the events kept include that goal's): 1,000 followers at once, each paired with every
+            # endpoint of the robots' participant, would take half a minute to start
+            follower = self.judge_lane.node
+            judged.follow = lambda: server.follow(judged.on_goal_event, follower)
         self.servers[robot] = server
         if restored is not None:
             self.say(f"{fleet}/{robot}  restored: run {restored.seq}, last id {restored.last_id}")
@@ -430,6 +470,9 @@ def run(
         raise ServeError(str(exc)) from None
     log = LiveLog(say)
     index, count = config.shard
+    why_slow = participant.ignore_own_endpoints()  # before the first participant: a fast start
+    if why_slow and len(config.served()) > LANE:
+        log(why_slow)
     spinning.init(ros_args)
     # Single-threaded executors, one per lane: a multi-threaded one adds its own work and Python's
     # GIL runs one thread at a time anyway.  rclpy's EventsExecutor (rclpy 9.1.2, rclpy.experimental)
@@ -439,7 +482,7 @@ def run(
     if watch.trace is not None and len(config.served()) > 1:
         with contextlib.suppress(FileExistsError):
             os.mkdir(watch.trace)
-    robots = _Robots(config, checking, store, log, watch)
+    robots = _Robots(config, checking, store, log, watch, ros_args)
     for robot in config.served():
         robots.add(robot, stored.get((config.fleet, robot)))
     robots.node.create_subscription(RosDescription, BEGIN_COMMAND_TOPIC, robots.on_begin_command, latched(10))
@@ -448,6 +491,8 @@ def run(
         signal.signal(signum, lambda *_: stop.set())
     for lane in robots.lanes:
         lane.spin()
+    if robots.judge_lane is not None:
+        robots.judge_lane.spin()
     names = list(robots.servers)
     shown = ", ".join(names if len(names) <= 10 else [*names[:10], f"... ({len(names) - 10} more)"])
     part = "" if count == 1 else f" (shard {index}/{count} of {len(config.robots)})"
@@ -464,9 +509,10 @@ def run(
     with bounded_close():
         for lane in robots.lanes:
             lane.stop()
-        for server in robots.servers.values():
-            server.destroy()
-        close_down([lane.node for lane in robots.lanes])
+        if robots.judge_lane is not None:
+            robots.judge_lane.spinner.stop()
+    # what the run leaves (the store, the judgement) before the entities go: destroying a fleet's
+    # entities takes time in proportion to the square of their number (docs/performance.md)
     if store is not None:
         store.close()
     if watch.judge:
@@ -478,6 +524,12 @@ def run(
                     stream.write(report)
             except OSError as exc:
                 log(f"--report {watch.report}: cannot write: {exc.strerror or exc}")
+    with bounded_close(CLOSE_BOUND + CLOSE_PER_ROBOT * len(robots.servers)):
+        for server in robots.servers.values():
+            server.destroy()
+        if robots.judge_lane is not None:
+            robots.judge_lane.close()
+        close_down([lane.node for lane in robots.lanes])
     log.close()
     return 0
 

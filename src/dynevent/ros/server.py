@@ -41,13 +41,12 @@ from typing import Any, Protocol
 from action_msgs.msg import GoalStatus as RosGoalStatus
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
-from rclpy.qos import QoSProfile
 from rclpy.task import Future
 
 from dynevent.errors import InvalidMessage, InvalidValue
 from dynevent.ros import convert
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
-from dynevent.ros.qos import introspect, latched
+from dynevent.ros.qos import EVENTS_KEPT, introspect, latched
 from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
@@ -249,6 +248,7 @@ class _Entities:
         self.timer: Any = None
         self.service = None
         self.introspection: Any = None
+        self.follower: Any = None
         self.action_name = action_name(fleet, robot)
         if description_service is not None:
             self.service = node.create_service(
@@ -267,25 +267,31 @@ class _Entities:
             self.node.destroy_timer(self.timer)
             self.timer = None
 
-    def introspect(self, on_goal: Callable[[Any], None]) -> bool:
-        """Turn on the introspection of the action server (the requests' contents) and follow its
-        ``send_goal`` service events with ``on_goal``: how a server learns which client sent a goal
-        (R22.1).  False where rclpy cannot."""
+    def introspect(self) -> bool:
+        """Turn on the introspection of the action server (the requests' contents), its events kept
+        for a follower that joins late (:data:`~dynevent.ros.qos.EVENTS_KEPT`).  False where rclpy
+        cannot."""
+        return introspect(self.action, self.node, latched(EVENTS_KEPT))
 
-        if not introspect(self.action, self.node):
-            return False
-        self.introspection = self.node.create_subscription(
+    def follow(self, on_goal: Callable[[Any], None], follower: Any) -> None:
+        """Follow the ``send_goal`` service events with ``on_goal`` on ``follower`` (a node; this
+        robot's when None), the ones kept from before included: how a server learns which client
+        sent a goal (R22.1)."""
+        if self.introspection is not None:
+            return
+        own = follower is None
+        self.follower = self.node if own else follower
+        self.introspection = self.follower.create_subscription(
             DynamicEvent.Impl.SendGoalService.Event,
             f"{self.action_name}/_action/send_goal/_service_event",
             on_goal,
-            QoSProfile(depth=100),
-            callback_group=self.group,
+            latched(EVENTS_KEPT),
+            callback_group=self.group if own else None,
         )
-        return True
 
     def destroy(self, node: Any) -> None:
         if self.introspection is not None:
-            node.destroy_subscription(self.introspection)
+            self.follower.destroy_subscription(self.introspection)
         self.action.destroy()
         self.refresh(False)
         node.destroy_publisher(self.status)
@@ -461,10 +467,22 @@ class DynamicEventServer:
         """Release the action server, publishers, timer and guard condition (after :meth:`shutdown`)."""
         self._ros.destroy(self._node)
 
-    def introspect(self, on_goal: Callable[[Any], None]) -> bool:
-        """Follow the ``send_goal`` service events of this robot's action server (its introspection,
-        turned on): ``on_goal(event)`` for each; False where rclpy cannot introspect an action."""
-        return self._ros.introspect(on_goal)
+    def introspect(self, on_goal: Callable[[Any], None] | None = None, follower: Any = None) -> bool:
+        """Turn on the introspection of this robot's action server (its service events, with their
+        contents, for a recording) and, with ``on_goal``, follow its ``send_goal`` events at once
+        (:meth:`follow`).  False where rclpy cannot introspect an action."""
+        if not self._ros.introspect():
+            return False
+        if on_goal is not None:
+            self.follow(on_goal, follower)
+        return True
+
+    def follow(self, on_goal: Callable[[Any], None], follower: Any = None) -> None:
+        """Follow the ``send_goal`` service events of this robot's action server (introspected):
+        ``on_goal(event)`` for each, the last few published before included, on ``follower`` (a
+        node; this robot's when None).  In a process whose participants ignore their own endpoints
+        (:mod:`dynevent.ros.participant`) the follower is a node of another context."""
+        self._ros.follow(on_goal, follower)
 
     def _describe(self, request: Any, response: Any) -> Any:
         with self._lock:  # a query: its one output is the answer, not an effect for the outbox (R16)
