@@ -127,11 +127,11 @@ CASES: tuple[Case, ...] = (
     Case("next.runs_a_child", "a NEXT runs its child: accepted, feedback with its id, one answer",
          ("R6.2", "R6.4", "R7.1", "R8.1", "R8.2", "R19.1"), needs="child"),
     Case("next.id_zero", "a NEXT with id 0 runs child status.id + 1 (the server numbers it)",
-         ("R6.2", "R20.1"), needs="child"),
+         ("R6.2", "R20.1"), needs="child", divergences=("D10",)),
     Case("next.id_chosen", "a NEXT's own id (above the run's highest) names its child", ("R6.2",),
          needs="child", divergences=("D10",)),
     Case("next.stateless_id", "right after a child ends, a NEXT with the status's id + 1 runs",
-         ("R20.1", "R20.2"), needs="child"),
+         ("R20.1", "R20.2"), needs="child", divergences=("D10",)),
     Case("next.id_stale", "a NEXT whose id is not above the run's highest is refused", ("R4.12",),
          needs="child", divergences=("D10",)),
     Case("next.status_after_child", "after a child ends the status is WAITING with its id", ("R2.2", "R8.4"),
@@ -155,7 +155,7 @@ CASES: tuple[Case, ...] = (
          "then WAITING standby", ("R9.3", "R8.2", "R8.3", "R19.1", "R8.4"), needs="child",
          divergences=("D28",)),
     Case("cancel.both_answered", "two CANCELs of the running child wait for its end and are both "
-         "answered with its result", ("R9.3", "R8.3", "R19.1"), needs="child"),
+         "answered with its result", ("R9.3", "R8.3", "R19.1"), needs="child", divergences=("D1",)),
     Case("action.cancel_running", "an action-level cancel of the running NEXT is accepted and the NEXT "
          "answered canceled", ("R10.3", "R8.2"), needs="child", divergences=("D31",)),
     Case("action.cancel_answered", "an action-level cancel of an answered goal is refused", ("R10.5",),
