@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import re
+import signal
 import subprocess
 import sys
 import time
@@ -357,3 +358,33 @@ def test_a_begin_command_that_cannot_run_makes_the_cases_missing_not_a_crash(tmp
     assert _verdicts(done.stdout) == {"request.seq_stale": "missing"}, done.stdout
     assert "--begin-command 'no-such-command-here' did not run" in done.stdout
     assert "Traceback" not in done.stderr
+
+
+def _interrupted_probe(robot: str, signum: int, after: float) -> subprocess.CompletedProcess[str]:
+    argv = [sys.executable, "-m", "dynevent", "probe", "--robot", robot, "--place", "pantry",
+            "--timeout", "5", "--server-wait", "30"]  # fmt: skip
+    process = subprocess.Popen(
+        argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=child_env()
+    )
+    time.sleep(after)
+    process.send_signal(signum)
+    return finish(process, 30)
+
+
+def test_a_probe_interrupted_says_what_it_ran_and_stops_without_a_traceback(tmp_path: Path) -> None:
+    """SIGTERM while the probe waits for a server, and Ctrl-C in the middle of its cases: each ends it
+    in a line (128 + the signal), after the report of the cases that ended (rcl's traceback once)."""
+    waiting = _interrupted_probe("nobodyHere", signal.SIGTERM, 2.0)
+    assert waiting.returncode == 143, waiting.stdout + waiting.stderr
+    assert "Traceback" not in waiting.stderr, waiting.stderr
+    assert f"SIGTERM: stopped after 0 of {len(CASES)} case(s); the rest not run" in waiting.stdout
+    serve = _serve(tmp_path, "stopRobot", "standard")
+    try:
+        midway = _interrupted_probe("stopRobot", signal.SIGINT, 6.0)
+    finally:
+        serve.stop()
+    assert midway.returncode == 130, midway.stdout + midway.stderr
+    assert "Traceback" not in midway.stderr, midway.stderr
+    ran = re.search(rf"SIGINT: stopped after (\d+) of {len(CASES)} case\(s\)", midway.stdout)
+    assert ran is not None and 0 < int(ran[1]) < len(CASES), midway.stdout
+    assert "status.latched                pass" in midway.stdout  # the report of the cases that ran

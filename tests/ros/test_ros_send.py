@@ -120,3 +120,17 @@ def test_a_robot_with_no_server_is_said_at_once_with_the_servers_seen(tmp_path: 
     assert re.match(r"no Dynamic Event server for tinyRobot/nobody within \d+ s; the graph has ", line), line
     assert f"tinyRobot/{ROBOT}" in line, line
     assert took < 15, f"{took:.1f} s (the default --timeout is 60 s: send no longer waits it out)"
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_send_interrupted_while_it_waits_for_a_server_says_so_without_a_traceback(signum: int) -> None:
+    """No Dynamic Event server on the graph: send waits for one; Ctrl-C or SIGTERM then ends it in a
+    line (it used to end in rcl's traceback: the context shut down under the wait)."""
+    process = _send("--robot", "notYetThere", "--end")
+    time.sleep(2.0)  # rclpy is up and send is waiting on the graph
+    process.send_signal(signum)
+    done = finish(process, 20)
+    assert done.returncode == 128 + signum, done.stdout + done.stderr
+    assert "Traceback" not in done.stderr, done.stderr
+    said = f"{signal.Signals(signum).name} while waiting for tinyRobot/notYetThere's server and status"
+    assert f"{said}: nothing was sent" in done.stdout

@@ -38,7 +38,7 @@ from dynevent.ros.client import introspect
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.graph import no_server_text
 from dynevent.ros.qos import latched
-from dynevent.ros.spinning import Spinner, bounded_close, close_down
+from dynevent.ros.spinning import Interrupted, Spinner, bounded_close, close_down, interruptible
 from dynevent.server import machine
 from dynevent.tools import probe_cases
 from dynevent.tools.check.trace import TraceWriter
@@ -1245,7 +1245,15 @@ def main(args: Any, cases: list[Case], say: Callable[[str], None]) -> int:
             sys.stdout.write(f"\r\033[K{text}")
             sys.stdout.flush()
 
-    findings = run(cases, options, say, progress)
+    try:
+        findings = run(cases, options, say, progress)
+    except ProbeInterrupted as stop:
+        if live:
+            sys.stdout.write("\r\033[K")
+        if stop.findings:
+            say(probe_cases.format_findings(stop.findings).rstrip("\n"))
+        say(f"{stop.name}: stopped after {len(stop.findings)} of {len(cases)} case(s); the rest not run")
+        return 128 + stop.signal
     if live:
         sys.stdout.write("\r\033[K")
     if findings is None:
@@ -1268,6 +1276,14 @@ def main(args: Any, cases: list[Case], say: Callable[[str], None]) -> int:
     return probe_cases.exit_status(findings)
 
 
+class ProbeInterrupted(Interrupted):
+    """Ctrl-C or SIGTERM during a probe run: ``findings`` are those of the cases that ended before."""
+
+    def __init__(self, signum: int, findings: list[Finding]) -> None:
+        super().__init__(signum)
+        self.findings = list(findings)
+
+
 def run(
     cases: list[Case],
     options: Options,
@@ -1285,20 +1301,23 @@ def run(
     executor.add_node(node)
     spinner = Spinner(executor, "dynevent-probe")
     spinner.start()
+    findings: list[Finding] = []
     try:
-        if not link.wait_for_server(options.server_wait):
-            say(no_server_text(node, options.fleet, options.robot, options.server_wait))
-            return None
-        probe = Probe(link, _ready(link, options, cases, say))
-        findings = []
-        for case in cases:
-            if probe.silent:
-                findings.append(probe.not_run(case, STOPPED_ANSWERING))
-                continue
-            if progress is not None:
-                progress(f"{case.id} ...")
-            findings.append(probe.run(case))
+        with interruptible():
+            if not link.wait_for_server(options.server_wait):
+                say(no_server_text(node, options.fleet, options.robot, options.server_wait))
+                return None
+            probe = Probe(link, _ready(link, options, cases, say))
+            for case in cases:
+                if probe.silent:
+                    findings.append(probe.not_run(case, STOPPED_ANSWERING))
+                    continue
+                if progress is not None:
+                    progress(f"{case.id} ...")
+                findings.append(probe.run(case))
         return findings
+    except Interrupted as stop:
+        raise ProbeInterrupted(stop.signal, findings) from None
     finally:
         with bounded_close():
             spinner.stop()

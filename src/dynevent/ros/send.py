@@ -13,10 +13,9 @@ when no server or status was found within the timeout.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import signal
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
@@ -29,7 +28,7 @@ from dynevent.errors import (
 from dynevent.ros import spinning
 from dynevent.ros.client import DynamicEventClient, GoalRun, GoalWaitTimeout
 from dynevent.ros.graph import no_server_text, servers_seen
-from dynevent.ros.spinning import Spinner, bounded_close, close_down
+from dynevent.ros.spinning import Interrupted, Spinner, bounded_close, close_down, interruptible
 from dynevent.server import outputs as outs
 from dynevent.tools import explain
 from dynevent.tools.check.trace import TraceWriter
@@ -76,11 +75,17 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
     spinner = Spinner(executor, "dynevent-send")
     spinner.start()
     try:
-        if not _found(client, node, args, left, say):
-            return 2
-        if not client.wait_for_status(left()):
-            say(f"no status from {args.fleet}/{args.robot} within {timeout:g} s")
-            return 2
+        try:
+            with interruptible():
+                if not _found(client, node, args, left, say):
+                    return 2
+                if not client.wait_for_status(left()):
+                    say(f"no status from {args.fleet}/{args.robot} within {timeout:g} s")
+                    return 2
+        except Interrupted as stop:
+            name = signal.Signals(stop.signal).name
+            say(f"{name} while waiting for {args.fleet}/{args.robot}'s server and status: nothing was sent")
+            return 128 + stop.signal
         status = _status(client)
         say(f"{args.fleet}/{args.robot}: {explain.status_text(status)}")
 
@@ -97,12 +102,12 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
         else:
             goal_run = client.finish()
         try:
-            with _interruptible():
+            with interruptible():
                 result = goal_run.wait(left())
         except GoalWaitTimeout:
             say(f"no answer within {timeout:g} s")
             return 1
-        except _Interrupted as stop:
+        except Interrupted as stop:
             return _stop_goal(client, goal_run, event_type, stop.signal, say)
         if isinstance(result, cl.Refused):
             rejection = result.rejection
@@ -155,29 +160,6 @@ def _found(
     return False
 
 
-class _Interrupted(Exception):
-    """Ctrl-C or SIGTERM while a goal of send's was open."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(signum)
-        self.signal = signum
-
-
-@contextlib.contextmanager
-def _interruptible() -> Iterator[None]:
-    """SIGINT and SIGTERM raise :class:`_Interrupted` in the main thread while the goal is open."""
-
-    def interrupt(signum: int, frame: object) -> None:
-        raise _Interrupted(signum)
-
-    previous = {signum: signal.signal(signum, interrupt) for signum in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        yield
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
-
-
 def _stop_goal(
     client: DynamicEventClient,
     goal_run: GoalRun,
@@ -199,12 +181,12 @@ def _stop_goal(
     else:
         say(f"{name}: waiting up to {STOP_BOUND:g} s for the answer to the goal already sent")
     try:
-        with _interruptible():
+        with interruptible():
             result = goal_run.wait(max(deadline - time.monotonic(), 0.0))
     except GoalWaitTimeout:
         say(f"no answer within {STOP_BOUND:g} s of {name}: the goal may still be open on the robot")
         return 128 + signum
-    except _Interrupted:
+    except Interrupted:
         say(f"{name} again: leaving without the answer")
         return 128 + signum
     if isinstance(result, cl.Refused):
