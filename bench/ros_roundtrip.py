@@ -134,6 +134,7 @@ class Client:
         from rmf_task_msgs.action import DynamicEvent
 
         self.goal_type = DynamicEvent.Goal
+        self.name = f"{fleet}/{robot}"
         self.description = description
         self.seq = 1
         self.action = ActionClient(node, DynamicEvent, f"rmf/dynamic_event/command/{fleet}/{robot}")
@@ -194,7 +195,8 @@ class Client:
         self.action.send_goal_async(goal, feedback_callback=on_feedback).add_done_callback(on_response)
         deadline = started + timeout
         if not (answered.wait(timeout) and fed.wait(max(deadline - time.perf_counter(), 0.0))):
-            raise SystemExit(f"goal {goal_id}: no result and feedback within {timeout} s")
+            got = f"{'an answer' if answered.is_set() else 'no answer'} and {len(feedback)} feedback"
+            raise SystemExit(f"{self.name}: goal {goal_id}: {got} within {timeout} s")
         elapsed = time.perf_counter() - started
         status = result[0].result.status if result else "rejected"
         return elapsed, len(feedback), status
