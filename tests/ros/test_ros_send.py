@@ -134,3 +134,31 @@ def test_send_interrupted_while_it_waits_for_a_server_says_so_without_a_tracebac
     assert "Traceback" not in done.stderr, done.stderr
     said = f"{signal.Signals(signum).name} while waiting for tinyRobot/notYetThere's server and status"
     assert f"{said}: nothing was sent" in done.stdout
+
+
+def test_send_waits_on_while_discovery_still_shows_new_servers(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A large fleet just started: the graph shows more of its servers at each look.  send does not
+    conclude that the robot has none while that goes on (in CI it once said so of the 66th robot of a
+    fleet whose servers it had seen 28 of)."""
+    import argparse
+
+    from dynevent.ros import send as send_module
+
+    monkeypatch.setattr(send_module, "WAKE", 0.02)
+    monkeypatch.setattr(send_module, "LOOK", 0.1)
+    monkeypatch.setattr(send_module, "SETTLED", 0.1)
+    started = time.monotonic()
+
+    def seen(node: object) -> list[tuple[str, str]]:  # one more server each 0.02 s, for 0.6 s
+        return [("tinyRobot", f"r{index}") for index in range(int((time.monotonic() - started) / 0.02) % 31)]
+
+    class Client:  # the robot's own server appears at 0.6 s
+        def wait_for_server(self, timeout: float) -> bool:
+            time.sleep(timeout)
+            return time.monotonic() - started > 0.6
+
+    monkeypatch.setattr(send_module, "servers_seen", seen)
+    args = argparse.Namespace(fleet="tinyRobot", robot="late", timeout=5.0, wait=False)
+    said: list[str] = []
+    found = send_module._found(Client(), None, args, lambda: 5.0 - (time.monotonic() - started), said.append)
+    assert found, said

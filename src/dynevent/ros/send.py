@@ -132,6 +132,9 @@ STOP_BOUND = 10.0
 LOOK = 3.0
 #: How often send looks at the graph again while it waits for the robot's server.
 WAKE = 0.5
+#: How long the servers the graph shows must stay the same before send says the robot's is not among
+#: them: a fleet whose discovery is still under way shows more servers at each look.
+SETTLED = 1.5
 
 
 def _found(
@@ -144,16 +147,22 @@ def _found(
     """Is the robot's server there?  Discovery can take seconds (a fleet adapter's took 3 s here, and
     more on a loaded machine), so send waits on, to the timeout, while the graph shows no Dynamic
     Event server yet or shows this robot's; once the graph shows other robots' servers and, after
-    :data:`LOOK` seconds, not this one's, it says which it sees and stops, unless ``--wait``."""
+    :data:`LOOK` seconds and with no new one for :data:`SETTLED` seconds, not this one's, it says
+    which it sees and stops, unless ``--wait``."""
     waited = float(args.timeout)
     started = waited - left()
     keep_waiting = bool(getattr(args, "wait", False))
+    known: frozenset[tuple[str, str]] = frozenset()
+    changed = 0.0  # when the servers the graph shows last changed (discovery still under way)
     while left() > 0:
         if client.wait_for_server(min(WAKE, left())):
             return True
-        seen = servers_seen(node)
+        seen = frozenset(servers_seen(node))
         elapsed = waited - left() - started
-        if not keep_waiting and elapsed >= LOOK and seen and (args.fleet, args.robot) not in seen:
+        if seen != known:
+            known, changed = seen, elapsed
+        settled = elapsed - changed >= SETTLED
+        if not keep_waiting and elapsed >= LOOK and settled and seen and (args.fleet, args.robot) not in seen:
             say(no_server_text(node, args.fleet, args.robot, round(elapsed)))
             return False
     say(no_server_text(node, args.fleet, args.robot, waited))
