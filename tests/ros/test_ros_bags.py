@@ -147,6 +147,15 @@ def _session(tmp_path: Path, graph: Any, serve_args: list[str], pause: float = 0
         record = Child(["-m", "dynevent", "record", "-o", str(bag), "--fleet", "tinyRobot", "--robot", ROBOT])
         record.wait_line(f"recording /rmf/dynamic_event/status/tinyRobot/{ROBOT}")
         watcher = graph.node("bag_watcher")
+        # the recorder's subscriptions on the graph before a goal is sent: "recording" is said when one
+        # is made, and serve says "serving" before other processes have discovered it (a recorder
+        # matched late once kept only the latched end of the NEXT's child)
+        for topic in (f"/rmf/dynamic_event/status/tinyRobot/{ROBOT}",
+                      f"/rmf/dynamic_event/command/tinyRobot/{ROBOT}/_action/feedback"):  # fmt: skip
+            record.wait_line(f"recording {topic}")
+            ends = (watcher.count_subscribers, watcher.count_publishers)
+            wait_for(lambda topic=topic, ends=ends: min(count(topic) for count in ends) > 0,
+                     f"the recorder and serve on {topic}")  # fmt: skip
         if "--no-judge" not in serve_args:  # the recorder is on the service events before a goal is sent
             for topic in SERVICE_EVENTS:
                 record.wait_line(f"recording {topic}")
