@@ -30,6 +30,7 @@ from typing import Any
 import rclpy
 from action_msgs.msg import GoalStatusArray
 from action_msgs.srv import CancelGoal
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
@@ -73,6 +74,7 @@ class Recorder:
         self.messages = 0
         self.bytes = 0
         self.topics: dict[str, Any] = {}  # topic: its subscription
+        self.heard: set[str] = set()  # the topics whose subscription has matched a publisher
         self._connections: dict[str, Any] = {}
         self._lock = threading.Lock()
 
@@ -111,10 +113,20 @@ class Recorder:
                 topic, msgtype, msgdef=bags.message_definition(msgtype),
                 rihs01=rihs01 if rihs01.startswith("RIHS01_") else _UNHASHED,
             )  # fmt: skip
+        heard = SubscriptionEventCallbacks(matched=lambda info, topic=topic: self._matched(topic, info))
         self.topics[topic] = self.node.create_subscription(
-            _CLASSES[msgtype], topic, lambda data, topic=topic: self._write(topic, data), qos, raw=True
-        )
+            _CLASSES[msgtype], topic, lambda data, topic=topic: self._write(topic, data), qos, raw=True,
+            event_callbacks=heard,
+        )  # fmt: skip
         self.say(f"recording {topic} ({msgtype})")
+
+    def _matched(self, topic: str, info: Any) -> None:
+        """Say when a topic is first heard: its subscription has matched a publisher, whose messages
+        are recorded from then on (a subscription made is not yet one matched: DDS discovery between
+        two processes can take seconds, and what a volatile topic carried before is not recorded)."""
+        if info.current_count > 0 and topic not in self.heard:
+            self.heard.add(topic)
+            self.say(f"hearing {topic}")
 
     def _named(self, topic: str) -> bool:
         """Whether ``topic`` is a Dynamic Event name of a robot asked for (the fleet-wide begin topic
