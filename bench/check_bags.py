@@ -57,7 +57,7 @@ def write_bag(path: Path, lines: Iterable[str], storage: str) -> None:
     import numpy as np
     from rosbags.rosbag2 import StoragePlugin, Writer
 
-    from dynevent.tools.check.bags import message_definition, typestore
+    from dynevent.bags.reader import message_definition, typestore
 
     store = typestore()
     types = store.types

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
+from dynevent.conformance.judge import step_records
 from dynevent.server import inputs as ins
 from dynevent.server import machine
-from dynevent.tools.check import step_records
 from dynevent.wire import _json
 from dynevent.wire.messages import Goal
 

@@ -26,13 +26,13 @@ import attrs
 
 from dynevent import client as cl
 from dynevent.conformance import driver, vectors
+from dynevent.conformance.judge import check_trace
 from dynevent.conformance.records import config_from_json, input_from_json, output_from_json, rule_validator
 from dynevent.server import inputs as ins
 from dynevent.server import machine, snapshot
 from dynevent.server.fleet import Fleet
 from dynevent.server.store import StateStore
 from dynevent.tools import cli
-from dynevent.tools.check import check_trace
 from dynevent.wire.description import EventDescription, EventSpec
 from dynevent.wire.messages import MESSAGE_TYPES
 from dynevent.wire.names import action_name, parse_name, validate_token

@@ -243,7 +243,7 @@ def test_a_store_whose_schema_text_is_not_utf8_is_refused(tmp_path: Any) -> None
 
 
 def test_a_trace_time_of_a_huge_integer_is_a_located_error() -> None:
-    from dynevent.tools.check import TraceError, check_trace
+    from dynevent.conformance.judge import TraceError, check_trace
 
     with pytest.raises(TraceError, match="time"):
         check_trace('{"type": "status", "time": ' + "9" * 400 + ', "message": {}}')
@@ -251,7 +251,7 @@ def test_a_trace_time_of_a_huge_integer_is_a_located_error() -> None:
 
 @pytest.mark.parametrize("status", ['{"a": 1}', '["succeeded"]'])
 def test_a_result_record_status_of_the_wrong_json_type_is_a_located_error(status: str) -> None:
-    from dynevent.tools.check import TraceError, check_trace
+    from dynevent.conformance.judge import TraceError, check_trace
 
     line = (
         '{"type": "result", "time": 1, "goal_uuid": "'

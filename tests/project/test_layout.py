@@ -1,5 +1,6 @@
 """The package layout is the architecture: imports go one way,
-wire <- server <- client/descriptions <- conformance <- tools.
+wire <- server <- client/descriptions <- conformance <- bags/sim <- ros <- tools: judging lives
+below the command line, and nothing imports the command line but ``__main__``.
 
 Every import in ``src/dynevent`` (at module level or inside a function) is read from the source, so a
 lazy import that crosses a layer the wrong way fails here as a module-level one would.
@@ -13,6 +14,7 @@ from pathlib import Path
 import pytest
 
 import dynevent
+from dynevent import _moved
 
 SRC = Path(__file__).resolve().parents[2] / "src" / "dynevent"
 
@@ -25,9 +27,17 @@ ALLOWED: dict[str, frozenset[str]] = {
     "client": frozenset({"errors", "wire", "server"}),
     "conformance": frozenset({"errors", "wire", "server", "descriptions"}),
     "descriptions": frozenset({"errors", "wire", "server"}),
-    "tools": frozenset({"errors", "wire", "server", "client", "conformance", "descriptions", "ros"}),
-    # judging is conformance (docs/design): ros reads the client judge from below
-    "ros": frozenset({"errors", "wire", "server", "client", "conformance", "descriptions", "tools"}),
+    "_moved": frozenset(),  # old import paths, kept one release
+    # recordings are files: read and judged below ros (no rclpy)
+    "bags": frozenset({"errors", "wire", "server", "conformance"}),
+    # the simulated fleet serve runs, its configuration checked before rclpy is needed
+    "sim": frozenset({"errors", "wire", "server", "descriptions"}),
+    # the command line, and what only it runs: nothing below imports it
+    "tools": frozenset(
+        {"errors", "wire", "server", "client", "conformance", "descriptions", "bags", "sim", "ros", "_moved"}
+    ),
+    # judging is conformance (docs/design): ros reads the judges from below, never the command line
+    "ros": frozenset({"errors", "wire", "server", "client", "conformance", "descriptions", "bags", "sim"}),
     "testing": frozenset({"errors", "wire", "server", "conformance"}),
     # behaviour trees over a robot client (its type only: the tree's author opens the client)
     "bt": frozenset({"errors", "wire", "client", "ros"}),
@@ -117,3 +127,59 @@ def test_the_ros_client_and_server_import_neither_each_other() -> None:
             node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and node.module
         }
         assert f"dynevent.ros.{other}" not in imported, f"ros/{module}.py imports ros/{other}.py"
+
+
+#: The top-level packages a ROS 2 environment provides: only dynevent.ros imports them.
+ROS_PACKAGES = frozenset(
+    {"rclpy", "rmf_task_msgs", "action_msgs", "builtin_interfaces", "service_msgs", "unique_identifier_msgs",
+     "rosidl_runtime_py", "rosbag2_py"}
+)  # fmt: skip
+
+
+def _top_imports(path: Path) -> set[str]:
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names.update(alias.name.split(".")[0] for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            names.add(node.module.split(".")[0])
+    return names
+
+
+def test_only_the_ros_binding_imports_ros() -> None:
+    """The core, the judges and the bag reader run without ROS 2: a recording is files."""
+    wrong = {
+        module: sorted(_top_imports(path) & ROS_PACKAGES)
+        for module, path in _modules()
+        if _part(module) != "ros" and _top_imports(path) & ROS_PACKAGES
+    }
+    assert not wrong, wrong
+    assert _top_imports(SRC / "ros" / "record.py") & ROS_PACKAGES  # the reader sees one
+
+
+MOVED = _moved.MODULES
+
+
+@pytest.mark.parametrize(("old", "new"), sorted(MOVED.items()))
+def test_a_moved_module_is_still_found_at_its_old_path_with_a_warning(old: str, new: str) -> None:
+    import importlib
+    import sys
+
+    sys.modules.pop(old, None)
+    with pytest.warns(DeprecationWarning, match=f"{old} has moved to {new}"):
+        module = importlib.import_module(old)
+    assert module is importlib.import_module(new)
+    sys.modules.pop(old, None)
+
+
+def test_the_judging_names_check_held_are_still_found_there_with_a_warning() -> None:
+    from dynevent.conformance import judge
+    from dynevent.tools import check
+
+    with pytest.warns(DeprecationWarning, match="dynevent.tools.check.check_trace has moved"):
+        assert check.check_trace is judge.check_trace
+    with pytest.warns(DeprecationWarning):
+        from dynevent.tools.check import Report
+    assert Report is judge.Report
+    with pytest.raises(AttributeError, match="no_such_name"):
+        check.no_such_name  # noqa: B018

@@ -30,7 +30,7 @@ NOT_THE_PROTOCOL: dict[tuple[str, str], str] = {
     ("conformance/runner.py", "error"): "the driver protocol's JSON key",
     ("conformance/report.py", "failed"): "a report's tally and JUnit attribute",
     ("conformance/report.py", "skipped"): "JUnit's element",
-    ("tools/probe_cases.py", "skipped"): "JUnit's element",
+    ("conformance/probe_cases.py", "skipped"): "JUnit's element",
     ("server/resync.py", "queued"): "a function's name in __all__",
 }
 
@@ -97,7 +97,7 @@ def rule_logic_outside_the_oracle(modules: list[tuple[str, ast.Module]]) -> list
 
 #: Where the final statuses are read for another purpose than R20.2, with why.
 FINAL_STATUS_READERS = {
-    "tools/check/observer.py": "a child's final status guessed for an answer the recording lacks",
+    "conformance/judge/observer.py": "a child's final status guessed for an answer the recording lacks",
 }
 
 

@@ -12,7 +12,7 @@ def test_no_core_module_imports_rclpy() -> None:
         "import importlib, pkgutil, sys, dynevent\n"
         "names = [m.name for m in pkgutil.walk_packages(dynevent.__path__, 'dynevent.')]\n"
         "for name in names:\n"
-        "    if not name.startswith('dynevent.ros'):\n"
+        "    if not name.startswith('dynevent.ros.'):  # the package itself is lazy\n"
         "        importlib.import_module(name)\n"
         "bad = sorted(m for m in sys.modules if m.split('.')[0] in ('rclpy', 'rmf_task_msgs'))\n"
         "print(len(names), bad)\n"

@@ -17,7 +17,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from service_msgs.msg import ServiceEventInfo
 from unique_identifier_msgs.msg import UUID
 
-from dynevent.tools.check.bags import _definitions, check_bag
+from dynevent.bags.reader import _definitions, check_bag
 
 ACTION = "/rmf/dynamic_event/command/tinyRobot/r1"
 T0 = 1_700_000_000 * 10**9

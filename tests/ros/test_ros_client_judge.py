@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 from ros_support import Child, child_env, finish, wait_for
 
-from dynevent.tools.check import check_trace
+from dynevent.conformance.judge import check_trace
 
 ROBOT = "judged1"
 

@@ -18,10 +18,10 @@ from pathlib import Path
 import pytest
 from ros_support import Child, child_env, finish
 
+from dynevent.conformance.judge import check_trace
+from dynevent.conformance.judge.trace import Finding
+from dynevent.conformance.probe_cases import CASES
 from dynevent.ros import probe
-from dynevent.tools.check import check_trace
-from dynevent.tools.check.trace import Finding
-from dynevent.tools.probe_cases import CASES
 
 #: What the rmf_ros2 mode of serve reproduces of rmf_ros2, case by case: the D-number the probe names.
 RMF_ROS2_FAILS = {

@@ -313,7 +313,7 @@ def test_a_crash_at_any_point_of_a_goals_life_loses_no_answer(
 def test_a_sharded_fleet_is_served_by_its_processes_as_by_one(tmp_path: Path) -> None:
     """``--shard K/N``: each process serves the robots whose names hash to its part, every robot is
     served exactly once, and a client drives each robot as it would one process's."""
-    from dynevent.tools.serve_config import parse_shard, shard_of
+    from dynevent.sim.config import parse_shard, shard_of
 
     robots = [f"shardRobot{index}" for index in range(6)]
     parts = {robot: shard_of(robot, 2) for robot in robots}

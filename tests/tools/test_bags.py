@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 
+from dynevent.bags.reader import BagReport, _definitions, _stored_name, check_bag, typestore
 from dynevent.errors import BagError
-from dynevent.tools.check.bags import BagReport, _definitions, _stored_name, check_bag, typestore
 
 STORE = typestore()
 DEFINITIONS = _definitions()
@@ -571,7 +571,7 @@ def test_other_readers_decode_a_bag_from_the_definitions_it_holds(tmp_path: Path
     alone, and Foxglove's ROS 2 decoder (ROS's own parser) every topic whose type a ``.msg`` can
     name, to the same values."""
     from bag_readers import read_with_foxglove, read_with_rosbags
-    from dynevent.tools.check.bags import message_definition
+    from dynevent.bags.reader import message_definition
 
     run = _topics(_partial_clean())
     run.goal(9, goal_id=9).result(9, SUCCEEDED, "completed", 9)
@@ -673,7 +673,7 @@ def _received(run: Conversation, order: list[int]) -> None:
 
 def _passed(monkeypatch: pytest.MonkeyPatch, path: Path) -> list[str]:
     """The kinds of the records check_bag passes to the observer, in order."""
-    from dynevent.tools.check import bags
+    from dynevent.bags import reader as bags
 
     kinds: list[str] = []
     push = bags.Checker.push

@@ -13,9 +13,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from dynevent.conformance.judge import Report, TraceError, check_trace, read_trace, step_records
 from dynevent.server import inputs as ins
 from dynevent.server import machine
-from dynevent.tools.check import Report, TraceError, check_trace, read_trace, step_records
 from dynevent.wire import _json
 from dynevent.wire.messages import Goal
 
@@ -260,7 +260,7 @@ def test_the_observer_keeps_the_latest_closed_goals_only_and_still_finds_a_late_
     """Memory stays flat on a trace of any length: of the goals answered or refused, the observer keeps
     the latest CLOSED_GOALS.  A second answer to a goal it let go is still a finding under R19.1 (an
     answer to a goal it does not know); one to a goal it keeps is a second answer."""
-    from dynevent.tools.check.observer import CLOSED_GOALS, Checker
+    from dynevent.conformance.judge.observer import CLOSED_GOALS, Checker
 
     trace = Trace().begin().status(1, 1, "standby", 0)
     cycles = CLOSED_GOALS + 50
@@ -271,7 +271,7 @@ def test_the_observer_keeps_the_latest_closed_goals_only_and_still_finds_a_late_
     trace.result(1, "aborted", "canceled", 1)
     old = trace.line
     trace.result(cycles, "aborted", "canceled", cycles)
-    from dynevent.tools.check.trace import read_trace
+    from dynevent.conformance.judge.trace import read_trace
 
     header, records = read_trace(trace.text().splitlines(keepends=True), "t.jsonl")
     checker = Checker(header)
@@ -525,7 +525,7 @@ def test_a_late_subscriber_may_read_the_latched_begin_after_the_status() -> None
 
 
 def test_a_trace_writer_writes_what_check_reads(tmp_path: Path) -> None:
-    from dynevent.tools.check.trace import TraceWriter, observation
+    from dynevent.conformance.judge.trace import TraceWriter, observation
     from dynevent.wire.messages import DynamicEventStatus
 
     writer = TraceWriter(str(tmp_path / "t.jsonl"), fleet="tinyRobot", robot="tinyRobot1")
@@ -704,7 +704,7 @@ def test_check_reads_a_trace_as_a_stream_holding_a_few_records(monkeypatch: pyte
     import sys
     from pathlib import Path
 
-    from dynevent.tools.check import observer
+    from dynevent.conformance.judge import observer
 
     root = str(Path(__file__).resolve().parents[2])
     if root not in sys.path:
@@ -783,3 +783,27 @@ def test_check_judges_a_server_as_serve_s_rmf_ros2_mode_when_asked() -> None:
     assert check_trace(text, "t", compatibility="rmf_ros2").clean
     with_config = _json.dumps(CONFIG) + "\n" + text  # a config record says standard: it wins
     assert not check_trace(with_config, "t", compatibility="rmf_ros2").clean
+
+
+def _judged(judge: Any, records: list[Any]) -> Report:
+    from dynevent.conformance.judge import Judge
+
+    typed: Judge = judge  # mypy holds both judges to the one interface
+    for record in records:
+        typed.push(record)
+    return typed.finish()
+
+
+def test_both_judges_keep_the_one_interface() -> None:
+    """The observer and the partial judge take records one at a time and give a report: the observer
+    pushed by hand finds what check_trace finds, and the partial judge, from the topics alone, the
+    status that shows a child id lower than the run showed before (R6.2)."""
+    from dynevent.conformance.judge import Checker, PartialJudge
+
+    trace = Trace().started().result(1, "succeeded", "completed", 6).status(1, 2, "completed", 6)
+    header, records = read_trace(trace.text().splitlines(), "t")
+    assert found(_judged(Checker(header), records)) == found(trace.check()) != []
+    topics = Trace().begin().status(1, 1, "standby", 0)
+    topics.status(1, 2, "underway", 5).status(1, 2, "underway", 4)
+    header, records = read_trace(topics.text().splitlines(), "t")
+    assert found(_judged(PartialJudge(header, margin=10**9), records)) == [(topics.line, "R6.2", "status_id")]

@@ -242,7 +242,8 @@ def test_help_imports_no_protocol_module() -> None:
         "import sys; from dynevent.tools import cli\n"
         "try:\n    cli.main(['--help'])\nexcept SystemExit:\n    pass\n"
         "heavy = sorted(m for m in sys.modules if m.startswith(('dynevent.server', 'dynevent.client', "
-        "'dynevent.conformance', 'dynevent.tools.check', 'dynevent.tools.explain', 'dynevent.tools.demo')))\n"
+        "'dynevent.conformance', 'dynevent.bags', 'dynevent.sim', 'dynevent.tools.check', "
+        "'dynevent.tools.demo')))\n"
         "print('HEAVY', heavy, 'attrs' in sys.modules)\n"
     )
     done = subprocess.run(
@@ -268,6 +269,24 @@ def _without_ros(*args: str, blocked: str = "rclpy") -> subprocess.CompletedProc
         timeout=60,
         check=False,
     )
+
+
+def test_the_ros_package_imports_without_ros_and_its_names_say_what_is_missing() -> None:
+    """``import dynevent.ros`` is lazy, as the root package is: without rclpy it imports, and a name
+    that needs ROS 2 raises ImportError saying what is missing and how to get it."""
+    code = (
+        "import sys; sys.modules['rclpy'] = None\n"
+        "import dynevent.ros\n"
+        "assert 'RobotClient' in dir(dynevent.ros)\n"
+        "try:\n    dynevent.ros.RobotClient\nexcept ImportError as exc:\n    print(exc)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert done.returncode == 0, done.stderr
+    expected = "dynevent.ros.RobotClient needs ROS 2 (rclpy) and the rmf_task_msgs"
+    assert done.stdout.startswith(expected), done.stdout
+    assert "setup-ros-env.sh" in done.stdout
 
 
 @pytest.mark.parametrize(

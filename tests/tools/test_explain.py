@@ -9,11 +9,11 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from dynevent.conformance.explain import UNKNOWN_GOAL, explain, format_explanation, state_from_status
 from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.testing.strategies import messages
 from dynevent.tools import cli
-from dynevent.tools.explain import UNKNOWN_GOAL, explain, format_explanation, state_from_status
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import DynamicState, EventType, RejectReason
 

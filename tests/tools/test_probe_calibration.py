@@ -14,7 +14,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from dynevent.tools import probe_cases
+from dynevent.conformance import probe_cases
 
 RUN = Path(__file__).resolve().parents[1] / "data" / "rmf_ros2" / "calibration" / "probe-known.txt"
 #: The cases the lab's run leaves out, and why.

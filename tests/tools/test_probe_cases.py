@@ -9,8 +9,8 @@ from pathlib import Path
 import attrs
 import pytest
 
-from dynevent.tools import probe_cases
-from dynevent.tools.probe_cases import CASES, KNOWN, Case, Finding, Verdict
+from dynevent.conformance import probe_cases
+from dynevent.conformance.probe_cases import CASES, KNOWN, Case, Finding, Verdict
 
 ROOT = Path(__file__).resolve().parents[2]
 SPEC_RULES = set(re.findall(r"\*\*(R\d+\.\d+)\*\*", (ROOT / "docs" / "spec.md").read_text(encoding="utf-8")))

@@ -18,8 +18,8 @@ import pytest
 
 pytest.importorskip("rosbags", reason="the bags extra (rosbags) reads the recordings")
 
-from dynevent.tools.check.bags import check_bag
-from dynevent.tools.check.trace import Finding
+from dynevent.bags.reader import check_bag
+from dynevent.conformance.judge.trace import Finding
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "rmf_ros2"
 DOC = Path(__file__).resolve().parents[2] / "docs" / "divergences.md"

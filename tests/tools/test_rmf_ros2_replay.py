@@ -21,14 +21,14 @@ import pytest
 
 pytest.importorskip("rosbags", reason="the bags extra (rosbags) reads the recordings")
 
+from dynevent.bags.reader import bag_records
+from dynevent.conformance.judge.trace import read_trace, step_records
 from dynevent.conformance.replay import Comparison, Difference, compare_recording
 from dynevent.errors import TraceError
 from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server.machine import ServerConfig, State, any_description
-from dynevent.tools.check.bags import bag_records
-from dynevent.tools.check.trace import read_trace, step_records
-from dynevent.tools.serve_config import ServeConfig, machine_config
+from dynevent.sim.config import ServeConfig, machine_config
 from dynevent.wire.messages import Goal
 from dynevent.wire.vocab import Compatibility, IdPolicy
 

@@ -14,7 +14,7 @@ from dynevent import descriptions
 from dynevent.errors import ServeError
 from dynevent.server import inputs, machine
 from dynevent.server import outputs as outs
-from dynevent.tools.serve_config import (
+from dynevent.sim.config import (
     DEFAULT_CATEGORIES,
     ServeConfig,
     Step,

@@ -1,5 +1,5 @@
 """The mirrors of received messages, from any object with the ROS field names: rclpy's message
-objects (:mod:`dynevent.ros.convert`), or a bag reader's (:mod:`dynevent.tools.check.bags`).
+objects (:mod:`dynevent.ros.convert`), or a bag reader's (:mod:`dynevent.bags.reader`).
 
 A value a mirror refuses is the sender's fault: :class:`~dynevent.errors.MalformedMessage` (an
 ``InvalidMessage``) naming the field and the value.  Nothing here imports ROS.

@@ -1,7 +1,7 @@
 """Replay a recorded server: drive the machine with the goals a recording's clients sent and the
 events its site caused, and set what the machine says beside what the server said.
 
-A recording of a live server (``dynevent record``, read by ``dynevent.tools.check.bags``) holds
+A recording of a live server (``dynevent record``, read by ``dynevent.bags.reader``) holds
 two kinds of thing: what the clients did (goals, action-level cancels) and what the server said
 (begin, statuses, goal responses, feedback, answers, cancel responses).  Some of what the server
 said comes from its site rather than from the protocol: a task reaching its dynamic event, the
@@ -76,7 +76,7 @@ _GOAL_KINDS = frozenset({"goal_response", "feedback", "result", "cancel_request"
 
 
 class Observation(Protocol):
-    """One record of a recording, as ``dynevent.tools.check`` reads it: ``kind`` is ``begin``,
+    """One record of a recording, as :mod:`dynevent.bags` reads it: ``kind`` is ``begin``,
     ``status``, ``goal``, ``goal_response``, ``feedback``, ``result``, ``cancel_request`` or
     ``cancel_response`` (others are skipped); ``time`` integer nanoseconds."""
 

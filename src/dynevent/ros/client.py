@@ -35,6 +35,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.task import Future
 
 from dynevent import client as cl
+from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.errors import (
     GoalWaitTimeout,  # defined there with every error; importable here too
     InvalidMessage,
@@ -44,7 +45,6 @@ from dynevent.ros import convert
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.qos import introspect, latched
 from dynevent.server.inputs import NOW_RANGE
-from dynevent.tools.check.trace import TraceWriter
 from dynevent.wire.messages import Result
 from dynevent.wire.names import (
     ROBOT_BEGIN_TOPIC_DEPTH,

@@ -4,8 +4,8 @@ The probe is a client that may break the protocol on purpose: it sends raw
 goals (a stale seq, event type 0, a CANCEL naming another event...) through
 its own action client and watches the robot's status and begin topics, with
 nothing of the server's process imported.  Each case of
-:data:`dynevent.tools.probe_cases.CASES` ends in a
-:class:`~dynevent.tools.probe_cases.Finding`; every wait is bounded by
+:data:`dynevent.conformance.probe_cases.CASES` ends in a
+:class:`~dynevent.conformance.probe_cases.Finding`; every wait is bounded by
 ``--timeout``.  Over ROS a refusal carries no reason (D6), so a case judges
 what a client can see: accepted or rejected, the feedback, the answer, the
 status that follows.
@@ -32,6 +32,9 @@ from action_msgs.msg import GoalStatus as RosGoalStatus
 from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 
+from dynevent.conformance import probe_cases
+from dynevent.conformance.judge.trace import TraceWriter
+from dynevent.conformance.probe_cases import Case, Finding, Verdict
 from dynevent.errors import InvalidMessage, ProbeError
 from dynevent.ros import convert, spinning
 from dynevent.ros.client import introspect
@@ -40,9 +43,6 @@ from dynevent.ros.graph import no_server_text
 from dynevent.ros.qos import latched
 from dynevent.ros.spinning import Interrupted, Spinner, bounded_close, close_down, interruptible
 from dynevent.server import machine
-from dynevent.tools import probe_cases
-from dynevent.tools.check.trace import TraceWriter
-from dynevent.tools.probe_cases import Case, Finding, Verdict
 from dynevent.wire.messages import (
     DynamicEventDescription,
     DynamicEventStatus,
@@ -327,7 +327,7 @@ class Options:
     ros_args: tuple[str, ...] = ()
     #: the cases that may be missing without failing the run: ids, globs, sections or rules
     allow_missing: tuple[str, ...] = ()
-    #: the cases ``--known`` expects to be missing (:data:`~dynevent.tools.probe_cases.KNOWN_MISSING`)
+    #: the cases ``--known`` expects to be missing (:data:`~dynevent.conformance.probe_cases.KNOWN_MISSING`)
     known_missing: frozenset[str] = frozenset()
 
 

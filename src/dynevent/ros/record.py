@@ -18,7 +18,6 @@ and metadata, and nothing received is lost.
 
 from __future__ import annotations
 
-import argparse
 import signal
 import sys
 import threading
@@ -27,6 +26,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import attrs
 import rclpy
 from action_msgs.msg import GoalStatusArray
 from action_msgs.srv import CancelGoal
@@ -34,14 +34,14 @@ from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from dynevent.bags import reader as bags
 from dynevent.errors import InvalidName, RecordError
 from dynevent.ros import spinning
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
-from dynevent.tools.check import bags
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, action_name, begin_topic, parse_name, status_topic
 
-__all__ = ["Recorder", "run"]
+__all__ = ["RecordOptions", "Recorder", "run"]
 
 #: The message class of each type a Dynamic Event conversation uses.
 _CLASSES: dict[str, Any] = {
@@ -174,7 +174,18 @@ def _qos_for(infos: Any) -> QoSProfile:
     )
 
 
-def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
+@attrs.frozen(kw_only=True)
+class RecordOptions:
+    """What ``dynevent record`` is asked to do, its flags read and checked by the command line."""
+
+    output: str | None = None  # the bag's directory; by default dynevent_<date>-<time>
+    fleets: tuple[str, ...] = ()  # the fleets recorded (every fleet when none)
+    robots: tuple[str, ...] = ()  # the robots recorded (every robot when none)
+    seconds: float | None = None  # stop after this long (by default at Ctrl-C or SIGTERM)
+    ros_args: tuple[str, ...] = ()  # ROS 2's own command-line arguments (``--ros-args ...``)
+
+
+def run(args: RecordOptions, say: Callable[[str], None]) -> int:
     """Record until SIGINT, SIGTERM or ``--seconds``; 0, or 2 when the bag cannot be written."""
     try:
         from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
@@ -185,7 +196,7 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
     output = Path(args.output or time.strftime("dynevent_%Y_%m_%d-%H_%M_%S"))
     if output.exists():
         raise RecordError(f"--output {output}: exists already (a bag is a new directory)")
-    fleets, robots = set(args.fleet or ()), set(args.robot or ())
+    fleets, robots = set(args.fleets), set(args.robots)
 
     def wanted(fleet: str, robot: str) -> bool:
         return (not fleets or fleet in fleets) and (not robots or robot in robots)
@@ -195,7 +206,7 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
         writer.open()
     except (OSError, WriterError) as exc:
         raise RecordError(f"--output {output}: cannot write: {exc}") from None
-    spinning.init(getattr(args, "ros_args", ()))
+    spinning.init(args.ros_args)
     node = rclpy.create_node("dynevent_record")
     live = sys.stdout.isatty()
 

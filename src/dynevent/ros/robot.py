@@ -30,11 +30,11 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 
 from dynevent import client as cl
+from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.errors import LocalError, RobotNotReady
 from dynevent.ros.client import DynamicEventClient, GoalRun
 from dynevent.ros.graph import no_server_text
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
-from dynevent.tools.check.trace import TraceWriter
 
 __all__ = ["AsyncRobotClient", "RobotClient"]
 

@@ -3,7 +3,7 @@
 It prints the robot's status as first seen, every feedback as it arrives,
 and the typed outcome; for a goal the robot refused (a ROS refusal carries
 no reason) it explains, from the status, why the robot most likely refused
-it and what to send instead (:mod:`dynevent.tools.explain`).  Everything is bounded
+it and what to send instead (:mod:`dynevent.conformance.explain`).  Everything is bounded
 by ``--timeout``.  Exit status: 0 when the goal succeeded (a NEXT whose event
 completed, a CANCEL or FINISHED that was carried out), 1 when it did not
 (refused, failed, cancelled, aborted, timed out), 2 on bad usage or input, or
@@ -12,16 +12,18 @@ when no server or status was found within the timeout.
 
 from __future__ import annotations
 
-import argparse
 import signal
 import time
 from collections.abc import Callable
 
+import attrs
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 
 from dynevent import client as cl
 from dynevent import descriptions
+from dynevent.conformance import explain
+from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.errors import (
     SendError,  # defined there with every error; importable here too
 )
@@ -30,13 +32,10 @@ from dynevent.ros.client import DynamicEventClient, GoalRun, GoalWaitTimeout
 from dynevent.ros.graph import no_server_text, servers_seen
 from dynevent.ros.spinning import Interrupted, Spinner, bounded_close, close_down, interruptible
 from dynevent.server import outputs as outs
-from dynevent.tools import explain
-from dynevent.tools.check.trace import TraceWriter
-from dynevent.tools.send_request import goal_request
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import EventType, GoalStatus
 
-__all__ = ["SendError", "goal_request", "run"]
+__all__ = ["SendError", "SendOptions", "run"]
 
 
 def _succeeded(event_type: EventType, outcome: cl.Outcome) -> bool:
@@ -51,9 +50,26 @@ def _progress_line(progress: cl.Progress) -> list[str]:
     return lines
 
 
-def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
+@attrs.frozen(kw_only=True)
+class SendOptions:
+    """What ``dynevent send`` is asked to do, its flags read and checked by the command line."""
+
+    fleet: str
+    robot: str
+    event_type: EventType
+    category: str = ""  # a NEXT's
+    description: str = ""  # a NEXT's
+    stubborn_period: float = 0.0  # a NEXT's, in seconds
+    timeout: float = 60.0  # the bound on the whole exchange, in seconds
+    trace: str | None = None  # a trace file of everything sent and received
+    introspection: bool = False  # publish the action client's service events
+    wait: bool = False  # wait for the robot's server up to the timeout, whatever other servers there are
+    ros_args: tuple[str, ...] = ()  # ROS 2's own command-line arguments (``--ros-args ...``)
+
+
+def run(args: SendOptions, say: Callable[[str], None]) -> int:
     """Send the goal; 0, 1 or 2 as the module docs say."""
-    event_type, category, description = goal_request(args)  # checked by the command line already
+    event_type, category, description = args.event_type, args.category, args.description
     timeout = float(args.timeout)
     started = time.monotonic()
 
@@ -61,14 +77,14 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
         return max(timeout - (time.monotonic() - started), 0.0)
 
     trace = _open_trace(args)
-    spinning.init(getattr(args, "ros_args", ()))
+    spinning.init(args.ros_args)
     node = rclpy.create_node("dynevent_send")
     # a description of the field's categories is checked here as every server checks its shape
     # (R4.18): one the robot would refuse is refused here, with the server's errors, and never sent
     client = DynamicEventClient(
         node, args.fleet, args.robot, validators=descriptions.shape_validators(), trace=trace
     )
-    if getattr(args, "introspection", False):
+    if args.introspection:
         client.introspect()
     executor = SingleThreadedExecutor()
     executor.add_node(node)
@@ -95,7 +111,7 @@ def run(args: argparse.Namespace, say: Callable[[str], None]) -> int:
 
         if event_type == EventType.NEXT:
             goal_run = client.next(
-                category, description, stubborn_period=args.stubbornness, on_progress=report
+                category, description, stubborn_period=args.stubborn_period, on_progress=report
             )
         elif event_type == EventType.CANCEL:
             goal_run = client.cancel(on_progress=report)
@@ -140,7 +156,7 @@ SETTLED = 1.5
 def _found(
     client: DynamicEventClient,
     node: object,
-    args: argparse.Namespace,
+    args: SendOptions,
     left: Callable[[], float],
     say: Callable[[str], None],
 ) -> bool:
@@ -151,7 +167,7 @@ def _found(
     which it sees and stops, unless ``--wait``."""
     waited = float(args.timeout)
     started = waited - left()
-    keep_waiting = bool(getattr(args, "wait", False))
+    keep_waiting = args.wait
     known: frozenset[tuple[str, str]] = frozenset()
     changed = 0.0  # when the servers the graph shows last changed (discovery still under way)
     while left() > 0:
@@ -205,8 +221,8 @@ def _stop_goal(
     return 128 + signum
 
 
-def _open_trace(args: argparse.Namespace) -> TraceWriter | None:
-    if getattr(args, "trace", None) is None:
+def _open_trace(args: SendOptions) -> TraceWriter | None:
+    if args.trace is None:
         return None
     try:
         return TraceWriter(args.trace, fleet=args.fleet, robot=args.robot)

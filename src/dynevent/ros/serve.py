@@ -4,7 +4,7 @@ A stand-in for a fleet adapter that client authors can run in a minute: one
 process hosting :class:`~dynevent.ros.server.DynamicEventServer` for each
 robot (in lanes of :data:`LANE` robots, a node and an executor thread each;
 ``--shard K/N`` serves one part of the fleet), whose children are simulated
-doing what their descriptions say (:func:`~dynevent.tools.serve_config.plan`;
+doing what their descriptions say (:func:`~dynevent.sim.config.plan`;
 per category a duration, a progress report with a log line every so often,
 places on which it fails), every description checked as the fleet adapter
 checks it (:mod:`dynevent.descriptions`, with the configured map and actions).
@@ -35,6 +35,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.logging import LoggingSeverity
 
 from dynevent.conformance.clients import ONE_CLIENT, ClientFinding, ClientJudge
+from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.errors import (
     InvalidConfig,
     InvalidMessage,
@@ -49,8 +50,7 @@ from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.machine import ServerConfig, State
 from dynevent.server.store import StateStore
-from dynevent.tools.check.trace import TraceWriter
-from dynevent.tools.serve_config import (
+from dynevent.sim.config import (
     CategorySpec,
     ServeConfig,
     Step,

@@ -119,7 +119,7 @@ def _add_explain_command(commands: argparse._SubParsersAction[argparse.ArgumentP
         help="judge as the spec says (standard, the default) or as rmf_ros2 does (accept, then abort)",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.set_defaults(run=_lazy("dynevent.tools.explain"))
+    parser.set_defaults(run=_lazy("dynevent.conformance.explain"))
 
 
 def _vectors(args: argparse.Namespace) -> int:
@@ -310,7 +310,7 @@ def _ros_command(command: str, check: Callable[[], Any], run: Callable[[Any, Any
 
 def _serve(args: argparse.Namespace) -> int:
     from dynevent.errors import ServeError
-    from dynevent.tools.serve_config import load_config
+    from dynevent.sim.config import load_config
 
     def check() -> Any:
         if not 0 <= args.grace <= 3600:
@@ -340,7 +340,14 @@ def _record(args: argparse.Namespace) -> int:
             raise RecordError(f"--all: records every robot of every fleet, so {named} cannot narrow it")
         _check_directory("output", args.output, RecordError)
 
-    return _ros_command("record", check, lambda record, _: record.run(args, _say))
+    def run(record: Any, _: None) -> int:
+        options = record.RecordOptions(
+            output=args.output, fleets=tuple(args.fleet or ()), robots=tuple(args.robot or ()),
+            seconds=args.seconds, ros_args=tuple(args.ros_args),
+        )  # fmt: skip
+        return int(record.run(options, _say))
+
+    return _ros_command("record", check, run)
 
 
 def _add_record_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -449,13 +456,22 @@ def _send(args: argparse.Namespace) -> int:
     from dynevent.errors import SendError
     from dynevent.tools.send_request import goal_request
 
-    def check() -> None:
+    def check() -> tuple[Any, str, str]:
         if not 0 < args.timeout < 1e6:
             raise SendError(f"--timeout: expected positive seconds (got {args.timeout})")
         _check_directory("trace", args.trace, SendError)
-        goal_request(args)
+        return goal_request(args)
 
-    return _ros_command("send", check, lambda send, _: send.run(args, _say))
+    def run(send: Any, goal: tuple[Any, str, str]) -> int:
+        event_type, category, description = goal
+        options = send.SendOptions(
+            fleet=args.fleet, robot=args.robot, event_type=event_type, category=category,
+            description=description, stubborn_period=args.stubbornness, timeout=args.timeout,
+            trace=args.trace, introspection=args.introspection, wait=args.wait, ros_args=tuple(args.ros_args),
+        )  # fmt: skip
+        return int(send.run(options, _say))
+
+    return _ros_command("send", check, run)
 
 
 def _check_directory(flag: str, path: str | None, error: type[Exception]) -> None:
@@ -465,8 +481,8 @@ def _check_directory(flag: str, path: str | None, error: type[Exception]) -> Non
 
 
 def _probe(args: argparse.Namespace) -> int:
+    from dynevent.conformance import probe_cases
     from dynevent.errors import ProbeError
-    from dynevent.tools import probe_cases
 
     def check() -> list[probe_cases.Case]:
         cases = probe_cases.select(args.cases)

@@ -1,36 +1,11 @@
-"""``dynevent check``: replay an observed trace of one robot against the machine, in observer mode.
+"""``dynevent check``: the command that judges a trace or a recording, and prints the judgement.
 
-A trace (docs/trace-format.md) is what was seen on the wire for one robot:
-begin and status messages, goal requests with their UUIDs, goal responses,
-feedback, terminal answers and action-level cancels, each with its time.
-The observer keeps a server state (:class:`dynevent.server.machine.State`) and
-infers the server's inputs from what it sees:
-
-- a ``begin`` is a ``Begin`` input (the event id arrives with the status
-  message that follows);
-- a ``goal`` and its ``goal_response`` are a ``GoalRequested`` input: the
-  machine's decision is compared with the response;
-- every other observation must be an output of the machine.  An
-  observation the machine already owes (an output of an inferred step not
-  seen yet) is compared with it.  Otherwise the observer *abduces* the
-  input that produced it from a short, fixed list of candidates: the start
-  of an accepted goal (``GoalStarted``), a child's progress (``ChildProgress``,
-  from feedback), a child's end (``ChildFinished``, from the running goal's
-  answer), a task cancel or kill, an interruption or a resume, a shutdown.
-  The first candidate whose first output on the action (or whose status
-  message) is the observation is taken; its other outputs are owed.
-
-When no candidate explains an observation, or the machine's output differs
-from it, the observer reports a :class:`Finding` (line, docs/spec.md rule,
-code, what was seen, what was expected), then resynchronises with the
-smallest change that makes the state agree with what the server evidently
-did (it queues a goal the server accepted, starts a NEXT whose feedback
-shows it running, forgets goals the server displaced), so that one fault is
-reported once and later records are judged against the server's real
-condition.
-
-:func:`check_trace` is the API; :func:`read_trace` parses a trace and raises
-:class:`TraceError` (naming the source, line and field) on unreadable input.
+The judging is :mod:`dynevent.conformance.judge` (the observer, the partial judge, traces) and
+:mod:`dynevent.bags` (recordings): this module reads files and standard input, shows progress on a
+terminal, and prints findings as text or JSON lines (docs/trace-format.md, docs/recordings.md).
+The names it used to hold (``check_trace``, ``read_trace``, ``Report``...) are imported from
+:mod:`dynevent.conformance.judge` now; importing them from here still works, with a
+:class:`DeprecationWarning`, until the release after 0.x that removes it (CHANGELOG).
 """
 
 from __future__ import annotations
@@ -38,89 +13,31 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from typing import Any
 
-import attrs
-
-from dynevent.errors import (
-    TraceError,  # defined there with every error; importable here too
-)
+from dynevent._moved import moved_attribute
+from dynevent.conformance import judge as _judge
+from dynevent.conformance.judge import Report as _Report
+from dynevent.conformance.judge import check_trace as _check_trace
+from dynevent.conformance.judge import format_report as _format_report
+from dynevent.conformance.judge import trace_records as _trace_records
+from dynevent.errors import TraceError as _TraceError
 from dynevent.tools._progress import Progress
-from dynevent.tools.check.observer import check_records
-from dynevent.tools.check.trace import (
-    RECORD_TYPES,
-    Finding,
-    Record,
-    Report,
-    read_trace,
-    step_records,
-    stream_trace,
-)
 from dynevent.wire import _json
 from dynevent.wire.vocab import Compatibility
 
-__all__ = [
-    "RECORD_TYPES",
-    "Finding",
-    "Record",
-    "Report",
-    "TraceError",
-    "check_records",
-    "check_trace",
-    "format_report",
-    "read_trace",
-    "step_records",
-    "trace_records",
-]
+__all__ = ["BAG_SUFFIXES", "bag_records", "format_bag"]
 
-
-def check_trace(
-    text: str | Iterable[str],
-    source: str = "<trace>",
-    *,
-    compatibility: Compatibility | str = Compatibility.STANDARD,
-) -> Report:
-    """Check a trace (its text, or its lines) in observer mode; each violation is a :class:`Finding`.
-
-    ``compatibility="rmf_ros2"`` judges the server as ``dynevent serve --compatibility rmf_ros2``
-    behaves (R17, and the adapter's own numbering of children), where the trace has no config record
-    that says otherwise: what is left is where the server differs from that emulation.  Raises
-    :class:`TraceError` (naming ``source``, the line and the field) when the trace cannot be read.
-    """
-    lines = text.splitlines() if isinstance(text, str) else text
-    header, records = stream_trace(lines, source)
-    header = attrs.evolve(header, compatibility=Compatibility(compatibility))
-    return check_records(header, records, source)
-
-
-def format_report(report: Report) -> str:
-    """The findings as text, one per line with what was expected, then a summary line."""
-    lines = []
-    for finding in report.findings:
-        lines.append(f"{report.source}:{finding.line}: {finding.rule} {finding.code}: {finding.message}")
-        lines.append(f"    expected: {finding.expected}")
-    count = len(report.findings)
-    noun = "violation" if count == 1 else "violations"
-    summary = f"{report.source}: {report.records} records, {count or 'no'} {noun}"
-    lines.append(summary)
-    return "\n".join(lines) + "\n"
-
-
-def trace_records(report: Report) -> list[dict[str, Any]]:
-    """The JSON lines of ``dynevent check --json``: one object per finding, then a summary."""
-    rows: list[dict[str, Any]] = [
-        {"type": "violation", "file": report.source, **finding.to_dict()} for finding in report.findings
-    ]
-    rows.append(
-        {
-            "type": "summary",
-            "file": report.source,
-            "records": report.records,
-            "violations": len(report.findings),
-        }
+#: The names this module held before judging moved below the command line, and where they are now.
+_MOVED = {
+    name: _judge
+    for name in (
+        "RECORD_TYPES", "Finding", "Record", "Report", "TraceError", "check_records", "check_trace",
+        "format_report", "read_trace", "step_records", "trace_records",
     )
-    return rows
+}  # fmt: skip
+__getattr__ = moved_attribute(__name__, _MOVED)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -137,17 +54,17 @@ def _run(args: argparse.Namespace) -> int:
     except OSError as exc:
         print(f"dynevent check: {source}: cannot read: {exc.strerror or exc}", file=sys.stderr)
         return 2
-    except TraceError as exc:
+    except _TraceError as exc:
         print(f"dynevent check: {exc}", file=sys.stderr)
         return 2
     if report.records == 0:
         print(f"dynevent check: {report.source}: nothing to check: no record in it", file=sys.stderr)
         return 2
     if args.json:
-        for row in trace_records(report):
+        for row in _trace_records(report):
             print(_json.dumps(row))
     else:
-        print(format_report(report), end="")
+        print(_format_report(report), end="")
     return 0 if report.clean else 1
 
 
@@ -156,8 +73,8 @@ BAG_SUFFIXES = (".mcap", ".db3")
 
 
 def _run_bag(source: str, as_json: bool, compatibility: Compatibility) -> int:
+    from dynevent.bags.reader import check_bag
     from dynevent.errors import BagError, MissingExtra
-    from dynevent.tools.check.bags import check_bag
 
     try:
         bag = check_bag(source, compatibility=compatibility)
@@ -180,7 +97,7 @@ def _run_bag(source: str, as_json: bool, compatibility: Compatibility) -> int:
 def format_bag(bag: Any) -> str:
     """A bag's findings as text: per robot each violation at its bag time, and the channels the bag
     lacked (a partial view: only what the topics show was judged); then a summary line."""
-    from dynevent.tools.check.bags import SEND_GOAL
+    from dynevent.bags.reader import SEND_GOAL
 
     lines = []
     # introspection was on where any robot's goals were recorded: a robot without any had no goals
@@ -249,7 +166,7 @@ def bag_records(bag: Any) -> list[dict[str, Any]]:
     return rows
 
 
-def _check_stream(stream: Any, source: str, compatibility: Compatibility = Compatibility.STANDARD) -> Report:
+def _check_stream(stream: Any, source: str, compatibility: Compatibility = Compatibility.STANDARD) -> _Report:
     """Check a trace read line by line from a binary stream, with a progress line on a terminal."""
     try:
         size: int | None = os.fstat(stream.fileno()).st_size or None
@@ -257,7 +174,7 @@ def _check_stream(stream: Any, source: str, compatibility: Compatibility = Compa
         size = None
     progress = Progress(f"dynevent check: {source}", size)
     try:
-        return check_trace(_text_lines(stream, source, progress), source, compatibility=compatibility)
+        return _check_trace(_text_lines(stream, source, progress), source, compatibility=compatibility)
     finally:
         progress.close()
 
@@ -270,4 +187,4 @@ def _text_lines(stream: Any, source: str, progress: Progress) -> Iterator[str]:
         try:
             yield raw.decode("utf-8")
         except UnicodeDecodeError as exc:
-            raise TraceError(source, number, "$", f"not UTF-8 text (byte {exc.start} of the line)") from None
+            raise _TraceError(source, number, "$", f"not UTF-8 text (byte {exc.start} of the line)") from None

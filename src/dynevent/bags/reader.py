@@ -1,0 +1,761 @@
+"""Rosbag2 recordings of Dynamic Event conversations, read and judged without ROS.
+
+A bag is a directory (``metadata.yaml`` and its storage files) or one storage
+file, MCAP (``.mcap``, rosbag2's default since Iron) or SQLite (``.db3``).  It
+is read with ``rosbags`` (the ``bags`` extra: ``pip install 'dynevent[bags]'``),
+its CDR messages decoded with the project's own interface files
+(``dynevent/ros/setup/interfaces``), so no ROS installation is needed.
+
+Every topic named after a robot (:mod:`dynevent.wire.names`) is that robot's:
+its status and begin topics, the action's ``_action/feedback`` topic and,
+when the bag has them, the introspection service events of the action's
+``send_goal``, ``get_result`` and ``cancel_goal`` services, which carry the
+goals, their responses, their answers and the action-level cancels (ROS 2
+records them when introspection is on, at the server or the client).  The
+fleet-wide begin topic is read for a robot whose own begin topic the bag
+lacks.  Each robot's messages become trace records (docs/trace-format.md),
+in bag order, judged by a :class:`~dynevent.conformance.judge.observer.Checker` of
+their own: one pass over the bag, whatever its size, holding a few records
+per robot.
+
+A robot whose goals the bag lacks (no ``send_goal`` introspection topic) is a
+partial view: its statuses show child events no goal the bag holds explains,
+so the machine cannot be run.  What its topics show by themselves is judged
+(:mod:`dynevent.conformance.judge.partial`), and its :class:`RobotReport` says which
+channels were absent, rather than report a violation the missing channel
+would cause.  A finding's ``line`` is the bag time of its message, in
+nanoseconds.
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import functools
+import heapq
+import importlib.resources
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import attrs
+
+from dynevent.conformance.judge.observer import AnswerEvidence, Checker
+from dynevent.conformance.judge.partial import GOAL_STATUSES, PartialJudge
+from dynevent.conformance.judge.trace import Record, Report, _Header
+from dynevent.conformance.received import (
+    begin_from_ros,
+    feedback_from_ros,
+    goal_from_ros,
+    result_from_ros,
+    status_from_ros,
+    uuid_from_ros,
+)
+from dynevent.errors import BagError, DyneventError, InvalidMessage, InvalidName, MissingExtra, TraceError
+from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
+from dynevent.wire.vocab import Compatibility, GoalStatus
+
+__all__ = [
+    "HIDDEN_SUFFIXES",
+    "SKEW",
+    "BagReport",
+    "RobotReport",
+    "check_bag",
+    "message_definition",
+    "typestore",
+]
+
+#: The action's hidden topics (``<action>/_action/...``) and the channel each is.
+FEEDBACK, GOAL_STATUS = "feedback", "goal status"
+SEND_GOAL, GET_RESULT, CANCEL_GOAL = "send_goal", "get_result", "cancel_goal"
+HIDDEN = {
+    "/_action/feedback": FEEDBACK,
+    "/_action/status": GOAL_STATUS,
+    "/_action/send_goal/_service_event": SEND_GOAL,
+    "/_action/get_result/_service_event": GET_RESULT,
+    "/_action/cancel_goal/_service_event": CANCEL_GOAL,
+}
+#: The type each channel carries: a topic of a Dynamic Event name with another type is not read.
+TYPES = {
+    "status": "rmf_task_msgs/msg/DynamicEventStatus",
+    "begin": "rmf_task_msgs/msg/DynamicEventDescription",
+    FEEDBACK: "rmf_task_msgs/action/DynamicEvent_FeedbackMessage",
+    GOAL_STATUS: "action_msgs/msg/GoalStatusArray",
+    SEND_GOAL: "rmf_task_msgs/action/DynamicEvent_SendGoal_Event",
+    GET_RESULT: "rmf_task_msgs/action/DynamicEvent_GetResult_Event",
+    CANCEL_GOAL: "action_msgs/srv/CancelGoal_Event",
+}
+#: The suffixes of the action's hidden topics, after ``<action>``.
+HIDDEN_SUFFIXES = tuple(HIDDEN)
+#: The channels a robot's judgement needs, in the words a partial view line uses.
+CHANNELS = {
+    "status": "the status topic",
+    "begin": "the begin topic",
+    FEEDBACK: "feedback",
+    SEND_GOAL: "goals and their responses (send_goal introspection)",
+    GET_RESULT: "answers (get_result introspection)",
+}
+
+#: service_msgs/ServiceEventInfo event types.
+_REQUEST_SENT, _REQUEST_RECEIVED, _RESPONSE_SENT, _RESPONSE_RECEIVED = 0, 1, 2, 3
+#: action_msgs/GoalStatus's statuses (0, unknown, is none of a goal's); the terminal ones answer it.
+_GOAL_STATUSES = {
+    1: GoalStatus.ACCEPTED,
+    2: GoalStatus.EXECUTING,
+    3: GoalStatus.CANCELING,
+    4: GoalStatus.SUCCEEDED,
+    5: GoalStatus.CANCELED,
+    6: GoalStatus.ABORTED,
+}
+_TERMINAL = {code: status for code, status in _GOAL_STATUSES.items() if status.is_terminal}
+
+
+@attrs.frozen
+class RobotReport:
+    """One robot of a bag: the channels the bag recorded for it (keys of :data:`CHANNELS`, and
+    ``"goal status"``, the action's goal statuses), the ones a full judgement needs that it lacks,
+    its report, whether that report judged only what the topics show (``partial``: the bag lacks the
+    robot's goals, :mod:`dynevent.conformance.judge.partial`), how many of its messages the mirrors
+    refused (a value the wire cannot carry: not judged), and the goals whose request the bag lacked
+    though it holds others (``lost``: the judgement began anew there, see :meth:`_Robot.lost_request`)."""
+
+    fleet: str
+    robot: str
+    channels: tuple[str, ...]
+    absent: tuple[str, ...]
+    report: Report
+    partial: bool = False
+    refused: int = 0
+    #: where the bag lacked a goal's request: (the bag time of the first record naming the goal, its UUID)
+    lost: tuple[tuple[int, str], ...] = ()
+
+    @property
+    def name(self) -> str:
+        return f"{self.fleet}/{self.robot}"
+
+
+@attrs.frozen
+class BagReport:
+    """What :func:`check_bag` found: each robot's report, and how many messages the bag held on the
+    Dynamic Event names (``messages``) and on others (``other``)."""
+
+    source: str
+    robots: tuple[RobotReport, ...]
+    messages: int
+    other: int
+
+    @property
+    def clean(self) -> bool:
+        """No robot's judgement found a violation."""
+        return all(robot.report.clean for robot in self.robots)
+
+
+def check_bag(path: str | Path, *, compatibility: Compatibility | str = Compatibility.STANDARD) -> BagReport:
+    """Judge every Dynamic Event conversation of the bag at ``path``; ``compatibility="rmf_ros2"``
+    judges each server as ``dynevent serve --compatibility rmf_ros2`` behaves.
+
+    Raises :class:`~dynevent.errors.MissingExtra` without ``rosbags``, and
+    :class:`~dynevent.errors.BagError` for a bag that cannot be read (no such
+    file, not a bag, truncated or corrupt, a message that cannot be decoded).
+    """
+    return _read(path, Compatibility(compatibility), keep=False)[0]
+
+
+def bag_records(path: str | Path) -> dict[tuple[str, str], list[Record]]:
+    """Each robot's records in the bag at ``path``, by (fleet, robot), in the order the server
+    made them (as :func:`check_bag` judges them; what :mod:`dynevent.conformance.replay` replays).
+    Raises as :func:`check_bag` does."""
+    robots = _read(path, Compatibility.STANDARD, keep=True)[1]
+    return {key: robot.kept for key, robot in sorted(robots.items())}
+
+
+def _read(
+    path: str | Path, compatibility: Compatibility, *, keep: bool
+) -> tuple[BagReport, dict[tuple[str, str], _Robot]]:
+    source = str(path)
+    rosbags = _rosbags()
+    reader_type, reader_errors = rosbags
+    if Path(path).is_dir() and not (Path(path) / "metadata.yaml").exists():
+        raise BagError(source, "not a rosbag2 recording: a bag directory holds a metadata.yaml")
+    robots: dict[tuple[str, str], _Robot] = {}
+    messages = other = 0
+    with _storage(source, reader_errors):
+        reader = reader_type(Path(path))
+        reader.open()
+    try:
+        with _storage(source, reader_errors):
+            routes = _routes(reader.connections, robots, compatibility, keep)
+            other = sum(item.msgcount for item in reader.connections if item.id not in routes)
+            wanted = [item for item in reader.connections if item.id in routes]
+            end = int(reader.end_time) - 1  # the recording's last message, on any topic
+        store = typestore()
+        decode_as = {item.id: _stored_name(store, item.msgtype) for item in wanted}
+        for connection in wanted:  # introspection without contents (METADATA) holds no goal
+            robot, channel = routes[connection.id]
+            if channel == SEND_GOAL and isinstance(robot, _Robot) and connection.msgcount:
+                with _storage(source, reader_errors):
+                    first = next(iter(reader.messages(connections=[connection])))
+                event = _decode(store, first, decode_as[connection.id], source)
+                robot.contents = bool(len(event.request) or len(event.response))
+        stream = iter(reader.messages(connections=wanted) if wanted else ())
+        while True:
+            with _storage(source, reader_errors):
+                item = next(stream, None)
+            if item is None:
+                break
+            connection, time, _ = item
+            end = max(end, time)
+            robot, channel = routes[connection.id]
+            message = _decode(store, item, decode_as[connection.id], source)
+            messages += 1
+            robot.take(channel, time, message)
+        reports = tuple(robot.finish(source, end) for _, robot in sorted(robots.items()))
+    except TraceError as exc:  # a record the observer cannot take, in the bag's order
+        raise BagError(source, f"{exc.field} at bag time {exc.line}: {exc.problem}") from None
+    finally:
+        with _storage(source, reader_errors):
+            reader.close()
+    return BagReport(source=source, robots=reports, messages=messages, other=other), robots
+
+
+@contextlib.contextmanager
+def _storage(source: str, reader_errors: tuple[type[BaseException], ...]) -> Iterator[None]:
+    """Around a call into the storage library: what it raises for a file that is not a readable bag
+    (its own errors, and apsw's or zstandard's on a corrupt file) becomes one :class:`BagError` line."""
+    try:
+        yield
+    except (FileNotFoundError, IsADirectoryError, PermissionError) as exc:
+        raise BagError(source, f"cannot read: {exc.strerror or exc}") from None
+    except reader_errors as exc:
+        raise BagError(source, f"not a readable rosbag2 recording: {_one_line(exc)}") from None
+    except DyneventError:
+        raise
+    except Exception as exc:  # the storage library's own (apsw, zstandard) on a corrupt file
+        raise BagError(
+            source, f"not a readable rosbag2 recording: {type(exc).__name__}: {_one_line(exc)}"
+        ) from None
+
+
+def _decode(store: Any, item: tuple[Any, int, bytes], msgtype: str, source: str) -> Any:
+    """A bag message, decoded; a decoder's error, of any kind, means the bag is not what it says."""
+    connection, time, raw = item
+    try:
+        return store.deserialize_cdr(raw, msgtype)
+    except Exception as exc:
+        raise BagError(source, f"{connection.topic} at {time}: cannot decode: {exc}") from None
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())
+
+
+def _stored_name(store: Any, msgtype: str) -> str:
+    """The name the type store knows a bag's type by: rosbags files a service's types
+    (``action_msgs/srv/CancelGoal_Event``) under ``.../srv/msg/...``."""
+    if msgtype in store.types:
+        return msgtype
+    from rosbags.typesys.msg import normalize_msgtype
+
+    normalized: str = normalize_msgtype(msgtype)
+    return normalized
+
+
+def _rosbags() -> tuple[Any, tuple[type[BaseException], ...]]:
+    """rosbags' reader, and the errors it raises for a file that is not a readable bag."""
+    try:
+        from rosbags.rosbag2 import Reader, ReaderError
+    except ImportError:
+        raise MissingExtra("bags", "rosbags", "reads rosbag2 recordings") from None
+    return Reader, (ReaderError, ValueError, OSError, EOFError)
+
+
+def _routes(
+    connections: Any, robots: dict[tuple[str, str], _Robot], compatibility: Compatibility, keep: bool = False
+) -> dict[int, tuple[_Robot, str]]:
+    """Each connection (by id) on a Dynamic Event name: the robot it belongs to and its channel."""
+    routes: dict[int, tuple[_Robot, str]] = {}
+    fleet_wide = []
+    for connection in connections:
+        topic = connection.topic
+        if topic.lstrip("/") == BEGIN_TOPIC:
+            if connection.msgtype == TYPES["begin"]:
+                fleet_wide.append(connection)
+            continue
+        name, channel = topic, ""
+        for suffix, hidden in HIDDEN.items():
+            if topic.endswith(suffix):
+                name, channel = topic[: -len(suffix)], hidden
+        try:
+            parsed = parse_name(name)
+        except InvalidName:
+            continue
+        if parsed.kind is NameKind.ACTION and not channel:
+            continue
+        if parsed.kind is not NameKind.ACTION:
+            if channel:
+                continue
+            channel = str(parsed.kind)
+        if connection.msgtype != TYPES[channel]:
+            continue  # a Dynamic Event name with another type: not this protocol's
+        key = (parsed.fleet, parsed.robot)
+        robot = robots.setdefault(key, _Robot(*key, compatibility=compatibility, keep=keep))
+        if connection.msgcount:  # a topic subscribed to in vain holds nothing to judge
+            robot.channels.add(channel)
+            robot.own_begins = robot.own_begins or channel == "begin"
+        routes[connection.id] = (robot, channel)
+    for connection in fleet_wide:  # a robot's begins, where its own begin topic was not recorded
+        routes[connection.id] = (_FleetBegins(robots, compatibility, keep), "begin")  # type: ignore[assignment]
+    return routes
+
+
+class _Robot:
+    """One robot's records, judged as they come.  A client's and the server's introspection both
+    record each goal, response and answer: a record the same as one taken before is taken once (an
+    answer that differs is a second answer, which the judgement sees)."""
+
+    def __init__(
+        self,
+        fleet: str,
+        robot: str,
+        *,
+        compatibility: Compatibility | str = Compatibility.STANDARD,
+        keep: bool = False,
+    ) -> None:
+        self.fleet, self.robot = fleet, robot
+        self.compatibility = Compatibility(compatibility)
+        self._judge: Checker | PartialJudge | None = None  # made at the first record: the channels are known
+        self.channels: set[str] = set()
+        self.own_begins = False  # the bag recorded the robot's own begin topic
+        self.contents = True  # its send_goal introspection holds the goals (not METADATA alone)
+        self.refused = 0
+        # the records taken lately: the client's copy of one comes close to the server's
+        self._seen: collections.OrderedDict[tuple[Any, ...], None] = collections.OrderedDict()
+        self._calls: dict[tuple[str, bytes, int], Any] = {}  # service calls whose response is to come
+        # records held for the server's order: (stamp, order, arrival, record)
+        self._waiting: list[tuple[int, float, int, Record]] = []
+        self._waiting_goals: dict[str, tuple[int, float, int, Record]] = {}
+        self._waiting_answers: dict[str, tuple[int, float, int, Record]] = {}
+        self._waiting_responses: dict[str, tuple[int, float, int, Record]] = {}
+        self._last: collections.OrderedDict[str, int] = collections.OrderedDict()  # a goal's latest key
+        self._goals: collections.OrderedDict[str, Record] = collections.OrderedDict()  # awaiting a response
+        # the goals whose answer a client asked for, and those whose goal status showed their end
+        self._asked: collections.OrderedDict[str, None] = collections.OrderedDict()
+        self._settled: collections.OrderedDict[str, str] = collections.OrderedDict()
+        self._requested: collections.OrderedDict[str, None] = collections.OrderedDict()  # goals passed on
+        self._last_status: Record | None = None
+        self._before: list[Report] = []  # the judgements cut where the bag lost a goal's request
+        self.lost: list[tuple[int, str]] = []
+        self._arrived = 0
+        self.keep = keep  # keep every record passed on, in ``kept`` (bag_records)
+        self.kept: list[Record] = []
+
+    def take(self, channel: str, time: int, message: Any) -> None:
+        self.channels.add(channel)
+        stamp = _stamp(channel, message, time)
+        call: tuple[str, bytes, int] | None = None
+        try:
+            if channel in _SERVICES:
+                message = self._paired(channel, message)
+                if message is None:
+                    return
+                call = message[3]
+                if channel == GET_RESULT and message[2] is None:
+                    _remember(self._asked, uuid_from_ros(message[1].goal_id), None)
+            for record in _RECORDS[channel](time, message):
+                if record.kind in _EVENT_KINDS:
+                    # one call seen by both the client's and the server's introspection is one record; an
+                    # answer asked for again is the same answer (another answer to the goal is not)
+                    same = (
+                        (record.goal_uuid, record.message, record.status) if record.kind == "result" else call
+                    )
+                    key = (record.kind, same)
+                    if key in self._seen:
+                        continue
+                    self._seen[key] = None
+                    if len(self._seen) > _CALLS:
+                        self._seen.popitem(last=False)
+                self._order(record, stamp)
+        except InvalidMessage:
+            self.refused += 1
+
+    def _order(self, record: Record, stamp: int) -> None:
+        """Pass records on in the server's order: a recorder receives each topic in order, but not
+        the topics in order with one another (a goal's request event may come after the status its
+        start published).  Each record waits :data:`SKEW` of bag time, then goes in the order of the
+        time the server stamped on it (a status's ``time``, a begin's ``start_time``, a service
+        event's ``stamp``; the bag time for feedback), ties in bag order.  The records of one goal
+        keep their own order: its answer goes after the feedback received before it, and feedback
+        received while its answer waits is read as sent before it (the feedback topic and the
+        result service are two channels: a recorder cannot tell late delivery from late sending)."""
+        while self._waiting and self._waiting[0][0] <= record.time - SKEW:  # what is due goes first
+            self._release()
+        answer = self._waiting_answers.get(record.goal_uuid) if record.kind == "feedback" else None
+        if answer is not None:
+            key: tuple[int, float] = (answer[0], answer[1] - 0.5)
+        elif record.goal_uuid and record.kind not in _OPENING:
+            key = (max(stamp, self._last.get(record.goal_uuid, stamp)), float(self._arrived))
+        else:  # a goal's request and response go by their own stamps: what names it goes after them
+            key = (stamp, float(self._arrived))
+        if record.goal_uuid:
+            self._last[record.goal_uuid] = max(key[0], self._last.get(record.goal_uuid, key[0]))
+            while len(self._last) > _CALLS:
+                self._last.popitem(last=False)
+        entry = (key[0], key[1], self._arrived, record)
+        heapq.heappush(self._waiting, entry)
+        self._arrived += 1
+        if record.kind == "goal":
+            self._waiting_goals[record.goal_uuid] = entry
+        elif record.kind == "goal_response":
+            self._waiting_responses[record.goal_uuid] = entry
+        elif record.kind == "result":
+            self._waiting_answers[record.goal_uuid] = entry
+        while self._waiting and self._waiting[0][0] <= record.time - SKEW:
+            self._release()
+
+    def _release(self) -> None:
+        """Pass on the first record waiting; a goal stamped later than a record that names it (two
+        hosts' clocks) goes first, and so does its response: a client stamps the response when it
+        receives it, after the server has begun to send the goal's feedback."""
+        entry = heapq.heappop(self._waiting)
+        record = entry[3]
+        if self._waiting_answers.get(record.goal_uuid) is entry:
+            del self._waiting_answers[record.goal_uuid]
+        if self._waiting_responses.get(record.goal_uuid) is entry:
+            del self._waiting_responses[record.goal_uuid]
+        uuid = record.goal_uuid
+        goal = self._waiting_goals.pop(uuid, None) if uuid else None
+        response = self._waiting_responses.pop(uuid, None) if uuid and record.kind != "goal" else None
+        for first in (goal, response):
+            if first is not None and first is not entry:
+                self._waiting.remove(first)
+                heapq.heapify(self._waiting)
+                self._pass(first[3])
+        self._pass(record)
+
+    @property
+    def judge(self) -> Checker | PartialJudge:
+        """The observer, for a robot whose goals the bag holds; else the judge of what its topics show."""
+        if self._judge is None:
+            header = _Header(fleet=self.fleet, robot=self.robot, compatibility=self.compatibility)
+            self._judge = Checker(header) if self.judged else PartialJudge(header, SKEW)
+        return self._judge
+
+    def _pass(self, record: Record) -> None:
+        if self.keep:
+            self.kept.append(record)
+        if isinstance(self.judge, PartialJudge):
+            self.judge.push(record)
+            return
+        if record.kind == GOAL_STATUSES:  # the goals' own records tell the rest
+            for uuid, status in record.message:
+                if status.is_terminal:
+                    _remember(self._settled, uuid, status.value)
+            return
+        if record.kind in ("feedback", "result") and record.goal_uuid not in self._requested:
+            self.lost_request(record)
+        elif record.kind == "status":
+            self._last_status = record
+        if record.kind == "goal":
+            _remember(self._requested, record.goal_uuid, None)
+            self._goals[record.goal_uuid] = record
+            if len(self._goals) > _CALLS:
+                self._goals.popitem(last=False)
+        elif record.kind == "goal_response":
+            if record.goal_uuid not in self._goals:
+                return  # the response to a goal the bag does not hold (lost, or before the recording)
+            del self._goals[record.goal_uuid]
+        self.judge.push(record)
+
+    def _paired(self, channel: str, event: Any) -> tuple[int, Any, Any, tuple[str, bytes, int]] | None:
+        """A service event as (kind, request, response, call): a response event carries no request (ROS 2
+        introspection), so the request of the same call (client GID and sequence number) is kept
+        until it comes.  None for a response whose request the bag does not hold."""
+        kind = int(event.info.event_type)
+        call = (channel, bytes(bytearray(event.info.client_gid)), int(event.info.sequence_number))
+        request = event.request[0] if len(event.request) else None
+        response = event.response[0] if len(event.response) else None
+        if kind in (_REQUEST_SENT, _REQUEST_RECEIVED):
+            if request is None:
+                return None  # introspection without contents: nothing to judge
+            self._calls[call] = request
+            while len(self._calls) > _CALLS:  # calls never answered: the oldest are let go
+                del self._calls[next(iter(self._calls))]
+            return kind, request, None, call
+        request = request if request is not None else self._calls.pop(call, None)
+        if request is None or response is None:
+            return None
+        return kind, request, response, call
+
+    def lost_request(self, record: Record) -> None:
+        """``record`` names a goal whose request the bag lacks (lost on the way: a recorder that had
+        not yet matched a new client's publisher; or sent before the recording began): the statuses
+        around it show a child no goal explains.  What was judged within :data:`SKEW` before it is let
+        go (its findings may be that goal's doing), and the judgement begins anew, as a trace that
+        begins mid-way does, at the latest status before it (of the records not judged yet, with the
+        requests whose responses are to come, else the last status judged)."""
+        assert isinstance(self._judge, Checker)
+        report, pending = self._judge.cut()
+        since = record.time - SKEW
+        kept = tuple(finding for finding in report.findings if finding.line < since)
+        self._before.append(attrs.evolve(report, findings=kept))
+        self.lost.append((record.time, record.goal_uuid))
+        self._judge = Checker(_Header(fleet=self.fleet, robot=self.robot, compatibility=self.compatibility))
+        statuses = [index for index, item in enumerate(pending) if item.kind == "status"]
+        seed = pending[statuses[-1]] if statuses else self._last_status  # the lost goal's start, or later
+        rest = pending[statuses[-1] + 1 :] if statuses else pending
+        awaiting = [goal for goal in self._goals.values() if goal not in rest]  # their responses are to come
+        for item in [seed, *awaiting, *rest] if seed is not None else [*awaiting, *rest]:
+            self._judge.push(item)
+        _remember(self._requested, record.goal_uuid, None)  # what follows of it is the new judgement's
+
+    @property
+    def judged(self) -> bool:
+        """Whether the bag recorded this robot's goals (its send_goal introspection): without them,
+        its statuses show child events no goal explains, and it is a partial view."""
+        return SEND_GOAL in self.channels and self.contents
+
+    def finish(self, source: str, end: int) -> RobotReport:
+        """The robot's report; ``end`` is the bag time of the bag's last message: an answer owed by a
+        step within :data:`SKEW` of it may have been on its way when the recording stopped."""
+        channels = tuple(sorted(self.channels))
+        absent = tuple(CHANNELS[name] for name in CHANNELS if name not in self.channels)
+        if SEND_GOAL in self.channels and not self.contents:
+            absent = (f"{CHANNELS[SEND_GOAL]}: recorded without contents (METADATA)", *absent)
+        while self._waiting:
+            self._release()
+        self.judge.source = f"{source}: {self.fleet}/{self.robot}"
+        if isinstance(self.judge, Checker):
+            evidence = AnswerEvidence(asked=self._asked, settled=self._settled, until=end - SKEW)
+            report = self.judge.finish(evidence)
+        else:
+            report = self.judge.finish()
+        for before in reversed(self._before):
+            records = before.records + report.records
+            report = attrs.evolve(report, records=records, findings=before.findings + report.findings)
+        return RobotReport(
+            self.fleet, self.robot, channels, absent, report, not self.judged, self.refused, tuple(self.lost)
+        )
+
+
+def _remember(books: collections.OrderedDict[str, Any], key: str, value: Any) -> None:
+    """Keep ``key`` in ``books``, the latest :data:`_CALLS` keys only."""
+    books[key] = value
+    books.move_to_end(key)
+    while len(books) > _CALLS:
+        books.popitem(last=False)
+
+
+#: How long (bag time, nanoseconds) a record waits for records the server published before it; a
+#: stamp farther than this from the bag time (another clock: simulated time, another host) is not used.
+SKEW = 1_000_000_000
+
+
+def _stamp(channel: str, message: Any, time: int) -> int:
+    """The time the server stamped on a message, when it is within :data:`SKEW` of the bag time.  A
+    service event a client published (its request sent, its response received) has the client's
+    clock, which may be another host's: its bag time is used."""
+    if channel in _SERVICES and int(message.info.event_type) in (_REQUEST_SENT, _RESPONSE_RECEIVED):
+        return time
+    source = {"status": "time", "begin": "start_time"}.get(channel)
+    stamped = (
+        getattr(message, source, None) if source else getattr(getattr(message, "info", None), "stamp", None)
+    )
+    if stamped is None:
+        return time
+    nanoseconds = int(stamped.sec) * 1_000_000_000 + int(stamped.nanosec)
+    return nanoseconds if abs(nanoseconds - time) <= SKEW else time
+
+
+#: The channels of service events, and how many calls without a response (and records taken lately)
+#: a robot keeps.
+_SERVICES = frozenset({SEND_GOAL, GET_RESULT, CANCEL_GOAL})
+_CALLS = 1024
+#: The records that open a goal: each goes by its own stamp, never after a record that names the goal
+#: but was received first (its start's feedback, say).
+_OPENING = frozenset({"goal", "goal_response"})
+#: The records a service event gives.
+_EVENT_KINDS = frozenset({"goal", "goal_response", "result", "cancel_request", "cancel_response"})
+
+
+class _FleetBegins:
+    """The fleet-wide begin topic: each begin goes to its robot, unless that robot's own begin
+    topic was recorded (the same begin, twice)."""
+
+    def __init__(
+        self, robots: dict[tuple[str, str], _Robot], compatibility: Compatibility, keep: bool = False
+    ) -> None:
+        self.robots = robots
+        self.compatibility = compatibility
+        self.keep = keep
+
+    def take(self, channel: str, time: int, message: Any) -> None:
+        key = (str(message.fleet), str(message.robot))
+        robot = self.robots.get(key)
+        if robot is None:
+            robot = self.robots[key] = _Robot(*key, compatibility=self.compatibility, keep=self.keep)
+        if not robot.own_begins:
+            robot.take(channel, time, message)
+
+
+def _status(time: int, message: Any) -> Iterator[Record]:
+    yield Record(line=time, kind="status", time=time, message=status_from_ros(message))
+
+
+def _begin(time: int, message: Any) -> Iterator[Record]:
+    yield Record(line=time, kind="begin", time=time, message=begin_from_ros(message))
+
+
+def _feedback(time: int, message: Any) -> Iterator[Record]:
+    uuid = uuid_from_ros(message.goal_id)
+    yield Record(
+        line=time, kind="feedback", time=time, goal_uuid=uuid, message=feedback_from_ros(message.feedback)
+    )
+
+
+def _goal_status(time: int, message: Any) -> Iterator[Record]:
+    statuses = tuple(
+        (uuid_from_ros(item.goal_info.goal_id), _GOAL_STATUSES[int(item.status)])
+        for item in message.status_list
+        if int(item.status) in _GOAL_STATUSES
+    )
+    yield Record(line=time, kind=GOAL_STATUSES, time=time, message=statuses)
+
+
+def _send_goal(time: int, call: Any) -> Iterator[Record]:
+    _, request, response, _ = call
+    uuid = uuid_from_ros(request.goal_id)
+    if response is None:
+        yield Record(line=time, kind="goal", time=time, goal_uuid=uuid, message=goal_from_ros(request.goal))
+    else:
+        yield Record(
+            line=time, kind="goal_response", time=time, goal_uuid=uuid, accepted=bool(response.accepted)
+        )
+
+
+def _get_result(time: int, call: Any) -> Iterator[Record]:
+    _, request, response, _ = call
+    status = None if response is None else _TERMINAL.get(int(response.status))
+    if status is not None:  # STATUS_UNKNOWN: the server knows no such goal, which answers nothing
+        uuid = uuid_from_ros(request.goal_id)
+        result = result_from_ros(response.result)
+        yield Record(line=time, kind="result", time=time, goal_uuid=uuid, message=result, status=status)
+
+
+def _cancel_goal(time: int, call: Any) -> Iterator[Record]:
+    _, request, response, _ = call
+    uuid = uuid_from_ros(request.goal_info.goal_id)
+    if uuid == "0" * 32:
+        return  # a cancel of every goal (or of goals before a time): no record says that
+    if response is None:
+        yield Record(line=time, kind="cancel_request", time=time, goal_uuid=uuid)
+    else:
+        canceling = {uuid_from_ros(info.goal_id) for info in response.goals_canceling}
+        yield Record(line=time, kind="cancel_response", time=time, goal_uuid=uuid, accepted=uuid in canceling)
+
+
+_RECORDS: dict[str, Callable[[int, Any], Iterator[Record]]] = {
+    "status": _status,
+    "begin": _begin,
+    FEEDBACK: _feedback,
+    GOAL_STATUS: _goal_status,
+    SEND_GOAL: _send_goal,
+    GET_RESULT: _get_result,
+    CANCEL_GOAL: _cancel_goal,
+}
+
+
+# --------------------------------------------------------------------------- the message definitions
+
+#: The action's own message types (``rmf_task_msgs/action/DynamicEvent_*``) and the services ROS 2
+#: derives from every action (``ros2/rcl_interfaces``' action_msgs and the rosidl action
+#: generators), whose introspection events a bag may hold.
+_DERIVED = {
+    "rmf_task_msgs/action/DynamicEvent_FeedbackMessage": (
+        "unique_identifier_msgs/UUID goal_id\nrmf_task_msgs/action/DynamicEvent_Feedback feedback"
+    ),
+    "rmf_task_msgs/action/DynamicEvent_SendGoal_Request": (
+        "unique_identifier_msgs/UUID goal_id\nrmf_task_msgs/action/DynamicEvent_Goal goal"
+    ),
+    "rmf_task_msgs/action/DynamicEvent_SendGoal_Response": "bool accepted\nbuiltin_interfaces/Time stamp",
+    "rmf_task_msgs/action/DynamicEvent_GetResult_Request": "unique_identifier_msgs/UUID goal_id",
+    "rmf_task_msgs/action/DynamicEvent_GetResult_Response": (
+        "int8 status\nrmf_task_msgs/action/DynamicEvent_Result result"
+    ),
+    "action_msgs/srv/CancelGoal_Request": "action_msgs/GoalInfo goal_info",
+    "action_msgs/srv/CancelGoal_Response": ("int8 return_code\naction_msgs/GoalInfo[] goals_canceling"),
+}
+_EVENTS = (
+    "rmf_task_msgs/action/DynamicEvent_SendGoal",
+    "rmf_task_msgs/action/DynamicEvent_GetResult",
+    "action_msgs/srv/CancelGoal",
+)
+
+
+@functools.cache
+def typestore() -> Any:
+    """rosbags' type store for ROS 2 Jazzy, with every type a Dynamic Event conversation uses."""
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    types: dict[str, Any] = {}
+    for name, text in _definitions().items():
+        types.update(get_types_from_msg(text, name))
+    store.register(types)
+    return store
+
+
+def _definitions() -> dict[str, str]:
+    """Every definition, from the project's interface files and :data:`_DERIVED`."""
+    # the package's files, without importing dynevent.ros (which needs rclpy)
+    root = importlib.resources.files("dynevent") / "ros" / "setup" / "interfaces" / "rmf_task_msgs"
+    definitions = {}
+    for name in ("DynamicEventStatus", "DynamicEventDescription", "LogEntry"):
+        definitions[f"rmf_task_msgs/msg/{name}"] = (root / "msg" / f"{name}.msg").read_text("utf-8")
+    parts = (root / "action" / "DynamicEvent.action").read_text("utf-8").split("\n---")
+    for part, text in zip(("Goal", "Result", "Feedback"), parts, strict=True):
+        definitions[f"rmf_task_msgs/action/DynamicEvent_{part}"] = text.strip("-\n")
+    definitions.update(_DERIVED)
+    for service in _EVENTS:
+        definitions[f"{service}_Event"] = "\n".join(
+            (
+                "service_msgs/ServiceEventInfo info",
+                f"{service}_Request[<=1] request",
+                f"{service}_Response[<=1] response",
+            )
+        )
+    return definitions
+
+
+def message_definition(msgtype: str) -> str:
+    """The definition of ``msgtype`` as rosbag2 keeps it beside a topic: ROS 2's concatenated form,
+    the type's own text, then each type it uses after a line of ``=`` and ``MSG: <type>``."""
+    own = _definitions()
+    store = typestore()
+
+    def text_of(name: str) -> str:
+        if name in own:
+            return own[name]
+        generated: str = store.generate_msgdef(name, ros_version=2)[0]
+        return generated.split("\n" + "=" * 80, maxsplit=1)[0]
+
+    used: list[str] = []
+
+    def visit(name: str) -> None:
+        for line in text_of(name).splitlines():
+            words = line.split("#", 1)[0].split()
+            if len(words) >= 2 and "/" in words[0] and "=" not in words[1]:
+                sub = _full_name(words[0].split("[", 1)[0])
+                if sub not in used:
+                    used.append(sub)
+                    visit(sub)
+
+    visit(msgtype)
+    parts = [text_of(msgtype).rstrip("\n")]
+    for name in used:
+        parts.append("=" * 80 + f"\nMSG: {name}\n" + text_of(name).rstrip("\n"))
+    return "\n".join(parts) + "\n"
+
+
+def _full_name(name: str) -> str:
+    """``pkg/Type`` as ``pkg/msg/Type``; a name with its interface kind stays."""
+    return name if name.count("/") == 2 else name.replace("/", "/msg/", 1)

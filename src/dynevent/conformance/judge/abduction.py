@@ -1,0 +1,249 @@
+"""Abduction: the input that explains an observation, from a short, fixed list of candidates, and
+the outputs that input owes (see the package docs)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import attrs
+
+from dynevent.conformance.judge.trace import (
+    _STATUSES,
+    _TIERS,
+    Record,
+)
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.server import outputs as outs
+from dynevent.server.machine import (
+    ServerConfig,
+    State,
+)
+from dynevent.wire.messages import DynamicEventStatus, Feedback, Goal, Result
+from dynevent.wire.vocab import (
+    TASK_SIGNAL_LOGS,
+    DynamicState,
+    EventType,
+    Failure,
+    Status,
+)
+
+# the input behind each task signal's log line (R13.1)
+_SIGNALS: dict[str, type[ins.TaskCancel] | type[ins.TaskKill]] = {
+    Status.CANCELED.value: ins.TaskCancel,
+    Status.KILLED.value: ins.TaskKill,
+}
+
+
+@attrs.define
+class _GoalSeen:
+    """What the trace showed of one goal."""
+
+    goal: Goal
+    line: int
+    responded: bool = False
+    accepted: bool = False
+    answered: int | None = None  # the line of its terminal answer
+    owed: bool = False  # dropped from the state on resynchronisation: its answers are not judged
+
+
+#: The goal an answered goal's record keeps: nothing after its answer reads the request itself.
+_ANSWERED = Goal()
+
+
+@attrs.frozen
+class _Owed:
+    """An output of an inferred step that has not been observed yet."""
+
+    channel: str
+    output: outs.Output
+    rule: str
+    line: int = 0  # the line whose step owes it
+    exact: bool = (
+        True  # False: inferred from a status alone, whose answer is owed but whose content is not known
+    )
+
+
+def _channel(output: outs.Output) -> str | None:
+    if isinstance(output, outs.PublishStatus):
+        return "status"
+    if isinstance(output, (outs.PublishFeedback, outs.AnswerGoal)):
+        return f"goal:{output.goal_uuid}"
+    if isinstance(output, outs.CancelResponse):
+        return f"cancel:{output.goal_uuid}"
+    return None
+
+
+def _failure(output: outs.Output) -> Failure | None:
+    """The execution failure an answer reports, if it is one of rmf_ros2's."""
+    return Failure.of(output.result.execution_failure) if isinstance(output, outs.AnswerGoal) else None
+
+
+def _result_rule(rule: str) -> str:
+    """The rule a wrong result breaks: R8.1 for the answers at a child's end, else the answer's own."""
+    at_child_end = rule in (machine.CHILD_END_RULE, machine.WAITING_CANCEL_RULE)
+    return machine.CHILD_RESULT_RULE if at_child_end else rule
+
+
+def _first_line(text: str) -> str:
+    return text.split("\n", 1)[0]
+
+
+def _same_status(a: DynamicEventStatus, b: DynamicEventStatus) -> bool:
+    return (a.dynamic_event_seq, a.dynamic_state, a.status, a.id) == (
+        b.dynamic_event_seq,
+        b.dynamic_state,
+        b.status,
+        b.id,
+    )
+
+
+def _exact(output: outs.Output, record: Record) -> bool:
+    """Does the machine's feedback or answer say what the record says?"""
+    if isinstance(output, outs.PublishFeedback):
+        feedback: Feedback = record.message
+        return (output.feedback.status, output.feedback.id) == (feedback.status, feedback.id)
+    if isinstance(output, outs.AnswerGoal):
+        result: Result = record.message
+        expected = output.result
+        return (
+            output.status.value,
+            expected.id,
+            expected.status,
+            _first_line(expected.execution_failure),
+        ) == (
+            record.status,
+            result.id,
+            result.status,
+            _first_line(result.execution_failure),
+        )
+    return False
+
+
+def _owes(owed: _Owed, record: Record) -> bool:
+    """Is ``record`` the owed output?"""
+    output = owed.output
+    if isinstance(output, outs.PublishStatus):
+        return record.kind == "status" and _same_status(output.message, record.message)
+    if isinstance(output, (outs.PublishFeedback, outs.AnswerGoal)):
+        wanted = "feedback" if isinstance(output, outs.PublishFeedback) else "result"
+        return record.kind == wanted and record.goal_uuid == output.goal_uuid and _exact(output, record)
+    return False
+
+
+# --------------------------------------------------------------------------- the abducer
+
+#: A candidate that explains an observation: its inputs, the state after them, the outputs it owes
+#: and, among them, the one observed.
+_Found = tuple[list[ins.Input], State, list[_Owed], _Owed]
+
+
+def simulate(state: State, events: list[ins.Input], config: ServerConfig) -> tuple[State, list[_Owed]]:
+    """The state after ``events`` and the observable outputs they owe: the machine's, nothing else."""
+    owed: list[_Owed] = []
+    for event in events:
+        transition = machine.step(state, event, config)
+        for output in transition.outputs:
+            channel = _channel(output)
+            if channel is not None:
+                owed.append(_Owed(channel, output, output.rule))
+        state = transition.state
+    return state, owed
+
+
+def candidates(state: State, record: Record, now: int) -> Iterator[list[ins.Input]]:
+    """The inputs that may have produced ``record``, most likely first (see the module docs)."""
+    running = state.running
+    uuid = record.goal_uuid
+    if record.kind == "feedback":
+        feedback: Feedback = record.message
+        texts = [entry.text for entry in feedback.logs]
+        if running is not None and running.goal_uuid == uuid:
+            for signal_status, signal_text in TASK_SIGNAL_LOGS.items():
+                if signal_text in texts:
+                    yield [_SIGNALS[signal_status](now=now)]
+            if running.started:
+                status = feedback.status if feedback.status in _STATUSES else running.child_status
+                last = feedback.logs[-1] if feedback.logs else None
+                tier = last.tier if last is not None and last.tier in _TIERS else "info"
+                log_text = last.text[: ins.MAX_LOG_TEXT_LENGTH] if last is not None else None
+                yield [ins.ChildProgress(status=status, log_text=log_text, tier=tier, now=now)]
+                if machine.ends_a_child(status) and not feedback.logs:
+                    yield [ins.ChildFinished(status=status, now=now)]  # its end as feedback (R17.7)
+            else:
+                yield [ins.Resume(now=now)]
+        if any(item.goal_uuid == uuid for item in state.queued):
+            yield [ins.GoalStarted(goal_uuid=uuid, now=now)]
+            if state.interrupted:
+                yield [ins.Resume(now=now), ins.GoalStarted(goal_uuid=uuid, now=now)]
+            else:
+                yield [ins.Interrupt(now=now), ins.GoalStarted(goal_uuid=uuid, now=now)]
+        return
+    if record.kind == "result":
+        result: Result = record.message
+        if any(item.goal_uuid == uuid for item in state.queued):
+            yield [ins.GoalStarted(goal_uuid=uuid, now=now)]
+        if running is not None and running.started:
+            final = result.status if result.status in _STATUSES else Status.COMPLETED.value
+            yield [ins.ChildFinished(status=final, now=now)]
+        if running is not None and not running.started and running.goal_uuid == uuid:
+            for queued in state.queued:  # a CANCEL's start cancels a deferred child at once (R9.4)
+                if queued.goal.event_type == EventType.CANCEL:
+                    yield [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now)]
+            yield [ins.TaskCancel(now=now)]
+            yield [ins.TaskKill(now=now)]
+        if _first_line(result.execution_failure) == Failure.SHUTDOWN.value:
+            yield [ins.Shutdown(now=now)]
+        return
+    message: DynamicEventStatus = record.message
+    for queued in state.queued:
+        yield [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now)]
+    if running is not None and running.started and message.status in _STATUSES:
+        yield [ins.ChildProgress(status=message.status, now=now)]
+    if running is not None and not running.started:
+        yield [ins.Resume(now=now)]
+    if message.status == Status.KILLED.value:
+        yield [ins.TaskKill(now=now)]
+    if message.status == Status.CANCELED.value or message.dynamic_state == DynamicState.INACTIVE:
+        yield [ins.TaskCancel(now=now)]
+
+
+def confirmed(found: _Found, upcoming: Record | None) -> bool:
+    """Does the next record show the next output this candidate owes?"""
+    rest = [item for item in found[2] if item is not found[3]]
+    return bool(rest) and upcoming is not None and _owes(rest[0], upcoming)
+
+
+def abduce(
+    state: State, config: ServerConfig, record: Record, now: int, upcoming: Record | None
+) -> _Found | None:
+    """The first candidate whose first output on the action is this feedback or answer.
+
+    A candidate that reproduces the observation exactly is preferred; else
+    the first whose output is of the same kind for the same goal (the
+    differences are then reported).  The abducer only calls the machine.
+    """
+    channel = f"goal:{record.goal_uuid}"
+    kind = outs.PublishFeedback if record.kind == "feedback" else outs.AnswerGoal
+    near = None
+    exact: list[_Found] = []
+    for events in candidates(state, record, now):
+        after, owed = simulate(state, events, config)
+        if kind is outs.AnswerGoal:  # a feedback owed before the answer (R17.7) may have come already
+            owed = [
+                item
+                for item in owed
+                if item.channel != channel or not isinstance(item.output, outs.PublishFeedback)
+            ]
+        first = next((item for item in owed if item.channel.startswith("goal:")), None)
+        if first is None or first.channel != channel or not isinstance(first.output, kind):
+            continue
+        if _exact(first.output, record):
+            exact.append((events, after, owed, first))
+        elif near is None:
+            near = (events, after, owed, first)
+    # candidates that agree on this record differ in what comes next: let the next record choose
+    for found in exact:
+        if confirmed(found, upcoming):
+            return found
+    return exact[0] if exact else near

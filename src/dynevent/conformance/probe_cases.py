@@ -1,0 +1,407 @@
+"""``dynevent probe``'s cases, verdicts and reports, without ROS 2.
+
+A case is data: an id (``section.name``), what it checks, the rules of
+docs/spec.md it tests, what it needs of the server (an active run, a child
+it can run), and the divergences of docs/divergences.md whose way of
+breaking it shows.  The ROS part (:mod:`dynevent.ros.probe`) carries each case
+out over the wire and gives a :class:`Finding` per case; this module selects
+cases, lists them, and reports findings (a table, JUnit XML) and the exit
+status, so that ``dynevent probe --list`` needs no ROS.
+
+Verdicts, as the Autobahn testsuite grades: ``pass``; ``non-strict`` (a
+SHOULD-level difference the spec allows); ``fail`` (a rule broken); ``info``
+(behaviour the spec leaves open); ``missing`` (the case could not be
+reached, e.g. no run began in time).  A failure whose way of breaking
+docs/divergences.md records for rmf_ros2 names its D-number; with
+``--known rmf_ros2`` such a failure is shown as ``known`` and does not fail
+the run.
+"""
+
+from __future__ import annotations
+
+import enum
+import fnmatch
+import html
+import json
+import xml.etree.ElementTree as ET
+from collections.abc import Iterable, Sequence
+
+import attrs
+
+from dynevent.descriptions.reading import GoToPlace, read
+from dynevent.errors import DyneventError
+
+__all__ = [
+    "CASES",
+    "EXIT_FAILED",
+    "EXIT_NOT_RUN",
+    "EXIT_OK",
+    "EXIT_USAGE",
+    "KNOWN",
+    "KNOWN_MISSING",
+    "Case",
+    "Finding",
+    "Verdict",
+    "exit_status",
+    "format_findings",
+    "format_list",
+    "junit_xml",
+    "matches",
+    "not_run_summary",
+    "place_of_run",
+    "probe_summary",
+    "report",
+    "select",
+]
+
+
+class Verdict(enum.Enum):
+    """What became of one case."""
+
+    PASS = "pass"
+    NON_STRICT = "non-strict"
+    FAIL = "fail"
+    INFO = "info"
+    MISSING = "missing"
+
+
+@attrs.frozen
+class Case:
+    """One probe case: ``needs`` is ``"status"`` (a status on the graph), ``"run"`` (an active
+    dynamic event, WAITING), ``"place"`` (a place to send the robot to, for a NEXT the server must
+    refuse for another reason only) or ``"child"`` (an active run and a place).
+    ``traced`` says whether ``dynevent check``, reading the probe's ``--trace``, can see the case's
+    failure too (not when a passive observer cannot tell the failure from a moment the spec allows)."""
+
+    id: str
+    title: str
+    rules: tuple[str, ...]
+    needs: str = "run"
+    divergences: tuple[str, ...] = ()
+    traced: bool = True
+
+    @property
+    def section(self) -> str:
+        return self.id.split(".", 1)[0]
+
+
+@attrs.frozen
+class Finding:
+    """A case's verdict, what the spec expects and what was seen, the messages exchanged, and the
+    D-number when the failure is one docs/divergences.md records; ``known`` when ``--known`` covers
+    it; ``absent`` when the failure is a message that did not come within the timeout (a trace,
+    which has no clock, shows that only when later messages prove it)."""
+
+    case: Case
+    verdict: Verdict
+    expected: str = ""
+    seen: str = ""
+    messages: tuple[str, ...] = ()
+    divergence: str | None = None
+    known: bool = False
+    seconds: float = 0.0
+    absent: bool = False  # the failure is a message that did not come within the timeout
+    expected_missing: bool = False  # missing, as --allow-missing or --known said it may be
+
+
+#: Every case, in the order they run (the ones that end a run come last).
+CASES: tuple[Case, ...] = (
+    Case("status.latched", "a late subscriber receives the robot's status (transient-local)",
+         ("R1.4", "R2.2"), needs="status"),
+    Case("status.waiting", "an active run's status is WAITING with the run's seq", ("R2.1", "R2.2", "R3.1"),
+         divergences=("D26",)),
+    Case("describe.query", "the description query answers with the run's description, status and id",
+         ("R16.2",)),
+    Case("request.seq_stale", "a FINISHED for an earlier run is refused", ("R4.2",)),
+    Case("request.seq_future", "a FINISHED for a run that has not begun is refused", ("R4.2",)),
+    Case("request.seq_stale_next", "a NEXT for an earlier run is refused", ("R4.2",), needs="child"),
+    Case("request.seq_future_next", "a NEXT for a run that has not begun is refused", ("R4.2",),
+         needs="child"),
+    Case("request.event_type_0", "a goal of event_type 0 is refused", ("R4.4",), divergences=("D7",)),
+    Case("request.event_type_unknown", "a goal of event_type 4 is refused", ("R4.5",), divergences=("D7",)),
+    # which categories a server supports is its configuration, which a trace tapped at a client lacks
+    Case("request.category_unknown", "a NEXT of a category the robot does not support is refused", ("R4.7",),
+         traced=False),
+    Case("request.description_not_json", "a NEXT whose description is not JSON is refused", ("R4.9",)),
+    Case("request.cancel_idle", "a CANCEL while no child runs is refused", ("R4.13",), divergences=("D8",)),
+    Case("next.runs_a_child", "a NEXT runs its child: accepted, feedback with its id, one answer",
+         ("R6.2", "R6.4", "R7.1", "R8.1", "R8.2", "R19.1"), needs="child"),
+    Case("next.id_zero", "a NEXT with id 0 runs child status.id + 1 (the server numbers it)",
+         ("R6.2", "R20.1"), needs="child", divergences=("D10",)),
+    Case("next.id_chosen", "a NEXT's own id (above the run's highest) names its child", ("R6.2",),
+         needs="child", divergences=("D10",)),
+    Case("next.stateless_id", "right after a child ends, a NEXT with the status's id + 1 runs",
+         ("R20.1", "R20.2"), needs="child", divergences=("D10",)),
+    Case("next.id_stale", "a NEXT whose id is not above the run's highest is refused", ("R4.12",),
+         needs="child", divergences=("D10",)),
+    Case("next.status_after_child", "after a child ends the status is WAITING with its id", ("R2.2", "R8.4"),
+         needs="child", divergences=("D2",), traced=False),
+    Case("next.busy", "a NEXT while a child runs is refused", ("R4.6",), needs="child"),
+    Case("next.busy_finished", "a FINISHED while a child runs is refused", ("R4.6",), needs="child",
+         divergences=("D30",)),
+    Case("next.race", "two NEXTs at once: one child runs, the other NEXT is refused or aborted, each "
+         "answered once", ("R4.16", "R5.2", "R19.2", "R19.1"), needs="child"),
+    Case("feedback.log_seq", "log entries are numbered one by one per robot, across children, in known tiers",
+         ("R7.2", "R7.3"), needs="child", divergences=("D9",)),
+    Case("stubborn.clamp_notice", "a stubborn period below the minimum is clamped with a warning in the "
+         "start feedback", ("R12.2",), needs="child", divergences=("D11",)),
+    Case("cancel.wrong_id", "a CANCEL naming another event is refused", ("R4.14",), needs="child",
+         divergences=("D8",)),
+    Case("cancel.seq_stale", "a CANCEL of the running child for an earlier run is refused", ("R4.2",),
+         needs="child"),
+    Case("cancel.seq_future", "a CANCEL of the running child for a run that has not begun is refused",
+         ("R4.2",), needs="child"),
+    Case("cancel.running_child", "a CANCEL of the running child ends it: both goals answered once, "
+         "then WAITING standby", ("R9.3", "R8.2", "R8.3", "R19.1", "R8.4"), needs="child",
+         divergences=("D28",)),
+    Case("cancel.both_answered", "two CANCELs of the running child wait for its end and are both "
+         "answered with its result", ("R9.3", "R8.3", "R19.1"), needs="child", divergences=("D1",)),
+    Case("action.cancel_running", "an action-level cancel of the running NEXT is accepted and the NEXT "
+         "answered canceled", ("R10.3", "R8.2"), needs="child", divergences=("D31",)),
+    Case("action.cancel_answered", "an action-level cancel of an answered goal is refused", ("R10.5",),
+         needs="child"),
+    Case("finished.ends_the_run", "FINISHED ends the run: succeeded, completed, then INACTIVE",
+         ("R11.1", "R11.2", "R2.2")),
+    Case("finished.next_after", "a NEXT after the run ended is refused", ("R4.3",), needs="place"),
+    Case("finished.cancel_after", "a CANCEL after the run ended is refused", ("R4.3",), needs="status"),
+    Case("finished.finished_after", "a FINISHED after the run ended is refused", ("R4.3",), needs="status"),
+    Case("begin.seq_wrap", "after run 4294967295 the next run is run 0, and a goal for 4294967295 is "
+         "refused", ("R3.2", "R3.1", "R4.2")),
+)  # fmt: skip
+
+
+#: The divergences a ``--known`` name covers: every one docs/divergences.md records is rmf_ros2's.
+KNOWN: dict[str, frozenset[str]] = {"rmf_ros2": frozenset(d for case in CASES for d in case.divergences)}
+
+#: The cases a ``--known`` name expects to be missing, each with why: a fleet adapter reaches the seq
+#: wrap only after four billion dynamic events.
+KNOWN_MISSING: dict[str, frozenset[str]] = {"rmf_ros2": frozenset({"begin.seq_wrap"})}
+
+#: The exit statuses of ``dynevent probe`` (docs/probe.md has the table).
+EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_NOT_RUN = 0, 1, 2, 3
+
+
+def place_of_run(description: str) -> str | None:
+    """The place a run's description names for the robot, for the cases that send it somewhere: the
+    first waypoint (by name) of a ``go_to_place`` estimate, as a task's dynamic event carries it
+    (``{"estimate": {"category": "go_to_place", "description": ...}}``); None when it names none."""
+    try:
+        estimate = json.loads(description).get("estimate")
+        if not isinstance(estimate, dict) or estimate.get("category") != "go_to_place":
+            return None
+        reading = read("go_to_place", estimate.get("description"))
+    except (ValueError, AttributeError, DyneventError):
+        return None
+    assert isinstance(reading, GoToPlace)  # what read gives for go_to_place
+    names = [place.waypoint for place in reading.one_of if isinstance(place.waypoint, str)]
+    return names[0] if names else None
+
+
+def select(patterns: Iterable[str] = ()) -> list[Case]:
+    """The cases any pattern names (all when none): a case id or glob (``request.*``), a section
+    (``cancel``), or a rule or rule glob (``R4.*``, ``R9.3``)."""
+    wanted = list(patterns)
+    if not wanted:
+        return list(CASES)
+    return [case for case in CASES if matches(case, wanted)]
+
+
+def format_list(cases: Sequence[Case]) -> str:
+    """The cases, a line each: id, rules, what it checks."""
+    width = max((len(case.id) for case in cases), default=0)
+    lines = [f"{case.id:{width}}  {case.title} ({', '.join(case.rules)})" for case in cases]
+    return "\n".join([*lines, f"{len(cases)} case(s)"]) + "\n"
+
+
+def _label(finding: Finding) -> str:
+    if finding.verdict is Verdict.MISSING and finding.expected_missing:
+        return "missing (allowed)"
+    if finding.verdict is Verdict.FAIL and finding.known:
+        return f"known ({finding.divergence})"
+    if finding.verdict is Verdict.FAIL and finding.divergence:
+        return f"fail ({finding.divergence})"
+    return finding.verdict.value
+
+
+def format_findings(findings: Sequence[Finding]) -> str:
+    """A line per case, the account of every failure, and the counts."""
+    width = max((len(finding.case.id) for finding in findings), default=0)
+    opening = not_run_summary(findings)
+    lines = [opening, ""] if opening else []
+    lines += [
+        f"{finding.case.id:{width}}  {_label(finding):14}  {finding.case.title}" for finding in findings
+    ]
+    for finding in findings:
+        if finding.verdict in (Verdict.FAIL, Verdict.MISSING, Verdict.NON_STRICT):
+            lines.append("")
+            lines.append(f"{finding.case.id} ({', '.join(finding.case.rules)}): {_label(finding)}")
+            if finding.verdict is Verdict.MISSING:
+                lines.append(f"  not run:  {finding.seen}")
+            else:
+                lines.append(f"  expected: {finding.expected}")
+                lines.append(f"  seen:     {finding.seen}")
+            lines.extend(f"  | {message}" for message in finding.messages)
+    lines.append("")
+    lines.append(probe_summary(findings))
+    return "\n".join(lines) + "\n"
+
+
+def exit_status(findings: Sequence[Finding]) -> int:
+    """1 when a case failed (a known divergence does not count); else 3 when a case was not run
+    (missing) that no ``--allow-missing`` or ``--known`` expected; else 0.  A conformance run never
+    passes what it did not test."""
+    if any(finding.verdict is Verdict.FAIL and not finding.known for finding in findings):
+        return EXIT_FAILED
+    if any(finding.verdict is Verdict.MISSING and not finding.expected_missing for finding in findings):
+        return EXIT_NOT_RUN
+    return EXIT_OK
+
+
+def matches(case: Case, patterns: Iterable[str]) -> bool:
+    """Does any pattern name ``case``: its id or a glob of it, its section, or one of its rules?"""
+    names = (case.id, case.section, *case.rules)
+    return any(fnmatch.fnmatchcase(name, pattern) for pattern in patterns for name in names)
+
+
+def not_run_summary(findings: Sequence[Finding]) -> str | None:
+    """The line that opens a report when cases were not run: how many, and why, most frequent first;
+    None when every case ran."""
+    missing = [finding for finding in findings if finding.verdict is Verdict.MISSING]
+    if not missing:
+        return None
+    reasons: dict[str, int] = {}
+    for finding in missing:
+        reasons[finding.seen] = reasons.get(finding.seen, 0) + 1
+    why = "; ".join(
+        f"{reason} ({count})" for reason, count in sorted(reasons.items(), key=lambda item: -item[1])
+    )
+    expected = sum(1 for finding in missing if finding.expected_missing)
+    allowed = f", {expected} of them expected" if expected else ""
+    return f"{len(missing)} of {len(findings)} case(s) not run{allowed}: {why}"
+
+
+def junit_xml(findings: Sequence[Finding], server: str = "") -> str:
+    """The run as JUnit XML: a test case per probe case (``classname`` its section), a failure with
+    the account, a skip for a missing case; each case's rules as a property."""
+    failures = sum(1 for finding in findings if finding.verdict is Verdict.FAIL and not finding.known)
+    skipped = sum(1 for finding in findings if finding.verdict is Verdict.MISSING)
+    suites = ET.Element("testsuites", name="dynevent probe", tests=str(len(findings)))
+    suite = ET.SubElement(
+        suites, "testsuite", name=server or "dynevent probe", tests=str(len(findings)),
+        failures=str(failures), skipped=str(skipped),
+    )  # fmt: skip
+    for finding in findings:
+        test = ET.SubElement(
+            suite,
+            "testcase",
+            classname=finding.case.section,
+            name=finding.case.id,
+            time=f"{finding.seconds:.3f}",
+        )
+        properties = ET.SubElement(test, "properties")
+        ET.SubElement(properties, "property", name="rules", value=" ".join(finding.case.rules))
+        ET.SubElement(properties, "property", name="verdict", value=_label(finding))
+        if finding.absent:
+            ET.SubElement(properties, "property", name="absent", value="a message did not come in time")
+        account = "\n".join([f"expected: {finding.expected}", f"seen: {finding.seen}", *finding.messages])
+        if finding.verdict is Verdict.FAIL and not finding.known:
+            ET.SubElement(test, "failure", message=f"{_label(finding)}: {finding.seen}").text = account
+        elif finding.verdict is Verdict.MISSING:
+            ET.SubElement(test, "skipped", message=finding.seen)
+        elif finding.known:
+            ET.SubElement(test, "system-out").text = f"known divergence {finding.divergence}\n{account}"
+    return ET.tostring(suites, encoding="unicode") + "\n"
+
+
+def probe_summary(findings: Sequence[Finding]) -> str:
+    """The counts line: ``15 pass, 2 fail (2 of the failures known)``."""
+    counts = {verdict: 0 for verdict in Verdict}
+    for finding in findings:
+        counts[finding.verdict] += 1
+    known = sum(1 for finding in findings if finding.known)
+    summary = ", ".join(f"{count} {verdict.value}" for verdict, count in counts.items() if count)
+    return summary + (f" ({known} of the failures known)" if known else "")
+
+
+def report(findings: Sequence[Finding], server: str, *, html_form: bool = False) -> str:
+    """A report a person reads: a table of the cases, then per case its rules, verdict, what the spec
+    expects, what was seen and every message sent and seen.  Markdown, or a self-contained HTML page."""
+    title = f"dynevent probe: {server}"
+    rows = [
+        (finding.case.id, _label(finding), ", ".join(finding.case.rules), finding.case.title)
+        for finding in findings
+    ]
+    if html_form:
+        return _report_html(title, rows, findings)
+    opening = not_run_summary(findings)
+    lines = [
+        f"# {title}",
+        "",
+        *([opening, ""] if opening else []),
+        probe_summary(findings),
+        "",
+        "| case | verdict | rules | checks |",
+        "|---|---|---|---|",
+    ]
+    lines.extend(f"| `{case}` | {label} | {rules} | {_cell(text)} |" for case, label, rules, text in rows)
+    for finding in findings:
+        lines += ["", f"## `{finding.case.id}`: {_label(finding)}", "", finding.case.title + ".", ""]
+        lines.extend(f"- {name}: {_cell(value)}" for name, value in _facts(finding))
+        if finding.messages:
+            lines += ["", "```", *finding.messages, "```"]
+    return "\n".join(lines) + "\n"
+
+
+def _facts(finding: Finding) -> list[tuple[str, str]]:
+    """What a report says of a case, in order: its rules, divergence, expected, seen and time."""
+    facts = [("rules", f"{', '.join(finding.case.rules)} (docs/spec.md)")]
+    if finding.divergence:
+        facts.append(("divergence", f"{finding.divergence} (docs/divergences.md)"))
+    if finding.verdict is Verdict.MISSING:
+        facts.append(("not run", finding.seen or "-"))
+    else:
+        seen = "as expected" if finding.verdict is Verdict.PASS else finding.seen or "-"
+        facts += [("expected", finding.expected or "-"), ("seen", seen)]
+    return [*facts, ("time", f"{finding.seconds:.3f} s")]
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+_STYLE = (
+    "body{font-family:sans-serif;margin:2em;max-width:70em}table{border-collapse:collapse}"
+    "td,th{border:1px solid #ccc;padding:.3em .6em;text-align:left}pre{background:#f6f6f6;padding:.6em}"
+    ".pass{background:#dfd}.fail{background:#fdd}.known{background:#ffd}.missing,.non-strict,.info{background:#eef}"
+)
+
+
+def _report_html(title: str, rows: list[tuple[str, str, str, str]], findings: Sequence[Finding]) -> str:
+    escape = html.escape
+    parts = [
+        "<!DOCTYPE html>",
+        f'<html lang="en"><head><meta charset="utf-8"><title>{escape(title)}</title>'
+        f"<style>{_STYLE}</style></head><body>",
+        f"<h1>{escape(title)}</h1>",
+        *([f"<p><strong>{escape(opening)}</strong></p>"] if (opening := not_run_summary(findings)) else []),
+        f"<p>{escape(probe_summary(findings))}</p>",
+        "<table><tr><th>case</th><th>verdict</th><th>rules</th><th>checks</th></tr>",
+    ]
+    for case, label, rules, text in rows:
+        css = label.split(" ", 1)[0]
+        parts.append(
+            f'<tr class="{escape(css)}"><td><a href="#{escape(case)}">{escape(case)}</a></td>'
+            f"<td>{escape(label)}</td><td>{escape(rules)}</td><td>{escape(text)}</td></tr>"
+        )
+    parts.append("</table>")
+    for finding in findings:
+        parts.append(
+            f'<h2 id="{escape(finding.case.id)}">{escape(finding.case.id)}: {escape(_label(finding))}</h2>'
+        )
+        parts.append(f"<p>{escape(finding.case.title)}.</p><ul>")
+        parts.extend(f"<li>{name}: {escape(value)}</li>" for name, value in _facts(finding))
+        parts.append("</ul>")
+        if finding.messages:
+            parts.append(f"<pre>{escape(chr(10).join(finding.messages))}</pre>")
+    parts.append("</body></html>")
+    return "\n".join(parts) + "\n"

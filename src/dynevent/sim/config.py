@@ -1,0 +1,259 @@
+"""The configuration of the fleet ``dynevent serve`` simulates, read and checked without ROS 2.
+
+What a ``--config`` file and the flags say (the fleet, its robots, the
+simulated categories, the robots' map and actions, the mode, the shard), so
+that ``dynevent serve`` checks its own input, and says what is wrong with it,
+before it needs rclpy; and what a simulated child does with its description
+(:func:`plan`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import zlib
+from pathlib import Path
+from typing import Any
+
+import attrs
+
+from dynevent import descriptions
+from dynevent.descriptions import shapes
+from dynevent.errors import InvalidConfig, InvalidName, MissingExtra, ServeError
+from dynevent.server.machine import ServerConfig, Validator, any_description
+from dynevent.wire.names import validate_token
+from dynevent.wire.vocab import Compatibility, IdPolicy
+
+__all__ = [
+    "DEFAULT_CATEGORIES",
+    "CategorySpec",
+    "ServeConfig",
+    "Step",
+    "load_config",
+    "machine_config",
+    "parse_shard",
+    "plan",
+    "shard_of",
+]
+
+
+@attrs.frozen
+class CategorySpec:
+    """How a simulated child of one category behaves: how long it takes (a ``perform_action`` takes
+    its duration estimate when it gives one), how often it reports, and the places it fails on."""
+
+    duration: float = 3.0
+    report_every: float = 1.0
+    fail_on: tuple[str, ...] = ()
+
+
+DEFAULT_CATEGORIES = {
+    "go_to_place": CategorySpec(duration=3.0, report_every=1.0, fail_on=("nowhere",)),
+    "perform_action": CategorySpec(duration=2.0, report_every=1.0),
+    "sequence": CategorySpec(duration=0.0, report_every=1.0),
+    "clean": CategorySpec(duration=5.0, report_every=1.0),
+    "pickup": CategorySpec(duration=2.0, report_every=1.0),
+    "dropoff": CategorySpec(duration=2.0, report_every=1.0),
+}
+
+
+@attrs.frozen
+class ServeConfig:
+    """What ``dynevent serve`` runs: the fleet, its robots, the categories and the options."""
+
+    fleet: str = "tinyRobot"
+    robots: tuple[str, ...] = ("tinyRobot1",)
+    categories: dict[str, CategorySpec] = attrs.field(factory=lambda: dict(DEFAULT_CATEGORIES))
+    compatibility: str = "standard"
+    rebegin: float = 2.0
+    #: The seq of each robot's first run (a robot restored from ``--state`` keeps its own): start at
+    #: 4294967295 to see the seq wrap to 0 at the next begin (R3.2).
+    first_seq: int = 1
+    #: The robots' map (waypoint names by index, None for an unnamed one) and the actions they
+    #: perform; None: every place and every action exists.
+    places: tuple[str | None, ...] | None = None
+    actions: tuple[str, ...] | None = None
+    #: This process's part of the fleet, (K, N): the robots whose name hashes to K of N (1 <= K <= N).
+    shard: tuple[int, int] = (1, 1)
+
+    def served(self) -> tuple[str, ...]:
+        """The robots this process serves: its shard of the fleet's robots."""
+        index, count = self.shard
+        return tuple(robot for robot in self.robots if shard_of(robot, count) == index)
+
+
+def shard_of(robot: str, count: int) -> int:
+    """The shard (1 to ``count``) that serves ``robot``: the same in every process and on every host."""
+    return zlib.crc32(robot.encode("utf-8")) % count + 1
+
+
+def parse_shard(text: str) -> tuple[int, int]:
+    """``"K/N"`` as (K, N), 1 <= K <= N; raises :class:`ServeError` naming the value."""
+    index, slash, count = text.partition("/")
+    if slash and index.isdigit() and count.isdigit() and 1 <= int(index) <= int(count):
+        return int(index), int(count)
+    raise ServeError(f"--shard {text!r}: expected K/N with 1 <= K <= N, e.g. 1/2")
+
+
+def load_config(args: argparse.Namespace) -> ServeConfig:
+    """The configuration from ``--config FILE`` and the flags (flags win); raises :class:`ServeError`."""
+    config = ServeConfig()
+    if args.config is not None:
+        try:
+            data = json.loads(Path(args.config).read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise ServeError(f"--config {args.config}: {exc}") from None
+        config = _config_from_dict(data, args.config)
+    if args.fleet is not None:
+        config = attrs.evolve(config, fleet=args.fleet)
+    if args.robots:
+        config = attrs.evolve(config, robots=tuple(args.robots))
+    if args.rebegin is not None:
+        config = attrs.evolve(config, rebegin=args.rebegin)
+    if getattr(args, "first_seq", None) is not None:
+        config = attrs.evolve(config, first_seq=_seq(args.first_seq, "--first-seq"))
+    if getattr(args, "compatibility", None) is not None:
+        config = attrs.evolve(config, compatibility=args.compatibility)
+    if getattr(args, "shard", None) is not None:
+        config = attrs.evolve(config, shard=parse_shard(args.shard))
+    try:
+        validate_token("fleet", config.fleet)
+        for robot in config.robots:
+            validate_token("robot", robot)
+    except InvalidName as exc:
+        raise ServeError(str(exc)) from None
+    if len(set(config.robots)) != len(config.robots):
+        raise ServeError(f"robots: a robot is named twice in {list(config.robots)}")
+    try:
+        machine_config(config)
+        shapes.require_explanations()  # a client author is told where a description goes wrong
+    except (InvalidConfig, MissingExtra) as exc:
+        raise ServeError(str(exc)) from None
+    return config
+
+
+def machine_config(config: ServeConfig) -> ServerConfig:
+    """The machine's configuration of every robot: the field's categories checked as R4.18 says
+    (with the configured map and actions), the others taking any description."""
+    field = [name for name in config.categories if name in descriptions.CATEGORIES]
+    others: dict[str, Validator] = {
+        name: any_description for name in config.categories if name not in descriptions.CATEGORIES
+    }
+    robot = descriptions.Robot(places=config.places, actions=config.actions, categories=field)
+    validators = robot.validators(others)
+    if config.compatibility == Compatibility.RMF_ROS2.value:
+        return ServerConfig.rmf_ros2(validators)
+    return ServerConfig(categories=validators, id_policy=IdPolicy.GOAL, compatibility=config.compatibility)
+
+
+@attrs.frozen
+class Step:
+    """A part of a simulated child: what it does (a log line says it), for how many seconds, and
+    the error it fails with when it reaches a place its category fails on."""
+
+    label: str
+    duration: float
+    failure: str | None = None
+
+
+def plan(category: str, description: Any, config: ServeConfig) -> list[Step]:
+    """What a simulated child of ``category`` does with its (accepted, parsed) description: its steps,
+    in order; a sequence's activities one after another."""
+    spec = config.categories.get(category, CategorySpec())
+    if category not in descriptions.CATEGORIES:
+        return [Step(category, spec.duration)]
+    reading = descriptions.read(category, description)
+    if isinstance(reading, descriptions.GoToPlace):
+        reachable = [place for place in reading.one_of if str(place.waypoint) not in spec.fail_on]
+        target = (reachable or list(reading.one_of))[0]
+        after = (
+            f", then {', '.join(str(place) for place in reading.followed_by)}" if reading.followed_by else ""
+        )
+        failure = None if reachable else f"{target}: no such place"
+        return [Step(f"{category} {target}{after}", spec.duration, failure)]
+    if isinstance(reading, descriptions.PerformAction):
+        estimate = reading.duration_estimate
+        seconds = spec.duration if estimate is None else min(max(estimate, 0.001), 86_400.0)
+        return [Step(f"{category} {reading.action}", seconds)]
+    if isinstance(reading, descriptions.Sequence):
+        steps = []
+        for number, activity in enumerate(reading.activities, start=1):
+            for step in plan(activity.category, activity.description, config):
+                label = f"activity {number} of {len(reading.activities)}: {step.label}"
+                steps.append(attrs.evolve(step, label=label))
+        return steps or [Step(f"{category} (no activities)", 0.001)]
+    if isinstance(reading, descriptions.Clean):
+        return [Step(f"{category} {reading.zone}", spec.duration)]
+    items = sum(item.quantity for item in reading.payload)
+    failure = f"{reading.place}: no such place" if str(reading.place.waypoint) in spec.fail_on else None
+    label = f"{category} at {reading.place} ({items} item{'s' if items != 1 else ''})"
+    return [Step(label, spec.duration, failure)]
+
+
+def _seq(value: Any, what: str) -> int:
+    """A run's seq (0 to 4294967295); raises :class:`ServeError` naming ``what`` and the value."""
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**32:
+        raise ServeError(f"{what}: expected a seq from 0 to 4294967295 (got {value!r})")
+    return value
+
+
+def _config_from_dict(data: Any, source: str) -> ServeConfig:
+    if not isinstance(data, dict):
+        raise ServeError(f"{source}: expected a JSON object")
+    unknown = set(data) - {
+        "fleet",
+        "robots",
+        "categories",
+        "compatibility",
+        "rebegin",
+        "first_seq",
+        "places",
+        "actions",
+    }
+    if unknown:
+        raise ServeError(f"{source}: unknown keys {sorted(unknown)}")
+    categories = dict(DEFAULT_CATEGORIES)
+    if "categories" in data:
+        categories = {}
+        for name, spec in dict(data["categories"]).items():
+            try:
+                values = dict(spec)
+                unknown_keys = set(values) - {"duration", "report_every", "fail_on"}
+                if unknown_keys:
+                    raise ValueError(f"unknown keys {sorted(unknown_keys)}")
+                default = DEFAULT_CATEGORIES.get(name, CategorySpec())
+                categories[name] = CategorySpec(
+                    duration=float(values.get("duration", default.duration or 3.0)),
+                    report_every=float(values.get("report_every", default.report_every)),
+                    fail_on=tuple(str(place) for place in values.get("fail_on", default.fail_on)),
+                )
+            except (TypeError, ValueError, OverflowError) as exc:  # OverflowError: float(10**400)
+                raise ServeError(f"{source}: categories.{name}: {exc}") from None
+            if not 0 < categories[name].duration < 1e6 or not 0 < categories[name].report_every < 1e6:
+                raise ServeError(
+                    f"{source}: categories.{name}: duration and report_every are positive seconds"
+                )
+    robots = data.get("robots", ["tinyRobot1"])
+    if not isinstance(robots, list) or not all(isinstance(robot, str) for robot in robots):
+        raise ServeError(f"{source}: robots: expected a list of names")
+    places, actions = data.get("places"), data.get("actions")
+    if places is not None and (
+        not isinstance(places, list) or not all(isinstance(p, (str, type(None))) for p in places)
+    ):
+        raise ServeError(
+            f"{source}: places: expected a list of waypoint names (null for an unnamed waypoint)"
+        )
+    if actions is not None and (
+        not isinstance(actions, list) or not all(isinstance(a, str) for a in actions)
+    ):
+        raise ServeError(f"{source}: actions: expected a list of action names")
+    return ServeConfig(
+        fleet=str(data.get("fleet", "tinyRobot")),
+        robots=tuple(robots),
+        categories=categories,
+        compatibility=str(data.get("compatibility", "standard")),
+        rebegin=float(data.get("rebegin", 2.0)),
+        first_seq=_seq(data.get("first_seq", 1), f"{source}: first_seq"),
+        places=None if places is None else tuple(places),
+        actions=None if actions is None else tuple(actions),
+    )
