@@ -183,3 +183,30 @@ def test_the_judging_names_check_held_are_still_found_there_with_a_warning() -> 
     assert Report is judge.Report
     with pytest.raises(AttributeError, match="no_such_name"):
         check.no_such_name  # noqa: B018
+
+
+#: The longest a class and a function may be, in lines (docstrings included): past them a part no
+#: longer reads as one thing.
+LONGEST_CLASS, LONGEST_FUNCTION = 350, 80
+
+
+def _too_long(tree: ast.Module) -> list[tuple[str, int]]:
+    found = []
+    for node in ast.walk(tree):
+        if not isinstance(node, (ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)):
+            continue
+        length = (node.end_lineno or node.lineno) - node.lineno + 1
+        if isinstance(node, ast.ClassDef) and length > LONGEST_CLASS:
+            found.append((f"class {node.name}", length))
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and length > LONGEST_FUNCTION:
+            found.append((f"def {node.name}", length))
+    return found
+
+
+def test_no_class_or_function_is_too_long_to_read_as_one_thing() -> None:
+    trees = {module: ast.parse(path.read_text(encoding="utf-8")) for module, path in _modules()}
+    found = {module: too_long for module, tree in trees.items() if (too_long := _too_long(tree))}
+    assert not found, found
+    made = "class Long:\n" + "    x = 1\n" * LONGEST_CLASS + "def long():\n" + "    pass\n" * LONGEST_FUNCTION
+    expected = [("class Long", LONGEST_CLASS + 1), ("def long", LONGEST_FUNCTION + 1)]
+    assert _too_long(ast.parse(made)) == expected

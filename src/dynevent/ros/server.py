@@ -348,7 +348,7 @@ class DynamicEventServer:
         self._node = node
         self._on_step = on_step
         self._config = config
-        self._children = children
+        self._children = _RunningChildren(self, children)
         self._stubbornness = stubbornness
         self._on_finished = on_finished
         self._on_interrupt_confirmed = on_interrupt_confirmed
@@ -359,17 +359,12 @@ class DynamicEventServer:
         self._observer = observer
         self._state = state if state is not None else State.new(fleet, robot)
         if (self._state.fleet, self._state.robot) != (fleet, robot):
-            raise InvalidValue(
-                "DynamicEventServer",
-                "state",
-                f"{self._state.fleet}/{self._state.robot}",
-                f"the state belongs to another robot than {fleet}/{robot}",
-            )
+            why = f"the state belongs to another robot than {fleet}/{robot}"
+            raise InvalidValue("DynamicEventServer", "state", f"{self._state.fleet}/{self._state.robot}", why)
         self._lock = threading.Lock()
         self._outbox: collections.deque[outs.Output] = collections.deque()
         self._answers: dict[str, Any] = {}
         self._handles: dict[str, Any] = {}
-        self._executions: dict[int, ChildExecution] = {}
         self._position: tuple[str, float, float] | None = None
         self._converted: tuple[Any, Any] = (None, None)  # the goal callback's (request, goal)
         self._log = node.get_logger().get_child(f"{fleet}.{robot}")
@@ -603,6 +598,8 @@ class DynamicEventServer:
     def _carry_out(self, output: outs.Output) -> None:
         if self._observer is not None:
             self._observer(output)
+        if self._children.carry_out(output):  # (and a child that ended is forgotten, whatever the output)
+            return
         if isinstance(output, outs.PublishStatus):
             self._ros.status.publish(convert.status_to_ros(output.message))
         elif isinstance(output, outs.PublishFeedback):
@@ -620,24 +617,8 @@ class DynamicEventServer:
             message = convert.begin_to_ros(output.message)
             self._ros.begin.publish(message)
             self._ros.fleet_begin.publish(message)
-        elif isinstance(output, outs.StartChild):
-            started = ChildExecution(self, output)
-            self._executions[output.id] = started
-            self._children.start(started)
-        elif isinstance(output, (outs.CancelChild, outs.KillChild)):
-            execution = self._executions.get(output.id)
-            if execution is not None:
-                kill = isinstance(output, outs.KillChild)
-                execution._stop(kill)
-                (self._children.kill if kill else self._children.cancel)(execution)
-        elif isinstance(output, (outs.InterruptChild, outs.ResumeChild)):
-            paused = self._executions.get(output.id)
-            if paused is not None:
-                interrupt = isinstance(output, outs.InterruptChild)
-                (self._children.interrupt if interrupt else self._children.resume)(paused)
         else:
             self._carry_out_other(output)
-        self._forget_finished()
 
     def _carry_out_other(self, output: outs.Output) -> None:
         holds = self._stubbornness
@@ -670,9 +651,42 @@ class DynamicEventServer:
         elif isinstance(output, (outs.SeqWrapped, outs.Ignored)):
             self._log.debug(repr(output))
 
-    def _forget_finished(self) -> None:
-        for child_id in [key for key, execution in self._executions.items() if execution.done]:
-            del self._executions[child_id]
+
+class _RunningChildren:
+    """The children the adapter runs, by id: the machine's child outputs carried out on them."""
+
+    def __init__(self, server: DynamicEventServer, children: ChildEvents) -> None:
+        self._server = server
+        self._children = children
+        self._executions: dict[int, ChildExecution] = {}
+
+    def carry_out(self, output: outs.Output) -> bool:
+        """Carry out a child's output (start, cancel, kill, interrupt, resume); False for another."""
+        try:
+            return self._carry_out(output)
+        finally:  # after every output: a child that ended is forgotten
+            for child_id in [key for key, execution in self._executions.items() if execution.done]:
+                del self._executions[child_id]
+
+    def _carry_out(self, output: outs.Output) -> bool:
+        if isinstance(output, outs.StartChild):
+            started = ChildExecution(self._server, output)
+            self._executions[output.id] = started
+            self._children.start(started)
+        elif isinstance(output, (outs.CancelChild, outs.KillChild)):
+            execution = self._executions.get(output.id)
+            if execution is not None:
+                kill = isinstance(output, outs.KillChild)
+                execution._stop(kill)
+                (self._children.kill if kill else self._children.cancel)(execution)
+        elif isinstance(output, (outs.InterruptChild, outs.ResumeChild)):
+            paused = self._executions.get(output.id)
+            if paused is not None:
+                interrupt = isinstance(output, outs.InterruptChild)
+                (self._children.interrupt if interrupt else self._children.resume)(paused)
+        else:
+            return False
+        return True
 
 
 def _abort_at_once(why: str) -> Callable[[Any], Any]:
