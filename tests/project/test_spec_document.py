@@ -5,6 +5,7 @@ from __future__ import annotations
 import ast
 import os
 import re
+import textwrap
 from pathlib import Path
 
 from dynevent.tools.diagram import render
@@ -131,3 +132,62 @@ def test_the_rule_index_reads_module_and_function_marks() -> None:
     assert "wire/test_names.py::test_valid_tokens" in tests["R1.4"]  # marked by the module's pytestmark
     assert "ros/test_ros_serve.py::test_a_foreign_state_file_is_refused_and_left_as_it_was" not in str(tests)
     assert set(tests) == _cited()  # the index's reading of the marks agrees with the citations found
+
+
+# --------------------------------------------------------------------------- the machine's own index
+
+SERVER = ROOT / "src" / "dynevent" / "server"
+#: The files of the rules: the machine, and the configuration and state types beside it.
+RULE_FILES = ("machine.py", "config.py", "state.py")
+INDEX_START = "Where each rule is carried out"
+INDEX_END = '"""'
+
+
+def machine_rule_index() -> str:
+    """The module docstring's index of machine.py: each rule cited in the rule files, and the top-level
+    functions, classes and constants that cite it (of config.py and state.py, named with their module)."""
+    where: dict[str, list[str]] = {}
+    for file in RULE_FILES:
+        source = (SERVER / file).read_text(encoding="utf-8")
+        lines = source.split("\n")
+        for node in ast.parse(source).body:
+            if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+                name = node.name
+            elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                name = next((target.id for target in targets if isinstance(target, ast.Name)), "")
+            else:
+                continue
+            if not name:
+                continue
+            text = "\n".join(lines[node.lineno - 1 : node.end_lineno])
+            label = name if file == "machine.py" else f"{file.removesuffix('.py')}.{name}"
+            for rule in dict.fromkeys(re.findall(r"\bR\d+\.\d+\b", text)):
+                where.setdefault(rule, []).append(label)
+    rows = [
+        f"{INDEX_START} (the functions, classes and tables that cite it; those of",
+        ":mod:`dynevent.server.config` and :mod:`dynevent.server.state` named with their module).",
+        "``DYNEVENT_UPDATE_RULE_INDEX=1 pytest tests/project/test_spec_document.py`` rewrites it from the",
+        "citations, and that test fails while it is stale::",
+        "",
+    ]
+    for rule in sorted(where, key=_rule_key):
+        rows.extend(textwrap.wrap(", ".join(where[rule]), 100, initial_indent=f"    {rule:<7}",
+                                  subsequent_indent=" " * 11, break_on_hyphens=False))  # fmt: skip
+    return "\n".join(rows) + "\n"
+
+
+def test_the_machine_names_where_each_rule_is_carried_out() -> None:
+    path = SERVER / "machine.py"
+    source = path.read_text(encoding="utf-8")
+    start = source.index(INDEX_START)
+    end = source.index(INDEX_END, start)
+    expected = machine_rule_index()
+    if os.environ.get("DYNEVENT_UPDATE_RULE_INDEX") == "1":
+        path.write_text(source[:start] + expected + source[end:], encoding="utf-8")
+        return
+    how = "DYNEVENT_UPDATE_RULE_INDEX=1 pytest tests/project/test_spec_document.py"
+    assert source[start:end] == expected, f"machine.py's rule index is stale: {how}"
+    cited = {line.split()[0] for line in expected.splitlines() if line.startswith("    R")}
+    assert cited <= RULES, sorted(cited - RULES)  # every rule the machine cites is one of the spec's
+    assert {"R4.2", "R8.4", "R12.2", "R20.2"} <= cited

@@ -1,7 +1,9 @@
 """The robot-side Dynamic Event machine: pure ``accept`` and ``step`` over a frozen state.
 
-Rule 1: everything that decides what the server does lives in this file.  The
-rules are numbered as in docs/spec.md (``R4.2`` and so on) and every rule is
+Rule 1: everything that decides what the server does lives in this file (and,
+beside it, the configuration's bounds and the state's derived phase and id:
+:mod:`dynevent.server.config`, :mod:`dynevent.server.state`).  The rules are
+numbered as in docs/spec.md (``R4.2`` and so on) and every rule is
 cited where it is carried out.  The machine never raises, never reads a clock
 and never does I/O: time arrives in the inputs, and every effect leaves as an
 output value (:mod:`dynevent.server.outputs`).
@@ -9,7 +11,104 @@ output value (:mod:`dynevent.server.outputs`).
 The machine's phase (INACTIVE, WAITING, RUNNING) is a projection of the state,
 and :data:`TRANSITIONS` declares, per phase and input, which phases a step may
 lead to; it is the source of the diagram in docs/spec.md and is checked
-against the behaviour by the test suite.
+against the behaviour by the test suite.  The names of the configuration and the
+state are re-exported here.
+
+Where each rule is carried out (the functions, classes and tables that cite it; those of
+:mod:`dynevent.server.config` and :mod:`dynevent.server.state` named with their module).
+``DYNEVENT_UPDATE_RULE_INDEX=1 pytest tests/project/test_spec_document.py`` rewrites it from the
+citations, and that test fails while it is stale::
+
+    R2.1   state.State, state.phase_of
+    R2.2   status_message, status_of, runs_a_child, state_from_status, state.State,
+           state.reported_id
+    R2.3   _finish, _start_goal, _on_child_progress, _on_child_finished
+    R3.1   next_seq, _on_begin, TRANSITIONS
+    R3.2   next_seq, _on_begin
+    R3.3   begin_description, _on_begin
+    R3.4   _on_begin
+    R4.1   _shutting_down, REQUEST_CHECKS, _GATES, _decide
+    R4.2   _seq_mismatch, REQUEST_CHECKS, _GATES, _decide
+    R4.3   _inactive, REQUEST_CHECKS, _GATES, _decide
+    R4.4   _uninitialized_type, REQUEST_CHECKS
+    R4.5   _unknown_type, REQUEST_CHECKS
+    R4.6   _busy, REQUEST_CHECKS, _GATES, _decide
+    R4.7   _unsupported_category, _description_invalid, REQUEST_CHECKS, _DESCRIPTION_CHECKS,
+           _check_description, _start_next
+    R4.8   _description_too_long, REQUEST_CHECKS, _DESCRIPTION_CHECKS, config.ServerConfig
+    R4.9   _description_not_json, REQUEST_CHECKS, _DESCRIPTION_CHECKS, check_index, _start_child,
+           config.any_description
+    R4.10  _description_invalid, REQUEST_CHECKS, _DESCRIPTION_CHECKS, _check_description
+    R4.11  _non_finite_stubborn, REQUEST_CHECKS
+    R4.12  _stale_id, REQUEST_CHECKS, _stale
+    R4.13  _cancel_idle, _cancel_id_mismatch, REQUEST_CHECKS
+    R4.14  _cancel_id_mismatch, REQUEST_CHECKS
+    R4.15  _on_goal_requested
+    R4.16  _decide, _on_goal_requested
+    R4.17  config._categories, config.ServerConfig
+    R5.1   _start_goal
+    R5.2   race_lost, _start_goal
+    R5.3   _on_goal_submitted, TRANSITIONS
+    R6.1   _start_child, _start_goal, _start_next, state.QueuedGoal
+    R6.2   next_child_id
+    R6.3   DEFERRED_START_RULE, state_from_status, TRANSITIONS
+    R6.4   START_RULE, _start_child, TRANSITIONS
+    R7.1   _on_child_progress
+    R7.2   _on_child_progress
+    R7.3   _log_entry, _start_next, _on_child_progress
+    R7.4   child_ended, _on_child_progress
+    R8.1   CHILD_RESULT_RULE, ends_a_child
+    R8.2   CHILD_END_RULE, ends_early, _answers_at_child_end
+    R8.3   WAITING_CANCEL_RULE, _answers_at_child_end
+    R8.4   state_from_status, _on_child_finished, TRANSITIONS
+    R9.1   _start_cancel
+    R9.2   _start_cancel
+    R9.3   _start_cancel
+    R9.4   _answers_at_child_end, _start_cancel, TRANSITIONS
+    R10.1  _on_cancel_requested
+    R10.2  _on_cancel_requested
+    R10.3  _on_cancel_requested
+    R10.4  _answers_at_child_end, _on_cancel_requested, TRANSITIONS
+    R10.5  _on_cancel_requested
+    R11.1  FINISHED_RULE, TRANSITIONS
+    R11.2  _end_dynamic_event
+    R12.1  _on_child_finished
+    R12.2  _start_next
+    R12.3  _on_tick
+    R12.4  _on_tick
+    R12.5  _end_stubbornness, _start_child
+    R13.1  _on_task_signal
+    R13.2  _on_task_signal
+    R13.3  _answers_at_child_end, _on_task_signal, TRANSITIONS
+    R13.4  _end_dynamic_event, _on_child_finished, TRANSITIONS
+    R13.6  _end_dynamic_event
+    R14.1  _on_interrupt
+    R14.2  _on_interrupt
+    R14.3  _on_resume
+    R14.4  _on_resume
+    R14.5  _start_child, _on_resume
+    R15.1  _on_shutdown
+    R15.2  TRANSITIONS
+    R16.1  _on_description_query
+    R16.2  _on_description_query
+    R17.1  RequestCheck, _walk, _deferred, _decide
+    R17.2  _start_goal
+    R17.4  _running_status, _on_child_finished
+    R17.5  _running_status, _on_child_progress
+    R17.6  begin_description, _on_begin
+    R17.7  _on_child_finished
+    R18.1  _on_begin, _on_shutdown
+    R18.2  _on_goal_requested, _on_goal_submitted
+    R18.3  _on_goal_started
+    R18.4  _on_child_progress, _on_child_finished
+    R18.5  _on_interrupt, _on_task_signal
+    R18.6  _on_interrupt, _on_resume
+    R18.7  _on_task_signal
+    R20.2  child_ended, runs_a_child, robot_waits, state_from_status
+    R21.1  _on_restart
+    R21.2  _end_stubbornness, _on_restart, TRANSITIONS
+    R21.3  _on_restart
+    R22.7  RequestCheck
 """
 
 from __future__ import annotations
@@ -17,17 +116,26 @@ from __future__ import annotations
 import math
 import typing
 import warnings
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping
 from typing import Any, TypeAlias
 
 import attrs
 
-from dynevent.errors import InvalidConfig, WrongInput
+from dynevent.errors import WrongInput
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
+from dynevent.server.config import METRES_RANGE, SECONDS_RANGE, ServerConfig, Validator, any_description
+from dynevent.server.state import (
+    Position,
+    QueuedGoal,
+    RunningGoal,
+    State,
+    Stubbornness,
+    phase_of,
+    reported_id,
+)
 from dynevent.wire import _json
-from dynevent.wire._fields import ANNOTATION, SECOND, U32_MAX, U64_MAX, copier, fast_init, maker, replacer
-from dynevent.wire.description import DEFAULT_CATEGORY, MAX_DESCRIPTION_BYTES
+from dynevent.wire._fields import SECOND, U32_MAX, U64_MAX, copier, fast_init, maker, replacer
 from dynevent.wire.messages import (
     DescriptionResponse,
     DynamicEventDescription,
@@ -38,7 +146,6 @@ from dynevent.wire.messages import (
     Result,
     Time,
 )
-from dynevent.wire.names import validate_token
 from dynevent.wire.vocab import (
     ENDED_CHILD_STATUSES,
     TASK_SIGNAL_LOGS,
@@ -59,8 +166,10 @@ __all__ = [
     "DEFERRED_START_RULE",
     "EXECUTION_FAILURES",
     "FINISHED_RULE",
+    "METRES_RANGE",
     "REFUSED_IN_EVERY_STATE",
     "REQUEST_CHECKS",
+    "SECONDS_RANGE",
     "START_RULE",
     "TRANSITIONS",
     "UNKNOWN_GOAL",
@@ -95,9 +204,6 @@ __all__ = [
 ]
 
 
-#: A description validator: ``(category, parsed description) -> list of errors`` (empty when valid).
-Validator: TypeAlias = Callable[[str, Any], Sequence[str]]
-
 #: rmf_ros2's execution-failure strings by a short name (``"race"``, ``"idle_cancel"``, ...): the
 #: values of :class:`~dynevent.wire.vocab.Failure`, kept for code written before it.
 EXECUTION_FAILURES: Mapping[str, str] = {failure.name.lower(): failure.value for failure in Failure}
@@ -116,11 +222,6 @@ _STANDARD, _RMF_ROS2, _GOAL_IDS = Compatibility.STANDARD, Compatibility.RMF_ROS2
 _PARSE_FAILURE = Failure.PARSE.value
 #: "No description parsed yet" (a parsed description may be any JSON value, None included).
 _UNCHECKED: Any = object()
-
-
-def any_description(category: str, description: Any) -> Sequence[str]:
-    """A category's validator that takes every description (its JSON is still checked, R4.9)."""
-    return ()
 
 
 #: Names kept for one release, each with its new name (CHANGELOG.md).
@@ -149,230 +250,6 @@ def __getattr__(name: str) -> Any:
             )
             return operation
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def _categories(value: Mapping[str, Validator]) -> Mapping[str, Validator]:
-    if not isinstance(value, Mapping):
-        raise InvalidConfig("categories", value, "expected a mapping of category to validator")
-    for name, validator in value.items():
-        if not isinstance(name, str) or not callable(validator):
-            raise InvalidConfig("categories", {name: validator}, "each category must map a str to a callable")
-        if name == DEFAULT_CATEGORY:  # R4.17: a nested run would take the robot's only slot
-            raise InvalidConfig(
-                "categories",
-                name,
-                f"{DEFAULT_CATEGORY!r} can never be a child category: a nested run would break the outer one",
-            )
-    return dict(value)
-
-
-def _id_policy(value: Any) -> IdPolicy:
-    try:
-        return IdPolicy(value)
-    except ValueError:
-        raise InvalidConfig(
-            "id_policy", value, f"expected one of {[item.value for item in IdPolicy]}"
-        ) from None
-
-
-def _compatibility(value: Any) -> Compatibility:
-    try:
-        return Compatibility(value)
-    except ValueError:
-        choices = [item.value for item in Compatibility]
-        raise InvalidConfig("compatibility", value, f"expected one of {choices}") from None
-
-
-#: The bounds of the configuration's numbers (R0.1): what the machine can run without overflow.
-SECONDS_RANGE = (0.001, 86_400.0)
-METRES_RANGE = (0.01, 1_000_000.0)
-
-
-def _within(bounds: tuple[float, float], unit: str) -> Callable[[Any, attrs.Attribute[Any], Any], None]:
-    low, high = bounds
-
-    def check(instance: Any, attribute: attrs.Attribute[Any], value: Any) -> None:
-        # comparisons, not float(): an integer of any size is judged exactly, and NaN fails both
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
-            problem = f"expected a number of {unit} from {low:g} to {high:g}"
-            raise InvalidConfig(attribute.name, value, problem)
-
-    return check
-
-
-def _description_limit(instance: Any, attribute: attrs.Attribute[Any], value: Any) -> None:
-    if type(value) is not int or not 0 < value <= MAX_DESCRIPTION_BYTES:
-        raise InvalidConfig(
-            attribute.name, value, f"expected a positive integer of at most {MAX_DESCRIPTION_BYTES} (bytes)"
-        )
-
-
-def _seconds_value(value: Any) -> Any:
-    if isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value <= SECONDS_RANGE[1]:
-        return float(value)
-    return value  # the validator names the fault
-
-
-def _at_least_a_centimetre(value: Any) -> Any:
-    if isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value <= METRES_RANGE[1]:
-        return max(float(value), METRES_RANGE[0])
-    return value  # the validator names the fault
-
-
-@attrs.frozen(kw_only=True, eq=False)
-class ServerConfig:
-    """What a robot's server is configured with; not state, never snapshotted.
-
-    ``categories`` maps each supported event category to its description
-    validator; ``dynamic_event`` is refused (R4.17).  ``stubborn_move_threshold``
-    is never below 0.01 m (a smaller value is raised to it, as rmf_ros2 does).
-    ``max_description_length`` is in UTF-8 bytes, as the begin description's
-    limit is, and never above it (R4.8).  A bad value raises
-    :class:`~dynevent.errors.InvalidConfig` naming the field.
-    """
-
-    categories: Mapping[str, Validator] = attrs.field(factory=dict, converter=_categories)
-    id_policy: IdPolicy = attrs.field(default=IdPolicy.GOAL, converter=_id_policy)
-    compatibility: Compatibility = attrs.field(default=Compatibility.STANDARD, converter=_compatibility)
-    stubborn_minimum: float = attrs.field(
-        default=2.0, validator=_within(SECONDS_RANGE, "seconds"), converter=_seconds_value
-    )
-    stubborn_refresh: float = attrs.field(
-        default=1.0, validator=_within(SECONDS_RANGE, "seconds"), converter=_seconds_value
-    )
-    stubborn_move_threshold: float = attrs.field(
-        default=0.1,
-        validator=_within(METRES_RANGE, "metres"),
-        converter=_at_least_a_centimetre,
-    )
-    max_description_length: int = attrs.field(default=MAX_DESCRIPTION_BYTES, validator=_description_limit)
-
-    @classmethod
-    def rmf_ros2(cls, categories: Mapping[str, Validator]) -> ServerConfig:
-        """The configuration that behaves as rmf_ros2 does where dynevent diverges by option."""
-        return cls(categories=categories, id_policy=IdPolicy.ADAPTER, compatibility=Compatibility.RMF_ROS2)
-
-
-@fast_init
-@attrs.frozen(kw_only=True)
-class QueuedGoal:
-    """A goal that was accepted and has not started yet.
-
-    ``checked`` carries a NEXT's description check from its acceptance to its
-    start: ``(config, parsed description)``, the configuration it passed under
-    and what it parsed to.  An annotation (no part of equality, never
-    encoded): a goal restored from a snapshot, or started under another
-    configuration, is checked again (R6.1).
-    """
-
-    goal_uuid: str
-    goal: Goal
-    checked: tuple[ServerConfig, Any] | None = attrs.field(
-        default=None, eq=False, repr=False, metadata={ANNOTATION: True}
-    )
-
-
-@fast_init
-@attrs.frozen(kw_only=True)
-class RunningGoal:
-    """The NEXT goal that holds the running slot, and its child event.
-
-    ``started`` is false while the child's start is deferred by an
-    interruption.  ``cancel_requested`` records an accepted action-level cancel
-    of this goal; ``canceling`` that the child has been told to stop.
-    """
-
-    goal_uuid: str
-    goal: Goal
-    child_id: int
-    child_status: str
-    started: bool
-    cancel_requested: bool = False
-    canceling: bool = False
-
-
-@fast_init
-@attrs.frozen(kw_only=True)
-class Position:
-    """Where a tick last reported the robot."""
-
-    map_name: str
-    x: float
-    y: float
-
-
-@fast_init
-@attrs.frozen(kw_only=True)
-class Stubbornness:
-    """An active stubborn hold: ``period`` seconds, held since ``hold_since``, anchored at ``anchor``."""
-
-    period: float
-    hold_since: int
-    next_refresh: int
-    anchor: Position | None
-
-
-@fast_init
-@attrs.frozen(kw_only=True)
-class State:
-    """Everything the server knows for one robot.
-
-    Build a fresh one with :meth:`new`.  The phase (``INACTIVE``, ``WAITING``,
-    ``RUNNING``) is derived, never stored.  ``status`` is the dynamic event's
-    own status; ``last_id`` the highest event id used in the current run;
-    ``log_seq`` the next ``LogEntry.seq``; ``task_signal`` is ``""``,
-    ``"canceled"`` or ``"killed"`` once the task was cancelled or killed.
-    """
-
-    fleet: str
-    robot: str
-    seq: int = 0
-    active: bool = False
-    event_id: int = 0
-    description: str = ""
-    status: str = Status.UNINITIALIZED.value
-    last_id: int = 0
-    running: RunningGoal | None = None
-    queued: tuple[QueuedGoal, ...] = ()
-    cancels: tuple[str, ...] = ()
-    interrupted: bool = False
-    task_signal: str = ""
-    stubborn: Stubbornness | None = None
-    position: Position | None = None
-    log_seq: int = 0
-    shutdown: bool = False
-
-    @classmethod
-    def new(cls, fleet: str, robot: str) -> State:
-        """The state of a robot whose server has just started; refuses invalid names."""
-        return cls(fleet=validate_token("fleet", fleet), robot=validate_token("robot", robot))
-
-    @property
-    def phase(self) -> DynamicState:
-        """INACTIVE without an active dynamic event, RUNNING while a goal holds the running slot (R2.1)."""
-        return phase_of(self.active, self.running is not None)
-
-    @property
-    def current_id(self) -> int:
-        """The id the status topic reports (R2.2): the child's while running, else the highest used."""
-        running = self.running
-        return reported_id(self.active, self.last_id, None if running is None else running.child_id)
-
-
-def phase_of(active: bool, running: bool) -> DynamicState:
-    """The phase of a server (R2.1): INACTIVE when no dynamic event is active, else RUNNING while a
-    goal holds the running slot, else WAITING.  :attr:`State.phase` and any other model read it."""
-    if not active:
-        return DynamicState.INACTIVE
-    return DynamicState.RUNNING if running else DynamicState.WAITING
-
-
-def reported_id(active: bool, last_id: int, child_id: int | None) -> int:
-    """The id a status message reports (R2.2): 0 when inactive, else the running child's
-    (``child_id``, ``None`` when none runs), else the highest id used in the run."""
-    if not active:
-        return 0
-    return last_id if child_id is None else child_id
 
 
 # Messages built from checked state skip their converters; copies skip __init__ (attrs.evolve re-runs it).

@@ -1,0 +1,129 @@
+"""A robot server's configuration (:class:`ServerConfig`): what the machine is run under, never state.
+
+Each number is checked to the bounds the machine runs without overflow (R0.1), and a bad value
+raises :class:`~dynevent.errors.InvalidConfig` naming the field.  The machine
+(:mod:`dynevent.server.machine`) re-exports every name here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, TypeAlias
+
+import attrs
+
+from dynevent.errors import InvalidConfig
+from dynevent.wire.description import DEFAULT_CATEGORY, MAX_DESCRIPTION_BYTES
+from dynevent.wire.vocab import Compatibility, IdPolicy
+
+__all__ = ["METRES_RANGE", "SECONDS_RANGE", "ServerConfig", "Validator", "any_description"]
+
+#: A description validator: ``(category, parsed description) -> list of errors`` (empty when valid).
+Validator: TypeAlias = Callable[[str, Any], Sequence[str]]
+
+
+def any_description(category: str, description: Any) -> Sequence[str]:
+    """A category's validator that takes every description (its JSON is still checked, R4.9)."""
+    return ()
+
+
+def _categories(value: Mapping[str, Validator]) -> Mapping[str, Validator]:
+    if not isinstance(value, Mapping):
+        raise InvalidConfig("categories", value, "expected a mapping of category to validator")
+    for name, validator in value.items():
+        if not isinstance(name, str) or not callable(validator):
+            raise InvalidConfig("categories", {name: validator}, "each category must map a str to a callable")
+        if name == DEFAULT_CATEGORY:  # R4.17: a nested run would take the robot's only slot
+            raise InvalidConfig(
+                "categories",
+                name,
+                f"{DEFAULT_CATEGORY!r} can never be a child category: a nested run would break the outer one",
+            )
+    return dict(value)
+
+
+def _id_policy(value: Any) -> IdPolicy:
+    try:
+        return IdPolicy(value)
+    except ValueError:
+        raise InvalidConfig(
+            "id_policy", value, f"expected one of {[item.value for item in IdPolicy]}"
+        ) from None
+
+
+def _compatibility(value: Any) -> Compatibility:
+    try:
+        return Compatibility(value)
+    except ValueError:
+        choices = [item.value for item in Compatibility]
+        raise InvalidConfig("compatibility", value, f"expected one of {choices}") from None
+
+
+#: The bounds of the configuration's numbers (R0.1): what the machine can run without overflow.
+SECONDS_RANGE = (0.001, 86_400.0)
+METRES_RANGE = (0.01, 1_000_000.0)
+
+
+def _within(bounds: tuple[float, float], unit: str) -> Callable[[Any, attrs.Attribute[Any], Any], None]:
+    low, high = bounds
+
+    def check(instance: Any, attribute: attrs.Attribute[Any], value: Any) -> None:
+        # comparisons, not float(): an integer of any size is judged exactly, and NaN fails both
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
+            problem = f"expected a number of {unit} from {low:g} to {high:g}"
+            raise InvalidConfig(attribute.name, value, problem)
+
+    return check
+
+
+def _description_limit(instance: Any, attribute: attrs.Attribute[Any], value: Any) -> None:
+    if type(value) is not int or not 0 < value <= MAX_DESCRIPTION_BYTES:
+        raise InvalidConfig(
+            attribute.name, value, f"expected a positive integer of at most {MAX_DESCRIPTION_BYTES} (bytes)"
+        )
+
+
+def _seconds_value(value: Any) -> Any:
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value <= SECONDS_RANGE[1]:
+        return float(value)
+    return value  # the validator names the fault
+
+
+def _at_least_a_centimetre(value: Any) -> Any:
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value <= METRES_RANGE[1]:
+        return max(float(value), METRES_RANGE[0])
+    return value  # the validator names the fault
+
+
+@attrs.frozen(kw_only=True, eq=False)
+class ServerConfig:
+    """What a robot's server is configured with; not state, never snapshotted.
+
+    ``categories`` maps each supported event category to its description
+    validator; ``dynamic_event`` is refused (R4.17).  ``stubborn_move_threshold``
+    is never below 0.01 m (a smaller value is raised to it, as rmf_ros2 does).
+    ``max_description_length`` is in UTF-8 bytes, as the begin description's
+    limit is, and never above it (R4.8).  A bad value raises
+    :class:`~dynevent.errors.InvalidConfig` naming the field.
+    """
+
+    categories: Mapping[str, Validator] = attrs.field(factory=dict, converter=_categories)
+    id_policy: IdPolicy = attrs.field(default=IdPolicy.GOAL, converter=_id_policy)
+    compatibility: Compatibility = attrs.field(default=Compatibility.STANDARD, converter=_compatibility)
+    stubborn_minimum: float = attrs.field(
+        default=2.0, validator=_within(SECONDS_RANGE, "seconds"), converter=_seconds_value
+    )
+    stubborn_refresh: float = attrs.field(
+        default=1.0, validator=_within(SECONDS_RANGE, "seconds"), converter=_seconds_value
+    )
+    stubborn_move_threshold: float = attrs.field(
+        default=0.1,
+        validator=_within(METRES_RANGE, "metres"),
+        converter=_at_least_a_centimetre,
+    )
+    max_description_length: int = attrs.field(default=MAX_DESCRIPTION_BYTES, validator=_description_limit)
+
+    @classmethod
+    def rmf_ros2(cls, categories: Mapping[str, Validator]) -> ServerConfig:
+        """The configuration that behaves as rmf_ros2 does where dynevent diverges by option."""
+        return cls(categories=categories, id_policy=IdPolicy.ADAPTER, compatibility=Compatibility.RMF_ROS2)
