@@ -210,3 +210,14 @@ def test_no_class_or_function_is_too_long_to_read_as_one_thing() -> None:
     made = "class Long:\n" + "    x = 1\n" * LONGEST_CLASS + "def long():\n" + "    pass\n" * LONGEST_FUNCTION
     expected = [("class Long", LONGEST_CLASS + 1), ("def long", LONGEST_FUNCTION + 1)]
     assert _too_long(ast.parse(made)) == expected
+
+
+def test_the_ros_entry_points_take_typed_options_not_the_command_lines_namespace() -> None:
+    """serve, send, record and probe are called with typed options the command line builds: none of
+    dynevent.ros reads argparse, and judging below the command line does not either."""
+    readers = sorted(
+        module
+        for module, path in _modules()
+        if _part(module) in ("ros", "conformance", "bags") and "argparse" in _top_imports(path)
+    )
+    assert readers == [], readers

@@ -16,19 +16,15 @@ a race, R5.2).
 
 from __future__ import annotations
 
-import argparse
 import json
-import sys
 from typing import Any
 
 import attrs
 
-from dynevent.errors import DyneventError, InvalidMessage
 from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.server.machine import UNKNOWN_GOAL, ServerConfig, State, state_from_status
-from dynevent.wire import _json
 from dynevent.wire._fields import U32_MAX, U64_MAX
 from dynevent.wire._text import goal_text, status_text
 from dynevent.wire.messages import DynamicEventStatus, Goal
@@ -412,73 +408,3 @@ def format_explanation(explanation: Explanation) -> str:
     lines.append("unknown:  " + explanation.unknown[0])
     lines.extend(f"          {item}" for item in explanation.unknown[1:])
     return "\n".join(lines) + "\n"
-
-
-class _ArgumentError(DyneventError):
-    def __init__(self, argument: str, problem: str) -> None:
-        super().__init__(f"{argument}: {problem}")
-
-
-#: The most JSON ``explain`` reads from a file or standard input (a status or a goal is far smaller).
-MAX_INPUT_BYTES = 4_000_000
-
-
-def _json_text(argument: str, value: str, stdin_taken: list[str]) -> str:
-    """The JSON text an argument names: inline, ``-`` for standard input, or ``@FILE``."""
-    if value == "-":
-        if stdin_taken:
-            raise _ArgumentError(argument, f"standard input is already read for {stdin_taken[0]}")
-        stdin_taken.append(argument)
-        return _bounded(argument, "standard input", sys.stdin.buffer.read(MAX_INPUT_BYTES + 1))
-    if value.startswith("@"):
-        path = value[1:]
-        try:
-            with open(path, "rb") as file:
-                return _bounded(argument, path, file.read(MAX_INPUT_BYTES + 1))
-        except OSError as exc:
-            raise _ArgumentError(argument, f"cannot read {path!r}: {exc.strerror or exc}") from None
-    return value
-
-
-def _bounded(argument: str, source: str, data: bytes) -> str:
-    if len(data) > MAX_INPUT_BYTES:
-        raise _ArgumentError(argument, f"{source} holds more than {MAX_INPUT_BYTES:,} bytes")
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise _ArgumentError(argument, f"{source} is not UTF-8 (byte {exc.start})") from None
-
-
-def _parse_message(argument: str, cls: type[Any], text: str) -> Any:
-    try:
-        return cls.from_json(text)
-    except InvalidMessage as exc:
-        raise _ArgumentError(argument, str(exc)) from None
-
-
-def _parse_categories(text: str | None) -> tuple[str, ...] | None:
-    if text is None:
-        return None
-    names = tuple(name.strip() for name in text.split(","))
-    if any(not name for name in names):
-        raise _ArgumentError("--categories", f"an empty category name in {text!r}")
-    return names
-
-
-def _run(args: argparse.Namespace) -> int:
-    try:
-        stdin_taken: list[str] = []
-        status = _parse_message(
-            "--status", DynamicEventStatus, _json_text("--status", args.status, stdin_taken)
-        )
-        goal = _parse_message("--goal", Goal, _json_text("--goal", args.goal, stdin_taken))
-        categories = _parse_categories(args.categories)
-    except _ArgumentError as exc:
-        print(f"dynevent explain: {exc}", file=sys.stderr)
-        return 2
-    explanation = explain(status, goal, categories=categories, compatibility=args.compat)
-    if args.json:
-        print(_json.dumps(explanation.to_dict()))
-    else:
-        print(format_explanation(explanation), end="")
-    return 0 if explanation.accepted else 1

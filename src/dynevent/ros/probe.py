@@ -329,6 +329,9 @@ class Options:
     allow_missing: tuple[str, ...] = ()
     #: the cases ``--known`` expects to be missing (:data:`~dynevent.conformance.probe_cases.KNOWN_MISSING`)
     known_missing: frozenset[str] = frozenset()
+    #: where to write the JUnit report, and the readable report (HTML when the name ends .html/.htm)
+    junit: str | None = None
+    report: str | None = None
 
 
 #: How many cases in a row may wait out the timeout, the server sending nothing meanwhile, before the
@@ -1227,17 +1230,8 @@ def implemented() -> frozenset[str]:
     return frozenset(_CASES)
 
 
-def main(args: Any, cases: list[Case], say: Callable[[str], None]) -> int:
-    """``dynevent probe``: run the cases, print the findings, write ``--junit``; the exit status."""
-    options = Options(
-        fleet=args.fleet, robot=args.robot, place=args.place[0] if args.place else None,
-        more_places=tuple(args.place[1:]) if args.place else (), category=args.category, timeout=args.timeout,
-        begin_command=args.begin_command, known=probe_cases.KNOWN.get(args.known or "", frozenset()),
-        trace=args.trace, stubborn_minimum=args.stubborn_minimum, introspection=args.introspection,
-        allow_missing=tuple(args.allow_missing), server_wait=args.server_wait,
-        ros_args=tuple(getattr(args, "ros_args", ())),
-        known_missing=probe_cases.KNOWN_MISSING.get(args.known or "", frozenset()),
-    )  # fmt: skip
+def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int:
+    """``dynevent probe``: run the cases, print the findings, write the reports; the exit status."""
     live = sys.stdout.isatty()
 
     def progress(text: str) -> None:
@@ -1263,11 +1257,11 @@ def main(args: Any, cases: list[Case], say: Callable[[str], None]) -> int:
     outputs: dict[str, Callable[[], str]] = {
         "junit": lambda: probe_cases.junit_xml(findings, server),
         "report": lambda: probe_cases.report(
-            findings, server, html_form=str(args.report).lower().endswith((".html", ".htm"))
+            findings, server, html_form=str(options.report).lower().endswith((".html", ".htm"))
         ),
     }
     for flag, text in outputs.items():
-        path = getattr(args, flag)
+        path = options.junit if flag == "junit" else options.report
         if path:
             try:
                 Path(path).write_text(text(), "utf-8")

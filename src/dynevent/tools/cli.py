@@ -119,7 +119,7 @@ def _add_explain_command(commands: argparse._SubParsersAction[argparse.ArgumentP
         help="judge as the spec says (standard, the default) or as rmf_ros2 does (accept, then abort)",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.set_defaults(run=_lazy("dynevent.conformance.explain"))
+    parser.set_defaults(run=_lazy("dynevent.tools.explain_command"))
 
 
 def _vectors(args: argparse.Namespace) -> int:
@@ -506,7 +506,21 @@ def _probe(args: argparse.Namespace) -> int:
             print(f"dynevent probe: {exc}", file=sys.stderr)
             return 2
         return 0
-    return _ros_command("probe", check, lambda probe, cases: probe.main(args, cases, _say))
+    def run(probe: Any, cases: list[probe_cases.Case]) -> int:
+        known = args.known or ""
+        options = probe.Options(
+            fleet=args.fleet, robot=args.robot, place=args.place[0] if args.place else None,
+            more_places=tuple(args.place[1:]) if args.place else (), category=args.category,
+            timeout=args.timeout, begin_command=args.begin_command,
+            known=probe_cases.KNOWN.get(known, frozenset()), trace=args.trace,
+            stubborn_minimum=args.stubborn_minimum, introspection=args.introspection,
+            allow_missing=tuple(args.allow_missing), server_wait=args.server_wait,
+            ros_args=tuple(args.ros_args), known_missing=probe_cases.KNOWN_MISSING.get(known, frozenset()),
+            junit=args.junit, report=args.report,
+        )  # fmt: skip
+        return int(probe.main(options, cases, _say))
+
+    return _ros_command("probe", check, run)
 
 
 def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
