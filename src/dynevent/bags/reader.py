@@ -42,7 +42,7 @@ import attrs
 
 from dynevent.conformance.judge.observer import AnswerEvidence, Checker
 from dynevent.conformance.judge.partial import GOAL_STATUSES, PartialJudge
-from dynevent.conformance.judge.trace import Record, Report, _Header
+from dynevent.conformance.judge.trace import Record, Report, TraceHeader
 from dynevent.conformance.received import (
     begin_from_ros,
     feedback_from_ros,
@@ -436,7 +436,7 @@ class _Robot:
     def judge(self) -> Checker | PartialJudge:
         """The observer, for a robot whose goals the bag holds; else the judge of what its topics show."""
         if self._judge is None:
-            header = _Header(fleet=self.fleet, robot=self.robot, compatibility=self.compatibility)
+            header = TraceHeader(fleet=self.fleet, robot=self.robot, compatibility=self.compatibility)
             self._judge = Checker(header) if self.judged else PartialJudge(header, SKEW)
         return self._judge
 
@@ -499,7 +499,9 @@ class _Robot:
         kept = tuple(finding for finding in report.findings if finding.line < since)
         self._before.append(attrs.evolve(report, findings=kept))
         self.lost.append((record.time, record.goal_uuid))
-        self._judge = Checker(_Header(fleet=self.fleet, robot=self.robot, compatibility=self.compatibility))
+        self._judge = Checker(
+            TraceHeader(fleet=self.fleet, robot=self.robot, compatibility=self.compatibility)
+        )
         statuses = [index for index, item in enumerate(pending) if item.kind == "status"]
         seed = pending[statuses[-1]] if statuses else self._last_status  # the lost goal's start, or later
         rest = pending[statuses[-1] + 1 :] if statuses else pending

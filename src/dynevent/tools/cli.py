@@ -506,6 +506,7 @@ def _probe(args: argparse.Namespace) -> int:
             print(f"dynevent probe: {exc}", file=sys.stderr)
             return 2
         return 0
+
     def run(probe: Any, cases: list[probe_cases.Case]) -> int:
         known = args.known or ""
         options = probe.Options(

@@ -1,5 +1,6 @@
 """Abduction: the input that explains an observation, from a short, fixed list of candidates, and
-the outputs that input owes (see the package docs)."""
+the outputs that input owes (see the package docs).  Its names are the vocabulary the judges share
+(what was seen of a goal, what an input owes, how an output matches a record)."""
 
 from __future__ import annotations
 
@@ -8,8 +9,8 @@ from collections.abc import Iterator
 import attrs
 
 from dynevent.conformance.judge.trace import (
-    _STATUSES,
-    _TIERS,
+    STATUSES,
+    TIERS,
     Record,
 )
 from dynevent.server import inputs as ins
@@ -28,6 +29,22 @@ from dynevent.wire.vocab import (
     Status,
 )
 
+__all__ = [
+    "ANSWERED",
+    "Found",
+    "GoalSeen",
+    "Owed",
+    "abduce",
+    "candidates",
+    "confirmed",
+    "failure_of",
+    "first_line",
+    "matches_exactly",
+    "result_rule",
+    "same_status",
+    "simulate",
+]
+
 # the input behind each task signal's log line (R13.1)
 _SIGNALS: dict[str, type[ins.TaskCancel] | type[ins.TaskKill]] = {
     Status.CANCELED.value: ins.TaskCancel,
@@ -36,7 +53,7 @@ _SIGNALS: dict[str, type[ins.TaskCancel] | type[ins.TaskKill]] = {
 
 
 @attrs.define
-class _GoalSeen:
+class GoalSeen:
     """What the trace showed of one goal."""
 
     goal: Goal
@@ -48,11 +65,11 @@ class _GoalSeen:
 
 
 #: The goal an answered goal's record keeps: nothing after its answer reads the request itself.
-_ANSWERED = Goal()
+ANSWERED = Goal()
 
 
 @attrs.frozen
-class _Owed:
+class Owed:
     """An output of an inferred step that has not been observed yet."""
 
     channel: str
@@ -74,22 +91,22 @@ def _channel(output: outs.Output) -> str | None:
     return None
 
 
-def _failure(output: outs.Output) -> Failure | None:
+def failure_of(output: outs.Output) -> Failure | None:
     """The execution failure an answer reports, if it is one of rmf_ros2's."""
     return Failure.of(output.result.execution_failure) if isinstance(output, outs.AnswerGoal) else None
 
 
-def _result_rule(rule: str) -> str:
+def result_rule(rule: str) -> str:
     """The rule a wrong result breaks: R8.1 for the answers at a child's end, else the answer's own."""
     at_child_end = rule in (machine.CHILD_END_RULE, machine.WAITING_CANCEL_RULE)
     return machine.CHILD_RESULT_RULE if at_child_end else rule
 
 
-def _first_line(text: str) -> str:
+def first_line(text: str) -> str:
     return text.split("\n", 1)[0]
 
 
-def _same_status(a: DynamicEventStatus, b: DynamicEventStatus) -> bool:
+def same_status(a: DynamicEventStatus, b: DynamicEventStatus) -> bool:
     return (a.dynamic_event_seq, a.dynamic_state, a.status, a.id) == (
         b.dynamic_event_seq,
         b.dynamic_state,
@@ -98,7 +115,7 @@ def _same_status(a: DynamicEventStatus, b: DynamicEventStatus) -> bool:
     )
 
 
-def _exact(output: outs.Output, record: Record) -> bool:
+def matches_exactly(output: outs.Output, record: Record) -> bool:
     """Does the machine's feedback or answer say what the record says?"""
     if isinstance(output, outs.PublishFeedback):
         feedback: Feedback = record.message
@@ -110,24 +127,26 @@ def _exact(output: outs.Output, record: Record) -> bool:
             output.status.value,
             expected.id,
             expected.status,
-            _first_line(expected.execution_failure),
+            first_line(expected.execution_failure),
         ) == (
             record.status,
             result.id,
             result.status,
-            _first_line(result.execution_failure),
+            first_line(result.execution_failure),
         )
     return False
 
 
-def _owes(owed: _Owed, record: Record) -> bool:
+def _owes(owed: Owed, record: Record) -> bool:
     """Is ``record`` the owed output?"""
     output = owed.output
     if isinstance(output, outs.PublishStatus):
-        return record.kind == "status" and _same_status(output.message, record.message)
+        return record.kind == "status" and same_status(output.message, record.message)
     if isinstance(output, (outs.PublishFeedback, outs.AnswerGoal)):
         wanted = "feedback" if isinstance(output, outs.PublishFeedback) else "result"
-        return record.kind == wanted and record.goal_uuid == output.goal_uuid and _exact(output, record)
+        return (
+            record.kind == wanted and record.goal_uuid == output.goal_uuid and matches_exactly(output, record)
+        )
     return False
 
 
@@ -135,18 +154,18 @@ def _owes(owed: _Owed, record: Record) -> bool:
 
 #: A candidate that explains an observation: its inputs, the state after them, the outputs it owes
 #: and, among them, the one observed.
-_Found = tuple[list[ins.Input], State, list[_Owed], _Owed]
+Found = tuple[list[ins.Input], State, list[Owed], Owed]
 
 
-def simulate(state: State, events: list[ins.Input], config: ServerConfig) -> tuple[State, list[_Owed]]:
+def simulate(state: State, events: list[ins.Input], config: ServerConfig) -> tuple[State, list[Owed]]:
     """The state after ``events`` and the observable outputs they owe: the machine's, nothing else."""
-    owed: list[_Owed] = []
+    owed: list[Owed] = []
     for event in events:
         transition = machine.step(state, event, config)
         for output in transition.outputs:
             channel = _channel(output)
             if channel is not None:
-                owed.append(_Owed(channel, output, output.rule))
+                owed.append(Owed(channel, output, output.rule))
         state = transition.state
     return state, owed
 
@@ -163,9 +182,9 @@ def candidates(state: State, record: Record, now: int) -> Iterator[list[ins.Inpu
                 if signal_text in texts:
                     yield [_SIGNALS[signal_status](now=now)]
             if running.started:
-                status = feedback.status if feedback.status in _STATUSES else running.child_status
+                status = feedback.status if feedback.status in STATUSES else running.child_status
                 last = feedback.logs[-1] if feedback.logs else None
-                tier = last.tier if last is not None and last.tier in _TIERS else "info"
+                tier = last.tier if last is not None and last.tier in TIERS else "info"
                 log_text = last.text[: ins.MAX_LOG_TEXT_LENGTH] if last is not None else None
                 yield [ins.ChildProgress(status=status, log_text=log_text, tier=tier, now=now)]
                 if machine.ends_a_child(status) and not feedback.logs:
@@ -184,7 +203,7 @@ def candidates(state: State, record: Record, now: int) -> Iterator[list[ins.Inpu
         if any(item.goal_uuid == uuid for item in state.queued):
             yield [ins.GoalStarted(goal_uuid=uuid, now=now)]
         if running is not None and running.started:
-            final = result.status if result.status in _STATUSES else Status.COMPLETED.value
+            final = result.status if result.status in STATUSES else Status.COMPLETED.value
             yield [ins.ChildFinished(status=final, now=now)]
         if running is not None and not running.started and running.goal_uuid == uuid:
             for queued in state.queued:  # a CANCEL's start cancels a deferred child at once (R9.4)
@@ -192,13 +211,13 @@ def candidates(state: State, record: Record, now: int) -> Iterator[list[ins.Inpu
                     yield [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now)]
             yield [ins.TaskCancel(now=now)]
             yield [ins.TaskKill(now=now)]
-        if _first_line(result.execution_failure) == Failure.SHUTDOWN.value:
+        if first_line(result.execution_failure) == Failure.SHUTDOWN.value:
             yield [ins.Shutdown(now=now)]
         return
     message: DynamicEventStatus = record.message
     for queued in state.queued:
         yield [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now)]
-    if running is not None and running.started and message.status in _STATUSES:
+    if running is not None and running.started and message.status in STATUSES:
         yield [ins.ChildProgress(status=message.status, now=now)]
     if running is not None and not running.started:
         yield [ins.Resume(now=now)]
@@ -208,7 +227,7 @@ def candidates(state: State, record: Record, now: int) -> Iterator[list[ins.Inpu
         yield [ins.TaskCancel(now=now)]
 
 
-def confirmed(found: _Found, upcoming: Record | None) -> bool:
+def confirmed(found: Found, upcoming: Record | None) -> bool:
     """Does the next record show the next output this candidate owes?"""
     rest = [item for item in found[2] if item is not found[3]]
     return bool(rest) and upcoming is not None and _owes(rest[0], upcoming)
@@ -216,7 +235,7 @@ def confirmed(found: _Found, upcoming: Record | None) -> bool:
 
 def abduce(
     state: State, config: ServerConfig, record: Record, now: int, upcoming: Record | None
-) -> _Found | None:
+) -> Found | None:
     """The first candidate whose first output on the action is this feedback or answer.
 
     A candidate that reproduces the observation exactly is preferred; else
@@ -226,7 +245,7 @@ def abduce(
     channel = f"goal:{record.goal_uuid}"
     kind = outs.PublishFeedback if record.kind == "feedback" else outs.AnswerGoal
     near = None
-    exact: list[_Found] = []
+    exact: list[Found] = []
     for events in candidates(state, record, now):
         after, owed = simulate(state, events, config)
         if kind is outs.AnswerGoal:  # a feedback owed before the answer (R17.7) may have come already
@@ -238,7 +257,7 @@ def abduce(
         first = next((item for item in owed if item.channel.startswith("goal:")), None)
         if first is None or first.channel != channel or not isinstance(first.output, kind):
             continue
-        if _exact(first.output, record):
+        if matches_exactly(first.output, record):
             exact.append((events, after, owed, first))
         elif near is None:
             near = (events, after, owed, first)

@@ -9,26 +9,26 @@ from collections.abc import Callable, Container, Iterable, Mapping
 import attrs
 
 from dynevent.conformance.judge.abduction import (
-    _ANSWERED,
-    _exact,
-    _failure,
-    _first_line,
-    _Found,
-    _GoalSeen,
-    _Owed,
-    _result_rule,
-    _same_status,
+    ANSWERED,
+    Found,
+    GoalSeen,
+    Owed,
     abduce,
     candidates,
     confirmed,
+    failure_of,
+    first_line,
+    matches_exactly,
+    result_rule,
+    same_status,
     simulate,
 )
 from dynevent.conformance.judge.trace import (
     Finding,
     Record,
     Report,
-    _Header,
-    _Unreadable,
+    TraceHeader,
+    Unreadable,
 )
 from dynevent.errors import (
     InvalidMessage,
@@ -65,7 +65,7 @@ class _Books:
     """The observer's books, which its parts share: the state, what is owed, the goals seen, the time and
     line, the findings, and the operations on them.  What only one part needs, that part keeps."""
 
-    def __init__(self, header: _Header) -> None:
+    def __init__(self, header: TraceHeader) -> None:
         self.config_known = header.config is not None
         if header.config is not None:
             self.config = header.config
@@ -74,8 +74,8 @@ class _Books:
         else:
             self.config = ServerConfig()
         self.state: State | None = None
-        self.owed: list[_Owed] = []
-        self.goals: dict[str, _GoalSeen] = {}
+        self.owed: list[Owed] = []
+        self.goals: dict[str, GoalSeen] = {}
         self.closed: collections.deque[str] = collections.deque()  # goals answered or refused, oldest first
         self.forgotten = False  # a closed goal was let go
         self.findings: list[Finding] = []
@@ -114,11 +114,11 @@ class _Books:
     def learn(self, goal: Goal) -> None:
         self.config = self.config_for(goal)
 
-    def simulate(self, events: list[ins.Input]) -> tuple[State, list[_Owed]]:
+    def simulate(self, events: list[ins.Input]) -> tuple[State, list[Owed]]:
         """The state after ``events`` and the outputs they owe, without committing (see :func:`simulate`)."""
         return simulate(self.st, events, self.config)
 
-    def commit(self, state: State, owed: list[_Owed]) -> None:
+    def commit(self, state: State, owed: list[Owed]) -> None:
         self.state = state
         self.owed.extend(attrs.evolve(item, line=self.line) for item in owed)
 
@@ -133,14 +133,14 @@ class _Books:
                 seen.owed = True
             self.forget_channel(f"goal:{uuid}")
 
-    def abduce(self, record: Record) -> _Found | None:
+    def abduce(self, record: Record) -> Found | None:
         """The candidate that explains ``record`` in the current state (see :func:`abduce`)."""
         return abduce(self.st, self.config, record, self.now, self.upcoming)
 
-    def confirmed(self, found: _Found) -> bool:
+    def confirmed(self, found: Found) -> bool:
         return confirmed(found, self.upcoming)
 
-    def bind_unknown(self, uuid: str, running_goal: bool = True) -> _GoalSeen | None:
+    def bind_unknown(self, uuid: str, running_goal: bool = True) -> GoalSeen | None:
         """What the trace showed of this goal; a goal it never showed may have begun before it.
 
         In a trace that begins mid-way, the first unknown goal seen while the
@@ -154,29 +154,29 @@ class _Books:
         if not self.partial:
             return None
         if running is None or running.goal_uuid != UNKNOWN_GOAL or not running_goal:
-            seen = _GoalSeen(goal=Goal(), line=0, responded=True, accepted=True, owed=True)
+            seen = GoalSeen(goal=Goal(), line=0, responded=True, accepted=True, owed=True)
             self.goals[uuid] = seen
             return seen
         self.state = resync.running_goal(self.st, uuid)
-        seen = _GoalSeen(goal=running.goal, line=0, responded=True, accepted=True)
+        seen = GoalSeen(goal=running.goal, line=0, responded=True, accepted=True)
         self.goals[uuid] = seen
         return seen
 
-    def abduce_uncertain(self, record: Record) -> tuple[list[ins.Input], State, list[_Owed], _Owed] | None:
+    def abduce_uncertain(self, record: Record) -> tuple[list[ins.Input], State, list[Owed], Owed] | None:
         """:meth:`abduce`, also in the world where a child whose start a status left uncertain has started."""
         found = self.abduce(record)
         running = self.st.running
         if not self.start_uncertain or running is None or running.started:
             return found
-        if found is not None and _exact(found[3].output, record) and self.confirmed(found):
+        if found is not None and matches_exactly(found[3].output, record) and self.confirmed(found):
             return found
         saved = self.st
         self.state = resync.child_started(saved, resumed=True)
         other = self.abduce(record)
-        found_exact = found is not None and _exact(found[3].output, record)
+        found_exact = found is not None and matches_exactly(found[3].output, record)
         if (
             other is not None
-            and _exact(other[3].output, record)
+            and matches_exactly(other[3].output, record)
             and (self.confirmed(other) or not found_exact)
         ):
             self.start_uncertain = False
@@ -282,7 +282,7 @@ class _Requests:
             )
             self.duplicates.add(record.goal_uuid)
             return
-        self.books.goals[record.goal_uuid] = _GoalSeen(goal=record.message, line=record.line)
+        self.books.goals[record.goal_uuid] = GoalSeen(goal=record.message, line=record.line)
 
     def ended_unseen(self) -> bool:
         """Whether an accepted goal the machine finds busy found the running child ended: a child
@@ -309,7 +309,7 @@ class _Requests:
             return
         seen = self.books.goals.get(record.goal_uuid)
         if seen is None or seen.responded:
-            raise _Unreadable("goal_uuid", "no goal record with this uuid awaits a response")
+            raise Unreadable("goal_uuid", "no goal record with this uuid awaits a response")
         seen.responded, seen.accepted = True, record.accepted
         goal = seen.goal
         decision = machine.accept(self.books.st, goal, self.books.config_for(goal))
@@ -416,7 +416,7 @@ class _Requests:
                     upcoming is not None
                     and upcoming.kind == "result"
                     and upcoming.goal_uuid == record.goal_uuid
-                    and _first_line(upcoming.message.execution_failure) == Failure.NOT_RUNNING.value
+                    and first_line(upcoming.message.execution_failure) == Failure.NOT_RUNNING.value
                 )
                 self.books.bind_unknown(record.goal_uuid, running_goal=not queued)
                 if queued:
@@ -440,7 +440,7 @@ class _Requests:
 class _Runs:
     """Begin and status messages: runs, their seq, the dynamic event's id and the status topic."""
 
-    def __init__(self, books: _Books, header: _Header) -> None:
+    def __init__(self, books: _Books, header: TraceHeader) -> None:
         self.books = books
         self.names = (header.fleet, header.robot) if header.fleet or header.robot else None
         self.event_id_pending = False
@@ -588,25 +588,25 @@ class _Runs:
         for index in statuses:
             output = self.books.owed[index].output
             assert isinstance(output, outs.PublishStatus)
-            if _same_status(output.message, message):
+            if same_status(output.message, message):
                 # a status topic keeps one message: earlier ones may be overwritten unseen
                 self.books.owed = [
                     item for i, item in enumerate(self.books.owed) if i > index or item.channel != "status"
                 ]
                 return
         current = machine.status_message(self.books.st, self.books.now)
-        if _same_status(current, message):
+        if same_status(current, message):
             return  # a repeat of the state's status (e.g. the latched message, read again)
         # in the server's order a step's answers and feedback come before its status: prefer a
         # candidate that owes none, then accept one whose other outputs are still to come; a tap at a
         # client may see the status first, so a candidate whose answers the next records show wins
         ahead = self.books.answers_ahead()
-        found: tuple[State, list[_Owed]] | None = None
+        found: tuple[State, list[Owed]] | None = None
         best = (-1, True)
         for events in [*candidates(self.books.st, record, self.books.now), *self.ended_child()]:
             state, owed = self.books.simulate(events)
             published = [item.output for item in owed if isinstance(item.output, outs.PublishStatus)]
-            if not published or not _same_status(published[-1].message, message):
+            if not published or not same_status(published[-1].message, message):
                 continue
             rank = (len(_answers(owed) & ahead), not any(item.channel.startswith("goal:") for item in owed))
             if rank > best:
@@ -635,7 +635,7 @@ class _Runs:
             return []
         return self.child_ends(ins.ChildFinished(status=answer.message.status, now=self.books.now))
 
-    def ended_unanswered(self, message: DynamicEventStatus) -> tuple[State, list[_Owed]] | None:
+    def ended_unanswered(self, message: DynamicEventStatus) -> tuple[State, list[Owed]] | None:
         """A status that shows the running child's end (WAITING, or INACTIVE under a task signal),
         whose answer no record ahead shows: the end is read from the status alone, and the answers it
         owes stay owed, their content unknown (the child's final status is not on the wire).  An
@@ -649,7 +649,7 @@ class _Runs:
         for events in self.child_ends(ins.ChildFinished(status=final, now=self.books.now)):
             state, owed = self.books.simulate(events)
             published = [item.output for item in owed if isinstance(item.output, outs.PublishStatus)]
-            if published and _same_status(published[-1].message, message):
+            if published and same_status(published[-1].message, message):
                 return state, [
                     attrs.evolve(item, exact=False) if isinstance(item.output, outs.AnswerGoal) else item
                     for item in owed
@@ -665,7 +665,7 @@ class _Runs:
         return [[*starts[:count], ended] for count in range(len(starts), -1, -1)]
 
 
-def _answers(owed: Iterable[_Owed]) -> set[tuple[str, str]]:
+def _answers(owed: Iterable[Owed]) -> set[tuple[str, str]]:
     return {
         (item.output.goal_uuid, item.output.status.value)
         for item in owed
@@ -754,7 +754,7 @@ class _Feedback:
             return
         self.unexplained_feedback(record, seen)
 
-    def compare_feedback(self, owed: _Owed, feedback: Feedback, events: list[ins.Input]) -> None:
+    def compare_feedback(self, owed: Owed, feedback: Feedback, events: list[ins.Input]) -> None:
         assert isinstance(owed.output, outs.PublishFeedback)
         expected = owed.output.feedback
         if expected.id != feedback.id:
@@ -784,7 +784,7 @@ class _Feedback:
             )
         self.check_clamp(owed, feedback)
 
-    def check_clamp(self, owed: _Owed, feedback: Feedback) -> None:
+    def check_clamp(self, owed: Owed, feedback: Feedback) -> None:
         """A start's feedback carries the warning of a clamped stubborn period (R12.2)."""
         output = owed.output
         if owed.rule not in (machine.START_RULE, machine.DEFERRED_START_RULE) or not isinstance(
@@ -813,7 +813,7 @@ class _Feedback:
             for item in self.books.owed
         ]
 
-    def unexplained_feedback(self, record: Record, seen: _GoalSeen) -> None:
+    def unexplained_feedback(self, record: Record, seen: GoalSeen) -> None:
         feedback: Feedback = record.message
         uuid = record.goal_uuid
         label = f"feedback {feedback.status} id={feedback.id} for goal {uuid}"
@@ -831,7 +831,7 @@ class _Feedback:
         if queued and goal.event_type == EventType.NEXT:
             _, owed = self.books.simulate([ins.GoalStarted(goal_uuid=uuid, now=self.books.now)])
             answer = next((item for item in owed if isinstance(item.output, outs.AnswerGoal)), None)
-            if answer is not None and _failure(answer.output) is Failure.RACE:
+            if answer is not None and failure_of(answer.output) is Failure.RACE:
                 race = machine.race_lost(state, goal, self.books.config_for(goal))
                 self.books.flag(
                     Violation.RACE_NOT_LOST,
@@ -888,7 +888,7 @@ class _Answers:
         result: Result = record.message
         uuid = record.goal_uuid
         # the running goal is answered at its child's end, or at shutdown
-        failure = _first_line(result.execution_failure)
+        failure = first_line(result.execution_failure)
         seen = self.books.bind_unknown(uuid, failure in ("", Failure.SHUTDOWN.value))
         label = f"answer {answer_text(record.status, result, first_line=True)} for goal {uuid}"
         if seen is None or not seen.accepted:
@@ -948,7 +948,7 @@ class _Answers:
         self.books.state = resync.dropped(state, uuid)
         return True
 
-    def compare_answer(self, owed: _Owed, record: Record) -> None:
+    def compare_answer(self, owed: Owed, record: Record) -> None:
         output = owed.output
         assert isinstance(output, outs.AnswerGoal)
         result: Result = record.message
@@ -967,18 +967,18 @@ class _Answers:
             self.books.event_id_unknown = False  # the first FINISHED of a run joined late names its own id
             self.books.state = resync.event_id(self.books.st, observed.id)
         elif expected.id != observed.id:
-            rule = _result_rule(owed.rule)
+            rule = result_rule(owed.rule)
             self.books.differs(
                 rule, "result_id", f"{label}: the result id does not match", f"{want} ({rule})"
             )
-        elif (_first_line(expected.execution_failure), expected.status) != (
-            _first_line(observed.execution_failure),
+        elif (first_line(expected.execution_failure), expected.status) != (
+            first_line(observed.execution_failure),
             observed.status,
         ):
-            rule = _result_rule(owed.rule)
+            rule = result_rule(owed.rule)
             self.books.differs(rule, "result", label, f"{want} ({rule})")
 
-    def unexplained_answer(self, record: Record, seen: _GoalSeen) -> None:
+    def unexplained_answer(self, record: Record, seen: GoalSeen) -> None:
         uuid = record.goal_uuid
         state = self.books.st
         label = f"goal {uuid} answered {answer_text(record.status, record.message, first_line=True)}"
@@ -1015,7 +1015,7 @@ class _Observer:
     The parts share the books (:class:`_Books`) and keep what only they need; none calls another.
     """
 
-    def __init__(self, header: _Header) -> None:
+    def __init__(self, header: TraceHeader) -> None:
         self.books = _Books(header)
         self.requests = _Requests(self.books)
         self.runs = _Runs(self.books, header)
@@ -1042,7 +1042,7 @@ class _Observer:
         if record.kind in ("result", "goal_response"):
             seen = books.goals.get(record.goal_uuid)
             if seen is not None and seen.answered == record.line:
-                seen.goal = _ANSWERED  # what is judged after its answer is the line
+                seen.goal = ANSWERED  # what is judged after its answer is the line
                 books.close(record.goal_uuid)
             elif seen is not None and record.kind == "goal_response" and seen.responded and not seen.accepted:
                 books.close(record.goal_uuid)
@@ -1107,7 +1107,7 @@ class Checker:
     records of several robots (a bag); :meth:`finish` gives the report.  It holds
     :data:`LOOKAHEAD` records, whatever the length of what it reads."""
 
-    def __init__(self, header: _Header, source: str = "<trace>") -> None:
+    def __init__(self, header: TraceHeader, source: str = "<trace>") -> None:
         self.source = source
         self._observer = _Observer(header)
         self._window: collections.deque[Record] = collections.deque()
@@ -1149,12 +1149,12 @@ class Checker:
         books.upcoming = window[0] if window else None
         try:
             self._observer.feed(record)
-        except _Unreadable as exc:
+        except Unreadable as exc:
             raise TraceError(self.source, record.line, exc.field, exc.problem) from None
         self._count += 1
 
 
-def check_records(header: _Header, records: Iterable[Record], source: str = "<trace>") -> Report:
+def check_records(header: TraceHeader, records: Iterable[Record], source: str = "<trace>") -> Report:
     """Replay parsed records in observer mode; see :func:`check_trace`."""
     checker = Checker(header, source)
     for record in records:

@@ -37,9 +37,9 @@ import collections
 
 import attrs
 
-from dynevent.conformance.judge.abduction import _same_status
+from dynevent.conformance.judge.abduction import same_status
 from dynevent.conformance.judge.observer import log_seq_faults
-from dynevent.conformance.judge.trace import Finding, Record, Report, _Header
+from dynevent.conformance.judge.trace import Finding, Record, Report, TraceHeader
 from dynevent.errors import InvalidMessage
 from dynevent.server import inputs as ins
 from dynevent.server import machine
@@ -87,7 +87,7 @@ class PartialJudge:
     at a time (:meth:`push`, in the server's order); :meth:`finish` gives the report.  ``margin`` is
     how long (bag time) a message may take to arrive after another published before it."""
 
-    def __init__(self, header: _Header, margin: int, source: str = "<bag>") -> None:
+    def __init__(self, header: TraceHeader, margin: int, source: str = "<bag>") -> None:
         self.source = source
         self.names = (header.fleet, header.robot)
         self.compatibility = header.compatibility
@@ -143,7 +143,7 @@ class PartialJudge:
             return
         if not state.active:
             described = machine.status_message(state, record.time)
-            if not _same_status(described, message):
+            if not same_status(described, message):
                 self._flag(
                     record.line,
                     Violation.STATUS_MISMATCH,

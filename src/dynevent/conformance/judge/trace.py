@@ -58,8 +58,8 @@ _REQUIRED: dict[str, frozenset[str]] = {
     "cancel_response": frozenset({"goal_uuid", "accepted"}),
 }
 
-_STATUSES = frozenset(status.value for status in Status)
-_TIERS = frozenset(tier.value for tier in Tier)
+STATUSES = frozenset(status.value for status in Status)
+TIERS = frozenset(tier.value for tier in Tier)
 _TERMINAL = {
     status.value: status for status in (GoalStatus.SUCCEEDED, GoalStatus.ABORTED, GoalStatus.CANCELED)
 }
@@ -227,7 +227,7 @@ def _record(data: Any, source: str, line: int) -> Record | dict[str, Any]:
 
 
 @attrs.frozen(kw_only=True)
-class _Header:
+class TraceHeader:
     fleet: str | None = None
     robot: str | None = None
     config: ServerConfig | None = None
@@ -235,7 +235,7 @@ class _Header:
     compatibility: Compatibility = Compatibility.STANDARD
 
 
-def _header(data: dict[str, Any], source: str, line: int) -> _Header:
+def _header(data: dict[str, Any], source: str, line: int) -> TraceHeader:
     names: dict[str, str] = {}
     for key in ("fleet", "robot"):
         value = data.get(key)
@@ -249,10 +249,10 @@ def _header(data: dict[str, Any], source: str, line: int) -> _Header:
             config = config_from_json(data["config"], "config")
         except InvalidRecord as exc:
             raise TraceError(source, line, exc.path, exc.problem) from None
-    return _Header(fleet=names.get("fleet"), robot=names.get("robot"), config=config)
+    return TraceHeader(fleet=names.get("fleet"), robot=names.get("robot"), config=config)
 
 
-def read_trace(lines: Iterable[str], source: str = "<trace>") -> tuple[_Header, list[Record]]:
+def read_trace(lines: Iterable[str], source: str = "<trace>") -> tuple[TraceHeader, list[Record]]:
     """Parse a trace: its optional config record and its observations.
 
     Blank lines and lines starting with ``#`` are skipped.  Raises
@@ -262,7 +262,7 @@ def read_trace(lines: Iterable[str], source: str = "<trace>") -> tuple[_Header, 
     return header, list(records)
 
 
-def stream_trace(lines: Iterable[str], source: str = "<trace>") -> tuple[_Header, Iterator[Record]]:
+def stream_trace(lines: Iterable[str], source: str = "<trace>") -> tuple[TraceHeader, Iterator[Record]]:
     """Like :func:`read_trace`, but the observations come one at a time, as ``lines`` are read.
 
     The config record, if any, is read at once; each later line is parsed when
@@ -271,11 +271,11 @@ def stream_trace(lines: Iterable[str], source: str = "<trace>") -> tuple[_Header
     parsed = _parsed_lines(lines, source)
     first = next(parsed, None)
     if first is None:
-        return _Header(), iter(())
+        return TraceHeader(), iter(())
     number, item = first
     if isinstance(item, dict):
         return _header(item, source, number), _observations(parsed, source)
-    return _Header(), _observations(itertools.chain([first], parsed), source)
+    return TraceHeader(), _observations(itertools.chain([first], parsed), source)
 
 
 def _parsed_lines(lines: Iterable[str], source: str) -> Iterator[tuple[int, Record | dict[str, Any]]]:
@@ -446,7 +446,7 @@ def _output_record(output: outs.Output) -> dict[str, Any] | None:
 # --------------------------------------------------------------------------- the observer
 
 
-class _Unreadable(Exception):
+class Unreadable(Exception):
     """A record the observer cannot use: its field and the problem (turned into a TraceError)."""
 
     def __init__(self, field: str, problem: str) -> None:
