@@ -221,3 +221,32 @@ def test_the_ros_entry_points_take_typed_options_not_the_command_lines_namespace
         if _part(module) in ("ros", "conformance", "bags") and "argparse" in _top_imports(path)
     )
     assert readers == [], readers
+
+
+def _private_imports(module: str, source: str) -> list[str]:
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if not (isinstance(node, ast.ImportFrom) and (node.module or "").startswith("dynevent")):
+            continue
+        for alias in node.names:
+            name = alias.name
+            if name.startswith("_") and not name.startswith("__") and f"{node.module}.{name}" not in MODULES:
+                found.append(f"{module}: from {node.module} import {name}")
+    return found
+
+
+def test_no_module_imports_a_private_name_of_another() -> None:
+    """What parts share is public in its module: a private name stays in its own (a private module,
+    ``_json`` or ``_fields``, is the package's to import)."""
+    found = [
+        line for module, path in _modules() for line in _private_imports(module, path.read_text("utf-8"))
+    ]
+    assert not found, found
+    seen = (
+        "from dynevent.wire import _json\nfrom dynevent.conformance.judge.trace import _Hidden, __version__\n"
+    )
+    assert _private_imports("m", seen) == ["m: from dynevent.conformance.judge.trace import _Hidden"]
+
+
+#: Every module of the package, by its dotted name.
+MODULES = frozenset(module for module, _ in _modules())

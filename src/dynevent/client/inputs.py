@@ -24,13 +24,16 @@ __all__ = [
     "ResultReceived",
     "StatusReceived",
     "Tick",
+    "checked_now",
 ]
 
 
 # --------------------------------------------------------------------------- checks at the edge
 
 
-def _check_now(where: str, value: Any) -> int:
+def checked_now(where: str, value: Any) -> int:
+    """``value`` as a client input's ``now``: integer nanoseconds within builtin_interfaces/Time, or
+    :class:`~dynevent.errors.InvalidValue` naming ``where``."""
     if type(value) is not int:
         raise InvalidValue(where, "now", value, "expected integer nanoseconds")
     if not NOW_RANGE[0] <= value <= NOW_RANGE[1]:
@@ -46,7 +49,7 @@ def _uuid_converter(value: Any, instance: object, field: attrs.Attribute[Any]) -
 
 
 def _now_converter(value: Any, instance: object, field: attrs.Attribute[Any]) -> int:
-    return _check_now(type(instance).__name__, value)
+    return checked_now(type(instance).__name__, value)
 
 
 def _field(function: Any, **kwargs: Any) -> Any:

@@ -74,10 +74,10 @@ from dynevent.client.inputs import (
     ResultReceived,
     StatusReceived,
     Tick,
-    _check_now,
+    checked_now,
 )
 from dynevent.client.outputs import (
-    _BY_FINAL_STATUS,
+    OUTCOME_OF_STATUS,
     ClientOutput,
     Ignored,
     Outcome,
@@ -436,7 +436,7 @@ def request_next(
     is nanoseconds); NaN and infinite stubborn periods are wire-legal and
     refused locally, as the server would.
     """
-    now = _check_now("request_next", now)
+    now = checked_now("request_next", now)
     timeout = _check_timeout(timeout)
     spare = state.last_id < U64_MAX
     goal = Goal(
@@ -460,7 +460,7 @@ def request_cancel(state: ClientState, *, now: int) -> ClientTransition:
     while RUNNING, or the child of its own open NEXT goal once feedback named
     it, unless an answer has told the client that child has ended.
     """
-    now = _check_now("request_cancel", now)
+    now = checked_now("request_cancel", now)
     target = _running_child(state)
     goal = Goal(
         dynamic_event_seq=state.seq,
@@ -475,7 +475,7 @@ def request_cancel(state: ClientState, *, now: int) -> ClientTransition:
 
 def request_finish(state: ClientState, *, now: int) -> ClientTransition:
     """Tell the robot the dynamic event is finished: a FINISHED goal, or a local refusal."""
-    now = _check_now("request_finish", now)
+    now = checked_now("request_finish", now)
     goal = Goal(dynamic_event_seq=state.seq, event_type=EventType.FINISHED)
     refusal = _refusal(state, goal)
     if refusal is not None:
@@ -495,7 +495,7 @@ def request_withdraw(state: ClientState, goal_uuid: str, *, now: int) -> ClientT
     NEXT of this client is :class:`Ignored`, with why.  This is what a
     behaviour tree's halt, or an interrupted command line, asks of a NEXT.
     """
-    now = _check_now("request_withdraw", now)
+    now = checked_now("request_withdraw", now)
     goal = state.goal(goal_uuid)
     if goal is None:
         return ClientTransition(state, (Ignored(input="withdraw", why=f"goal {goal_uuid} is not open"),))
@@ -671,9 +671,9 @@ def _classify(state: ClientState, goal: OpenGoal, event: ResultReceived) -> Outc
         kind = OutcomeKind.TIMEOUT
         text = f"outran its timeout; the event ended {result.status!r}"
     else:
-        kind = _BY_FINAL_STATUS.get(result.status, OutcomeKind.ERROR)
+        kind = OUTCOME_OF_STATUS.get(result.status, OutcomeKind.ERROR)
         text = f"the event ended {result.status!r}"
-        if result.status not in _BY_FINAL_STATUS:
+        if result.status not in OUTCOME_OF_STATUS:
             text += ", which is not a final status"
     # a result names the child (or the dynamic event) only when the goal ran; a CANCEL names its target
     event_id = goal.goal.id if failure or goal.goal.event_type == EventType.CANCEL else result.id

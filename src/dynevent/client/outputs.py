@@ -15,6 +15,7 @@ from dynevent.wire.messages import Goal, LogEntry, Result
 from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReason, Status
 
 __all__ = [
+    "OUTCOME_OF_STATUS",
     "ClientOutput",
     "Ignored",
     "Outcome",
@@ -62,7 +63,8 @@ class OutcomeKind(str, enum.Enum):
         return self.value
 
 
-_BY_FINAL_STATUS: dict[str, OutcomeKind] = {
+#: The outcome of a NEXT whose child ended with each final status.
+OUTCOME_OF_STATUS: dict[str, OutcomeKind] = {
     Status.COMPLETED.value: OutcomeKind.COMPLETED,
     Status.CANCELED.value: OutcomeKind.CANCELED,
     Status.KILLED.value: OutcomeKind.KILLED,
