@@ -218,7 +218,7 @@ def test_the_ros_entry_points_take_typed_options_not_the_command_lines_namespace
     readers = sorted(
         module
         for module, path in _modules()
-        if _part(module) in ("ros", "conformance", "bags") and "argparse" in _top_imports(path)
+        if _part(module) in ("ros", "conformance", "bags", "sim") and "argparse" in _top_imports(path)
     )
     assert readers == [], readers
 

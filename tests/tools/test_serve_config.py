@@ -3,7 +3,6 @@ by default, a map and actions when configured, and children that do what their d
 
 from __future__ import annotations
 
-import argparse
 import json
 from pathlib import Path
 from typing import Any
@@ -26,16 +25,10 @@ from dynevent.wire.messages import Goal
 from dynevent.wire.vocab import EventType
 
 
-def _args(config: Path | None = None) -> argparse.Namespace:
-    return argparse.Namespace(
-        config=None if config is None else str(config), fleet=None, robots=None, rebegin=None, shard=None
-    )
-
-
 def _load(tmp_path: Path, data: Any) -> ServeConfig:
     path = tmp_path / "serve.json"
     path.write_text(json.dumps(data), encoding="utf-8")
-    return load_config(_args(path))
+    return load_config(str(path))
 
 
 def _accepts(config: ServeConfig, category: str, description: Any) -> tuple[str, ...]:
@@ -55,7 +48,7 @@ def _accepts(config: ServeConfig, category: str, description: Any) -> tuple[str,
 
 @pytest.mark.spec("R4.18")
 def test_by_default_serve_takes_every_field_category_and_every_place() -> None:
-    config = load_config(_args())
+    config = load_config()
     assert set(config.categories) == set(descriptions.CATEGORIES)
     assert _accepts(config, "go_to_place", {"waypoint": "A"}) == ()
     assert _accepts(config, "go_to_place", 3) == ()
@@ -152,16 +145,13 @@ def test_the_defaults_are_the_documented_ones() -> None:
 
 
 def test_the_first_runs_seq_is_configured_by_file_or_flag_within_a_uint32(tmp_path: Path) -> None:
-    assert load_config(_args()).first_seq == 1
+    assert load_config().first_seq == 1
     assert _load(tmp_path, {"first_seq": 4294967295}).first_seq == 4294967295
-    flagged = _args()
-    flagged.first_seq = 0
-    assert load_config(flagged).first_seq == 0
+    assert load_config(first_seq=0).first_seq == 0
     for value in (-1, 2**32, 1.5, True, "7"):
         with pytest.raises(ServeError, match=r"serve\.json: first_seq: expected a seq from 0 to 4294967295"):
             _load(tmp_path, {"first_seq": value})
-    flagged.first_seq = 2**32
     with pytest.raises(
         ServeError, match=r"^--first-seq: expected a seq from 0 to 4294967295 \(got 4294967296\)$"
     ):
-        load_config(flagged)
+        load_config(first_seq=2**32)

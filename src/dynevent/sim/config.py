@@ -9,9 +9,9 @@ before it needs rclpy; and what a simulated child does with its description
 
 from __future__ import annotations
 
-import argparse
 import json
 import zlib
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -95,27 +95,37 @@ def parse_shard(text: str) -> tuple[int, int]:
     raise ServeError(f"--shard {text!r}: expected K/N with 1 <= K <= N, e.g. 1/2")
 
 
-def load_config(args: argparse.Namespace) -> ServeConfig:
-    """The configuration from ``--config FILE`` and the flags (flags win); raises :class:`ServeError`."""
+def load_config(
+    path: str | None = None,
+    *,
+    fleet: str | None = None,
+    robots: Sequence[str] = (),
+    rebegin: float | None = None,
+    first_seq: Any = None,
+    compatibility: str | None = None,
+    shard: str | None = None,
+) -> ServeConfig:
+    """The configuration from the file at ``path`` (``--config``) and the flags (which win over it);
+    raises :class:`ServeError` naming the file's field or the flag."""
     config = ServeConfig()
-    if args.config is not None:
+    if path is not None:
         try:
-            data = json.loads(Path(args.config).read_text(encoding="utf-8"))
+            data = json.loads(Path(path).read_text(encoding="utf-8"))
         except (OSError, ValueError) as exc:
-            raise ServeError(f"--config {args.config}: {exc}") from None
-        config = _config_from_dict(data, args.config)
-    if args.fleet is not None:
-        config = attrs.evolve(config, fleet=args.fleet)
-    if args.robots:
-        config = attrs.evolve(config, robots=tuple(args.robots))
-    if args.rebegin is not None:
-        config = attrs.evolve(config, rebegin=args.rebegin)
-    if getattr(args, "first_seq", None) is not None:
-        config = attrs.evolve(config, first_seq=_seq(args.first_seq, "--first-seq"))
-    if getattr(args, "compatibility", None) is not None:
-        config = attrs.evolve(config, compatibility=args.compatibility)
-    if getattr(args, "shard", None) is not None:
-        config = attrs.evolve(config, shard=parse_shard(args.shard))
+            raise ServeError(f"--config {path}: {exc}") from None
+        config = _config_from_dict(data, path)
+    if fleet is not None:
+        config = attrs.evolve(config, fleet=fleet)
+    if robots:
+        config = attrs.evolve(config, robots=tuple(robots))
+    if rebegin is not None:
+        config = attrs.evolve(config, rebegin=rebegin)
+    if first_seq is not None:
+        config = attrs.evolve(config, first_seq=_seq(first_seq, "--first-seq"))
+    if compatibility is not None:
+        config = attrs.evolve(config, compatibility=compatibility)
+    if shard is not None:
+        config = attrs.evolve(config, shard=parse_shard(shard))
     try:
         validate_token("fleet", config.fleet)
         for robot in config.robots:

@@ -317,7 +317,10 @@ def _serve(args: argparse.Namespace) -> int:
             raise ServeError(f"--grace: expected seconds from 0 to 3600 (got {args.grace})")
         for flag in ("report", "trace"):
             _check_directory(flag, getattr(args, flag), ServeError)
-        return load_config(args)
+        return load_config(
+            args.config, fleet=args.fleet, robots=args.robots or (), rebegin=args.rebegin,
+            first_seq=args.first_seq, compatibility=args.compatibility, shard=args.shard,
+        )  # fmt: skip
 
     def run(serve: Any, config: Any) -> int:
         watch = serve.Watch(judge=not args.no_judge, grace=args.grace, report=args.report, trace=args.trace,
