@@ -16,13 +16,9 @@ import sys
 from collections.abc import Iterator
 from typing import Any
 
+from dynevent import errors as _errors
 from dynevent._moved import moved_attribute
 from dynevent.conformance import judge as _judge
-from dynevent.conformance.judge import Report as _Report
-from dynevent.conformance.judge import check_trace as _check_trace
-from dynevent.conformance.judge import format_report as _format_report
-from dynevent.conformance.judge import trace_records as _trace_records
-from dynevent.errors import TraceError as _TraceError
 from dynevent.tools._progress import Progress
 from dynevent.wire import _json
 from dynevent.wire.vocab import Compatibility
@@ -54,17 +50,17 @@ def _run(args: argparse.Namespace) -> int:
     except OSError as exc:
         print(f"dynevent check: {source}: cannot read: {exc.strerror or exc}", file=sys.stderr)
         return 2
-    except _TraceError as exc:
+    except _errors.TraceError as exc:
         print(f"dynevent check: {exc}", file=sys.stderr)
         return 2
     if report.records == 0:
         print(f"dynevent check: {report.source}: nothing to check: no record in it", file=sys.stderr)
         return 2
     if args.json:
-        for row in _trace_records(report):
+        for row in _judge.trace_records(report):
             print(_json.dumps(row))
     else:
-        print(_format_report(report), end="")
+        print(_judge.format_report(report), end="")
     return 0 if report.clean else 1
 
 
@@ -166,7 +162,9 @@ def bag_records(bag: Any) -> list[dict[str, Any]]:
     return rows
 
 
-def _check_stream(stream: Any, source: str, compatibility: Compatibility = Compatibility.STANDARD) -> _Report:
+def _check_stream(
+    stream: Any, source: str, compatibility: Compatibility = Compatibility.STANDARD
+) -> _judge.Report:
     """Check a trace read line by line from a binary stream, with a progress line on a terminal."""
     try:
         size: int | None = os.fstat(stream.fileno()).st_size or None
@@ -174,7 +172,7 @@ def _check_stream(stream: Any, source: str, compatibility: Compatibility = Compa
         size = None
     progress = Progress(f"dynevent check: {source}", size)
     try:
-        return _check_trace(_text_lines(stream, source, progress), source, compatibility=compatibility)
+        return _judge.check_trace(_text_lines(stream, source, progress), source, compatibility=compatibility)
     finally:
         progress.close()
 
@@ -187,4 +185,6 @@ def _text_lines(stream: Any, source: str, progress: Progress) -> Iterator[str]:
         try:
             yield raw.decode("utf-8")
         except UnicodeDecodeError as exc:
-            raise _TraceError(source, number, "$", f"not UTF-8 text (byte {exc.start} of the line)") from None
+            raise _errors.TraceError(
+                source, number, "$", f"not UTF-8 text (byte {exc.start} of the line)"
+            ) from None
