@@ -250,3 +250,74 @@ def test_no_module_imports_a_private_name_of_another() -> None:
 
 #: Every module of the package, by its dotted name.
 MODULES = frozenset(module for module, _ in _modules())
+
+
+#: Methods that change the container they are called on.
+_MUTATORS = frozenset(
+    "add append appendleft clear discard extend insert pop popitem popleft remove setdefault sort update".split()
+)
+
+
+def _reach(node: ast.expr) -> tuple[str, int] | None:
+    """The name an attribute chain starts from and how many attributes deep it goes (``self.a.b``:
+    ``("self", 2)``); subscripts do not count; None when the chain starts elsewhere (a call)."""
+    depth = 0
+    while isinstance(node, (ast.Attribute, ast.Subscript)):
+        depth += isinstance(node, ast.Attribute)
+        node = node.value
+    return (node.id, depth) if isinstance(node, ast.Name) else None
+
+
+def _foreign_changes(source: str) -> list[str]:
+    """Where code changes what another object keeps: it assigns or deletes an attribute of anything but
+    ``self`` (``seen.answered = 1``, ``self.books.state = s``), or calls a mutating method of a
+    container another object holds (``self.books.owed.pop()``).  A local's own items (``found[0] = x``)
+    and ``self.x`` are the code's own."""
+    found: list[tuple[int, str]] = []
+    for node in ast.walk(ast.parse(source)):
+        targets: list[ast.expr] = []
+        if isinstance(node, ast.Assign):
+            targets = list(node.targets)
+        elif isinstance(node, (ast.AugAssign, ast.AnnAssign)):
+            targets = [node.target]
+        elif isinstance(node, ast.Delete):
+            targets = list(node.targets)
+        for target in targets:
+            for item in target.elts if isinstance(target, ast.Tuple) else [target]:
+                reach = _reach(item)
+                if reach is None or reach[1] == 0:
+                    continue
+                name, depth = reach
+                if name != "self" or depth > 1:
+                    found.append((node.lineno, f"line {node.lineno}: {ast.unparse(item)} changed"))
+        if (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, ast.Attribute)
+            and node.func.attr in _MUTATORS
+            and (reach := _reach(node.func.value)) is not None
+            and reach[1] >= (2 if reach[0] == "self" else 1)
+        ):
+            found.append((node.lineno, f"line {node.lineno}: {ast.unparse(node.func)}() called"))
+    return [text for _, text in sorted(found)]
+
+
+def test_the_observers_parts_change_what_the_rooms_keep_only_through_their_methods() -> None:
+    """The observer's rooms (findings, the records ahead, the server as the machine has it, the goals
+    seen) are each the only writer of what they keep; the parts that judge call their methods."""
+    for name in ("observer", "abduction"):
+        source = (SRC / "conformance" / "judge" / f"{name}.py").read_text("utf-8")
+        assert _foreign_changes(source) == [], name
+    shared = (
+        "def f(self, seen, found):\n"
+        "    self.own = 1\n    self.own[2] = 3\n    found[0] = 1\n    self._owed.pop(0)\n"
+        "    seen.answered = 4\n    self.books.state = 5\n    del self.books.owed[0]\n"
+        "    self.books.owed.pop(0)\n    seen.log.append(6)\n    a, seen.b = 7, 8\n"
+    )
+    assert _foreign_changes(shared) == [
+        "line 6: seen.answered changed",
+        "line 7: self.books.state changed",
+        "line 8: self.books.owed[0] changed",
+        "line 9: self.books.owed.pop() called",
+        "line 10: seen.log.append() called",
+        "line 11: seen.b changed",
+    ]

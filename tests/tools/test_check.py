@@ -278,7 +278,7 @@ def test_the_observer_keeps_the_latest_closed_goals_only_and_still_finds_a_late_
     for record in records:
         checker.push(record)
     report = checker.finish()
-    assert len(checker._observer.books.goals) <= CLOSED_GOALS
+    assert len(checker._observer.rooms.goals) <= CLOSED_GOALS
     assert found(report) == [(old, "R19.1", "answer_not_accepted"), (trace.line, "R19.1", "second_answer")]
     assert report.findings[0].message.endswith(f"or closed before the latest {CLOSED_GOALS} closed goals")
 

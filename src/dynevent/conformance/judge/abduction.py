@@ -54,7 +54,8 @@ _SIGNALS: dict[str, type[ins.TaskCancel] | type[ins.TaskKill]] = {
 
 @attrs.define
 class GoalSeen:
-    """What the trace showed of one goal."""
+    """What the trace showed of one goal.  Its judge changes it through its methods alone, each a
+    step of the goal's life on the wire."""
 
     goal: Goal
     line: int
@@ -62,6 +63,26 @@ class GoalSeen:
     accepted: bool = False
     answered: int | None = None  # the line of its terminal answer
     owed: bool = False  # dropped from the state on resynchronisation: its answers are not judged
+
+    def respond(self, accepted: bool) -> None:
+        """The server answered the request: accepted or refused."""
+        self.responded, self.accepted = True, accepted
+
+    def answer(self, line: int) -> None:
+        """Its terminal answer came, on ``line``."""
+        self.answered = line
+
+    def let_go(self) -> None:
+        """The state no longer follows the goal: what it owes is not judged."""
+        self.owed = True
+
+    def take_up(self) -> None:
+        """The state follows the goal again (a goal from before the trace starts its child)."""
+        self.owed = False
+
+    def close(self) -> None:
+        """Answered: what is judged after the answer is the line, not the request."""
+        self.goal = ANSWERED
 
 
 #: The goal an answered goal's record keeps: nothing after its answer reads the request itself.

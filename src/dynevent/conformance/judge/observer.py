@@ -1,15 +1,16 @@
-"""The observer: books every part shares, and one part per kind of record (requests, runs,
-feedback, answers), composed by :class:`_Observer`; :func:`check_records` drives it."""
+"""The observer: four rooms, each the only keeper of what it holds (the findings, the records ahead,
+the server as the machine has it, the goals seen), and one part per kind of record (requests, runs,
+feedback, answers) that judges against them and changes them through their methods alone; composed
+by :class:`_Observer`, which :func:`check_records` drives."""
 
 from __future__ import annotations
 
 import collections
-from collections.abc import Callable, Container, Iterable, Mapping
+from collections.abc import Callable, Container, Iterable, Mapping, Sequence
 
 import attrs
 
 from dynevent.conformance.judge.abduction import (
-    ANSWERED,
     Found,
     GoalSeen,
     Owed,
@@ -61,11 +62,68 @@ from dynevent.wire.vocab import (
 )
 
 
-class _Books:
-    """The observer's books, which its parts share: the state, what is owed, the goals seen, the time and
-    line, the findings, and the operations on them.  What only one part needs, that part keeps."""
+class _Findings:
+    """What the observer found, each on the line of the record being judged: the only list of them."""
 
-    def __init__(self, header: TraceHeader) -> None:
+    def __init__(self) -> None:
+        self._found: list[Finding] = []
+        self._line = 0
+
+    def at(self, line: int) -> None:
+        """The record of ``line`` is being judged."""
+        self._line = line
+
+    def flag(self, violation: Violation, message: str, expected: str) -> None:
+        """Report ``violation`` on the current line."""
+        self.differs(violation.rule, violation.code, message, expected)
+
+    def differs(self, rule: str, code: str, message: str, expected: str, line: int | None = None) -> None:
+        """Report an output that differs from the machine's, under the rule of the machine's output, on
+        the current line or ``line``."""
+        at = self._line if line is None else line
+        self._found.append(Finding(line=at, rule=rule, code=code, message=message, expected=expected))
+
+    def all(self) -> tuple[Finding, ...]:
+        return tuple(self._found)
+
+
+class _Ahead:
+    """The records after the one being judged, which the checker's window holds: the only copy."""
+
+    def __init__(self) -> None:
+        self.records: tuple[Record, ...] = ()  # the LOOKAHEAD records after it
+
+    def show(self, records: tuple[Record, ...]) -> None:
+        self.records = records
+
+    @property
+    def upcoming(self) -> Record | None:
+        """The record after the one being judged."""
+        return self.records[0] if self.records else None
+
+    def answers(self) -> set[tuple[str, str]]:
+        """The goal UUIDs and goal statuses of the answers among the records ahead."""
+        return {(record.goal_uuid, record.status) for record in self.records if record.kind == "result"}
+
+    def of_goal(self, uuid: str) -> Record | None:
+        """The next feedback or answer of this goal among the records ahead."""
+        for record in self.records:
+            if record.goal_uuid == uuid and record.kind in ("feedback", "result"):
+                return record
+        return None
+
+    def confirms(self, found: Found) -> bool:
+        return confirmed(found, self.upcoming)
+
+
+class _Replica:
+    """The server as the machine has it: its state, its configuration, the outputs it owes, the time,
+    and what the trace leaves uncertain about it.  The only writer of all of them: the parts change
+    them through its methods, each named for what the trace showed."""
+
+    def __init__(self, header: TraceHeader, findings: _Findings, ahead: _Ahead) -> None:
+        self._findings = findings
+        self._ahead = ahead
         self.config_known = header.config is not None
         if header.config is not None:
             self.config = header.config
@@ -74,35 +132,24 @@ class _Books:
         else:
             self.config = ServerConfig()
         self.state: State | None = None
-        self.owed: list[Owed] = []
-        self.goals: dict[str, GoalSeen] = {}
-        self.closed: collections.deque[str] = collections.deque()  # goals answered or refused, oldest first
-        self.forgotten = False  # a closed goal was let go
-        self.findings: list[Finding] = []
+        self._owed: list[Owed] = []
         self.now = ins.NOW_RANGE[0]
-        self.line = 0
+        self._line = 0
         self.partial = False  # the trace begins mid-way: goals it never showed may be open
-        self.upcoming: Record | None = None  # the record after the one being judged
-        self.lookahead: tuple[Record, ...] = ()  # the LOOKAHEAD records after it
         self.event_id_unknown = False  # the run began before the trace: its own id is not known
         self.start_uncertain = False  # a RUNNING "queued" status: a deferred child, or one reporting queued
 
-    # ------------------------------------------------------------------ bookkeeping
-
-    def flag(self, violation: Violation, message: str, expected: str) -> None:
-        """Report ``violation`` on the current line."""
-        self.differs(violation.rule, violation.code, message, expected)
-
-    def differs(self, rule: str, code: str, message: str, expected: str) -> None:
-        """Report an output that differs from the machine's, under the rule of the machine's output."""
-        self.findings.append(
-            Finding(line=self.line, rule=rule, code=code, message=message, expected=expected)
-        )
+    # ------------------------------------------------------------------ reading
 
     @property
     def st(self) -> State:
         assert self.state is not None  # set by the first record
         return self.state
+
+    @property
+    def owed(self) -> Sequence[Owed]:
+        """What the steps so far owe and the trace has not shown yet, oldest first."""
+        return self._owed
 
     def config_for(self, goal: Goal) -> ServerConfig:
         """The configuration; without a config record, every category a goal names is taken as supported."""
@@ -111,34 +158,189 @@ class _Books:
         categories = {**self.config.categories, goal.category: machine.any_description}
         return attrs.evolve(self.config, categories=categories)
 
-    def learn(self, goal: Goal) -> None:
-        self.config = self.config_for(goal)
+    def status(self) -> DynamicEventStatus:
+        """The state's status message now."""
+        return machine.status_message(self.st, self.now)
 
     def simulate(self, events: list[ins.Input]) -> tuple[State, list[Owed]]:
         """The state after ``events`` and the outputs they owe, without committing (see :func:`simulate`)."""
         return simulate(self.st, events, self.config)
 
-    def commit(self, state: State, owed: list[Owed]) -> None:
-        self.state = state
-        self.owed.extend(attrs.evolve(item, line=self.line) for item in owed)
-
-    def forget_channel(self, channel: str) -> None:
-        self.owed = [item for item in self.owed if item.channel != channel]
-
-    def displace(self, uuids: Iterable[str]) -> None:
-        """The server no longer runs these goals as the state says: their answers are not judged."""
-        for uuid in uuids:
-            seen = self.goals.get(uuid)
-            if seen is not None and seen.answered is None:
-                seen.owed = True
-            self.forget_channel(f"goal:{uuid}")
-
     def abduce(self, record: Record) -> Found | None:
         """The candidate that explains ``record`` in the current state (see :func:`abduce`)."""
-        return abduce(self.st, self.config, record, self.now, self.upcoming)
+        return abduce(self.st, self.config, record, self.now, self._ahead.upcoming)
 
-    def confirmed(self, found: Found) -> bool:
-        return confirmed(found, self.upcoming)
+    # ------------------------------------------------------------------ the trace's opening and time
+
+    def advance(self, time: int, line: int) -> None:
+        """The record of ``line``, stamped ``time``, is being judged (the time never goes back)."""
+        self.now = max(self.now, time)
+        self._line = line
+
+    def open(self, record: Record) -> bool:
+        """Set the starting state from the first record; True when the record is used up."""
+        base = State.new("fleet", "robot")
+        self.partial = record.kind == "status" or (
+            record.kind == "begin" and record.message.dynamic_event_seq != 1
+        )
+        if record.kind == "status":
+            message: DynamicEventStatus = record.message
+            try:
+                self.state = state_from_status(message, child_end=False)  # its answer is still to come
+            except ValueError as exc:
+                self.state = resync.seq(base, message.dynamic_event_seq)
+                self._findings.flag(
+                    Violation.STATUS_PHASE, f"status {status_text(message)}: {exc}", "dynamic_state 0, 1 or 2"
+                )
+                return True
+            # a status names the highest id used (R2.2), not the dynamic event's own id
+            self.event_id_unknown = message.dynamic_state != DynamicState.INACTIVE
+            self.start_uncertain = self.st.running is not None and not self.st.running.started
+            return True
+        if record.kind == "begin":
+            self.state = resync.next_run(base, record.message.dynamic_event_seq)
+            return False
+        self.state = base  # a trace from the server's start
+        return False
+
+    # ------------------------------------------------------------------ steps and resynchronisation
+
+    def learn(self, goal: Goal) -> None:
+        """An accepted goal names a category the server supports."""
+        self.config = self.config_for(goal)
+
+    def commit(self, state: State, owed: Iterable[Owed]) -> None:
+        """The step that gave ``state`` and owes ``owed`` took place, at the current line."""
+        self.state = state
+        self._owed.extend(attrs.evolve(item, line=self._line) for item in owed)
+
+    def resync(self, state: State) -> None:
+        """The server is known to be in ``state``, whatever the steps so far say (see :mod:`resync`)."""
+        self.state = state
+
+    def begin(self, state: State, begin: ins.Begin) -> None:
+        """A run begins from ``state``: its id and its child's start are known again."""
+        self.state = state
+        self.commit(*self.simulate([begin]))
+        self.event_id_unknown = self.start_uncertain = False
+
+    def learn_event_id(self, event_id: int, *, own: bool) -> None:
+        """The WAITING status after a begin names ``event_id``; ``own``: it is the begin's own status,
+        and so the run's own id (else the highest used so far, and the run's id is still unknown)."""
+        self.state = resync.event_id(self.st, event_id)
+        if not own:
+            self.event_id_unknown = True
+        self._owed = [
+            attrs.evolve(item, output=outs.PublishStatus(message=attrs.evolve(output.message, id=event_id)))
+            if isinstance(output := item.output, outs.PublishStatus)
+            and output.message.dynamic_state == DynamicState.WAITING
+            and output.message.id == 0
+            else item
+            for item in self._owed
+        ]
+
+    def learn_event_id_from_finished(self, event_id: int) -> None:
+        """The first FINISHED of a run joined late is answered with the run's own id."""
+        self.event_id_unknown = False
+        self.state = resync.event_id(self.st, event_id)
+
+    def learn_child_id(self, child_id: int) -> None:
+        """The running child has ``child_id``, whatever the rules gave it: its owed statuses say so."""
+        if self.st.running is None:
+            return
+        self.state = resync.child_id(self.st, child_id)
+        current = self.status()
+        self._owed = [
+            attrs.evolve(item, output=outs.PublishStatus(message=current))
+            if isinstance(item.output, outs.PublishStatus)
+            and item.output.message.dynamic_state == DynamicState.RUNNING
+            else item
+            for item in self._owed
+        ]
+
+    def start_uncertain_for(self, uuid: str) -> bool:
+        """Is the running goal ``uuid``, with a start a status left uncertain?"""
+        running = self.st.running
+        return self.start_uncertain and running is not None and running.goal_uuid == uuid
+
+    def settle_start(self, *, started: bool) -> None:
+        """The uncertain start is known: the child ``started``, or its start is still deferred."""
+        if started:
+            self.state = resync.child_started(self.st)
+        self.start_uncertain = False
+
+    def abduce_uncertain(self, record: Record) -> Found | None:
+        """:meth:`abduce`, also in the world where a child whose start a status left uncertain has started."""
+        found = self.abduce(record)
+        running = self.st.running
+        if not self.start_uncertain or running is None or running.started:
+            return found
+        if found is not None and matches_exactly(found[3].output, record) and self._ahead.confirms(found):
+            return found
+        saved = self.st
+        self.state = resync.child_started(saved, resumed=True)
+        other = self.abduce(record)
+        found_exact = found is not None and matches_exactly(found[3].output, record)
+        if (
+            other is not None
+            and matches_exactly(other[3].output, record)
+            and (self._ahead.confirms(other) or not found_exact)
+        ):
+            self.start_uncertain = False
+            return other
+        self.state = saved
+        return found
+
+    # ------------------------------------------------------------------ what is owed
+
+    def forget_channel(self, channel: str) -> None:
+        """Nothing owed on ``channel`` is judged any more."""
+        self._owed = [item for item in self._owed if item.channel != channel]
+
+    def take(self, index: int) -> Owed:
+        """The owed output at ``index`` was seen."""
+        return self._owed.pop(index)
+
+    def settle_status(self, message: DynamicEventStatus) -> bool:
+        """Is ``message`` an owed status?  It is then seen, and the owed statuses before it with it: a
+        status topic keeps one message, and earlier ones may be overwritten unseen."""
+        for index, item in enumerate(self._owed):
+            output = item.output
+            if isinstance(output, outs.PublishStatus) and same_status(output.message, message):
+                self._owed = [
+                    other for i, other in enumerate(self._owed) if i > index or other.channel != "status"
+                ]
+                return True
+        return False
+
+    def take_answers(self) -> list[Owed]:
+        """The answers still owed, which are owed no more (the trace has ended)."""
+        answers = [item for item in self._owed if isinstance(item.output, outs.AnswerGoal)]
+        self._owed = [item for item in self._owed if not isinstance(item.output, outs.AnswerGoal)]
+        return answers
+
+
+class _Goals:
+    """The goals the trace showed, and which of them are closed: the only book of them."""
+
+    def __init__(self, replica: _Replica) -> None:
+        self._replica = replica
+        self._seen: dict[str, GoalSeen] = {}
+        self._closed: collections.deque[str] = collections.deque()  # answered or refused, oldest first
+        self._forgotten = False  # a closed goal was let go
+
+    def __len__(self) -> int:
+        return len(self._seen)
+
+    def __contains__(self, uuid: object) -> bool:
+        return uuid in self._seen
+
+    def get(self, uuid: str) -> GoalSeen | None:
+        return self._seen.get(uuid)
+
+    def requested(self, uuid: str, goal: Goal, line: int) -> None:
+        """A client requested ``goal`` as ``uuid``, on ``line``."""
+        self._seen[uuid] = GoalSeen(goal=goal, line=line)
 
     def bind_unknown(self, uuid: str, running_goal: bool = True) -> GoalSeen | None:
         """What the trace showed of this goal; a goal it never showed may have begun before it.
@@ -148,106 +350,59 @@ class _Books:
         to be that goal, unless ``running_goal`` says the observation cannot
         be the running goal's; any other unknown goal is not judged.
         """
-        running = self.st.running
-        if uuid in self.goals:
-            return self.goals[uuid]
-        if not self.partial:
+        replica = self._replica
+        if uuid in self._seen:
+            return self._seen[uuid]
+        if not replica.partial:
             return None
+        running = replica.st.running
         if running is None or running.goal_uuid != UNKNOWN_GOAL or not running_goal:
             seen = GoalSeen(goal=Goal(), line=0, responded=True, accepted=True, owed=True)
-            self.goals[uuid] = seen
+            self._seen[uuid] = seen
             return seen
-        self.state = resync.running_goal(self.st, uuid)
+        replica.resync(resync.running_goal(replica.st, uuid))
         seen = GoalSeen(goal=running.goal, line=0, responded=True, accepted=True)
-        self.goals[uuid] = seen
+        self._seen[uuid] = seen
         return seen
 
-    def abduce_uncertain(self, record: Record) -> tuple[list[ins.Input], State, list[Owed], Owed] | None:
-        """:meth:`abduce`, also in the world where a child whose start a status left uncertain has started."""
-        found = self.abduce(record)
-        running = self.st.running
-        if not self.start_uncertain or running is None or running.started:
-            return found
-        if found is not None and matches_exactly(found[3].output, record) and self.confirmed(found):
-            return found
-        saved = self.st
-        self.state = resync.child_started(saved, resumed=True)
-        other = self.abduce(record)
-        found_exact = found is not None and matches_exactly(found[3].output, record)
-        if (
-            other is not None
-            and matches_exactly(other[3].output, record)
-            and (self.confirmed(other) or not found_exact)
-        ):
-            self.start_uncertain = False
-            return other
-        self.state = saved
-        return found
+    def displace(self, uuids: Iterable[str]) -> None:
+        """The server no longer runs these goals as the state says: their answers are not judged."""
+        for uuid in uuids:
+            seen = self._seen.get(uuid)
+            if seen is not None and seen.answered is None:
+                seen.let_go()
+            self._replica.forget_channel(f"goal:{uuid}")
 
-    def answers_never_seen(self, evidence: AnswerEvidence | None = None) -> None:
-        """At the trace's end: every answer owed by a step the trace showed, never seen, is missing.
-        ``evidence`` (a reader that may not hold every answer, a bag) says which answers it could have
-        shown, and the goal statuses that showed others (see :class:`AnswerEvidence`)."""
-        missing = Violation.ANSWER_MISSING
-        for item in self.owed:
-            if isinstance(item.output, outs.AnswerGoal):
-                uuid = item.output.goal_uuid
-                if evidence is not None:
-                    if uuid in evidence.settled:
-                        continue  # answered: its goal status shows it, though the bag lacks the answer
-                    if uuid not in evidence.asked:
-                        continue  # no client asked for it: no recording could hold it
-                    if evidence.until is not None and item.line > evidence.until:
-                        continue  # the recording stopped while it may have been on its way
-                if item.exact:
-                    message = f"goal {uuid} never answered (by the end of the trace)"
-                    expected = f"{answer_text(item.output.status.value, item.output.result)} ({item.rule})"
-                else:  # a child's end read from its status alone: how it ended is not on the wire
-                    message = f"goal {uuid} never answered, though this status shows its child's end"
-                    expected = (
-                        f"one terminal answer, with the child's result, before this status ({item.rule})"
-                    )
-                self.findings.append(
-                    Finding(
-                        line=item.line,
-                        rule=missing.rule,
-                        code=missing.code,
-                        message=message,
-                        expected=expected,
-                    )
-                )
-        self.owed = [item for item in self.owed if not isinstance(item.output, outs.AnswerGoal)]
+    def judged(self, record: Record) -> None:
+        """``record`` (an answer or a response) was judged: close its goal when it closed it."""
+        seen = self._seen.get(record.goal_uuid)
+        if seen is None:
+            return
+        if seen.answered == record.line:
+            seen.close()
+            self._close(record.goal_uuid)
+        elif record.kind == "goal_response" and seen.responded and not seen.accepted:
+            self._close(record.goal_uuid)
 
-    def close(self, uuid: str) -> None:
+    def _close(self, uuid: str) -> None:
         """Goal ``uuid`` was answered or refused: what is judged after that is a record naming it (a
         second answer, feedback after the answer), which the latest :data:`CLOSED_GOALS` closed goals
         keep; an older one is let go, so that memory stays flat on a trace of any length (a record
         naming it is then one of a goal never requested: R19.1 still)."""
-        self.closed.append(uuid)
-        while len(self.closed) > CLOSED_GOALS:
-            old = self.closed.popleft()
-            seen = self.goals.get(old)
+        self._closed.append(uuid)
+        while len(self._closed) > CLOSED_GOALS:
+            old = self._closed.popleft()
+            seen = self._seen.get(old)
             if seen is not None and (seen.answered is not None or (seen.responded and not seen.accepted)):
-                del self.goals[old]  # unless its UUID was taken again by a goal still open
-                self.forgotten = True
+                del self._seen[old]  # unless its UUID was taken again by a goal still open
+                self._forgotten = True
 
     @property
     def unknown_goal(self) -> str:
         """What a goal the observer does not know is."""
-        if self.forgotten:
+        if self._forgotten:
             return f"never requested in this trace, or closed before the latest {CLOSED_GOALS} closed goals"
         return "never requested in this trace"
-
-    def answers_ahead(self) -> set[tuple[str, str]]:
-        """The goal UUIDs and goal statuses of the answers among the records ahead."""
-        return {(record.goal_uuid, record.status) for record in self.lookahead if record.kind == "result"}
-
-    def ahead(self, uuid: str) -> Record | None:
-        """The next feedback or answer of this goal among the records the observer sees ahead."""
-        for record in self.lookahead:
-            if record.goal_uuid == uuid and record.kind in ("feedback", "result"):
-                return record
-        return None
 
 
 @attrs.frozen
@@ -265,87 +420,109 @@ class AnswerEvidence:
     until: int | None = None
 
 
-class _Requests:
+@attrs.frozen
+class _Rooms:
+    """What the parts judge against, each kept by its own room: the findings, the records ahead, the
+    server as the machine has it, and the goals seen."""
+
+    findings: _Findings
+    ahead: _Ahead
+    replica: _Replica
+    goals: _Goals
+
+
+class _Part:
+    """One part of the observer: it reads the rooms and changes them through their methods alone."""
+
+    def __init__(self, rooms: _Rooms) -> None:
+        self.findings = rooms.findings
+        self.ahead = rooms.ahead
+        self.replica = rooms.replica
+        self.goals = rooms.goals
+
+
+class _Requests(_Part):
     """Goal requests, their responses and action-level cancels: the machine's ``accept``, compared."""
 
-    def __init__(self, books: _Books) -> None:
-        self.books = books
+    def __init__(self, rooms: _Rooms) -> None:
+        super().__init__(rooms)
         self.duplicates: set[str] = set()  # goal UUIDs requested again while open
 
     def on_goal(self, record: Record) -> None:
-        seen = self.books.goals.get(record.goal_uuid)
+        seen = self.goals.get(record.goal_uuid)
         if seen is not None and seen.answered is None and (not seen.responded or seen.accepted):
-            self.books.flag(
+            self.findings.flag(
                 Violation.GOAL_UUID_REUSED,
                 f"goal {record.goal_uuid} requested again while it is open (since line {seen.line})",
                 "a fresh goal UUID for every goal",
             )
             self.duplicates.add(record.goal_uuid)
             return
-        self.books.goals[record.goal_uuid] = GoalSeen(goal=record.message, line=record.line)
+        self.goals.requested(record.goal_uuid, record.message, record.line)
 
     def ended_unseen(self) -> bool:
         """Whether an accepted goal the machine finds busy found the running child ended: a child
         whose last report was a final status (R20.2), of a goal the trace picked up mid-way (its
         request, so its answer too, may be missing from a recording).  The child is then taken as
         ended, as a client takes it, and its answer is not judged."""
-        state = self.books.st
+        state = self.replica.st
         running = state.running
         if running is None or not running.started or state.task_signal:
             return False
-        bound = self.books.goals.get(running.goal_uuid)
+        bound = self.goals.get(running.goal_uuid)
         if not machine.ends_a_child(running.child_status) or bound is None or bound.line != 0:
             return False
         if bound.answered is not None:
             return False
-        after, _ = self.books.simulate([ins.ChildFinished(status=running.child_status, now=self.books.now)])
-        self.books.state = after
-        bound.owed = True
+        ended = ins.ChildFinished(status=running.child_status, now=self.replica.now)
+        after, _ = self.replica.simulate([ended])
+        self.replica.resync(after)
+        bound.let_go()
         return True
 
     def on_goal_response(self, record: Record) -> None:
         if record.goal_uuid in self.duplicates:
             self.duplicates.discard(record.goal_uuid)
             return
-        seen = self.books.goals.get(record.goal_uuid)
+        seen = self.goals.get(record.goal_uuid)
         if seen is None or seen.responded:
             raise Unreadable("goal_uuid", "no goal record with this uuid awaits a response")
-        seen.responded, seen.accepted = True, record.accepted
+        seen.respond(record.accepted)
         goal = seen.goal
-        decision = machine.accept(self.books.st, goal, self.books.config_for(goal))
+        decision = machine.accept(self.replica.st, goal, self.replica.config_for(goal))
         busy = isinstance(decision, outs.Rejected) and decision.reason is RejectReason.BUSY
         if busy and record.accepted and self.ended_unseen():
-            decision = machine.accept(self.books.st, goal, self.books.config_for(goal))
+            decision = machine.accept(self.replica.st, goal, self.replica.config_for(goal))
         if not self.agrees(decision, record):
             self.explain_response(goal, record)
-            decision = machine.accept(self.books.st, goal, self.books.config_for(goal))
+            decision = machine.accept(self.replica.st, goal, self.replica.config_for(goal))
         if record.accepted:
-            self.books.learn(goal)
+            self.replica.learn(goal)
         if isinstance(decision, outs.Accepted) == record.accepted:
             if isinstance(decision, outs.Rejected) and not self.same_reason(decision, record):
-                self.books.differs(
+                self.findings.differs(
                     decision.rule,
                     "wrong_reason",
                     f"{goal_text(goal)} rejected as {record.reason}",
                     f"rejected as {decision.reason.value}, the first check that fails: {decision.text}",
                 )
             if record.accepted:
-                event = ins.GoalRequested(goal_uuid=record.goal_uuid, goal=goal, now=self.books.now)
-                self.books.commit(*self.books.simulate([event]))
+                event = ins.GoalRequested(goal_uuid=record.goal_uuid, goal=goal, now=self.replica.now)
+                self.replica.commit(*self.replica.simulate([event]))
             return
         if isinstance(decision, outs.Rejected):  # accepted, but the rules refuse it
-            self.books.differs(
+            self.findings.differs(
                 decision.rule,
                 f"accepted_{decision.reason.value}",
                 f"{goal_text(goal)} accepted",
                 f"rejected: {decision.reason.value} ({decision.text})",
             )
-            self.books.state = resync.queued(self.books.st, record.goal_uuid, goal)
+            self.replica.resync(resync.queued(self.replica.st, record.goal_uuid, goal))
             return
         if self.unknowable(goal, record):
             return
         said = f" as {record.reason.value}" if record.reason is not None else ""
-        self.books.flag(
+        self.findings.flag(
             Violation.REJECTED_ACCEPTABLE,
             f"{goal_text(goal)} rejected{said}",
             "accepted: the goal passes every check of R4",
@@ -359,77 +536,74 @@ class _Requests:
     def same_reason(self, decision: outs.Rejected, record: Record) -> bool:
         reason = record.reason
         return reason is None or machine.could_refuse_first(
-            reason, decision, config_known=self.books.config_known
+            reason, decision, config_known=self.replica.config_known
         )
 
     def unknowable(self, goal: Goal, record: Record) -> bool:
         """Could an unknown configuration have refused this NEXT?"""
-        if self.books.config_known or goal.event_type != EventType.NEXT:
+        if self.replica.config_known or goal.event_type != EventType.NEXT:
             return False
         return record.reason is None or record.reason in machine.CONFIGURED_REFUSALS
 
     def explain_response(self, goal: Goal, record: Record) -> None:
         """The response may follow starts of accepted goals whose outputs come later: try them."""
         events: list[ins.Input] = []
-        for queued in self.books.st.queued:
-            events.append(ins.GoalStarted(goal_uuid=queued.goal_uuid, now=self.books.now))
-            state, owed = self.books.simulate(events)
-            decision = machine.accept(state, goal, self.books.config_for(goal))
+        for queued in self.replica.st.queued:
+            events.append(ins.GoalStarted(goal_uuid=queued.goal_uuid, now=self.replica.now))
+            state, owed = self.replica.simulate(events)
+            decision = machine.accept(state, goal, self.replica.config_for(goal))
             if self.agrees(decision, record):
-                self.books.commit(state, owed)
+                self.replica.commit(state, owed)
                 return
         if record.reason is RejectReason.SHUTTING_DOWN:
-            state, owed = self.books.simulate([ins.Shutdown(now=self.books.now)])
-            self.books.commit(state, owed)
+            state, owed = self.replica.simulate([ins.Shutdown(now=self.replica.now)])
+            self.replica.commit(state, owed)
 
     def on_cancel_request(self, record: Record) -> None:
-        if self.books.partial and record.goal_uuid not in self.books.goals:
+        if self.replica.partial and record.goal_uuid not in self.goals:
             return  # a goal from before the trace, maybe: its response tells (on_cancel_response)
-        seen = self.books.goals.get(record.goal_uuid)
+        seen = self.goals.get(record.goal_uuid)
         if seen is not None and seen.owed:
             return  # a goal the state no longer follows: its cancel is not judged either
-        running = self.books.st.running
-        if self.books.start_uncertain and running is not None and running.goal_uuid == record.goal_uuid:
+        if self.replica.start_uncertain_for(record.goal_uuid):
             # a deferred child is cancelled at once (R10.4); a started one ends later (R10.3)
-            answer = self.books.ahead(record.goal_uuid)  # at once: within the next two records
+            answer = self.ahead.of_goal(record.goal_uuid)  # at once: within the next two records
             deferred = (
                 answer is not None
                 and answer.kind == "result"
                 and answer.status == GoalStatus.CANCELED.value
                 and answer.message.status == Status.CANCELED.value
             )
-            if not deferred:
-                self.books.state = resync.child_started(self.books.st)
-            self.books.start_uncertain = False
-        self.books.commit(
-            *self.books.simulate([ins.CancelRequested(goal_uuid=record.goal_uuid, now=self.books.now)])
+            self.replica.settle_start(started=not deferred)
+        self.replica.commit(
+            *self.replica.simulate([ins.CancelRequested(goal_uuid=record.goal_uuid, now=self.replica.now)])
         )
 
     def on_cancel_response(self, record: Record) -> None:
         channel = f"cancel:{record.goal_uuid}"
-        if not any(item.channel == channel for item in self.books.owed):
-            if self.books.partial and record.goal_uuid not in self.books.goals:
+        if not any(item.channel == channel for item in self.replica.owed):
+            if self.replica.partial and record.goal_uuid not in self.goals:
                 if not record.accepted:
                     return  # a goal unknown to the server as well
-                upcoming = self.books.upcoming
+                upcoming = self.ahead.upcoming
                 queued = (
                     upcoming is not None
                     and upcoming.kind == "result"
                     and upcoming.goal_uuid == record.goal_uuid
                     and first_line(upcoming.message.execution_failure) == Failure.NOT_RUNNING.value
                 )
-                self.books.bind_unknown(record.goal_uuid, running_goal=not queued)
+                self.goals.bind_unknown(record.goal_uuid, running_goal=not queued)
                 if queued:
                     return  # an accepted goal that had not started (R10.1, R10.2)
             self.on_cancel_request(record)
-        index = next((i for i, item in enumerate(self.books.owed) if item.channel == channel), None)
+        index = next((i for i, item in enumerate(self.replica.owed) if item.channel == channel), None)
         if index is None:
             return
-        owed = self.books.owed.pop(index)
+        owed = self.replica.take(index)
         assert isinstance(owed.output, outs.CancelResponse)
         if owed.output.accepted != record.accepted:
             word = {True: "accepted", False: "rejected"}
-            self.books.differs(
+            self.findings.differs(
                 owed.rule,
                 "cancel_response",
                 f"cancel of goal {record.goal_uuid} {word[record.accepted]}",
@@ -437,11 +611,11 @@ class _Requests:
             )
 
 
-class _Runs:
+class _Runs(_Part):
     """Begin and status messages: runs, their seq, the dynamic event's id and the status topic."""
 
-    def __init__(self, books: _Books, header: TraceHeader) -> None:
-        self.books = books
+    def __init__(self, rooms: _Rooms, header: TraceHeader) -> None:
+        super().__init__(rooms)
         self.names = (header.fleet, header.robot) if header.fleet or header.robot else None
         self.event_id_pending = False
         self.begin_seen = False
@@ -452,31 +626,8 @@ class _Runs:
 
     def sync(self, record: Record) -> bool:
         """Set the starting state from the first record; True when the record is used up."""
-        base = State.new("fleet", "robot")
-        self.books.partial = record.kind == "status" or (
-            record.kind == "begin" and record.message.dynamic_event_seq != 1
-        )
-        if record.kind == "status":
-            message: DynamicEventStatus = record.message
-            try:
-                self.books.state = state_from_status(message, child_end=False)  # its answer is still to come
-                # a status names the highest id used (R2.2), not the dynamic event's own id
-                self.books.event_id_unknown = message.dynamic_state != DynamicState.INACTIVE
-                self.books.start_uncertain = (
-                    self.books.st.running is not None and not self.books.st.running.started
-                )
-            except ValueError as exc:
-                self.books.state = resync.seq(base, message.dynamic_event_seq)
-                self.books.flag(
-                    Violation.STATUS_PHASE, f"status {status_text(message)}: {exc}", "dynamic_state 0, 1 or 2"
-                )
-            return True
-        if record.kind == "begin":
-            self.books.state = resync.next_run(base, record.message.dynamic_event_seq)
-            self.opened_by_begin = True
-            return False
-        self.books.state = base  # a trace from the server's start
-        return False
+        self.opened_by_begin = record.kind == "begin"
+        return self.replica.open(record)
 
     def on_begin(self, record: Record) -> None:
         message: DynamicEventDescription = record.message
@@ -484,22 +635,22 @@ class _Runs:
         if self.names is None:
             self.names = names
         elif names != self.names:
-            self.books.flag(
+            self.findings.flag(
                 Violation.BEGIN_NAMES,
                 f"begin names {message.fleet}/{message.robot}",
                 f"the robot of this trace, {self.names[0]}/{self.names[1]}",
             )
-        state = self.books.st
+        state = self.replica.st
         if self.late_begin(message):
             return
         self.begin_seen = True
         if state.shutdown:
-            self.books.flag(
+            self.findings.flag(
                 Violation.BEGIN_AFTER_SHUTDOWN, f"begin of run {message.dynamic_event_seq}", "nothing"
             )
             state = resync.serving(state)
         if state.active:
-            self.books.flag(
+            self.findings.flag(
                 Violation.BEGIN_WHILE_ACTIVE,
                 f"begin of run {message.dynamic_event_seq} while run {state.seq} is active",
                 "the end of the run first: FINISHED, a task cancel or kill, with an INACTIVE status",
@@ -507,44 +658,42 @@ class _Runs:
             open_goals = [queued.goal_uuid for queued in state.queued] + list(state.cancels)
             if state.running is not None:
                 open_goals.append(state.running.goal_uuid)
-            self.books.displace(open_goals)
+            self.goals.displace(open_goals)
             state = resync.run_dropped(state)
         expected = (state.seq + 1) & U32_MAX
         if message.dynamic_event_seq != expected:
-            self.books.flag(
+            self.findings.flag(
                 Violation.BEGIN_SEQ,
                 f"begin of run {message.dynamic_event_seq}",
                 f"seq {expected}, one above the previous run's {state.seq}",
             )
             state = resync.next_run(state, message.dynamic_event_seq)
         try:
-            event = ins.Begin(description=message.description, event_id=0, now=self.books.now)
+            event = ins.Begin(description=message.description, event_id=0, now=self.replica.now)
         except InvalidMessage as exc:
-            self.books.flag(
+            self.findings.flag(
                 Violation.BEGIN_DESCRIPTION,
                 f"begin description: {exc.problem}",
                 "a dynamic_event description",
             )
-            event = ins.Begin(description="{}", event_id=0, now=self.books.now)
-        self.books.state = state
-        self.books.commit(*self.books.simulate([event]))
+            event = ins.Begin(description="{}", event_id=0, now=self.replica.now)
+        self.replica.begin(state, event)
         self.latched_begin = message if self.opened_by_begin else None
         self.opened_by_begin = False
         self.event_id_pending = True
-        self.books.event_id_unknown = self.books.start_uncertain = False
 
     def late_begin(self, message: DynamicEventDescription) -> bool:
         """The begin of the run a trace started in (from its status), read after that status: a late
         subscriber reads the two latched topics in either order (docs/trace-format.md)."""
-        state = self.books.st
-        if self.begin_seen or not self.books.partial or not state.active:
+        state = self.replica.st
+        if self.begin_seen or not self.replica.partial or not state.active:
             return False
         self.begin_seen = True
         return message.dynamic_event_seq == state.seq
 
     def adopt_event_id(self, message: DynamicEventStatus) -> None:
         """The begin did not say the dynamic event's id; the WAITING status that follows does."""
-        state = self.books.st
+        state = self.replica.st
         if not (
             self.event_id_pending
             and message.dynamic_state == DynamicState.WAITING
@@ -554,57 +703,35 @@ class _Runs:
         ):
             return
         self.event_id_pending = False
-        self.books.state = resync.event_id(state, message.id)
         begin, self.latched_begin = self.latched_begin, None
-        if begin is not None and begin.start_time != message.time:
-            # not the begin's own status (a step publishes both with one time): the id it names is the
-            # highest used so far, and the run's own id is told by its FINISHED's answer
-            self.books.event_id_unknown = True
-        patched = []
-        for item in self.books.owed:
-            output = item.output
-            if (
-                isinstance(output, outs.PublishStatus)
-                and output.message.dynamic_state == DynamicState.WAITING
-                and output.message.id == 0
-            ):
-                fixed = outs.PublishStatus(message=attrs.evolve(output.message, id=message.id))
-                patched.append(attrs.evolve(item, output=fixed))
-            else:
-                patched.append(item)
-        self.books.owed = patched
+        # a status after a latched begin, with another time, is not the begin's own (a step publishes
+        # both with one time): the id it names is the highest used so far, and the run's own id is
+        # told by its FINISHED's answer
+        self.replica.learn_event_id(message.id, own=begin is None or begin.start_time == message.time)
 
     def on_status(self, record: Record) -> None:
         message: DynamicEventStatus = record.message
         if message.dynamic_state not in (0, 1, 2):
-            self.books.flag(
+            self.findings.flag(
                 Violation.STATUS_PHASE,
                 f"status with dynamic_state {message.dynamic_state}",
                 "dynamic_state 0 (INACTIVE), 1 (WAITING) or 2 (RUNNING)",
             )
             return
         self.adopt_event_id(message)
-        statuses = [index for index, item in enumerate(self.books.owed) if item.channel == "status"]
-        for index in statuses:
-            output = self.books.owed[index].output
-            assert isinstance(output, outs.PublishStatus)
-            if same_status(output.message, message):
-                # a status topic keeps one message: earlier ones may be overwritten unseen
-                self.books.owed = [
-                    item for i, item in enumerate(self.books.owed) if i > index or item.channel != "status"
-                ]
-                return
-        current = machine.status_message(self.books.st, self.books.now)
+        if self.replica.settle_status(message):
+            return
+        current = self.replica.status()
         if same_status(current, message):
             return  # a repeat of the state's status (e.g. the latched message, read again)
         # in the server's order a step's answers and feedback come before its status: prefer a
         # candidate that owes none, then accept one whose other outputs are still to come; a tap at a
         # client may see the status first, so a candidate whose answers the next records show wins
-        ahead = self.books.answers_ahead()
+        ahead = self.ahead.answers()
         found: tuple[State, list[Owed]] | None = None
         best = (-1, True)
-        for events in [*candidates(self.books.st, record, self.books.now), *self.ended_child()]:
-            state, owed = self.books.simulate(events)
+        for events in [*candidates(self.replica.st, record, self.replica.now), *self.ended_child()]:
+            state, owed = self.replica.simulate(events)
             published = [item.output for item in owed if isinstance(item.output, outs.PublishStatus)]
             if not published or not same_status(published[-1].message, message):
                 continue
@@ -615,11 +742,11 @@ class _Runs:
             found = self.ended_unanswered(message)
         if found is not None:
             state, owed = found
-            self.books.commit(state, [item for item in owed if item.channel != "status"])
-            self.books.owed = [item for item in self.books.owed if item.channel != "status"]
+            self.replica.forget_channel("status")
+            self.replica.commit(state, [item for item in owed if item.channel != "status"])
             return
-        self.books.owed = [item for item in self.books.owed if item.channel != "status"]
-        self.books.flag(
+        self.replica.forget_channel("status")
+        self.findings.flag(
             Violation.STATUS_MISMATCH,
             f"status {status_text(message)}",
             f"{status_text(current)}, the state's status",
@@ -629,25 +756,25 @@ class _Runs:
         """A child's end whose answer the next records show, after the starts of none, one, ... of the
         queued goals (a CANCEL starts silently and stops the child): a tap at a client sees the status
         topic and the answer on separate channels, so the status may come first."""
-        running = self.books.st.running
-        answer = self.books.ahead(running.goal_uuid) if running is not None and running.started else None
+        running = self.replica.st.running
+        answer = self.ahead.of_goal(running.goal_uuid) if running is not None and running.started else None
         if answer is None or answer.kind != "result" or answer.message.status not in _STATUS_VALUES:
             return []
-        return self.child_ends(ins.ChildFinished(status=answer.message.status, now=self.books.now))
+        return self.child_ends(ins.ChildFinished(status=answer.message.status, now=self.replica.now))
 
     def ended_unanswered(self, message: DynamicEventStatus) -> tuple[State, list[Owed]] | None:
         """A status that shows the running child's end (WAITING, or INACTIVE under a task signal),
         whose answer no record ahead shows: the end is read from the status alone, and the answers it
         owes stay owed, their content unknown (the child's final status is not on the wire).  An
         answer that never comes is then missing (R19.1) at this status, not a status that disagrees."""
-        running = self.books.st.running
+        running = self.replica.st.running
         if running is None or not running.started or message.dynamic_state == DynamicState.RUNNING:
             return None
         final = (
             running.child_status if running.child_status in ENDED_CHILD_STATUSES else Status.COMPLETED.value
         )
-        for events in self.child_ends(ins.ChildFinished(status=final, now=self.books.now)):
-            state, owed = self.books.simulate(events)
+        for events in self.child_ends(ins.ChildFinished(status=final, now=self.replica.now)):
+            state, owed = self.replica.simulate(events)
             published = [item.output for item in owed if isinstance(item.output, outs.PublishStatus)]
             if published and same_status(published[-1].message, message):
                 return state, [
@@ -660,8 +787,8 @@ class _Runs:
         """``ended`` after the starts of all, ..., one, none of the queued goals (a CANCEL starts
         silently and stops the child); most starts first: a binding starts a goal as soon as it
         accepts it."""
-        now = self.books.now
-        starts = [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now) for queued in self.books.st.queued]
+        now = self.replica.now
+        starts = [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now) for queued in self.replica.st.queued]
         return [[*starts[:count], ended] for count in range(len(starts), -1, -1)]
 
 
@@ -694,16 +821,16 @@ def log_seq_faults(last: int | None, feedback: Feedback) -> list[tuple[str, str]
     return faults
 
 
-class _Feedback:
+class _Feedback(_Part):
     """Feedback: a child's start and progress, abduced, compared, and corrected when it disagrees."""
 
-    def __init__(self, books: _Books) -> None:
-        self.books = books
+    def __init__(self, rooms: _Rooms) -> None:
+        super().__init__(rooms)
         self.log_seq: int | None = None  # the robot's last log seq seen
 
     def check_logs(self, feedback: Feedback) -> None:
         for message, expected in log_seq_faults(self.log_seq, feedback):
-            self.books.flag(Violation.LOG_SEQ, message, expected)
+            self.findings.flag(Violation.LOG_SEQ, message, expected)
         if feedback.logs:
             self.log_seq = feedback.logs[-1].seq
 
@@ -711,45 +838,45 @@ class _Feedback:
         feedback: Feedback = record.message
         self.check_logs(feedback)
         uuid = record.goal_uuid
-        seen = self.books.bind_unknown(uuid)
+        seen = self.goals.bind_unknown(uuid)
         label = f"feedback {feedback.status} id={feedback.id} for goal {uuid}"
         if seen is None or not seen.accepted:
-            what = self.books.unknown_goal if seen is None else "rejected"
-            self.books.flag(
+            what = self.goals.unknown_goal if seen is None else "rejected"
+            self.findings.flag(
                 Violation.FEEDBACK_NOT_RUNNING, f"{label}, {what}", "no feedback: no goal of it runs"
             )
             return
         if seen.answered is not None:
-            self.books.flag(
+            self.findings.flag(
                 Violation.AFTER_ANSWER,
                 f"{label} after its terminal answer (line {seen.answered})",
                 "nothing after a goal's terminal answer",
             )
             return
-        state = self.books.st
+        state = self.replica.st
         if seen.line == 0 and seen.owed and state.active and state.running is None:
             # a NEXT accepted before the trace began starts now
-            seen.owed = False
+            seen.take_up()
             goal = Goal(dynamic_event_seq=state.seq, event_type=EventType.NEXT, id=feedback.id)
             self.force_start(uuid, goal, feedback)
             return
         if seen.owed:
             return
         channel = f"goal:{uuid}"
-        for index, item in enumerate(self.books.owed):
+        for index, item in enumerate(self.replica.owed):
             if item.channel != channel:
                 continue
             if not isinstance(item.output, outs.PublishFeedback):
                 break
             if item.output.feedback.status == feedback.status and item.output.feedback.id == feedback.id:
-                del self.books.owed[index]
+                self.replica.take(index)
                 self.check_clamp(item, feedback)
                 return
-        found = self.books.abduce_uncertain(record)
+        found = self.replica.abduce_uncertain(record)
         if found is not None:
             events, state, owed, first = found
             owed.remove(first)
-            self.books.commit(state, owed)
+            self.replica.commit(state, owed)
             self.compare_feedback(first, feedback, events)
             return
         self.unexplained_feedback(record, seen)
@@ -760,23 +887,23 @@ class _Feedback:
         if expected.id != feedback.id:
             if isinstance(events[-1], (ins.GoalStarted, ins.Resume)):
                 policy = (
-                    "the NEXT goal's id" if self.books.config.id_policy is IdPolicy.GOAL else "the next id"
+                    "the NEXT goal's id" if self.replica.config.id_policy is IdPolicy.GOAL else "the next id"
                 )
-                self.books.flag(
+                self.findings.flag(
                     Violation.CHILD_ID,
                     f"the child started for goal {owed.output.goal_uuid} has id {feedback.id}",
                     f"id {expected.id}, {policy}",
                 )
-                self.patch_child_id(feedback.id)
+                self.replica.learn_child_id(feedback.id)
             else:
-                self.books.differs(
+                self.findings.differs(
                     owed.rule,
                     "feedback_id",
                     f"feedback id={feedback.id} for goal {owed.output.goal_uuid}",
                     f"id={expected.id}, the running child's",
                 )
         if expected.status != feedback.status:
-            self.books.differs(
+            self.findings.differs(
                 owed.rule,
                 "feedback_status",
                 f"feedback {feedback.status} for goal {owed.output.goal_uuid}",
@@ -793,61 +920,47 @@ class _Feedback:
             return
         warnings = [entry for entry in output.feedback.logs if entry.tier == Tier.WARNING.value]
         if warnings and not any(entry.tier == Tier.WARNING.value for entry in feedback.logs):
-            self.books.flag(
+            self.findings.flag(
                 Violation.CLAMP_NOT_REPORTED,
                 f"the start feedback of goal {output.goal_uuid} carries no warning",
                 f"a warning log entry: {warnings[0].text}",
             )
 
-    def patch_child_id(self, child_id: int) -> None:
-        running = self.books.st.running
-        if running is None:
-            return
-        self.books.state = resync.child_id(self.books.st, child_id)
-        current = machine.status_message(self.books.st, self.books.now)
-        self.books.owed = [
-            attrs.evolve(item, output=outs.PublishStatus(message=current))
-            if isinstance(item.output, outs.PublishStatus)
-            and item.output.message.dynamic_state == DynamicState.RUNNING
-            else item
-            for item in self.books.owed
-        ]
-
     def unexplained_feedback(self, record: Record, seen: GoalSeen) -> None:
         feedback: Feedback = record.message
         uuid = record.goal_uuid
         label = f"feedback {feedback.status} id={feedback.id} for goal {uuid}"
-        state = self.books.st
+        state = self.replica.st
         goal = seen.goal
         queued = any(item.goal_uuid == uuid for item in state.queued)
         pending = next(
             (
                 item
-                for item in self.books.owed
+                for item in self.replica.owed
                 if item.channel == f"goal:{uuid}" and isinstance(item.output, outs.AnswerGoal)
             ),
             None,
         )
         if queued and goal.event_type == EventType.NEXT:
-            _, owed = self.books.simulate([ins.GoalStarted(goal_uuid=uuid, now=self.books.now)])
+            _, owed = self.replica.simulate([ins.GoalStarted(goal_uuid=uuid, now=self.replica.now)])
             answer = next((item for item in owed if isinstance(item.output, outs.AnswerGoal)), None)
             if answer is not None and failure_of(answer.output) is Failure.RACE:
-                race = machine.race_lost(state, goal, self.books.config_for(goal))
-                self.books.flag(
+                race = machine.race_lost(state, goal, self.replica.config_for(goal))
+                self.findings.flag(
                     Violation.RACE_NOT_LOST,
                     f"{label}: its NEXT ({goal_text(goal)}) started a child",
                     f"aborted: {Failure.RACE.value!r}, as {race}",
                 )
             elif answer is not None and isinstance(answer.output, outs.AnswerGoal):
                 expected = answer_text(answer.output.status.value, answer.output.result, first_line=True)
-                self.books.differs(
+                self.findings.differs(
                     answer.rule, "feedback_not_running", f"{label}: its NEXT started a child", expected
                 )
             self.force_start(uuid, goal, feedback)
             return
         if pending is not None:
             assert isinstance(pending.output, outs.AnswerGoal)
-            self.books.differs(
+            self.findings.differs(
                 pending.rule,
                 "feedback_not_running",
                 f"{label}, whose event has ended",
@@ -855,13 +968,13 @@ class _Feedback:
             )
             return
         kind = EventType(goal.event_type).name if goal.event_type <= 3 else f"event_type {goal.event_type}"
-        self.books.flag(
+        self.findings.flag(
             Violation.FEEDBACK_NOT_RUNNING, f"{label}, a {kind} goal that runs no child", "no feedback"
         )
 
     def force_start(self, uuid: str, goal: Goal, feedback: Feedback) -> None:
         """The server runs this NEXT, whatever the rules say: make it the running goal."""
-        state = self.books.st
+        state = self.replica.st
         displaced = list(state.cancels)
         if state.running is not None:
             displaced.append(state.running.goal_uuid)
@@ -872,16 +985,17 @@ class _Feedback:
                 for item in state.queued
                 if item.goal.event_type == EventType.CANCEL and item.goal.id == old
             )
-        self.books.displace(displaced)
-        self.books.state = resync.running(state, uuid, goal, feedback.id, feedback.status, displaced)
-        self.books.owed = [item for item in self.books.owed if item.channel != "status"]
+        self.goals.displace(displaced)
+        self.replica.resync(resync.running(state, uuid, goal, feedback.id, feedback.status, displaced))
+        self.replica.forget_channel("status")
 
 
-class _Answers:
-    """Terminal answers: the end of a goal, abduced or owed, compared with the machine's."""
+class _Answers(_Part):
+    """Terminal answers: the end of a goal, abduced or owed, compared with the machine's, and at the
+    trace's end those never seen."""
 
-    def __init__(self, books: _Books) -> None:
-        self.books = books
+    def __init__(self, rooms: _Rooms) -> None:
+        super().__init__(rooms)
         self.last_end: tuple[int, Result] | None = None  # the last child end: its line and result
 
     def on_result(self, record: Record) -> None:
@@ -889,55 +1003,78 @@ class _Answers:
         uuid = record.goal_uuid
         # the running goal is answered at its child's end, or at shutdown
         failure = first_line(result.execution_failure)
-        seen = self.books.bind_unknown(uuid, failure in ("", Failure.SHUTDOWN.value))
+        seen = self.goals.bind_unknown(uuid, failure in ("", Failure.SHUTDOWN.value))
         label = f"answer {answer_text(record.status, result, first_line=True)} for goal {uuid}"
         if seen is None or not seen.accepted:
-            what = self.books.unknown_goal if seen is None else "rejected"
-            self.books.flag(
+            what = self.goals.unknown_goal if seen is None else "rejected"
+            self.findings.flag(
                 Violation.ANSWER_NOT_ACCEPTED, f"{label}, {what}", "no answer: the goal was never accepted"
             )
             return
         if seen.answered is not None:
-            self.books.flag(
+            self.findings.flag(
                 Violation.SECOND_ANSWER,
                 f"{label}: a second terminal answer (the first on line {seen.answered})",
                 "exactly one terminal answer per goal",
             )
             return
-        seen.answered = record.line
+        seen.answer(record.line)
         if seen.owed:
             return
         channel = f"goal:{uuid}"
         pending = next(
             (
                 item
-                for item in self.books.owed
+                for item in self.replica.owed
                 if item.channel == channel and isinstance(item.output, outs.AnswerGoal)
             ),
             None,
         )
         if pending is not None:
-            self.books.forget_channel(channel)
+            self.replica.forget_channel(channel)
             self.compare_answer(pending, record)
             return
         if self.started_unseen(record):
             return
-        found = self.books.abduce_uncertain(record)
+        found = self.replica.abduce_uncertain(record)
         if found is not None:
             events, state, owed, first = found
-            self.books.commit(state, [item for item in owed if item.channel != channel])
+            self.replica.commit(state, [item for item in owed if item.channel != channel])
             self.compare_answer(first, record)
             if isinstance(events[-1], ins.ChildFinished) and isinstance(first.output, outs.AnswerGoal):
                 self.last_end = (record.line, first.output.result)
             return
         self.unexplained_answer(record, seen)
 
+    def never_seen(self, evidence: AnswerEvidence | None = None) -> None:
+        """At the trace's end: every answer owed by a step the trace showed, never seen, is missing.
+        ``evidence`` (a reader that may not hold every answer, a bag) says which answers it could have
+        shown, and the goal statuses that showed others (see :class:`AnswerEvidence`)."""
+        missing = Violation.ANSWER_MISSING
+        for item in self.replica.take_answers():
+            assert isinstance(item.output, outs.AnswerGoal)
+            uuid = item.output.goal_uuid
+            if evidence is not None:
+                if uuid in evidence.settled:
+                    continue  # answered: its goal status shows it, though the bag lacks the answer
+                if uuid not in evidence.asked:
+                    continue  # no client asked for it: no recording could hold it
+                if evidence.until is not None and item.line > evidence.until:
+                    continue  # the recording stopped while it may have been on its way
+            if item.exact:
+                message = f"goal {uuid} never answered (by the end of the trace)"
+                expected = f"{answer_text(item.output.status.value, item.output.result)} ({item.rule})"
+            else:  # a child's end read from its status alone: how it ended is not on the wire
+                message = f"goal {uuid} never answered, though this status shows its child's end"
+                expected = f"one terminal answer, with the child's result, before this status ({item.rule})"
+            self.findings.differs(missing.rule, missing.code, message, expected, line=item.line)
+
     def started_unseen(self, record: Record) -> bool:
         """A CANCEL's start shows nothing on the wire: its answer may say it waited for the last child."""
-        state = self.books.st
+        state = self.replica.st
         uuid = record.goal_uuid
         queued = next((item for item in state.queued if item.goal_uuid == uuid), None)
-        seen = self.books.goals.get(uuid)
+        seen = self.goals.get(uuid)
         if queued is None or queued.goal.event_type != EventType.CANCEL or self.last_end is None:
             return False
         line, result = self.last_end
@@ -945,7 +1082,7 @@ class _Answers:
             return False
         if record.message != result:
             return False
-        self.books.state = resync.dropped(state, uuid)
+        self.replica.resync(resync.dropped(state, uuid))
         return True
 
     def compare_answer(self, owed: Owed, record: Record) -> None:
@@ -957,18 +1094,17 @@ class _Answers:
             return  # an end read from a status alone: the answer was owed, its content is not known
         label = f"goal {record.goal_uuid} answered {answer_text(record.status, result, first_line=True)}"
         want = answer_text(output.status.value, expected, first_line=True)
-        seen = self.books.goals.get(record.goal_uuid)
+        seen = self.goals.get(record.goal_uuid)
         early = {record.status, output.status.value} == {GoalStatus.ABORTED.value, GoalStatus.CANCELED.value}
         if early and seen is not None and seen.line == 0:
             pass  # a goal from before the trace: whether it was cancelled through the action is not known
         elif record.status != output.status.value:
-            self.books.differs(owed.rule, "goal_status", label, f"{want} ({owed.rule})")
-        elif owed.rule == machine.FINISHED_RULE and self.books.event_id_unknown:
-            self.books.event_id_unknown = False  # the first FINISHED of a run joined late names its own id
-            self.books.state = resync.event_id(self.books.st, observed.id)
+            self.findings.differs(owed.rule, "goal_status", label, f"{want} ({owed.rule})")
+        elif owed.rule == machine.FINISHED_RULE and self.replica.event_id_unknown:
+            self.replica.learn_event_id_from_finished(observed.id)
         elif expected.id != observed.id:
             rule = result_rule(owed.rule)
-            self.books.differs(
+            self.findings.differs(
                 rule, "result_id", f"{label}: the result id does not match", f"{want} ({rule})"
             )
         elif (first_line(expected.execution_failure), expected.status) != (
@@ -976,11 +1112,11 @@ class _Answers:
             observed.status,
         ):
             rule = result_rule(owed.rule)
-            self.books.differs(rule, "result", label, f"{want} ({rule})")
+            self.findings.differs(rule, "result", label, f"{want} ({rule})")
 
     def unexplained_answer(self, record: Record, seen: GoalSeen) -> None:
         uuid = record.goal_uuid
-        state = self.books.st
+        state = self.replica.st
         label = f"goal {uuid} answered {answer_text(record.status, record.message, first_line=True)}"
         running = state.running
         queued = next((item for item in state.queued if item.goal_uuid == uuid), None)
@@ -988,39 +1124,42 @@ class _Answers:
             queued is not None and queued.goal.event_type == EventType.CANCEL and running
         ):
             child = running.child_id if running is not None else 0
-            self.books.flag(
+            self.findings.flag(
                 Violation.CANCEL_ANSWERED_EARLY,
                 f"{label} while child {child} still runs",
                 f"the CANCEL waits for child {child} to end, then is answered with its result (R8.3)",
             )
-            self.books.state = resync.dropped(state, uuid)
+            self.replica.resync(resync.dropped(state, uuid))
             return
         if queued is not None:
             start = "its child starts" if queued.goal.event_type == EventType.NEXT else "it runs"
-            self.books.flag(Violation.ANSWER_BEFORE_START, label, f"no answer yet: {start}")
-            self.books.state = resync.dropped(state, uuid)
+            self.findings.flag(Violation.ANSWER_BEFORE_START, label, f"no answer yet: {start}")
+            self.replica.resync(resync.dropped(state, uuid))
             return
         if running is not None and running.goal_uuid == uuid:
-            self.books.flag(
+            self.findings.flag(
                 Violation.ANSWER_WHILE_DEFERRED, label, "no answer while the child's start is deferred"
             )
-            self.books.state = resync.start_dropped(state)
+            self.replica.resync(resync.start_dropped(state))
             return
-        self.books.flag(Violation.ANSWER_NOT_OPEN, label, "no answer: the goal is not open")
+        self.findings.flag(Violation.ANSWER_NOT_OPEN, label, "no answer: the goal is not open")
 
 
 class _Observer:
     """Observer mode (see the module docs): each record goes to the part that reads its kind.
 
-    The parts share the books (:class:`_Books`) and keep what only they need; none calls another.
+    The parts judge against the rooms (:class:`_Rooms`), each the only keeper of what it holds, and
+    keep what only they need; none calls another.
     """
 
     def __init__(self, header: TraceHeader) -> None:
-        self.books = _Books(header)
-        self.requests = _Requests(self.books)
-        self.runs = _Runs(self.books, header)
-        self.feedback = _Feedback(self.books)
-        self.answers = _Answers(self.books)
+        findings, ahead = _Findings(), _Ahead()
+        replica = _Replica(header, findings, ahead)
+        self.rooms = _Rooms(findings=findings, ahead=ahead, replica=replica, goals=_Goals(replica))
+        self.requests = _Requests(self.rooms)
+        self.runs = _Runs(self.rooms, header)
+        self.feedback = _Feedback(self.rooms)
+        self.answers = _Answers(self.rooms)
         self._handlers: dict[str, Callable[[Record], None]] = {
             "goal": self.requests.on_goal,
             "goal_response": self.requests.on_goal_response,
@@ -1033,19 +1172,14 @@ class _Observer:
         }
 
     def feed(self, record: Record) -> None:
-        books = self.books
-        books.line = record.line
-        books.now = max(books.now, record.time)
-        if books.state is None and self.runs.sync(record):
+        rooms = self.rooms
+        rooms.findings.at(record.line)
+        rooms.replica.advance(record.time, record.line)
+        if rooms.replica.state is None and self.runs.sync(record):
             return
         self._handlers[record.kind](record)
         if record.kind in ("result", "goal_response"):
-            seen = books.goals.get(record.goal_uuid)
-            if seen is not None and seen.answered == record.line:
-                seen.goal = ANSWERED  # what is judged after its answer is the line
-                books.close(record.goal_uuid)
-            elif seen is not None and record.kind == "goal_response" and seen.responded and not seen.accepted:
-                books.close(record.goal_uuid)
+            rooms.goals.judged(record)
 
 
 #: How many closed (answered or refused) goals the observer remembers: a record naming one of the
@@ -1057,7 +1191,7 @@ CLOSED_GOALS = 4096
 LOOKAHEAD = 2
 
 
-def _response_ahead(books: _Books, record: Record, window: Iterable[Record]) -> Record | None:
+def _response_ahead(rooms: _Rooms, record: Record, window: Iterable[Record]) -> Record | None:
     """The response, among the records ahead, of the goal whose feedback or answer ``record`` is, when
     the goal awaits it, or of an accepted goal when ``record`` is a status; or the begin of the run
     whose status ``record`` is, when that run has not begun: a tap at a client sees the action's
@@ -1065,18 +1199,18 @@ def _response_ahead(books: _Books, record: Record, window: Iterable[Record]) -> 
     response follows its request at once, so no record comes between them.)"""
 
     def awaited(ahead: Record) -> bool:
-        seen = books.goals.get(ahead.goal_uuid)
+        seen = rooms.goals.get(ahead.goal_uuid)
         return ahead.kind == "goal_response" and seen is not None and not seen.responded
 
     if record.kind == "status":
         seq = record.message.dynamic_event_seq
-        state = books.state
+        state = rooms.replica.state
         if state is not None and seq != state.seq and record.message.dynamic_state != DynamicState.INACTIVE:
             # the status of a run whose begin, on the other topic, was read just after it
             begin = next((ahead for ahead in window if ahead.kind == "begin"), None)
             if begin is not None and begin.message.dynamic_event_seq == seq:
                 return begin
-        late = _late_feedback(books, record.message, list(window))
+        late = _late_feedback(rooms.replica.state, record.message, list(window))
         if late is not None:
             return late
         # the status of an accepted goal's start, before its response
@@ -1086,11 +1220,11 @@ def _response_ahead(books: _Books, record: Record, window: Iterable[Record]) -> 
     return next((ahead for ahead in window if awaited(ahead) and ahead.goal_uuid == record.goal_uuid), None)
 
 
-def _late_feedback(books: _Books, status: DynamicEventStatus, ahead: list[Record]) -> Record | None:
+def _late_feedback(state: State | None, status: DynamicEventStatus, ahead: list[Record]) -> Record | None:
     """The running goal's feedback, among the records ahead, received after a status that shows its
     child's end and before the goal's answer: sent before both (the answer goes before the status of
     its step), delivered late (a recorder under load; feedback has no stamp to put it back by)."""
-    running = books.state.running if books.state is not None else None
+    running = state.running if state is not None else None
     if running is None or not running.started:
         return None
     ended = not machine.runs_a_child(status) or status.id != running.child_id
@@ -1124,9 +1258,8 @@ class Checker:
         reader could have shown, see :class:`AnswerEvidence`); the report."""
         while self._window:
             self._judge_first()
-        books = self._observer.books
-        books.answers_never_seen(evidence)
-        return Report(source=self.source, records=self._count, findings=tuple(books.findings))
+        self._observer.answers.never_seen(evidence)
+        return Report(source=self.source, records=self._count, findings=self._observer.rooms.findings.all())
 
     def cut(self) -> tuple[Report, list[Record]]:
         """Stop here, for a reader that goes on with a new observer (a bag that lost a goal's request):
@@ -1134,19 +1267,18 @@ class Checker:
         but not judged."""
         pending = list(self._window)
         self._window.clear()
-        findings = tuple(self._observer.books.findings)
+        findings = self._observer.rooms.findings.all()
         return Report(source=self.source, records=self._count, findings=findings), pending
 
     def _judge_first(self) -> None:
-        window, books = self._window, self._observer.books
+        window, rooms = self._window, self._observer.rooms
         record = window.popleft()
-        response = _response_ahead(books, record, window)
+        response = _response_ahead(rooms, record, window)
         if response is not None:  # a tap at a client: the goal's feedback or answer came first
             window.remove(response)
             window.appendleft(record)
             record = response
-        books.lookahead = tuple(window)
-        books.upcoming = window[0] if window else None
+        rooms.ahead.show(tuple(window))
         try:
             self._observer.feed(record)
         except Unreadable as exc:
