@@ -254,7 +254,8 @@ MODULES = frozenset(module for module, _ in _modules())
 
 #: Methods that change the container they are called on.
 _MUTATORS = frozenset(
-    "add append appendleft clear discard extend insert pop popitem popleft remove setdefault sort update".split()
+    {"add", "append", "appendleft", "clear", "discard", "extend", "insert", "pop", "popitem", "popleft"}
+    | {"remove", "setdefault", "sort", "update"}
 )
 
 
