@@ -11,7 +11,8 @@ import signal
 import subprocess
 import sys
 import threading
-from collections.abc import Callable, Sequence
+import zlib
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, TypeVar
 
 T = TypeVar("T")
@@ -74,9 +75,35 @@ def finish(process: subprocess.Popen[str], timeout: float) -> subprocess.Complet
     return subprocess.CompletedProcess(process.args, process.returncode, stdout, stderr or "")
 
 
+#: How many DDS domains the tests choose among (0 to 101 are safe on Linux; 0 is left to a default
+#: ROS install).
+DOMAINS = 100
+
+
+def domain_of(environ: Mapping[str, str]) -> int:
+    """The DDS domain of this test process: one per test run, so that parallel runs never meet, and under
+    pytest-xdist one per worker, so that two ROS tests running at once never meet either.
+
+    The run's domain is ``ROS_DOMAIN_ID`` when set (worker ``gwN`` then takes the Nth domain after
+    it), else one of 1 to :data:`DOMAINS` drawn at random (under xdist from the run's id, which every
+    worker shares; worker ``gwN`` takes the Nth after it, counting round).
+    """
+    worker = environ.get("PYTEST_XDIST_WORKER", "")
+    index = int(worker[2:]) if worker.startswith("gw") and worker[2:].isdigit() else 0
+    given = environ.get("ROS_DOMAIN_ID", "")
+    if given.isdigit():
+        return int(given) + index
+    if "PYTEST_XDIST_TESTRUNUID" in environ:
+        drawn = zlib.crc32(environ["PYTEST_XDIST_TESTRUNUID"].encode()) % DOMAINS
+    else:
+        drawn = random.randrange(DOMAINS)
+    return 1 + (drawn + index) % DOMAINS
+
+
 def keep_dds_local() -> None:
-    """One DDS domain per test run, so that parallel runs never meet; discovery stays on this machine."""
-    os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(1, 100)))
+    """A DDS domain of this process's own (:func:`domain_of`), which the processes it starts inherit;
+    discovery stays on this machine."""
+    os.environ["ROS_DOMAIN_ID"] = str(domain_of(os.environ))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     os.environ.pop("ROS_STATIC_PEERS", None)
     os.environ.pop("ROS_LOCALHOST_ONLY", None)

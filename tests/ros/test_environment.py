@@ -22,3 +22,20 @@ def test_no_core_module_imports_rclpy() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=False
     )
     assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_each_xdist_worker_takes_a_dds_domain_of_its_own() -> None:
+    """Two ROS tests that run at once, on two workers, never meet on DDS: each worker of a run takes its
+    own domain, the same for the whole run; a domain the user gave is the first worker's."""
+    from ros_support import DOMAINS, domain_of
+
+    run = {"PYTEST_XDIST_TESTRUNUID": "3f2a"}
+    domains = [domain_of({**run, "PYTEST_XDIST_WORKER": f"gw{n}"}) for n in range(8)]
+    assert len(set(domains)) == 8 and all(1 <= domain <= DOMAINS for domain in domains), domains
+    assert domains == [domain_of({**run, "PYTEST_XDIST_WORKER": f"gw{n}"}) for n in range(8)]
+    many = [domain_of({**run, "PYTEST_XDIST_WORKER": f"gw{n}"}) for n in range(DOMAINS)]
+    assert sorted(many) == list(range(1, DOMAINS + 1))  # counting round, never past the last
+    given = {"ROS_DOMAIN_ID": "42"}
+    assert [domain_of({**given, "PYTEST_XDIST_WORKER": f"gw{n}"}) for n in range(3)] == [42, 43, 44]
+    assert domain_of(given) == 42
+    assert 1 <= domain_of({}) <= DOMAINS
