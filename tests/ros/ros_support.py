@@ -175,6 +175,11 @@ class Graph:
 
         self._closing.set()
         self._thread.join(timeout=5)
+        # MultiThreadedExecutor.shutdown (rclpy 9.1.2) destroys the executor's guard condition before
+        # it waits for its thread pool, where a callback that found its callback group busy still
+        # triggers that guard condition: the task fails ("cannot use Destroyable"), and its exception
+        # is printed when the task is collected.  The pool's callbacks end first here.
+        self.executor._executor.shutdown(wait=True)
         self.executor.shutdown(timeout_sec=5)
         close_down(self.nodes, self.context)
         if self.died is not None:
