@@ -1254,14 +1254,13 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
         return probe_cases.EXIT_USAGE
     say(probe_cases.format_findings(findings).rstrip("\n"))
     server = f"{options.fleet}/{options.robot}"
-    outputs: dict[str, Callable[[], str]] = {
-        "junit": lambda: probe_cases.junit_xml(findings, server),
-        "report": lambda: probe_cases.report(
+    outputs: list[tuple[str, str | None, Callable[[], str]]] = [
+        ("junit", options.junit, lambda: probe_cases.junit_xml(findings, server)),
+        ("report", options.report, lambda: probe_cases.report(
             findings, server, html_form=str(options.report).lower().endswith((".html", ".htm"))
-        ),
-    }
-    for flag, text in outputs.items():
-        path = options.junit if flag == "junit" else options.report
+        )),
+    ]  # fmt: skip
+    for flag, path, text in outputs:
         if path:
             try:
                 Path(path).write_text(text(), "utf-8")

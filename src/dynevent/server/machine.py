@@ -550,8 +550,9 @@ def _description_too_long(
     state: State, goal: Goal, config: ServerConfig, found: list[Any]
 ) -> outs.Rejected | None:
     description, limit = goal.description, config.max_description_length
-    # one byte a character needs no encoding (bench/machine_revisions.py: with _stale inlined in the
-    # stale-id check, an accepted NEXT's accept went from 1.15 to 1.11-1.12 times b54d329's)
+    # one byte a character needs no encoding (bench/machine_revisions.py: with the stale-id test then
+    # inlined beside it, since given back so that _stale is its one source, it took an accepted NEXT's
+    # accept from 1.15 to 1.12 times b54d329's)
     if len(description) <= limit and description.isascii():
         return None
     size = _json.utf8_size(description)
@@ -616,10 +617,7 @@ def _non_finite_stubborn(
 
 
 def _stale_id(state: State, goal: Goal, config: ServerConfig, found: list[Any]) -> outs.Rejected | None:
-    if config.id_policy is not _GOAL_IDS:  # _stale, inlined: every accepted NEXT runs it (see the size check)
-        return None
-    goal_id, last_id = goal.id, state.last_id
-    if (last_id != U64_MAX) if goal_id == 0 else (goal_id > last_id):
+    if not _stale(state, goal, config):
         return None
     if goal.id == 0:
         text = f"id 0 asks the server for the next id, and none is left above {state.last_id}"

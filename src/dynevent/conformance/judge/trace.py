@@ -228,6 +228,9 @@ def _record(data: Any, source: str, line: int) -> Record | dict[str, Any]:
 
 @attrs.frozen(kw_only=True)
 class TraceHeader:
+    """What a trace says before its records: the robot it is of, and the configuration of its server
+    (from a config record), or how to judge the server without one."""
+
     fleet: str | None = None
     robot: str | None = None
     config: ServerConfig | None = None
