@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 import typing
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 import attrs
@@ -137,9 +137,9 @@ def test_server_config_compares_and_hashes_by_identity() -> None:
 
 
 def test_validator_type_alias() -> None:
-    assert machine.Validator == Callable[[str, Any], Sequence[str]]
+    assert machine.Validator == Callable[[str, Any], Iterable[str]]
     hints = typing.get_type_hints(ServerConfig)
-    assert hints["categories"] == Mapping[str, Callable[[str, Any], Sequence[str]]]
+    assert hints["categories"] == Mapping[str, Callable[[str, Any], Iterable[str]]]
 
 
 def test_handler_table_type() -> None:

@@ -196,7 +196,7 @@ def load_vectors(paths: Iterable[str | os.PathLike[str]] = ()) -> list[Vector]:
     return found
 
 
-_RULE = re.compile(r"R(\d+)\.(\d+)")
+_RULE = re.compile(r"R(\d{1,9})\.(\d{1,9})")  # a rule number of ten digits is no rule of the spec
 
 
 def rule_key(rule: str) -> tuple[int, int, str]:

@@ -22,7 +22,7 @@ from typing import Any
 
 from dynevent.errors import InvalidConfig
 
-__all__ = ["Predicate", "compile_schema"]
+__all__ = ["Predicate", "compile_schema", "compile_subschemas"]
 
 #: A compiled schema: ``predicate(instance) -> valid``.
 Predicate = Callable[[Any], bool]
@@ -221,3 +221,25 @@ def compile_schema(name: str, registry: Mapping[str, Mapping[str, Any]]) -> Pred
     raises :class:`~dynevent.errors.InvalidConfig` for a keyword it cannot judge."""
     document, _, pointer = name.partition("#")
     return _Compiler(registry).reference(document, "#" + pointer)
+
+
+def compile_subschemas(
+    keyword: str, registry: Mapping[str, Mapping[str, Any]]
+) -> dict[int, tuple[Mapping[str, Any], Predicate]]:
+    """The predicate of every subschema that is the value of ``keyword`` (``"items"``) anywhere in
+    ``registry``'s documents, by the identity of that subschema (kept beside it, so that the
+    identity stays its own): how an explanation skips the members a subschema accepts."""
+    compiler = _Compiler(registry)
+    found: dict[int, tuple[Mapping[str, Any], Predicate]] = {}
+    for name, document in registry.items():
+        pending: list[Any] = [document]
+        while pending:
+            node = pending.pop()
+            if isinstance(node, list):
+                pending.extend(node)
+            elif isinstance(node, dict):
+                sub = node.get(keyword)
+                if isinstance(sub, dict):
+                    found[id(sub)] = (sub, compiler.schema(name, sub))
+                pending.extend(node.values())
+    return found

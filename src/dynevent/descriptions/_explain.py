@@ -10,12 +10,15 @@ further than another, the line names what was expected: the schema's title.
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from collections.abc import Iterable, Sequence
 from typing import Any
 
-__all__ = ["explain", "pointer", "render"]
+import attrs
+
+__all__ = ["explain", "integer_text", "pointer", "prefixed", "render", "under"]
 
 #: Values longer than this are shortened in an error line.
 _LONGEST_VALUE = 48
@@ -38,15 +41,80 @@ def pointer(path: Iterable[Any]) -> str:
 
 
 def render(value: Any) -> str:
-    """A value as compact JSON, shortened past :data:`_LONGEST_VALUE` characters."""
-    if isinstance(value, float) and not math.isfinite(value):
-        text = "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
-    else:
-        try:
-            text = json.dumps(value, ensure_ascii=False, separators=(", ", ": "), allow_nan=True)
-        except (TypeError, ValueError):  # not JSON (never from a parsed description)
-            text = repr(value)
+    """A value as compact JSON, shortened past :data:`_LONGEST_VALUE` characters.
+
+    The cost is bounded whatever the value: only the pieces up to the cut are written (a
+    description of a megabyte is not encoded to show its first 48 characters), an integer too
+    long to write is named by its length, and nesting of any depth is walked without recursion.
+    """
+    pieces: list[str] = []
+    size = 0
+    pending: list[Any] = [value]
+    while pending and size <= _LONGEST_VALUE:
+        item = pending.pop()
+        if isinstance(item, _Piece):
+            piece = item.text
+        elif isinstance(item, dict):
+            piece = "{"
+            pending.append(_Piece("}"))
+            for number, (key, member) in reversed(list(enumerate(_first(item.items())))):
+                pending.extend((member, _Piece(_scalar(str(key)) + ": ")))
+                if number:
+                    pending.append(_Piece(", "))
+        elif isinstance(item, (list, tuple)):
+            piece = "["
+            pending.append(_Piece("]"))
+            for number, member in reversed(list(enumerate(_first(item)))):
+                pending.append(member)
+                if number:
+                    pending.append(_Piece(", "))
+        else:
+            piece = _scalar(item)
+        pieces.append(piece)
+        size += len(piece)
+    text = "".join(pieces)
     return text if len(text) <= _LONGEST_VALUE else text[: _LONGEST_VALUE - 1] + "…"
+
+
+@attrs.frozen
+class _Piece:
+    """Text already written, waiting on :func:`render`'s stack."""
+
+    text: str
+
+
+def _first(items: Iterable[Any]) -> list[Any]:
+    """The members a shortened rendering can show (each takes at least one character)."""
+    return list(itertools.islice(items, _LONGEST_VALUE))
+
+
+#: Integers of more bits than this (about 4,200 digits) are named by their length, not written out:
+#: Python refuses to write one of more than 4,300 digits by default, and none would fit a line.
+_LONGEST_INTEGER_BITS = 14_000
+
+
+def integer_text(value: int) -> str:
+    """An integer as decimal text, or, past what Python writes, ``<an integer of about N digits>``."""
+    if value.bit_length() <= _LONGEST_INTEGER_BITS:
+        try:
+            return int.__repr__(value)
+        except ValueError:  # the interpreter's limit on digits set lower than its default
+            pass
+    return f"<an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits>"
+
+
+def _scalar(value: Any) -> str:
+    if isinstance(value, bool) or value is None:
+        return "true" if value is True else ("false" if value is False else "null")
+    if isinstance(value, int):
+        return integer_text(value)
+    if isinstance(value, float) and not math.isfinite(value):
+        return "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
+    if isinstance(value, str):
+        return json.dumps(value[: _LONGEST_VALUE + 1], ensure_ascii=False)
+    if isinstance(value, float):
+        return float.__repr__(value)
+    return repr(value)[: _LONGEST_VALUE + 1]  # not JSON (never from a parsed description)
 
 
 def _title(schema: Any, fallback: str) -> str:
@@ -118,10 +186,11 @@ def prefixed(prefix: Sequence[Any], lines: Iterable[str]) -> tuple[str, ...]:
     """``lines`` of a nested description, their pointers moved under ``prefix`` (a line of another
     validator that has no pointer is put at the nested description itself)."""
     head = pointer(prefix)
-    return tuple(_under(head, str(line)) for line in lines)
+    return tuple(under(head, str(line)) for line in lines)
 
 
-def _under(head: str, line: str) -> str:
+def under(head: str, line: str) -> str:
+    """One line of a nested description, its pointer moved under ``head`` (a pointer)."""
     if line.startswith("/:"):
         return head + line[1:]
     if line.startswith("/"):

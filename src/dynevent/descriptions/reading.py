@@ -16,6 +16,7 @@ from typing import Any
 import attrs
 
 from dynevent.descriptions import shapes
+from dynevent.descriptions._explain import integer_text
 from dynevent.errors import InvalidEventDescription
 
 __all__ = [
@@ -40,7 +41,7 @@ class Place:
     orientation: float | None = None
 
     def __str__(self) -> str:
-        name = self.waypoint if isinstance(self.waypoint, str) else f"#{self.waypoint}"
+        name = self.waypoint if isinstance(self.waypoint, str) else f"#{integer_text(self.waypoint)}"
         return name if self.orientation is None else f"{name} (facing {self.orientation:g} rad)"
 
 

@@ -21,6 +21,7 @@ from typing import Any
 
 from dynevent.descriptions import _compile, _explain
 from dynevent.errors import MissingExtra, UnknownCategory
+from dynevent.server.config import MAX_LISTED_ERRORS, listed_errors
 
 __all__ = ["CATEGORIES", "conforms", "form", "require_explanations", "schema", "schemas", "shape_errors"]
 
@@ -73,12 +74,13 @@ def _forms(category: str) -> tuple[_compile.Predicate, ...]:
     )
 
 
-def form(category: str, description: Any) -> int | None:
+def form(category: str, description: Any, *, conforming: bool = False) -> int | None:
     """Which form of ``category``'s schema a conforming description takes: the index of the one
     branch of its top-level ``oneOf`` that it fits (``go_to_place``: 0 a place, 1 ``{"place": ...}``,
     2 ``{"one_of": [...]}``), or ``None`` for a schema without forms or a description that does
-    not conform.  Keys do not tell: ``{"place": "A", "one_of": 5}`` is of the second form."""
-    if not conforms(category, description):
+    not conform.  Keys do not tell: ``{"place": "A", "one_of": 5}`` is of the second form.
+    ``conforming=True`` says the caller has just seen it conform (it is not judged twice)."""
+    if not conforming and not conforms(category, description):
         return None
     return next((number for number, fits in enumerate(_forms(category)) if fits(description)), None)
 
@@ -90,16 +92,47 @@ def conforms(category: str, description: Any) -> bool:
 
 @functools.cache
 def _validator(category: str) -> Any:
-    """The ``jsonschema`` validator of ``category``, or ``None`` without the package."""
+    """The ``jsonschema`` validator of ``category``, or ``None`` without the package.
+
+    Its ``items`` lists the faults of the first few members at fault only, and skips a member
+    the compiled schema accepts without asking the package (R4.19): an array of any length is
+    explained in time linear in its length, with a small constant."""
     try:
         import jsonschema
         import referencing
     except ImportError:
         return None
+    draft = referencing.jsonschema.DRAFT202012
+    # without "$schema", a document that a $ref leads into keeps this class (the package picks a
+    # document's class by its "$schema"), so that the bounded "items" holds everywhere
+    documents = {
+        name: {key: value for key, value in document.items() if key != "$schema"}
+        for name, document in _schemas().items()
+    }
     registry: Any = referencing.Registry().with_resources(
-        (name, referencing.Resource.from_contents(document)) for name, document in _schemas().items()
+        (name, referencing.Resource.from_contents(document, default_specification=draft))
+        for name, document in documents.items()
     )
-    return jsonschema.Draft202012Validator(_schemas()[_document(category)], registry=registry)
+    accepts = _compile.compile_subschemas("items", documents)
+
+    def items(validator: Any, items: Any, instance: Any, schema: Any) -> Any:
+        if not validator.is_type(instance, "array"):
+            return
+        known = accepts.get(id(items))
+        fits = known[1] if known is not None and known[0] is items else None
+        at_fault = 0
+        for index, item in enumerate(instance):
+            if fits is not None and fits(item):
+                continue
+            errors = list(validator.descend(instance=item, schema=items, path=index))
+            if errors:
+                yield from errors
+                at_fault += 1
+                if at_fault > MAX_LISTED_ERRORS:
+                    return
+
+    bounded = jsonschema.validators.extend(jsonschema.Draft202012Validator, {"items": items})
+    return bounded(documents[_document(category)], registry=registry)
 
 
 def require_explanations() -> None:
@@ -113,9 +146,10 @@ def shape_errors(category: str, description: Any) -> tuple[str, ...]:
     """Why ``description`` fails ``category``'s schema, one line per fault (none when it conforms).
 
     Each line is ``<JSON pointer>: <fault>``, e.g. ``/one_of/1: 5.5 is not a place``; the
-    description itself is ``/``.  The lines come from the ``jsonschema`` package (the
-    ``descriptions`` extra); without it the verdict is the same and the one line says only
-    that the description is not of the category, and how to learn where.
+    description itself is ``/``.  At most :data:`~dynevent.server.config.MAX_LISTED_ERRORS` are
+    listed (R4.19), found in time linear in the description's size.  The lines come from the
+    ``jsonschema`` package (the ``descriptions`` extra); without it the verdict is the same and
+    the one line says only that the description is not of the category, and how to learn where.
     """
     if conforms(category, description):
         return ()
@@ -127,4 +161,4 @@ def shape_errors(category: str, description: Any) -> tuple[str, ...]:
     lines = _explain.explain(validator.iter_errors(description))
     # The compiled verdict and the package agree on every instance (tests/descriptions); were
     # they ever to differ, the refusal still says so rather than refusing without a reason.
-    return lines or (f"/: {_explain.render(description)} is not {title}",)
+    return listed_errors(lines) or (f"/: {_explain.render(description)} is not {title}",)

@@ -7,7 +7,8 @@ raises :class:`~dynevent.errors.InvalidConfig` naming the field.  The machine
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+import itertools
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, TypeAlias
 
 import attrs
@@ -16,10 +17,36 @@ from dynevent.errors import InvalidConfig
 from dynevent.wire.description import DEFAULT_CATEGORY, MAX_DESCRIPTION_BYTES
 from dynevent.wire.vocab import Compatibility, IdPolicy
 
-__all__ = ["METRES_RANGE", "SECONDS_RANGE", "ServerConfig", "Validator", "any_description"]
+__all__ = [
+    "MAX_LISTED_ERRORS",
+    "METRES_RANGE",
+    "MORE_ERRORS",
+    "SECONDS_RANGE",
+    "ServerConfig",
+    "Validator",
+    "any_description",
+    "listed_errors",
+]
 
-#: A description validator: ``(category, parsed description) -> list of errors`` (empty when valid).
-Validator: TypeAlias = Callable[[str, Any], Sequence[str]]
+#: A description validator: ``(category, parsed description) -> list of errors`` (empty when valid);
+#: an iterable the machine reads lazily (R4.19: no more than one error past the listed ones).
+Validator: TypeAlias = Callable[[str, Any], Iterable[str]]
+
+
+#: The most errors a refusal of R4.10 lists (R4.19): a validator's further errors are not read.
+MAX_LISTED_ERRORS = 8
+#: The line that stands, as the last of a refusal's errors, for the errors not listed (R4.19).
+MORE_ERRORS = f"(further errors not listed: a refusal lists the first {MAX_LISTED_ERRORS})"
+
+
+def listed_errors(errors: Iterable[Any]) -> tuple[str, ...]:
+    """The errors a refusal lists (R4.19): the first :data:`MAX_LISTED_ERRORS` of ``errors``, as
+    text, and :data:`MORE_ERRORS` when there were more.  No error past the one after the last
+    listed is read, so a validator that yields its errors lazily stops being asked there."""
+    first = [str(error) for error in itertools.islice(errors, MAX_LISTED_ERRORS + 1)]
+    if len(first) > MAX_LISTED_ERRORS:
+        return (*first[:MAX_LISTED_ERRORS], MORE_ERRORS)
+    return tuple(first)
 
 
 def any_description(category: str, description: Any) -> Sequence[str]:

@@ -46,6 +46,7 @@ citations, and that test fails while it is stale::
     R4.15  _on_goal_requested
     R4.16  _ACCEPTANCES, _on_goal_requested
     R4.17  config._categories, config.ServerConfig
+    R4.19  _description_invalid, config.listed_errors
     R5.1   _start_goal
     R5.2   race_lost, _start_goal
     R5.3   _on_goal_submitted, TRANSITIONS
@@ -124,7 +125,16 @@ import attrs
 from dynevent.errors import WrongInput
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
-from dynevent.server.config import METRES_RANGE, SECONDS_RANGE, ServerConfig, Validator, any_description
+from dynevent.server.config import (
+    MAX_LISTED_ERRORS,
+    METRES_RANGE,
+    MORE_ERRORS,
+    SECONDS_RANGE,
+    ServerConfig,
+    Validator,
+    any_description,
+    listed_errors,
+)
 from dynevent.server.state import (
     Position,
     QueuedGoal,
@@ -166,7 +176,9 @@ __all__ = [
     "DEFERRED_START_RULE",
     "EXECUTION_FAILURES",
     "FINISHED_RULE",
+    "MAX_LISTED_ERRORS",
     "METRES_RANGE",
+    "MORE_ERRORS",
     "REFUSED_IN_EVERY_STATE",
     "REQUEST_CHECKS",
     "SECONDS_RANGE",
@@ -190,6 +202,7 @@ __all__ = [
     "check_index",
     "child_ended",
     "could_refuse_first",
+    "listed_errors",
     "next_child_id",
     "next_seq",
     "phase_of",
@@ -590,7 +603,7 @@ def _description_invalid(
     validator = config.categories[goal.category]  # R4.7 ran first
     try:
         errors = validator(goal.category, found[0])
-        errors = () if type(errors) in (tuple, list) and not errors else tuple(str(error) for error in errors)
+        errors = () if type(errors) in (tuple, list) and not errors else listed_errors(errors)  # R4.19
     except Exception as exc:  # a faulty validator must not break the machine
         errors = (f"the validator raised {type(exc).__name__}: {exc}",)
     if not errors:
