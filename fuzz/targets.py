@@ -16,6 +16,7 @@ import contextlib
 import functools
 import io
 import os
+import shlex
 import sqlite3
 import tempfile
 from collections.abc import Callable
@@ -335,6 +336,157 @@ def _status(data: Any) -> Any:
     return DynamicEventStatus.from_dict(data)
 
 
+# --------------------------------------------------------------------------- the newer edges (#43)
+
+#: The robot the description targets judge with: a map of 300 places, two actions.
+_MAP = [f"place_{number:03d}" for number in range(300)]
+
+
+@functools.cache
+def _robot() -> Any:
+    from dynevent import descriptions
+
+    return descriptions.Robot(places=[*_MAP, None], actions=["wave", "charge"])
+
+
+def _description_seeds() -> tuple[Any, ...]:
+    return (
+        ["go_to_place", {"one_of": ["place_001", {"waypoint": 3, "orientation": 1.5}, "plce_002"]}],
+        ["go_to_place", {"place": "place_007", "followed_by": [1, 2, "place_009"]}],
+        [
+            "perform_action",
+            {"category": "wave", "description": {"arm": [1, 2]}, "expected_finish_location": 4},
+        ],
+        [
+            "sequence",
+            [
+                {"category": "go_to_place", "description": "place_001"},
+                {"category": "clean", "description": {"zone": "z"}},
+            ],
+        ],
+        ["pickup", {"place": "place_010", "payload": [{"sku": "box", "quantity": 2}]}],
+        ["dropoff", {"place": 5, "handler": "h", "payload": {"sku": "box", "quantity": 1}}],
+    )
+
+
+def _robot_check(value: Any) -> object:
+    """A description of any shape, judged by a robot with a map: a tuple of lines, within the listing
+    bound (R4.19), never an error."""
+    category, description = ([*value, None, None])[:2] if isinstance(value, list) else ("go_to_place", value)
+    lines = _robot().check(category if isinstance(category, str) else "go_to_place", description)
+    if not isinstance(lines, tuple) or len(lines) > machine.MAX_LISTED_ERRORS + 1:
+        raise AssertionError(f"{len(lines)} lines")
+    return lines
+
+
+def _robot_config(value: Any) -> object:
+    from dynevent import descriptions
+
+    robot = descriptions.Robot(**value)
+    return robot.check("go_to_place", {"one_of": ["place_001", 2]})
+
+
+def _serve_config(value: Any) -> object:
+    from dynevent.sim.config import load_config
+
+    return _with_file(value, load_config)
+
+
+def _with_file(value: Any, call: Callable[[str], object]) -> object:
+    folder = tempfile.mkdtemp(prefix="dynevent-fuzz-")
+    path = os.path.join(folder, "input")
+    try:
+        data = value if isinstance(value, bytes) else str(value).encode("utf-8", "surrogatepass")
+        Path(path).write_bytes(data)
+        return call(path)
+    finally:
+        os.unlink(path)
+        os.rmdir(folder)
+
+
+def _send_request(value: Any) -> object:
+    import argparse
+
+    from dynevent.tools.send_request import goal_request
+
+    def ask(path: str) -> object:
+        flags = {"place": None, "cancel": False, "end": False, "category": "go_to_place"}
+        return (
+            goal_request(argparse.Namespace(**flags, file=path, description=None)),
+            goal_request(argparse.Namespace(**flags, file=None, description="@" + path)),
+        )
+
+    return _with_file(value, ask)
+
+
+#: A recording of the deployed server: its metadata.yaml (text) and its MCAP storage (bytes).
+_BAG = ROOT / "tests" / "data" / "rmf_ros2" / "demos"
+
+
+def _bag_metadata(value: Any) -> object:
+    """A bag whose metadata.yaml is mutated (YAML structure, aliases, nesting), its storage whole."""
+    return _bag(_text(value).encode("utf-8", "surrogatepass"), (_BAG / "demos.mcap").read_bytes())
+
+
+def _bag_storage(value: Any) -> object:
+    """A bag whose MCAP storage is mutated bytes, its metadata whole."""
+    data = value if isinstance(value, bytes) else str(value).encode("utf-8", "surrogatepass")
+    return _bag((_BAG / "metadata.yaml").read_bytes(), data)
+
+
+def _bag(metadata: bytes, storage: bytes) -> object:
+    from dynevent.bags.reader import check_bag
+
+    folder = tempfile.mkdtemp(prefix="dynevent-fuzz-bag-")
+    try:
+        Path(folder, "metadata.yaml").write_bytes(metadata)
+        Path(folder, "demos.mcap").write_bytes(storage)
+        return check_bag(folder)
+    finally:
+        for name in os.listdir(folder):
+            os.unlink(os.path.join(folder, name))
+        os.rmdir(folder)
+
+
+def _runner_answer(value: Any) -> object:
+    """A driver that greets properly, then answers every request with the mutated line: the runner
+    judges it (a failure, a broken driver) or refuses it, within bounds, and ends the driver."""
+    line = value if isinstance(value, bytes) else mutate.dumps(value).encode("utf-8", "surrogatepass")
+
+    def run(path: str) -> object:
+        hello = '{"ok": true, "implementation": "fuzz", "protocol": 1}'
+        script = f"read x; echo '{hello}'; while read x; do cat {path}; echo; done"
+        implementation = vectors.ExternalImplementation(f"sh -c {shlex.quote(script)}", timeout=2)
+        try:
+            return list(vectors.run_vectors(vectors.load_vectors()[:1], implementation))
+        finally:
+            implementation.close()
+
+    return _with_file(line.replace(b"\n", b" "), run)
+
+
+def _reports(value: Any) -> object:
+    """Every report writer, given text of any kind where a driver's or server's text goes: the XML
+    parses and every report encodes as UTF-8."""
+    from xml.etree import ElementTree
+
+    from dynevent.conformance import probe_cases
+    from dynevent.conformance.runner import Failure, Outcome
+
+    text = _text(value) if isinstance(value, (str, bytes)) else mutate.dumps(value)
+    vector = vectors.load_vectors()[0]
+    failed = Outcome(vector, Failure(1, {"x": text}, [text], [], text))
+    written = [vectors.junit_xml([failed], text)]
+    case = probe_cases.CASES[0]
+    finding = probe_cases.Finding(case, probe_cases.Verdict.FAIL, expected=text, seen=text, messages=(text,))
+    written.append(probe_cases.junit_xml([finding], text))
+    for xml in written:
+        ElementTree.fromstring(xml.encode("utf-8"))
+    for page in (probe_cases.report([finding], text), probe_cases.report([finding], text, html_form=True)):
+        page.encode("utf-8", "backslashreplace")
+    return written
+
+
 def targets() -> list[Target]:
     """Every entry point the fuzzer drives."""
     mat = material()
@@ -476,6 +628,48 @@ def targets() -> list[Target]:
             lambda v: _cli([str(x) for x in v] if isinstance(v, list) else [str(v)]),
             cli=True,
         ),
+        Target("descriptions.Robot.check", _description_seeds(), _robot_check),
+        Target(
+            "descriptions.Robot(**fields)",
+            ({"places": ["a", None, "b"], "actions": ["wave"], "categories": ["go_to_place", "sequence"]},),
+            _robot_config,
+            kwargs=True,
+        ),
+        Target(
+            "sim.load_config FILE",
+            (
+                mutate.dumps(
+                    {
+                        "fleet": "f",
+                        "robots": ["r1"],
+                        "rebegin": 1,
+                        "places": ["a", None],
+                        "categories": {"go_to_place": {"duration": 1, "fail_on": ["x"]}},
+                    }
+                ),
+            ),
+            _serve_config,
+            text=True,
+        ),
+        Target(
+            "send_request --file and --description @FILE",
+            (mutate.dumps({"category": "go_to_place", "description": {"one_of": ["a"]}}),),
+            _send_request,
+            text=True,
+        ),
+        Target(
+            "bags: metadata.yaml",
+            ((_BAG / "metadata.yaml").read_text(encoding="utf-8"),),
+            _bag_metadata,
+            text=True,
+        ),
+        Target("bags: MCAP storage", ((_BAG / "demos.mcap").read_bytes()[:4_096],), _bag_storage, text=True),
+        Target(
+            "runner: a driver's answers",
+            ({"ok": True, "outputs": [{"type": "publish_status", "message": {"id": 1}}], "view": None},),
+            _runner_answer,
+        ),
+        Target("report writers", ("a name\u0007 with \udc80", {"rule": "R4.\x00"}), _reports),
     ]
     assert by_type  # every input type has seeds from the vectors
     return made

@@ -10,7 +10,11 @@ counts the requests it reads (``hello`` is request 1) and, at request ``AT``:
 - ``garbage``: answers a line that is not JSON, then serves on;
 - ``flood``: answers 10,000 lines of noise, then the real answer;
 - ``huge``: answers one line of 20 MB (above the runner's limit);
-- ``stderr``: writes 50 MB to standard error, then answers.
+- ``stderr``: writes 50 MB to standard error, then answers;
+- ``closed``: closes its standard output and goes on running (an hour), its input still open;
+- ``values``: answers one line of 3 million outputs (6 MB, under the byte limit);
+- ``endless``: writes 50 MB to standard error as one line with no end, then answers;
+- ``surrogate``: answers hello with a name holding a lone surrogate and a control character.
 
 With ``--once FILE`` it misbehaves only while FILE does not exist, and
 creates it: the restarted driver then serves well, as a driver with a rare
@@ -52,6 +56,20 @@ def main() -> int:
                 out.write("noise\n" * 10_000)
             elif mode == "huge":
                 out.write("x" * 20_000_000 + "\n")
+            elif mode == "closed":
+                out.close()
+                os.close(1)
+                time.sleep(3600)
+            elif mode == "values":
+                out.write('{"ok": true, "outputs": [' + ", ".join(["{}"] * 3_000_000) + "]}\n")
+            elif mode == "endless":
+                for _ in range(50):
+                    sys.stderr.write("e" * 1_000_000)
+                sys.stderr.flush()
+            elif mode == "surrogate":
+                answer = answer.replace(
+                    '"implementation":"dynevent', '"implementation":"\\udc80\\u0007dynevent'
+                )
             elif mode == "stderr":
                 chunk = "e" * 1_000_000 + "\n"
                 for _ in range(50):

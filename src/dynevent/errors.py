@@ -23,6 +23,7 @@ __all__ = [
     "BagError",
     "DuplicateRobot",
     "DyneventError",
+    "FileError",
     "GoalWaitTimeout",
     "ImplementationError",
     "ImplementationGone",
@@ -310,6 +311,16 @@ class ServeError(LocalError):
 
 class RecordError(LocalError):
     """``dynevent record`` cannot run as asked (its output, its options)."""
+
+
+class FileError(LocalError):
+    """A file named on a command line (or to an API that takes a path) that cannot be read or
+    written as asked: not there, not a regular file, too large, not UTF-8, not JSON, a path too
+    long.  The message names what the file is for and the path."""
+
+    def __init__(self, what: str, path: str, problem: str) -> None:
+        self.what, self.path, self.problem = what, path, problem
+        super().__init__(f"{what} {short_repr(path)}: {problem}")
 
 
 class ProbeError(LocalError):

@@ -179,6 +179,9 @@ def test_commands_check_their_arguments_at_the_edge() -> None:
         client.request_next(state, "go_to_place", '"a"', timeout=0, now=0)
     with pytest.raises(InvalidMessage, match=r"timeout.*is this nanoseconds"):
         client.request_next(state, "go_to_place", '"a"', timeout=60 * SECOND, now=0)  # a duration is seconds
+    for huge in (-(10**400), 10**400):  # too large for a float: judged as an int, never converted
+        with pytest.raises(InvalidMessage, match="timeout"):
+            client.request_next(state, "go_to_place", '"a"', timeout=huge, now=0)
     with pytest.raises(InvalidMessage, match="now"):
         client.request_finish(state, now=1.0)  # type: ignore[arg-type]
     with pytest.raises(InvalidMessage, match="now"):

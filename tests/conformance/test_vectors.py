@@ -16,6 +16,7 @@ import shlex
 import subprocess
 import sys
 import time
+import xml.etree.ElementTree as ET
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -438,12 +439,17 @@ MISBEHAVING = ROOT / "tests" / "misbehaving_driver.py"
 
 
 def _misbehaving(
-    tmp_path: Path, mode: str, at: int, *extra: str, once: bool = True
+    tmp_path: Path, mode: str, at: int, *extra: str, once: bool = True, timeout: int = 1
 ) -> tuple[subprocess.CompletedProcess[str], float]:
     command = f"{PYTHON} {MISBEHAVING} {mode} {at}" + (f" --once {tmp_path / 'once'}" if once else "")
     started = time.monotonic()
-    result = _dynevent("--impl", command, "--timeout", "1", *extra)
+    result = _dynevent("--impl", command, "--timeout", str(timeout), *extra)
     return result, time.monotonic() - started
+
+
+#: The runner's timeout in the cases where the misbehaviour is not a wait: long enough for the
+#: slowest honest machine to write and read 20 MB, so that the verdict is the limit's, never a timeout's.
+NOT_A_WAIT = 30
 
 
 @pytest.mark.parametrize(
@@ -456,6 +462,8 @@ def _misbehaving(
         ("garbage", 20, "the driver answered with"),
         ("flood", 20, "the driver answered with"),
         ("huge", 20, "the driver answered a line above"),
+        ("closed", 20, "the driver closed its output and went on running: it was ended"),
+        ("values", 20, "the driver answered a line of more than 1,000,000 values"),
     ],
 )
 def test_a_driver_that_breaks_once_fails_one_vector_and_the_rest_run(
@@ -464,7 +472,8 @@ def test_a_driver_that_breaks_once_fails_one_vector_and_the_rest_run(
     """Dies, stalls, answers late, answers garbage or floods: the vector it was answering fails, the
     driver is restarted, and every other vector runs and passes (a late answer is never read as the
     answer to a later request).  The report is whole and the exit status 1."""
-    result, took = _misbehaving(tmp_path, mode, at)
+    waits = mode in ("late", "hang")
+    result, took = _misbehaving(tmp_path, mode, at, timeout=1 if waits else NOT_A_WAIT)
     assert result.returncode == 1, result.stdout + result.stderr
     assert SUMMARY_LINE.findall(result.stdout) == [(str(len(shipped) - 1), "1")], result.stdout
     assert problem in " ".join(result.stdout.split()), result.stdout
@@ -478,6 +487,24 @@ def test_a_driver_that_floods_its_standard_error_does_not_block_the_run(
     result, _ = _misbehaving(tmp_path, "stderr", 20)
     assert result.returncode == 0, result.stdout + result.stderr[-500:]
     assert SUMMARY_LINE.findall(result.stdout) == [(str(len(shipped)), "0")]
+
+
+def test_a_driver_that_writes_an_endless_error_line_does_not_grow_the_runner(
+    tmp_path: Path, shipped: list[vectors.Vector]
+) -> None:
+    result, _ = _misbehaving(tmp_path, "endless", 20, timeout=NOT_A_WAIT)
+    assert result.returncode == 0, result.stdout + result.stderr[-500:]
+    assert SUMMARY_LINE.findall(result.stdout) == [(str(len(shipped)), "0")]
+
+
+def test_a_drivers_name_of_any_text_is_printed_and_reported_escaped(tmp_path: Path) -> None:
+    junit = tmp_path / "report.xml"
+    result, _ = _misbehaving(tmp_path, "surrogate", 1, "--junit", str(junit), once=False, timeout=NOT_A_WAIT)
+    assert result.returncode == 0, result.stdout + result.stderr[-500:]
+    assert "Traceback" not in result.stderr
+    assert "\\udc80" in result.stdout  # the lone surrogate, escaped where it is printed
+    suite = ET.parse(junit).getroot().find("testsuite")  # parses: the name is made safe for XML
+    assert suite is not None and suite.get("name", "").startswith("\\udc80\\u0007dynevent")
 
 
 def test_a_driver_that_always_hangs_costs_three_timeouts_and_the_rest_are_not_run(

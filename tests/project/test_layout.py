@@ -23,21 +23,26 @@ SRC = Path(__file__).resolve().parents[2] / "src" / "dynevent"
 ALLOWED: dict[str, frozenset[str]] = {
     "errors": frozenset(),
     "wire": frozenset({"errors"}),
+    # the files a user names: read bounded, only regular ones, one error line for any fault
+    "files": frozenset({"errors", "wire"}),
     "server": frozenset({"errors", "wire"}),
     "client": frozenset({"errors", "wire", "server"}),
-    "conformance": frozenset({"errors", "wire", "server", "descriptions"}),
+    "conformance": frozenset({"errors", "wire", "server", "descriptions", "files"}),
     "descriptions": frozenset({"errors", "wire", "server"}),
     "_moved": frozenset(),  # old import paths, kept one release
     # recordings are files: read and judged below ros (no rclpy)
-    "bags": frozenset({"errors", "wire", "server", "conformance"}),
+    "bags": frozenset({"errors", "wire", "server", "conformance", "files"}),
     # the simulated fleet serve runs, its configuration checked before rclpy is needed
-    "sim": frozenset({"errors", "wire", "server", "descriptions"}),
+    "sim": frozenset({"errors", "wire", "server", "descriptions", "files"}),
     # the command line, and what only it runs: nothing below imports it
     "tools": frozenset(
-        {"errors", "wire", "server", "client", "conformance", "descriptions", "bags", "sim", "ros", "_moved"}
+        {"errors", "wire", "server", "client", "conformance", "descriptions", "files", "bags", "sim", "ros"}
+        | {"_moved"}
     ),
     # judging is conformance (docs/design): ros reads the judges from below, never the command line
-    "ros": frozenset({"errors", "wire", "server", "client", "conformance", "descriptions", "bags", "sim"}),
+    "ros": frozenset(
+        {"errors", "wire", "server", "client", "conformance", "descriptions", "files", "bags", "sim"}
+    ),
     "testing": frozenset({"errors", "wire", "server", "conformance"}),
     # behaviour trees over a robot client (its type only: the tree's author opens the client)
     "bt": frozenset({"errors", "wire", "client", "ros"}),

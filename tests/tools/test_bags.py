@@ -7,7 +7,10 @@ with ROS's own serialisation instead, which holds the reader's message definitio
 
 from __future__ import annotations
 
+import contextlib
 import json
+import os
+import sqlite3
 from pathlib import Path
 from typing import Any
 
@@ -485,6 +488,53 @@ def test_bags_that_cannot_be_read_are_said_in_one_line(tmp_path: Path) -> None:
     cut.write_bytes(data[: len(data) // 2])
     with pytest.raises(BagError, match=r"cut.mcap: "):
         check_bag(cut)
+
+
+def test_a_bag_of_yaml_aliases_is_refused_before_it_is_composed(tmp_path: Path) -> None:
+    bag = _clean().write(tmp_path / "laughs", StoragePlugin.MCAP)
+    metadata = (bag / "metadata.yaml").read_text(encoding="utf-8")
+    laughs = "\n".join(
+        [f"a0: &a0 [{', '.join(['lol'] * 10)}]"]
+        + [f"a{n}: &a{n} [{', '.join([f'*a{n - 1}'] * 10)}]" for n in range(1, 10)]
+    )  # composed, ten to the tenth strings
+    (bag / "metadata.yaml").write_text(laughs + "\n" + metadata, encoding="utf-8")
+    with pytest.raises(
+        BagError, match=r"laughs: metadata.yaml uses a YAML alias, which no rosbag2 recording does$"
+    ):
+        check_bag(bag)
+    (bag / "metadata.yaml").write_text("x: " + "[" * 100 + "]" * 100 + "\n" + metadata, encoding="utf-8")
+    with pytest.raises(BagError, match=r"metadata.yaml is nested deeper than 64 levels"):
+        check_bag(bag)
+
+
+@pytest.mark.parametrize("storage", STORAGES, ids=["mcap", "sqlite3"])
+def test_a_bag_whose_files_are_not_regular_is_refused_without_reading(
+    tmp_path: Path, storage: StoragePlugin
+) -> None:
+    bag = _clean().write(tmp_path / "bag", storage)
+    stored = next(path for path in bag.iterdir() if path.name != "metadata.yaml")
+    stored.unlink()
+    os.mkfifo(stored)  # a reader that opened it would wait for a writer for ever
+    with pytest.raises(BagError, match=rf"{stored.name}: a FIFO, not a bag's storage file$"):
+        check_bag(bag)
+    (bag / "metadata.yaml").unlink()
+    os.mkfifo(bag / "metadata.yaml")
+    with pytest.raises(BagError, match=r"metadata.yaml .*is a FIFO, not a regular file$"):
+        check_bag(bag)
+    with pytest.raises(BagError, match=r"not a rosbag2 recording: a FIFO, not a bag's file$"):
+        check_bag(stored)
+    with pytest.raises(BagError, match=r"cannot read: File name too long$"):
+        check_bag(tmp_path / ("x" * 5_000))
+
+
+def test_a_db3_whose_time_is_text_is_a_located_error(tmp_path: Path) -> None:
+    bag = _clean().write(tmp_path / "bag", StoragePlugin.SQLITE3)
+    database = next(bag.glob("*.db3"))
+    with contextlib.closing(sqlite3.connect(database)) as connection:
+        connection.execute("UPDATE messages SET timestamp = 'soon' WHERE id = 2")
+        connection.commit()
+    with pytest.raises(BagError, match=r"a message's time is 'soon', not nanoseconds$"):
+        check_bag(bag)
 
 
 def _correct_but_unusual() -> dict[str, Conversation]:

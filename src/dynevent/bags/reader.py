@@ -34,12 +34,15 @@ import contextlib
 import functools
 import heapq
 import importlib.resources
+import os
+import stat
 from collections.abc import Callable, Iterator
-from pathlib import Path
+from pathlib import Path, PurePath
 from typing import Any
 
 import attrs
 
+from dynevent import files
 from dynevent.conformance.judge.observer import AnswerEvidence, Checker
 from dynevent.conformance.judge.partial import GOAL_STATUSES, PartialJudge
 from dynevent.conformance.judge.trace import Record, Report, TraceHeader
@@ -51,7 +54,16 @@ from dynevent.conformance.received import (
     status_from_ros,
     uuid_from_ros,
 )
-from dynevent.errors import BagError, DyneventError, InvalidMessage, InvalidName, MissingExtra, TraceError
+from dynevent.errors import (
+    BagError,
+    DyneventError,
+    FileError,
+    InvalidMessage,
+    InvalidName,
+    MissingExtra,
+    TraceError,
+    short_repr,
+)
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
 from dynevent.wire.vocab import Compatibility, GoalStatus
 
@@ -175,8 +187,7 @@ def _read(
     source = str(path)
     rosbags = _rosbags()
     reader_type, reader_errors = rosbags
-    if Path(path).is_dir() and not (Path(path) / "metadata.yaml").exists():
-        raise BagError(source, "not a rosbag2 recording: a bag directory holds a metadata.yaml")
+    _vet(source, Path(path))
     robots: dict[tuple[str, str], _Robot] = {}
     messages = other = 0
     with _storage(source, reader_errors):
@@ -204,6 +215,10 @@ def _read(
             if item is None:
                 break
             connection, time, _ = item
+            if type(time) is not int:  # a SQLite column holds whatever a writer put there
+                raise BagError(
+                    source, f"{connection.topic}: a message's time is {short_repr(time)}, not nanoseconds"
+                )
             end = max(end, time)
             robot, channel = routes[connection.id]
             message = _decode(store, item, decode_as[connection.id], source)
@@ -216,6 +231,68 @@ def _read(
         with _storage(source, reader_errors):
             reader.close()
     return BagReport(source=source, robots=reports, messages=messages, other=other), robots
+
+
+#: The largest metadata.yaml read (a recording's is a few KB per topic) and its deepest nesting.
+MAX_METADATA_BYTES = 4_000_000
+_METADATA_DEPTH = 64
+
+
+def _vet(source: str, path: Path) -> None:
+    """What a bag is made of, checked before the storage library opens any of it: every file it
+    would read is a regular file (a FIFO would block the read for ever), and metadata.yaml is
+    bounded YAML without aliases (a "billion laughs" would take the machine's memory; no rosbag2
+    writer uses an alias)."""
+    mode = _mode(source, path)
+    if not stat.S_ISDIR(mode):
+        if not stat.S_ISREG(mode):
+            raise BagError(source, f"not a rosbag2 recording: {files.kind(mode)}, not a bag's file")
+        return
+    metadata = path / "metadata.yaml"
+    if not metadata.exists():
+        raise BagError(source, "not a rosbag2 recording: a bag directory holds a metadata.yaml")
+    try:
+        text = files.read_text(str(metadata), "metadata.yaml", limit=MAX_METADATA_BYTES)
+    except FileError as exc:
+        raise BagError(source, f"not a readable rosbag2 recording: {exc}") from None
+    for name in _storage_files(source, text):
+        storage = path / PurePath(name).name  # as the reader finds it: beside metadata.yaml
+        if storage.name and os.path.lexists(storage):
+            kind = _mode(source, storage)
+            if not stat.S_ISREG(kind):
+                raise BagError(source, f"{storage.name}: {files.kind(kind)}, not a bag's storage file")
+
+
+def _mode(source: str, path: Path) -> int:
+    try:
+        return os.stat(path).st_mode
+    except (OSError, ValueError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else "not a path"
+        raise BagError(source, f"cannot read: {reason}") from None
+
+
+def _storage_files(source: str, text: str) -> list[str]:
+    """The storage files metadata.yaml names, read after its events are vetted (no alias, nesting
+    bounded), so that composing it costs no more than its size."""
+    from ruamel.yaml import YAML
+    from ruamel.yaml.error import YAMLError
+    from ruamel.yaml.events import AliasEvent, CollectionEndEvent, CollectionStartEvent
+
+    yaml = YAML(typ="safe")
+    depth = 0
+    try:
+        for event in yaml.parse(text):
+            if isinstance(event, AliasEvent):
+                raise BagError(source, "metadata.yaml uses a YAML alias, which no rosbag2 recording does")
+            depth += isinstance(event, CollectionStartEvent) - isinstance(event, CollectionEndEvent)
+            if depth > _METADATA_DEPTH:
+                raise BagError(source, f"metadata.yaml is nested deeper than {_METADATA_DEPTH} levels")
+        document = yaml.load(text)
+    except YAMLError as exc:
+        raise BagError(source, f"not a readable rosbag2 recording: metadata.yaml: {_one_line(exc)}") from None
+    information = document.get("rosbag2_bagfile_information") if isinstance(document, dict) else None
+    names = information.get("relative_file_paths") if isinstance(information, dict) else None
+    return [name for name in names if isinstance(name, str)] if isinstance(names, list) else []
 
 
 @contextlib.contextmanager

@@ -18,7 +18,8 @@ from typing import Any
 
 import attrs
 
-from dynevent.errors import InvalidVector
+from dynevent import files
+from dynevent.errors import FileError, InvalidVector
 from dynevent.wire import _json
 
 __all__ = [
@@ -179,10 +180,9 @@ def load_vectors(paths: Iterable[str | os.PathLike[str]] = ()) -> list[Vector]:
     if chosen:
         for path in chosen:
             try:
-                with open(path, "rb") as handle:
-                    text = handle.read()
-            except OSError as exc:
-                raise InvalidVector(path, "$", f"cannot read: {exc.strerror}") from None
+                text = files.read_bytes(path, "vector file")
+            except FileError as exc:
+                raise InvalidVector(path, "$", exc.problem) from None
             found.extend(parse_vector_file(path, text, schema=True))
     else:
         folder = resources.files("dynevent") / "conformance"

@@ -16,6 +16,7 @@ import attrs
 
 from dynevent.conformance.files import rule_key
 from dynevent.conformance.runner import Outcome
+from dynevent.conformance.xml_report import xml_document
 
 __all__ = [
     "WIDTH",
@@ -183,5 +184,4 @@ def junit_xml(outcomes: Sequence[Outcome], implementation: str = "") -> str:
             element.text = outcome.failure.diff(WIDTH)
         elif outcome.not_run is not None:
             ET.SubElement(case, "skipped", message=outcome.not_run)
-    ET.indent(suites)
-    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(suites, encoding="unicode") + "\n"
+    return xml_document(suites)

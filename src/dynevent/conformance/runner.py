@@ -41,6 +41,7 @@ from dynevent.wire import _json
 
 __all__ = [
     "MAX_ANSWER_BYTES",
+    "MAX_ANSWER_VALUES",
     "MAX_BROKEN",
     "MAX_STALLS",
     "MAX_TIMEOUT",
@@ -57,6 +58,13 @@ __all__ = [
 MAX_TIMEOUT = 3600.0
 #: The longest answer line an external implementation may write, in bytes.
 MAX_ANSWER_BYTES = 16 * 1024 * 1024
+#: The most values (a separator, an array or an object each) an answer line may hold: what parsing
+#: it holds in memory is bounded before it is parsed (a million values, some hundred megabytes).
+MAX_ANSWER_VALUES = 1_000_000
+#: How long a driver that closed its output is given to exit before it is ended, at least.
+_LAST_WAIT = 0.5
+#: The most of a standard error line read at once.
+_STDERR_PIECE = 4_096
 #: Vectors in a row that may end in a timeout before the run stops: a driver that hangs on everything
 #: costs this many timeouts, not one per vector.
 MAX_STALLS = 3
@@ -243,12 +251,23 @@ class ExternalImplementation:
                 raise self._break(f"the driver did not answer within {self.timeout:g} s", stalled=True)
             chunk = os.read(stdout.fileno(), 65536)
             if not chunk:
-                code = self._process.wait()
+                try:
+                    code = self._process.wait(timeout=max(deadline - time.monotonic(), _LAST_WAIT))
+                except subprocess.TimeoutExpired:  # its output closed, the process still there
+                    self._process.kill()
+                    code = self._process.wait()
+                    raise self._break(
+                        "the driver closed its output and went on running: it was ended"
+                    ) from None
                 raise self._break(f"the driver ended (exit code {code})")
             self._pending += chunk
             if len(self._pending) > MAX_ANSWER_BYTES:
                 raise self._break(f"the driver answered a line above {MAX_ANSWER_BYTES} bytes")
         line, _, self._pending = self._pending.partition(b"\n")
+        # what parsing would hold in memory, counted before it is spent: one value a separator
+        values = line.count(b",") + line.count(b"[") + line.count(b"{")
+        if values > MAX_ANSWER_VALUES:
+            raise self._break(f"the driver answered a line of more than {MAX_ANSWER_VALUES:,} values")
         return line
 
     # ------------------------------------------------------------------ the protocol
@@ -296,7 +315,7 @@ def _keep_tail(stream: IO[bytes], tail: collections.deque[str]) -> None:
     """Read a program's standard error to its end, keeping the last lines (each cut to 200 characters):
     a program that floods it can neither block on a full pipe nor fill this process's memory."""
     with contextlib.suppress(OSError, ValueError):
-        for raw in stream:
+        while raw := stream.readline(_STDERR_PIECE):  # a line without end is read in pieces
             text = raw.decode("utf-8", "replace").rstrip()
             if text:
                 tail.append(text[:200])

@@ -23,7 +23,6 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from pathlib import Path
 from typing import Any
 
 import attrs
@@ -32,10 +31,11 @@ from action_msgs.msg import GoalStatus as RosGoalStatus
 from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 
+from dynevent import files
 from dynevent.conformance import probe_cases
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.conformance.probe_cases import Case, Finding, Verdict
-from dynevent.errors import InvalidMessage, ProbeError
+from dynevent.errors import FileError, InvalidMessage, ProbeError
 from dynevent.ros import convert, spinning
 from dynevent.ros.client import introspect
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
@@ -1263,9 +1263,9 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
     for flag, path, text in outputs:
         if path:
             try:
-                Path(path).write_text(text(), "utf-8")
-            except OSError as exc:
-                raise ProbeError(f"--{flag} {path}: cannot write: {exc.strerror or exc}") from None
+                files.write_text(path, text(), f"--{flag}")
+            except FileError as exc:
+                raise ProbeError(str(exc)) from None
     return probe_cases.exit_status(findings)
 
 
@@ -1351,5 +1351,5 @@ def _open_trace(options: Options) -> TraceWriter | None:
         return None
     try:
         return TraceWriter(options.trace, fleet=options.fleet, robot=options.robot)
-    except OSError as exc:
-        raise ProbeError(f"--trace {options.trace}: cannot write: {exc.strerror or exc}") from None
+    except FileError as exc:
+        raise ProbeError(str(exc)) from None

@@ -18,6 +18,7 @@ and metadata, and nothing received is lost.
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import threading
@@ -194,7 +195,7 @@ def run(args: RecordOptions, say: Callable[[str], None]) -> int:
 
         raise MissingExtra("bags", "rosbags", "writes rosbag2 recordings") from None
     output = Path(args.output or time.strftime("dynevent_%Y_%m_%d-%H_%M_%S"))
-    if output.exists():
+    if os.path.lexists(output):  # lexists: a path too long to stat is for the writer to name
         raise RecordError(f"--output {output}: exists already (a bag is a new directory)")
     fleets, robots = set(args.fleets), set(args.robots)
 

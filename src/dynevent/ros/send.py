@@ -25,6 +25,7 @@ from dynevent import descriptions
 from dynevent.conformance import explain
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.errors import (
+    FileError,
     SendError,  # defined there with every error; importable here too
 )
 from dynevent.ros import spinning
@@ -226,8 +227,8 @@ def _open_trace(args: SendOptions) -> TraceWriter | None:
         return None
     try:
         return TraceWriter(args.trace, fleet=args.fleet, robot=args.robot)
-    except OSError as exc:
-        raise SendError(f"--trace {args.trace}: cannot write: {exc.strerror or exc}") from None
+    except FileError as exc:
+        raise SendError(str(exc)) from None
 
 
 def _why_refused(status: DynamicEventStatus, goal: Goal) -> str:

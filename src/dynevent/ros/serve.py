@@ -34,9 +34,11 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.logging import LoggingSeverity
 
+from dynevent import files
 from dynevent.conformance.clients import ONE_CLIENT, ClientFinding, ClientJudge
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.errors import (
+    FileError,
     InvalidConfig,
     InvalidMessage,
     ServeError,  # defined there with every error; importable here too
@@ -444,8 +446,8 @@ class _Robots:
             path = os.path.join(path, f"{robot}.jsonl")
         try:
             return TraceWriter(path, fleet=self.config.fleet, robot=robot)
-        except OSError as exc:
-            raise ServeError(f"--trace {path}: cannot write: {exc.strerror or exc}") from None
+        except FileError as exc:
+            raise ServeError(str(exc)) from None
 
     def on_begin_command(self, message: Any) -> None:
         if message.fleet == self.config.fleet and message.robot in self.servers:
@@ -520,10 +522,9 @@ def run(
         log(line)
         if watch.report is not None:
             try:
-                with open(watch.report, "w", encoding="utf-8") as stream:
-                    stream.write(report)
-            except OSError as exc:
-                log(f"--report {watch.report}: cannot write: {exc.strerror or exc}")
+                files.write_text(watch.report, report, "--report")
+            except FileError as exc:
+                log(str(exc))
     with bounded_close(CLOSE_BOUND + CLOSE_PER_ROBOT * len(robots.servers)):
         for server in robots.servers.values():
             server.destroy()

@@ -9,17 +9,16 @@ before it needs rclpy; and what a simulated child does with its description
 
 from __future__ import annotations
 
-import json
+import re
 import zlib
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 import attrs
 
-from dynevent import descriptions
+from dynevent import descriptions, files
 from dynevent.descriptions import shapes
-from dynevent.errors import InvalidConfig, InvalidName, MissingExtra, ServeError
+from dynevent.errors import FileError, InvalidConfig, InvalidName, MissingExtra, ServeError, short_repr
 from dynevent.server.machine import ServerConfig, Validator, any_description
 from dynevent.wire.names import validate_token
 from dynevent.wire.vocab import Compatibility, IdPolicy
@@ -82,6 +81,12 @@ class ServeConfig:
         return tuple(robot for robot in self.robots if shard_of(robot, count) == index)
 
 
+#: The compatibility modes, as the command line and a ``--config`` file name them.
+_MODES = tuple(mode.value for mode in Compatibility)
+#: A shard's numbers: ASCII digits (``str.isdigit`` takes ``²`` too), at most six of them.
+_DIGITS = re.compile(r"[0-9]{1,6}")
+
+
 def shard_of(robot: str, count: int) -> int:
     """The shard (1 to ``count``) that serves ``robot``: the same in every process and on every host."""
     return zlib.crc32(robot.encode("utf-8")) % count + 1
@@ -90,7 +95,7 @@ def shard_of(robot: str, count: int) -> int:
 def parse_shard(text: str) -> tuple[int, int]:
     """``"K/N"`` as (K, N), 1 <= K <= N; raises :class:`ServeError` naming the value."""
     index, slash, count = text.partition("/")
-    if slash and index.isdigit() and count.isdigit() and 1 <= int(index) <= int(count):
+    if slash and _DIGITS.fullmatch(index) and _DIGITS.fullmatch(count) and 1 <= int(index) <= int(count):
         return int(index), int(count)
     raise ServeError(f"--shard {text!r}: expected K/N with 1 <= K <= N, e.g. 1/2")
 
@@ -110,19 +115,21 @@ def load_config(
     config = ServeConfig()
     if path is not None:
         try:
-            data = json.loads(Path(path).read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
-            raise ServeError(f"--config {path}: {exc}") from None
+            data = files.read_json(path, "--config")
+        except FileError as exc:
+            raise ServeError(str(exc)) from None
         config = _config_from_dict(data, path)
     if fleet is not None:
         config = attrs.evolve(config, fleet=fleet)
     if robots:
         config = attrs.evolve(config, robots=tuple(robots))
     if rebegin is not None:
-        config = attrs.evolve(config, rebegin=rebegin)
+        config = attrs.evolve(config, rebegin=_seconds("--rebegin", "", rebegin, zero=True))
     if first_seq is not None:
         config = attrs.evolve(config, first_seq=_seq(first_seq, "--first-seq"))
     if compatibility is not None:
+        if compatibility not in _MODES:
+            raise _wrong("--compatibility", "", f"one of {', '.join(_MODES)}", compatibility)
         config = attrs.evolve(config, compatibility=compatibility)
     if shard is not None:
         config = attrs.evolve(config, shard=parse_shard(shard))
@@ -207,63 +214,87 @@ def _seq(value: Any, what: str) -> int:
     return value
 
 
+#: The keys a ``--config`` file may have, and those of each of its categories.
+_KEYS = ("fleet", "robots", "categories", "compatibility", "rebegin", "first_seq", "places", "actions")
+_CATEGORY_KEYS = ("duration", "report_every", "fail_on")
+#: The longest a simulated step or a re-begin may be configured to take (seconds: a day).
+_LONGEST = 86_400.0
+
+
+def _wrong(source: str, where: str, expected: str, value: Any) -> ServeError:
+    """The one line of a wrong value: the file and field (or the flag), what was expected, the value."""
+    at = f"{source}: {where}" if where else source
+    return ServeError(f"{at}: expected {expected} (got {short_repr(value)})")
+
+
+def _seconds(source: str, where: str, value: Any, *, zero: bool = False) -> float:
+    """A number of seconds, above 0 (or 0 itself when ``zero``) and at most a day."""
+    low = "0" if zero else "above 0"
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise _wrong(source, where, f"a number of seconds, {low} and at most {_LONGEST:g}", value)
+    # comparisons before float(): an integer of any size is judged exactly, and NaN fails both
+    if not (value >= 0 if zero else value > 0) or not value <= _LONGEST:
+        raise _wrong(source, where, f"a number of seconds, {low} and at most {_LONGEST:g}", value)
+    return float(value)
+
+
+def _string_list(source: str, where: str, value: Any, what: str, *, nulls: bool = False) -> tuple[Any, ...]:
+    fits = (str, type(None)) if nulls else str
+    if not isinstance(value, list) or not all(isinstance(item, fits) for item in value):
+        raise _wrong(source, where, what, value)
+    return tuple(value)
+
+
+def _category(source: str, name: str, spec: Any) -> CategorySpec:
+    where = f"categories.{name}"
+    if not isinstance(spec, dict):
+        raise _wrong(source, where, "an object of duration, report_every and fail_on", spec)
+    unknown = sorted(set(spec) - set(_CATEGORY_KEYS))
+    if unknown:
+        raise ServeError(f"{source}: {where}: unknown keys {unknown}")
+    default = DEFAULT_CATEGORIES.get(name, CategorySpec())
+    return CategorySpec(
+        duration=_seconds(source, f"{where}.duration", spec.get("duration", default.duration or 3.0)),
+        report_every=_seconds(
+            source, f"{where}.report_every", spec.get("report_every", default.report_every)
+        ),
+        fail_on=_string_list(
+            source, f"{where}.fail_on", spec.get("fail_on", list(default.fail_on)), "a list of place names"
+        ),
+    )
+
+
 def _config_from_dict(data: Any, source: str) -> ServeConfig:
     if not isinstance(data, dict):
-        raise ServeError(f"{source}: expected a JSON object")
-    unknown = set(data) - {
-        "fleet",
-        "robots",
-        "categories",
-        "compatibility",
-        "rebegin",
-        "first_seq",
-        "places",
-        "actions",
-    }
+        raise _wrong(source, "the file", "a JSON object", data)
+    unknown = sorted(set(data) - set(_KEYS))
     if unknown:
-        raise ServeError(f"{source}: unknown keys {sorted(unknown)}")
+        raise ServeError(f"{source}: unknown keys {unknown}")
     categories = dict(DEFAULT_CATEGORIES)
     if "categories" in data:
-        categories = {}
-        for name, spec in dict(data["categories"]).items():
-            try:
-                values = dict(spec)
-                unknown_keys = set(values) - {"duration", "report_every", "fail_on"}
-                if unknown_keys:
-                    raise ValueError(f"unknown keys {sorted(unknown_keys)}")
-                default = DEFAULT_CATEGORIES.get(name, CategorySpec())
-                categories[name] = CategorySpec(
-                    duration=float(values.get("duration", default.duration or 3.0)),
-                    report_every=float(values.get("report_every", default.report_every)),
-                    fail_on=tuple(str(place) for place in values.get("fail_on", default.fail_on)),
-                )
-            except (TypeError, ValueError, OverflowError) as exc:  # OverflowError: float(10**400)
-                raise ServeError(f"{source}: categories.{name}: {exc}") from None
-            if not 0 < categories[name].duration < 1e6 or not 0 < categories[name].report_every < 1e6:
-                raise ServeError(
-                    f"{source}: categories.{name}: duration and report_every are positive seconds"
-                )
-    robots = data.get("robots", ["tinyRobot1"])
-    if not isinstance(robots, list) or not all(isinstance(robot, str) for robot in robots):
-        raise ServeError(f"{source}: robots: expected a list of names")
+        if not isinstance(data["categories"], dict):
+            raise _wrong(source, "categories", "an object of category names", data["categories"])
+        categories = {name: _category(source, name, spec) for name, spec in data["categories"].items()}
     places, actions = data.get("places"), data.get("actions")
-    if places is not None and (
-        not isinstance(places, list) or not all(isinstance(p, (str, type(None))) for p in places)
-    ):
-        raise ServeError(
-            f"{source}: places: expected a list of waypoint names (null for an unnamed waypoint)"
-        )
-    if actions is not None and (
-        not isinstance(actions, list) or not all(isinstance(a, str) for a in actions)
-    ):
-        raise ServeError(f"{source}: actions: expected a list of action names")
+    for key in ("fleet", "compatibility"):
+        if key in data and not isinstance(data[key], str):
+            raise _wrong(source, key, "a string", data[key])
+    compatibility = data.get("compatibility", "standard")
+    if compatibility not in _MODES:
+        raise _wrong(source, "compatibility", f"one of {', '.join(_MODES)}", compatibility)
     return ServeConfig(
-        fleet=str(data.get("fleet", "tinyRobot")),
-        robots=tuple(robots),
+        fleet=data.get("fleet", "tinyRobot"),
+        robots=_string_list(source, "robots", data.get("robots", ["tinyRobot1"]), "a list of names"),
         categories=categories,
-        compatibility=str(data.get("compatibility", "standard")),
-        rebegin=float(data.get("rebegin", 2.0)),
+        compatibility=compatibility,
+        rebegin=_seconds(source, "rebegin", data.get("rebegin", 2.0), zero=True),
         first_seq=_seq(data.get("first_seq", 1), f"{source}: first_seq"),
-        places=None if places is None else tuple(places),
-        actions=None if actions is None else tuple(actions),
+        places=None
+        if places is None
+        else _string_list(
+            source, "places", places, "a list of waypoint names (null for an unnamed waypoint)", nulls=True
+        ),
+        actions=None
+        if actions is None
+        else _string_list(source, "actions", actions, "a list of action names"),
     )

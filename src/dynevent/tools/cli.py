@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import io
 import os
 import sys
 from collections.abc import Callable, Sequence
@@ -124,7 +125,9 @@ def _add_explain_command(commands: argparse._SubParsersAction[argparse.ArgumentP
 
 def _vectors(args: argparse.Namespace) -> int:
     """``dynevent vectors``: run the conformance vectors; 0 all pass, 1 any fails, 2 bad input."""
+    from dynevent import files
     from dynevent.conformance import vectors
+    from dynevent.errors import FileError
     from dynevent.tools._progress import Progress
     from dynevent.wire import _json
 
@@ -166,9 +169,9 @@ def _vectors(args: argparse.Namespace) -> int:
         implementation.close()
     if args.junit is not None:
         try:
-            Path(args.junit).write_text(vectors.junit_xml(outcomes, implementation.name), encoding="utf-8")
-        except OSError as exc:
-            print(f"dynevent vectors: --junit {args.junit}: {exc.strerror}", file=sys.stderr)
+            files.write_text(args.junit, vectors.junit_xml(outcomes, implementation.name), "--junit")
+        except FileError as exc:
+            print(f"dynevent vectors: {exc}", file=sys.stderr)
             return 2
     if args.json:
         for outcome in outcomes:
@@ -694,6 +697,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     _add_send_command(commands)
     _add_probe_command(commands)
     _add_record_command(commands)
+    for stream in (
+        sys.stdout,
+        sys.stderr,
+    ):  # text another program sent (a lone surrogate) is escaped, not fatal
+        if isinstance(stream, io.TextIOWrapper):
+            stream.reconfigure(errors="backslashreplace")
     argv, ros_args = split_ros_args(sys.argv[1:] if argv is None else list(argv))
     args = parser.parse_args(argv)
     args.ros_args = ros_args
@@ -704,10 +713,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command is None:  # bare `dynevent`: what it can do, not a run of one of its commands
         parser.print_help()
         return 0
+    from dynevent.errors import DyneventError
+
     try:
         result: int = args.run(args)
     except KeyboardInterrupt:
         return 130  # Ctrl-C: the command stops, without a traceback
+    except DyneventError as exc:  # what a command did not name itself is still one line, never a traceback
+        print(f"dynevent {args.command}: {exc}", file=sys.stderr)
+        return 2
     except BrokenPipeError:
         return quiet_broken_pipe()
     return result

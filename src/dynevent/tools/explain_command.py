@@ -11,8 +11,9 @@ import argparse
 import sys
 from typing import Any
 
+from dynevent import files
 from dynevent.conformance.explain import explain, format_explanation
-from dynevent.errors import DyneventError, InvalidMessage
+from dynevent.errors import DyneventError, FileError, InvalidMessage, short_repr
 from dynevent.wire import _json
 from dynevent.wire.messages import DynamicEventStatus, Goal
 
@@ -38,10 +39,9 @@ def _json_text(argument: str, value: str, stdin_taken: list[str]) -> str:
     if value.startswith("@"):
         path = value[1:]
         try:
-            with open(path, "rb") as file:
-                return _bounded(argument, path, file.read(MAX_INPUT_BYTES + 1))
-        except OSError as exc:
-            raise _ArgumentError(argument, f"cannot read {path!r}: {exc.strerror or exc}") from None
+            return _bounded(argument, path, files.read_bytes(path, argument, limit=MAX_INPUT_BYTES + 1))
+        except FileError as exc:
+            raise _ArgumentError(argument, f"{short_repr(path)} {exc.problem}") from None
     return value
 
 

@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
-from dynevent.errors import SendError
+from dynevent import files
+from dynevent.errors import FileError, SendError, short_repr
+from dynevent.wire import _json
 from dynevent.wire.vocab import EventType
 
 __all__ = ["goal_request"]
@@ -30,9 +31,9 @@ def goal_request(args: argparse.Namespace) -> tuple[EventType, str, str]:
     if args.end:
         return EventType.FINISHED, "", ""
     try:
-        data = json.loads(Path(args.file).read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise SendError(f"--file {args.file}: {exc}") from None
+        data = files.read_json(args.file, "--file")
+    except FileError as exc:
+        raise SendError(str(exc)) from None
     if not isinstance(data, dict) or not isinstance(data.get("category"), str) or "description" not in data:
         raise SendError(f'--file {args.file}: expected {{"category": "...", "description": ...}}')
     description = data["description"]
@@ -47,13 +48,13 @@ def _description(text: str) -> str:
     """``--description``'s JSON text (``@FILE``: the file's), checked to be JSON."""
     source = "--description"
     if text.startswith("@"):
-        source = f"--description {text}"
+        source = f"--description {short_repr(text)}"
         try:
-            text = Path(text[1:]).read_text(encoding="utf-8")
-        except OSError as exc:
-            raise SendError(f"{source}: {exc}") from None
+            text = files.read_text(text[1:], "--description")
+        except FileError as exc:
+            raise SendError(str(exc)) from None
     try:
-        json.loads(text)
-    except ValueError as exc:
-        raise SendError(f"{source}: not JSON: {exc}") from None
+        _json.parse(text)
+    except _json.JsonProblem as exc:
+        raise SendError(f"{source}: not JSON dynevent reads: {exc}") from None
     return text.strip()

@@ -39,7 +39,12 @@ def to_nanoseconds(owner: str, field: str, seconds: Any, *, zero: bool = True) -
     ``owner.field`` otherwise."""
     if isinstance(seconds, bool) or not isinstance(seconds, (int, float)):
         raise InvalidValue(owner, field, seconds, "expected a duration in seconds (an int or a float)")
-    if not math.isfinite(seconds) or seconds < 0 or (seconds == 0 and not zero):
+    # an int is finite, and isfinite cannot take one too large for a float
+    if (
+        (isinstance(seconds, float) and not math.isfinite(seconds))
+        or seconds < 0
+        or (seconds == 0 and not zero)
+    ):
         bound = "0 or more" if zero else "above 0"
         raise InvalidValue(owner, field, seconds, f"expected a finite duration in seconds, {bound}")
     if seconds > MAX_DURATION:

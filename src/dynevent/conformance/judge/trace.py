@@ -12,6 +12,7 @@ from typing import Any
 
 import attrs
 
+from dynevent import files
 from dynevent.conformance.records import InvalidRecord, config_from_json
 from dynevent.errors import (
     InvalidMessage,
@@ -365,7 +366,7 @@ class TraceWriter:
     process that dies keeps every record before its end).  Threads may share one writer.
 
     ``fleet`` and ``robot`` (and the server's ``config`` as JSON, when known) make the config record.
-    Raises ``OSError`` when the file cannot be opened.
+    Raises :class:`~dynevent.errors.FileError` when the file cannot be opened.
     """
 
     def __init__(
@@ -373,7 +374,7 @@ class TraceWriter:
     ) -> None:
         self.path = path
         self._lock = threading.Lock()
-        self._stream = open(path, "w", encoding="utf-8")  # noqa: SIM115  # closed by close()
+        self._stream = files.create_text(path, "--trace")  # closed by close()
         header: dict[str, Any] = {"type": "config"}
         header.update({key: value for key, value in (("fleet", fleet), ("robot", robot)) if value})
         if config is not None:

@@ -17,8 +17,10 @@ from collections.abc import Iterator
 from typing import Any
 
 from dynevent import errors as _errors
+from dynevent import files
 from dynevent._moved import moved_attribute
 from dynevent.conformance import judge as _judge
+from dynevent.errors import FileError
 from dynevent.tools._progress import Progress
 from dynevent.wire import _json
 from dynevent.wire.vocab import Compatibility
@@ -45,8 +47,11 @@ def _run(args: argparse.Namespace) -> int:
         if source == "-":
             report = _check_stream(sys.stdin.buffer, "<stdin>", compatibility)
         else:
-            with open(source, "rb") as stream:
+            with files.open_regular(source, "trace") as stream:
                 report = _check_stream(stream, source, compatibility)
+    except FileError as exc:
+        print(f"dynevent check: {exc}", file=sys.stderr)
+        return 2
     except OSError as exc:
         print(f"dynevent check: {source}: cannot read: {exc.strerror or exc}", file=sys.stderr)
         return 2
