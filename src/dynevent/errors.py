@@ -56,6 +56,19 @@ __all__ = [
 _VALUE_REPR_LIMIT = 80
 
 
+#: Paths longer than this (far past any file system's limit) are shortened in an error message.
+_PATH_REPR_LIMIT = 4_096
+
+
+def shown_path(path: str) -> str:
+    """A path as an error message shows it: whole and quoted, control characters escaped; shortened
+    only when it is longer than any path a system takes."""
+    text = repr(path)
+    if len(text) > _PATH_REPR_LIMIT:
+        text = f"{text[:77]}... ({len(path)} chars)"
+    return text
+
+
 def short_repr(value: object) -> str:
     """Return ``repr(value)`` cut to a readable length for error messages."""
     try:
@@ -320,7 +333,7 @@ class FileError(LocalError):
 
     def __init__(self, what: str, path: str, problem: str) -> None:
         self.what, self.path, self.problem = what, path, problem
-        super().__init__(f"{what} {short_repr(path)}: {problem}")
+        super().__init__(f"{what} {shown_path(path)}: {problem}")
 
 
 class ProbeError(LocalError):

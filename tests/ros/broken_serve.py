@@ -124,7 +124,14 @@ def ignores_clamp(server: Any, output: outs.Output) -> outs.Output | None:
     return output
 
 
+def _skips_seq() -> None:
+    """Each run's seq is the last one's plus 2 (runs 1, 3, 5): no case looks at the step between runs,
+    the judge over the probe's exchange does (R3.1)."""
+    machine.next_seq = lambda seq: (seq + 2) % 2**32
+
+
 DEFECTS: dict[str, Callable[[], None]] = {
+    "skips_seq": _skips_seq,
     "accepts_stale_seq": lambda: _accept_despite(RejectReason.SEQ_MISMATCH),
     "accepts_stale_next": lambda: _accept_despite(RejectReason.SEQ_MISMATCH, EventType.NEXT),
     "accepts_stale_cancel": lambda: _accept_despite(RejectReason.SEQ_MISMATCH, EventType.CANCEL),

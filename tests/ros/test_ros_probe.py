@@ -124,7 +124,9 @@ def _check_agrees(
         case_at[finding.line] for finding in report.findings if everywhere is None or not everywhere(finding)
     }
     failed, seen = set(), set()
-    for test in ET.parse(junit).getroot().iter("testcase"):
+    cases = ET.parse(junit).getroot().find("testsuite")  # the cases' suite (the judge's is the second)
+    assert cases is not None
+    for test in cases.iter("testcase"):
         properties = {item.get("name"): item.get("value") for item in test.iter("property")}
         if str(properties["verdict"]).startswith(("fail", "known")):
             failed.add(test.get("name"))
@@ -241,21 +243,23 @@ BROKEN = {
 }  # fmt: skip
 
 
-@pytest.mark.parametrize("defect", list(BROKEN))
-def test_a_broken_server_is_caught_by_the_case_of_the_rule_it_breaks(tmp_path: Path, defect: str) -> None:
-    """Every other case passes: no false failure (a case that cannot be reached is missing, and
-    only where the defect makes it so)."""
+def _probe_broken(tmp_path: Path, defect: str, robot: str, *args: str) -> subprocess.CompletedProcess[str]:
+    """The probe (``--timeout 3``, JUnit in j.xml) against a server of tests/ros/broken_serve.py."""
     config = _config(tmp_path, rebegin=0.3)
-    robot = f"broken_{defect}"
     script = Path(__file__).resolve().parent / "broken_serve.py"
     serve = Child([str(script), defect, "--robot", robot, "--config", str(config)])
     serve.wait_line("serving ")
     try:
-        done = _probe(
-            robot, "--timeout", "3", "--trace", str(tmp_path / "t"), "--junit", str(tmp_path / "j.xml")
-        )
+        return _probe(robot, "--timeout", "3", "--junit", str(tmp_path / "j.xml"), *args)
     finally:
         serve.stop()
+
+
+@pytest.mark.parametrize("defect", list(BROKEN))
+def test_a_broken_server_is_caught_by_the_case_of_the_rule_it_breaks(tmp_path: Path, defect: str) -> None:
+    """Every other case passes: no false failure (a case that cannot be reached is missing, and
+    only where the defect makes it so)."""
+    done = _probe_broken(tmp_path, defect, f"broken_{defect}", "--trace", str(tmp_path / "t"))
     assert done.returncode == 1, done.stdout + done.stderr
     expected = {case.id: "pass" for case in CASES}
     expected.update(BROKEN[defect])
@@ -267,17 +271,45 @@ def test_a_broken_server_is_caught_by_the_case_of_the_rule_it_breaks(tmp_path: P
             assert f"{case} ({', '.join(rules[case])}): fail" in done.stdout, done.stdout
 
 
-def test_a_volatile_status_is_caught_and_the_run_stops_early(tmp_path: Path) -> None:
+#: Defects no case looks for, and what the judge over the probe's exchange finds of each.
+UNSEEN_BY_CASES = {
+    # runs 1, 3, 5: the first run is not the wrap's 4294967295, so the wrap case cannot run
+    "skips_seq": ({"begin.seq_wrap": "missing"}, "R3.1 begin_seq"),
+}
+
+
+@pytest.mark.spec("R3.1")
+@pytest.mark.parametrize("defect", list(UNSEEN_BY_CASES))
+def test_the_judge_over_every_record_finds_what_no_case_looks_for(tmp_path: Path, defect: str) -> None:
+    """The probe's verdicts come from its cases and from the judge ``dynevent check`` runs, fed every
+    record of the exchange: a defect no case looks for still fails the run, in its own section."""
+    done = _probe_broken(tmp_path, defect, f"unseen_{defect}")
+    cases, found = UNSEEN_BY_CASES[defect]
+    assert done.returncode == 1, done.stdout + done.stderr
+    expected = {case.id: "pass" for case in CASES}
+    expected.update(cases)
+    assert _verdicts(done.stdout) == expected, done.stdout
+    section = done.stdout.split("the judge, over every record of the exchange: ", 1)
+    assert len(section) == 2, done.stdout
+    assert f": fail: {found}: " in section[1], done.stdout
+    suites = ET.parse(tmp_path / "j.xml").getroot().findall("testsuite")
+    assert [suite.get("name") for suite in suites][1:] == ["the judge, over every record"]
+    assert int(suites[1].get("failures", "0")) >= 1
+
+
+@pytest.mark.parametrize("begin", [(), ("--begin-command", "true")], ids=["alone", "with a begin command"])
+def test_a_volatile_status_is_caught_and_the_run_stops_early(tmp_path: Path, begin: tuple[str, ...]) -> None:
     """A server whose status and begin topics are volatile (R1.4 says transient-local) fails
-    status.latched; the probe says at once that no status came, and after three cases in a row wait
-    out the timeout it runs no more, saying why (it once took over 4 minutes, 10 s a case)."""
+    status.latched; the probe says at once that no status came, and the cases that need a run are
+    not run, saying why, rather than each wait out the timeout (it once took over 4 minutes, 10 s a
+    case; 370 s with a begin command, run for each case that finds no run)."""
     config = _config(tmp_path, rebegin=0.3)
     serve = Child([str(Path(__file__).resolve().parent / "broken_serve.py"), "volatile_status",
                    "--robot", "brokenVolatile", "--config", str(config)])  # fmt: skip
     serve.wait_line("serving ")
     try:
         started = time.monotonic()
-        done = _probe("brokenVolatile", "--timeout", "2")
+        done = _probe("brokenVolatile", "--timeout", "2", *begin)
         took = time.monotonic() - started
     finally:
         serve.stop()
@@ -285,7 +317,7 @@ def test_a_volatile_status_is_caught_and_the_run_stops_early(tmp_path: Path) -> 
     lines = done.stdout.splitlines()
     assert lines[0].startswith("no status from tinyRobot/brokenVolatile within 2 s"), done.stdout
     assert _verdicts(done.stdout)["status.latched"] == "fail", done.stdout
-    assert "stopped answering" in done.stdout
+    assert "no status was heard within 2 s (R1.4)" in done.stdout
     assert took < silent_bound(2.0), f"{took:.1f} s"
 
 
@@ -311,9 +343,31 @@ def test_a_silent_server_ends_the_run_within_its_bound(tmp_path: Path) -> None:
     assert len(verdicts) == len(CASES) and "pass" not in verdicts.values(), done.stdout
     assert sum(1 for verdict in verdicts.values() if verdict == "missing") >= len(CASES) - 6, done.stdout
     assert done.stdout.splitlines()[0].startswith("no status from tinyRobot/silentRobot"), done.stdout
-    assert "stopped answering" in done.stdout
+    assert "no status was heard within 2 s (R1.4)" in done.stdout
     assert took < silent_bound(2.0), f"{took:.1f} s"
     print(f"probe against a silent server, --timeout 2: {took:.1f} s")
+
+
+@pytest.mark.spec("R19.1")
+def test_a_server_that_never_answers_a_next_ends_the_run_within_its_deadline(tmp_path: Path) -> None:
+    """A NEXT whose child completes is never answered: every case that runs a child to its end waits
+    out its --timeout; --deadline bounds the run (it once took 372 s), the cases left not run, with why."""
+    config = _config(tmp_path, rebegin=0.3)
+    script = Path(__file__).resolve().parent / "broken_serve.py"
+    serve = Child([str(script), "hangs_next", "--robot", "hangsDeadline", "--config", str(config)])
+    serve.wait_line("serving ")
+    deadline = 15.0
+    try:
+        started = time.monotonic()
+        done = _probe("hangsDeadline", "--timeout", "3", "--deadline", str(deadline))
+        took = time.monotonic() - started
+    finally:
+        serve.stop()
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert "the run's --deadline of 15 s passed" in done.stdout, done.stdout
+    assert "missing" in _verdicts(done.stdout).values()
+    # the server found, the deadline, the close-down and a process's start (rclpy, DDS discovery)
+    assert took < deadline + 15, f"{took:.1f} s"
 
 
 def test_missing_cases_fail_the_run_unless_allowed(tmp_path: Path) -> None:

@@ -11,13 +11,18 @@ from typing import Any
 import attrs
 import pytest
 
+from dynevent import client
+from dynevent.conformance.explain import explain
+from dynevent.server import inputs as ins
+from dynevent.server import machine, snapshot
 from dynevent.server import outputs as outs
-from dynevent.server import snapshot
 from dynevent.server.machine import (
     RunningGoal,
     ServerConfig,
     any_description,
 )
+from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.vocab import DynamicState, EventType, RejectReason
 from scenario import (
     ADAPTER,
     ANY_TEXT,
@@ -344,3 +349,33 @@ def test_output_order_with_clamp_and_stubborn_end() -> None:
         feedback(u(2), "underway", 6, entry(log_seq, "warning", T0, ANY_TEXT)),
         status(1, RUNNING, "underway", 6),
     )
+
+
+# --------------------------------------------------------------------------- the id above the highest, once
+
+
+@pytest.mark.spec("R4.12", "R6.2")
+def test_the_fresh_id_is_one_function_and_none_is_left_at_the_top() -> None:
+    """One rule for the id above a run's highest, asked by every side at 2**64 - 1: the machine
+    refuses id 0 (goal policy) and wraps its own counter (adapter policy), the client machine sends
+    no id it would have to invent, and explain says none is left."""
+    top = 2**64 - 1
+    assert machine.fresh_id(5) == 6 and machine.fresh_id(top - 1) == top and machine.fresh_id(top) is None
+    goal_zero = Goal(dynamic_event_seq=1, event_type=EventType.NEXT, category="go", description="{}", id=0)
+    assert machine.next_child_id(goal_zero, top, machine.ServerConfig(id_policy="adapter")) == 0
+    config = machine.ServerConfig(categories={"go": machine.any_description})
+    state = machine.step(
+        machine.State.new("f", "r"), ins.Begin(description="{}", event_id=top, now=1), config
+    ).state
+    refused = machine.accept(state, goal_zero, config)
+    assert isinstance(refused, outs.Rejected) and refused.reason is RejectReason.STALE_ID
+    at_top = DynamicEventStatus(
+        dynamic_event_seq=1, dynamic_state=DynamicState.WAITING, status="standby", id=top
+    )
+    held = client.step(
+        client.ClientState.new("0" * 16, categories=["go"]), client.StatusReceived(message=at_top)
+    )
+    asked = client.request_next(held.state, "go", "{}", now=0)
+    assert not any(isinstance(output, client.SendGoal) for output in asked.outputs)  # refused locally
+    told = explain(at_top, attrs.evolve(goal_zero, id=top))
+    assert not told.accepted and told.instead is None and "no id is left above" in told.advice

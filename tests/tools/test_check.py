@@ -807,3 +807,27 @@ def test_both_judges_keep_the_one_interface() -> None:
     topics.status(1, 2, "underway", 5).status(1, 2, "underway", 4)
     header, records = read_trace(topics.text().splitlines(), "t")
     assert found(_judged(PartialJudge(header, margin=10**9), records)) == [(topics.line, "R6.2", "status_id")]
+
+
+def _latched(seq: int, state: int, status: str, event_id: int) -> str:
+    return (
+        f'{{"time":1,"type":"status","message":{{"dynamic_event_seq":{seq},"dynamic_state":{state},'
+        f'"status":"{status}","id":{event_id},"time":{{"sec":1,"nanosec":0}}}}}}\n'
+        f'{{"time":1,"type":"begin","message":{{"fleet":"f","robot":"r","dynamic_event_seq":{seq},'
+        f'"description":"{{}}","start_time":{{"sec":0,"nanosec":0}}}}}}\n'
+    )
+
+
+@pytest.mark.spec("R3.1")
+def test_the_latched_begin_of_an_ended_run_read_after_its_status_is_no_new_run() -> None:
+    """A late subscriber reads the two latched topics in either order: the INACTIVE status of run 5,
+    then run 5's begin, is that run's, not a begin of run 5 again (the probe joins such servers)."""
+    after = (
+        '{"time":2,"type":"begin","message":{"fleet":"f","robot":"r","dynamic_event_seq":6,'
+        '"description":"{}","start_time":{"sec":2,"nanosec":0}}}\n'
+    )
+    assert check_trace(_latched(5, 0, "uninitialized", 0) + after).clean
+    assert check_trace(_latched(5, 1, "standby", 3)).clean
+    skipped = after.replace('"dynamic_event_seq":6', '"dynamic_event_seq":7')
+    report = check_trace(_latched(5, 0, "uninitialized", 0) + skipped)
+    assert [(finding.rule, finding.code) for finding in report.findings] == [("R3.1", "begin_seq")]

@@ -10,6 +10,8 @@ import attrs
 import pytest
 
 from dynevent.conformance import probe_cases
+from dynevent.conformance.judge import divergences
+from dynevent.conformance.judge.trace import Finding as JudgeFinding
 from dynevent.conformance.probe_cases import CASES, KNOWN, Case, Finding, Verdict
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -199,3 +201,96 @@ def test_docs_probe_lists_every_case_with_its_rules_and_divergences() -> None:
     assert rows == [
         (case.id, ", ".join(case.rules), case.title, ", ".join(case.divergences)) for case in CASES
     ]
+
+
+# --------------------------------------------------------------------------- the judge beside the cases
+
+CLEAN = (Path(__file__).resolve().parents[2] / "docs" / "examples" / "clean-trace.jsonl").read_text("utf-8")
+#: A feedback of NEXT 6 (goal ...01) sent again after its answer and the status that ended its child.
+LATE_FEEDBACK = (
+    '{"time":103.5,"type":"feedback","goal_uuid":"00000000000000000000000000000001",'
+    '"feedback":{"status":"underway","id":6,"logs":[]}}'
+)
+
+
+def _with_cases(text: str, *cases: tuple[str, str]) -> str:
+    """``text`` with ``# case ID`` lines put before the first line holding each marker."""
+    for case, marker in cases:
+        at = text.index(marker)
+        start = text.rindex("\n", 0, at) + 1
+        text = text[:start] + f"# case {case}\n" + text[start:]
+    return text
+
+
+def _finding(case_id: str, verdict: probe_cases.Verdict) -> probe_cases.Finding:
+    case = next(case for case in probe_cases.CASES if case.id == case_id)
+    return probe_cases.Finding(case, verdict)
+
+
+def _late_feedback() -> str:
+    """The clean trace with NEXT 6's feedback sent again after its answer and the status after it."""
+    lines = CLEAN.splitlines()
+    end = next(n for n, line in enumerate(lines) if line.startswith('{"time":103,"type":"status"'))
+    lines.insert(end + 1, LATE_FEEDBACK)
+    first = '"goal_uuid":"00000000000000000000000000000001"'
+    return _with_cases("\n".join(lines) + "\n", ("next.runs_a_child", first))
+
+
+@pytest.mark.spec("R19.1")
+def test_the_judge_finds_what_no_case_did_and_it_fails_the_run() -> None:
+    passed = [_finding("next.runs_a_child", probe_cases.Verdict.PASS)]
+    judged = probe_cases.judge_exchange(_late_feedback(), passed)
+    assert [(item.case, item.finding.rule, item.finding.code) for item in judged] == [
+        ("next.runs_a_child", "R19.1", "after_answer")
+    ]
+    assert judged[0].label == "?" and judged[0].counts
+    assert probe_cases.exit_status(passed) == probe_cases.EXIT_OK
+    assert probe_cases.exit_status(passed, judged) == probe_cases.EXIT_FAILED
+    said = probe_cases.format_findings(passed, judged)
+    assert "the judge, over every record of the exchange: 1 finding(s)" in said
+    assert "next.runs_a_child: fail: R19.1 after_answer: " in said
+    junit = ET.fromstring(probe_cases.junit_xml(passed, "f/r", judged))
+    assert [suite.get("name") for suite in junit.iter("testsuite")] == ["f/r", "the judge, over every record"]
+    assert "R19.1 after_answer" in probe_cases.report(passed, "f/r", judged=judged)
+    assert 'id="judge"' in probe_cases.report(passed, "f/r", html_form=True, judged=judged)
+    # a case that failed on the finding's rule already said so: not said twice
+    failed = [attrs.evolve(_finding("next.runs_a_child", probe_cases.Verdict.FAIL))]
+    assert probe_cases.judge_exchange(_late_feedback(), failed) == []
+
+
+@pytest.mark.spec("R7.3")
+def test_a_finding_the_deployed_server_showed_is_known_to_known() -> None:
+    text = CLEAN.replace('"logs":[{"seq":1,', '"logs":[{"seq":0,', 1)  # a log seq repeats
+    judged = probe_cases.judge_exchange(text, [])
+    assert [(item.finding.rule, item.finding.code, item.label) for item in judged] == [
+        ("R7.3", "log_seq", "D9")
+    ]
+    assert judged[0].counts and probe_cases.exit_status([], judged) == probe_cases.EXIT_FAILED
+    known = probe_cases.judge_exchange(text, [], known=KNOWN["rmf_ros2"])
+    assert known[0].known and not known[0].counts
+    assert probe_cases.exit_status([], known) == probe_cases.EXIT_OK
+    assert ": known (D9): R7.3" in known[0].line()
+
+
+@pytest.mark.spec("R3.1")
+def test_a_seq_that_skips_is_the_judges_finding_and_a_clean_exchange_has_none() -> None:
+    assert probe_cases.judge_exchange(CLEAN, []) == []
+    skipped = CLEAN + (
+        '{"time":110,"type":"begin","message":{"fleet":"tinyRobot","robot":"tinyRobot1",'
+        '"dynamic_event_seq":3,"description":"{}","start_time":{"sec":110,"nanosec":0}}}\n'
+        '{"time":110,"type":"status","message":{"dynamic_event_seq":3,"dynamic_state":1,'
+        '"status":"standby","id":1,"time":{"sec":110,"nanosec":0}}}\n'
+    )
+    judged = probe_cases.judge_exchange(skipped, [])
+    assert ("R3.1", "begin_seq") in {(item.finding.rule, item.finding.code) for item in judged}
+    assert all(item.case == "" for item in judged)  # before the first case
+    assert probe_cases.exit_status([], judged) == probe_cases.EXIT_FAILED
+
+
+def test_an_open_item_of_the_judge_is_uncertain_and_does_not_fail_the_run() -> None:
+    seen, expected = "status RUNNING seq=1 id=6 underway", "WAITING seq=1 id=5 standby"
+    finding = JudgeFinding(line=3, rule="R2.2", code="status_mismatch", message=seen, expected=expected)
+    item = probe_cases.Judged("next.runs_a_child", finding, divergences.label(finding))
+    assert item.label == "response_seen_late" and item.uncertain and not item.counts
+    assert probe_cases.exit_status([], [item]) == probe_cases.EXIT_OK
+    assert "uncertain" in item.line() and "(1 uncertain)" in probe_cases.judged_summary([item])

@@ -438,13 +438,13 @@ def request_next(
     """
     now = checked_now("request_next", now)
     timeout = _check_timeout(timeout)
-    spare = state.last_id < U64_MAX
+    fresh = machine.fresh_id(state.last_id)  # none left: the highest, which the machine refuses (R4.12)
     goal = Goal(
         dynamic_event_seq=state.seq,
         event_type=EventType.NEXT,
         category=category,
         description=description,
-        id=state.last_id + 1 if spare else state.last_id,
+        id=state.last_id if fresh is None else fresh,
         stubborn_period=stubborn_period,
     )
     refusal = _refusal(state, goal)

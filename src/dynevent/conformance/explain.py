@@ -25,7 +25,7 @@ from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.server.machine import UNKNOWN_GOAL, ServerConfig, State, state_from_status
-from dynevent.wire._fields import U32_MAX, U64_MAX
+from dynevent.wire._fields import U32_MAX
 from dynevent.wire._text import goal_text, status_text
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import (
@@ -224,9 +224,9 @@ def _fix(state: State, goal: Goal, rejection: outs.Rejected) -> tuple[Goal | Non
     if reason is RejectReason.NON_FINITE_STUBBORN_PERIOD:
         return attrs.evolve(goal, stubborn_period=0.0), "give a finite stubborn_period (0 for none)", True
     if reason is RejectReason.STALE_ID:
-        if state.last_id >= U64_MAX:
+        fresh = machine.fresh_id(state.last_id)
+        if fresh is None:
             return None, f"no id is left above {state.last_id} in this run: FINISH it, begin another", False
-        fresh = state.last_id + 1
         return (
             attrs.evolve(goal, id=fresh),
             f"give the NEXT a fresh id, above every id used in the run (at least {fresh}), "

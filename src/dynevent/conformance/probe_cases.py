@@ -28,6 +28,8 @@ from collections.abc import Iterable, Sequence
 
 import attrs
 
+from dynevent.conformance.judge import check_trace, divergences
+from dynevent.conformance.judge.trace import Finding as JudgeFinding
 from dynevent.conformance.xml_report import xml_document, xml_safe
 from dynevent.descriptions.reading import GoToPlace, read
 from dynevent.errors import DyneventError
@@ -42,10 +44,13 @@ __all__ = [
     "KNOWN_MISSING",
     "Case",
     "Finding",
+    "Judged",
     "Verdict",
     "exit_status",
     "format_findings",
     "format_list",
+    "judge_exchange",
+    "judged_summary",
     "junit_xml",
     "matches",
     "not_run_summary",
@@ -103,6 +108,62 @@ class Finding:
     seconds: float = 0.0
     absent: bool = False  # the failure is a message that did not come within the timeout
     expected_missing: bool = False  # missing, as --allow-missing or --known said it may be
+
+
+@attrs.frozen
+class Judged:
+    """A finding of the judge ``dynevent check`` runs, over every record of the probe's exchange, that
+    no case's verdict already says: in which case's records it lies (``""`` before the first), its
+    ``label`` (the divergence the deployed server showed it as, an open item of the judge, or
+    ``"?"``), ``known`` when ``--known`` covers that divergence, and ``uncertain`` for an open item:
+    what a client's view of the exchange cannot settle, reported and not counted."""
+
+    case: str
+    finding: JudgeFinding
+    label: str
+    known: bool = False
+
+    @property
+    def uncertain(self) -> bool:
+        return self.label in divergences.OPEN_ITEMS
+
+    @property
+    def counts(self) -> bool:
+        """Whether it fails the run: neither known nor uncertain."""
+        return not (self.known or self.uncertain)
+
+    def line(self) -> str:
+        """One line: where, the rule and code, what was seen, what was expected, and how it counts."""
+        finding = self.finding
+        how = f"known ({self.label})" if self.known else "uncertain" if self.uncertain else "fail"
+        where = self.case or "before the first case"
+        return (
+            f"{where}: {how}: {finding.rule} {finding.code}: {finding.message} (expected: {finding.expected})"
+        )
+
+
+def judge_exchange(text: str, findings: Sequence[Finding], known: Iterable[str] = ()) -> list[Judged]:
+    """What the judge finds in the probe's trace ``text`` beside the cases' verdicts: every finding
+    but those of a rule a case that holds it failed on (its verdict says so already); ``known`` are
+    the divergences ``--known`` covers (:data:`KNOWN`)."""
+    covered = frozenset(known)
+    failed = {
+        finding.case.id: set(finding.case.rules) for finding in findings if finding.verdict is Verdict.FAIL
+    }
+    case_at: list[str] = [""]
+    current = ""
+    for line in text.splitlines():
+        if line.startswith("# case "):
+            current = line.removeprefix("# case ")
+        case_at.append(current)
+    judged = []
+    for finding in check_trace(text, "the probe's exchange").findings:
+        case = case_at[finding.line] if 0 < finding.line < len(case_at) else ""
+        if finding.rule in failed.get(case, ()):
+            continue
+        divergence = divergences.label(finding)
+        judged.append(Judged(case, finding, divergence, known=divergence in covered))
+    return judged
 
 
 #: Every case, in the order they run (the ones that end a run come last).
@@ -224,8 +285,9 @@ def _label(finding: Finding) -> str:
     return finding.verdict.value
 
 
-def format_findings(findings: Sequence[Finding]) -> str:
-    """A line per case, the account of every failure, and the counts."""
+def format_findings(findings: Sequence[Finding], judged: Sequence[Judged] = ()) -> str:
+    """A line per case, the account of every failure, what the judge found beside the cases, and the
+    counts."""
     width = max((len(finding.case.id) for finding in findings), default=0)
     opening = not_run_summary(findings)
     lines = [opening, ""] if opening else []
@@ -242,16 +304,30 @@ def format_findings(findings: Sequence[Finding]) -> str:
                 lines.append(f"  expected: {finding.expected}")
                 lines.append(f"  seen:     {finding.seen}")
             lines.extend(f"  | {message}" for message in finding.messages)
+    if judged:
+        lines += ["", f"the judge, over every record of the exchange: {judged_summary(judged)}"]
+        lines.extend(f"  {item.line()}" for item in judged)
     lines.append("")
     lines.append(probe_summary(findings))
     return "\n".join(lines) + "\n"
 
 
-def exit_status(findings: Sequence[Finding]) -> int:
-    """1 when a case failed (a known divergence does not count); else 3 when a case was not run
-    (missing) that no ``--allow-missing`` or ``--known`` expected; else 0.  A conformance run never
-    passes what it did not test."""
+def judged_summary(judged: Sequence[Judged]) -> str:
+    """``3 findings (1 known, 2 uncertain)``: what the judge found beside the cases."""
+    known = sum(1 for item in judged if item.known)
+    uncertain = sum(1 for item in judged if item.uncertain and not item.known)
+    parts = [f"{known} known"] if known else []
+    parts += [f"{uncertain} uncertain"] if uncertain else []
+    return f"{len(judged)} finding(s)" + (f" ({', '.join(parts)})" if parts else "")
+
+
+def exit_status(findings: Sequence[Finding], judged: Sequence[Judged] = ()) -> int:
+    """1 when a case failed or the judge found what no case did (a known divergence, or an uncertain
+    finding, does not count); else 3 when a case was not run (missing) that no ``--allow-missing`` or
+    ``--known`` expected; else 0.  A conformance run never passes what it did not test."""
     if any(finding.verdict is Verdict.FAIL and not finding.known for finding in findings):
+        return EXIT_FAILED
+    if any(item.counts for item in judged):
         return EXIT_FAILED
     if any(finding.verdict is Verdict.MISSING and not finding.expected_missing for finding in findings):
         return EXIT_NOT_RUN
@@ -281,9 +357,10 @@ def not_run_summary(findings: Sequence[Finding]) -> str | None:
     return f"{len(missing)} of {len(findings)} case(s) not run{allowed}: {why}"
 
 
-def junit_xml(findings: Sequence[Finding], server: str = "") -> str:
+def junit_xml(findings: Sequence[Finding], server: str = "", judged: Sequence[Judged] = ()) -> str:
     """The run as JUnit XML: a test case per probe case (``classname`` its section), a failure with
-    the account, a skip for a missing case; each case's rules as a property."""
+    the account, a skip for a missing case; each case's rules as a property.  What the judge found
+    beside the cases is a second test suite, a test case per finding (``classname`` ``judge``)."""
     failures = sum(1 for finding in findings if finding.verdict is Verdict.FAIL and not finding.known)
     skipped = sum(1 for finding in findings if finding.verdict is Verdict.MISSING)
     suites = ET.Element("testsuites", name="dynevent probe", tests=str(len(findings)))
@@ -311,6 +388,19 @@ def junit_xml(findings: Sequence[Finding], server: str = "") -> str:
             ET.SubElement(test, "skipped", message=finding.seen)
         elif finding.known:
             ET.SubElement(test, "system-out").text = f"known divergence {finding.divergence}\n{account}"
+    if judged:
+        counted = sum(1 for item in judged if item.counts)
+        beside = ET.SubElement(
+            suites, "testsuite", name="the judge, over every record", tests=str(len(judged)),
+            failures=str(counted), skipped="0",
+        )  # fmt: skip
+        for item in judged:
+            name = f"{item.finding.rule} {item.finding.code} (line {item.finding.line})"
+            test = ET.SubElement(beside, "testcase", classname="judge", name=name)
+            if item.counts:
+                ET.SubElement(test, "failure", message=item.line(), type=item.finding.code)
+            else:
+                ET.SubElement(test, "system-out").text = item.line()
     return xml_document(suites)
 
 
@@ -324,16 +414,19 @@ def probe_summary(findings: Sequence[Finding]) -> str:
     return summary + (f" ({known} of the failures known)" if known else "")
 
 
-def report(findings: Sequence[Finding], server: str, *, html_form: bool = False) -> str:
+def report(
+    findings: Sequence[Finding], server: str, *, html_form: bool = False, judged: Sequence[Judged] = ()
+) -> str:
     """A report a person reads: a table of the cases, then per case its rules, verdict, what the spec
-    expects, what was seen and every message sent and seen.  Markdown, or a self-contained HTML page."""
+    expects, what was seen and every message sent and seen, then what the judge found beside the
+    cases.  Markdown, or a self-contained HTML page."""
     title = f"dynevent probe: {server}"
     rows = [
         (finding.case.id, _label(finding), ", ".join(finding.case.rules), finding.case.title)
         for finding in findings
     ]
-    if html_form:
-        return xml_safe(_report_html(title, rows, findings))  # a page that parses, whatever a server said
+    if html_form:  # a page that parses, whatever a server said
+        return xml_safe(_report_html(title, rows, findings, judged))
     opening = not_run_summary(findings)
     lines = [
         f"# {title}",
@@ -350,6 +443,9 @@ def report(findings: Sequence[Finding], server: str, *, html_form: bool = False)
         lines.extend(f"- {name}: {_cell(value)}" for name, value in _facts(finding))
         if finding.messages:
             lines += ["", "```", *finding.messages, "```"]
+    if judged:
+        lines += ["", f"## The judge, over every record: {judged_summary(judged)}", ""]
+        lines.extend(f"- {_cell(item.line())}" for item in judged)
     return "\n".join(lines) + "\n"
 
 
@@ -377,7 +473,9 @@ _STYLE = (
 )
 
 
-def _report_html(title: str, rows: list[tuple[str, str, str, str]], findings: Sequence[Finding]) -> str:
+def _report_html(
+    title: str, rows: list[tuple[str, str, str, str]], findings: Sequence[Finding], judged: Sequence[Judged]
+) -> str:
     escape = html.escape
     parts = [
         "<!DOCTYPE html>",
@@ -404,5 +502,11 @@ def _report_html(title: str, rows: list[tuple[str, str, str, str]], findings: Se
         parts.append("</ul>")
         if finding.messages:
             parts.append(f"<pre>{escape(chr(10).join(finding.messages))}</pre>")
+    if judged:
+        parts.append(
+            f'<h2 id="judge">The judge, over every record: {escape(judged_summary(judged))}</h2><ul>'
+        )
+        parts.extend(f"<li>{escape(item.line())}</li>" for item in judged)
+        parts.append("</ul>")
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"

@@ -366,7 +366,8 @@ def _count_as_site(driven: _Replay, records: Sequence[Observation], index: int) 
     if child is None or child - 1 <= state.last_id or state.running is not None:
         return None
     driven.state = attrs.evolve(state, last_id=child - 1)
-    return f"run {state.seq}: child {child} (the machine's next: {state.last_id + 1})"
+    fresh = machine.fresh_id(state.last_id)
+    return f"run {state.seq}: child {child} (the machine's next: {'none left' if fresh is None else fresh})"
 
 
 def replay(

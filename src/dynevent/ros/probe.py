@@ -43,6 +43,7 @@ from dynevent.ros.graph import no_server_text
 from dynevent.ros.qos import latched
 from dynevent.ros.spinning import Interrupted, Spinner, bounded_close, close_down, interruptible
 from dynevent.server import machine
+from dynevent.wire._fields import U64_MAX
 from dynevent.wire.messages import (
     DynamicEventDescription,
     DynamicEventStatus,
@@ -70,7 +71,20 @@ _TERMINAL = {
 _STANDBY, _UNDERWAY = Status.STANDBY.value, Status.UNDERWAY.value
 _COMPLETED, _CANCELED = Status.COMPLETED.value, Status.CANCELED.value
 _U32 = 2**32
-_U64 = 2**64
+#: The configuration whose server numbers every child itself (id policy adapter): what a NEXT of id
+#: 0 asks of any server (R6.2).
+_SERVER_NUMBERS = machine.ServerConfig(id_policy="adapter")
+
+
+def _fresh(last_id: int) -> int:
+    """The id above ``last_id`` a NEXT names (R4.12, the machine's :func:`~dynevent.server.machine.fresh_id`);
+    a case that needs one where none is left is not run."""
+    fresh = machine.fresh_id(last_id)
+    if fresh is None:
+        raise _Unreachable(f"no id is left above {last_id} in this run (2**64 - 1 is the highest)")
+    return fresh
+
+
 #: How long the description case looks for the service, which a server need not offer (D17).
 _SERVICE_WAIT = 2.0
 #: The history depth of the probe's own subscriptions.
@@ -332,6 +346,8 @@ class Options:
     #: where to write the JUnit report, and the readable report (HTML when the name ends .html/.htm)
     junit: str | None = None
     report: str | None = None
+    #: the bound on the whole run once the server is found (seconds): no wait goes past it
+    deadline: float = 120.0
 
 
 #: How many cases in a row may wait out the timeout, the server sending nothing meanwhile, before the
@@ -392,6 +408,28 @@ class Probe:
         self.exchanges: list[Exchange] = []
         self.timeouts_in_a_row = 0  # cases that waited out the timeout, one after the other
         self._places_sent = 0
+        self.ends_at = time.monotonic() + options.deadline
+        #: the kinds of wait that have timed out once (``"status"``), and why: the cases that need one
+        #: are not run to wait it out again (the cause is said instead)
+        self.dead: dict[str, str] = {}
+
+    @property
+    def timeout(self) -> float:
+        """The bound on the next wait: ``--timeout``, or what is left of ``--deadline`` when less."""
+        return max(_LEAST_WAIT, min(self.options.timeout, self.ends_at - time.monotonic()))
+
+    @property
+    def past_deadline(self) -> bool:
+        return time.monotonic() >= self.ends_at
+
+    def blocked(self, case: Case) -> str | None:
+        """Why ``case`` is not run: a kind of wait it needs has timed out already, or the deadline passed."""
+        if self.past_deadline:
+            return f"the run's --deadline of {self.options.deadline:g} s passed"
+        for kind, needs in _NEEDS_OF_WAIT.items():
+            if kind in self.dead and case.needs in needs:
+                return self.dead[kind]
+        return None
 
     # ---------------------------------------------------------------- carrying out
 
@@ -450,13 +488,13 @@ class Probe:
         a case that otherwise passed fails when one was not."""
         for exchange in self.exchanges:
             goal = _describe_goal(exchange.goal).removeprefix("sent ")
-            if exchange.accepted and not exchange.answered(self.options.timeout):
+            if exchange.accepted and not exchange.answered(self.timeout):
                 what = f"{goal} accepted, no answer"
             elif len(exchange.answers) > 1:
                 what = f"{goal} answered {len(exchange.answers)} times"
             else:
                 continue
-            self.note(f"{what} within {self.options.timeout:g} s (R19.1)")
+            self.note(f"{what} within {self.timeout:g} s (R19.1)")
             if finding.verdict in (Verdict.PASS, Verdict.NON_STRICT, Verdict.INFO):
                 return Finding(
                     finding.case, Verdict.FAIL, expected="every accepted goal answered exactly once (R19.1)",
@@ -468,7 +506,7 @@ class Probe:
         """The status of an active run the robot waits in, after the begin command when one is given
         and the robot is not waiting; else the case is missing.  Waiting is WAITING, or RUNNING with
         a child's final status (R20.2: what rmf_ros2 keeps publishing after a child ends)."""
-        timeout = self.options.timeout
+        timeout = self.timeout
         status = self.link.wait_status(machine.robot_waits, 0.5)
         if status is None and self.options.begin_command:
             self._run_begin_command()
@@ -484,7 +522,7 @@ class Probe:
         try:
             done = subprocess.run(
                 shlex.split(command),
-                timeout=self.options.timeout,
+                timeout=self.timeout,
                 check=False,
                 capture_output=True,
                 text=True,
@@ -494,9 +532,9 @@ class Probe:
         self.note(f"ran --begin-command: exit status {done.returncode}")
 
     def any_status(self) -> DynamicEventStatus:
-        status = self.link.wait_status(lambda s: True, self.options.timeout)
+        status = self.link.wait_status(lambda s: True, self.timeout)
         if status is None:
-            raise _TimedOut(f"no status within {self.options.timeout:g} s")
+            raise _TimedOut(f"no status within {self.timeout:g} s")
         return status
 
     def send(self, goal: Goal, *, answer: bool = True) -> Exchange:
@@ -504,17 +542,17 @@ class Probe:
         exchange = self.link.send(goal)
         self.exchanges.append(exchange)
         self.note(_describe_goal(goal))
-        if not exchange.responded(self.options.timeout):
+        if not exchange.responded(self.timeout):
             self.note("no response")
             return exchange
         if answer and exchange.accepted:
-            exchange.answered(self.options.timeout)
+            exchange.answered(self.timeout)
         self.note(_describe_answer(exchange))
         return exchange
 
     def cancel(self, exchange: Exchange) -> bool | None:
         """An action-level cancel of ``exchange``'s goal: accepted, refused, or None (no response)."""
-        accepted = self.link.cancel(exchange, self.options.timeout)
+        accepted = self.link.cancel(exchange, self.timeout)
         outcome = {None: "no response", True: "accepted", False: "refused"}[accepted]
         self.note(
             f"sent an action-level cancel of {_describe_goal(exchange.goal).removeprefix('sent ')}: {outcome}"
@@ -532,7 +570,7 @@ class Probe:
             event_type=EventType.NEXT,
             category=self.options.category,
             description=json.dumps({"one_of": [place]}),
-            id=status.id + 1 if goal_id is None else goal_id,
+            id=_fresh(status.id) if goal_id is None else goal_id,
         )
 
     def refused(self, case: Case, goal: Goal, divergence: str | None = None) -> Finding:
@@ -563,7 +601,7 @@ class Probe:
                 and (s.id == goal.id or s.id > status.id)
             )
 
-        deadline = time.monotonic() + self.options.timeout
+        deadline = time.monotonic() + self.timeout
         while time.monotonic() < deadline:
             running = self.link.wait_status(new_child, min(_LOOK_AGAIN, deadline - time.monotonic()))
             if running is not None:
@@ -588,15 +626,13 @@ class Probe:
             if running is not None:
                 break
             if not exchange.answers:
-                raise _TimedOut(
-                    f"the child of NEXT {goal.id} never showed RUNNING within {self.options.timeout:g} s"
-                )
+                raise _TimedOut(f"the child of NEXT {goal.id} never showed RUNNING within {self.timeout:g} s")
             # it ended before it was seen running: the robot stood where it was sent
             self.note(f"the child of NEXT {goal.id} ended at once ({_describe_answer(exchange)}): "
                       "the robot stood there")  # fmt: skip
             if tried == places:
                 raise _Unreachable(f"every child ended at once, at each of the {places} place(s) given")
-            self.link.wait_status(_waits_or_ended, self.options.timeout)
+            self.link.wait_status(_waits_or_ended, self.timeout)
         assert running is not None  # every way out of the loop but its break raised
         if running.id != goal.id:
             self.note(f"the server numbered the child {running.id} (the NEXT's id was {goal.id})")
@@ -608,9 +644,15 @@ class Probe:
                     dynamic_event_seq=goal.dynamic_event_seq, event_type=EventType.CANCEL, id=running.id
                 )
                 self.send(stop)
-                exchange.answered(self.options.timeout)
-            self.link.wait_status(_waits_or_ended, self.options.timeout)
+                exchange.answered(self.timeout)
+            self.link.wait_status(_waits_or_ended, self.timeout)
 
+
+#: The shortest wait the deadline leaves (seconds): a message already on its way is still read.
+_LEAST_WAIT = 0.05
+#: Which cases a kind of wait that timed out stops: no status heard stops every case that needs an
+#: active run (the begin command each would run cannot make a status heard that none was).
+_NEEDS_OF_WAIT = {"status": ("run", "place", "child")}
 
 #: How often a wait for a running child looks whether its NEXT was answered first (seconds).
 _LOOK_AGAIN = 0.2
@@ -621,11 +663,11 @@ _LOOK_AGAIN = 0.2
 
 def _status_latched(probe: Probe, case: Case) -> Finding:
     expected = "a late subscriber receives the status"
-    if probe.link.wait_status(lambda status: True, probe.options.timeout) is None:
+    if probe.link.wait_status(lambda status: True, probe.timeout) is None:
         # a server with no transient-local status (a volatile one never matches this subscriber)
-        seen = f"no status within {probe.options.timeout:g} s"
+        seen = f"no status within {probe.timeout:g} s"
         return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=True)
-    if probe.link.late_subscriber_hears(probe.options.timeout):
+    if probe.link.late_subscriber_hears(probe.timeout):
         return Finding(case, Verdict.PASS, expected="a status", seen="a status")
     return Finding(case, Verdict.FAIL, expected=expected, seen="nothing")
 
@@ -677,14 +719,14 @@ def _event_type_unknown(probe: Probe, case: Case) -> Finding:
 def _category_unknown(probe: Probe, case: Case) -> Finding:
     status = probe.waiting()
     goal = _goal(status, EventType.NEXT, category="dynevent_probe_no_such_category", description="{}",
-                 id=status.id + 1)  # fmt: skip
+                 id=_fresh(status.id))  # fmt: skip
     return probe.refused(case, goal)
 
 
 def _description_not_json(probe: Probe, case: Case) -> Finding:
     status = probe.waiting()
     goal = _goal(status, EventType.NEXT, category=probe.options.category, description="{not json",
-                 id=status.id + 1)  # fmt: skip
+                 id=_fresh(status.id))  # fmt: skip
     return probe.refused(case, goal)
 
 
@@ -708,7 +750,7 @@ def _runs_a_child(probe: Probe, case: Case) -> Finding:
             case,
             Verdict.FAIL,
             expected=expected,
-            seen=f"no answer within {probe.options.timeout:g} s",
+            seen=f"no answer within {probe.timeout:g} s",
             absent=True,
         )
     status_, result = answer
@@ -739,10 +781,10 @@ def _status_after_child(probe: Probe, case: Case) -> Finding:
     goal = probe.next_goal(status)
     exchange = probe.send(goal)
     if not exchange.answers:
-        raise _TimedOut(f"the child did not end within {probe.options.timeout:g} s")
+        raise _TimedOut(f"the child did not end within {probe.timeout:g} s")
     answer = exchange.answer
     child = answer[1].id if answer is not None and answer[1].id else goal.id  # R8.1: the result names it
-    after = probe.link.wait_status(lambda s: s.id == child and s.status != _UNDERWAY, probe.options.timeout)
+    after = probe.link.wait_status(lambda s: s.id == child and s.status != _UNDERWAY, probe.timeout)
     if after is None:
         return Finding(
             case,
@@ -763,7 +805,7 @@ def _status_after_child(probe: Probe, case: Case) -> Finding:
 def _busy(probe: Probe, case: Case) -> Finding:
     with probe.child() as (_, child_id):
         status = probe.link.status or probe.any_status()
-        return probe.refused(case, probe.next_goal(status, goal_id=child_id + 1))
+        return probe.refused(case, probe.next_goal(status, goal_id=_fresh(child_id)))
 
 
 def _busy_finished(probe: Probe, case: Case) -> Finding:
@@ -787,7 +829,7 @@ def _cancel_running_child(probe: Probe, case: Case) -> Finding:
         status = probe.link.status or probe.any_status()
         since = len(probe.link.history())
         cancel = probe.send(_goal(status, EventType.CANCEL, id=child_id))
-        running.answered(probe.options.timeout)
+        running.answered(probe.timeout)
         probe.note(f"the NEXT: {_describe_answer(running)}")
         cancel_answer, next_answer = cancel.answer, running.answer
         if cancel_answer is None or next_answer is None:
@@ -811,7 +853,7 @@ def _status_after_cancel(probe: Probe, case: Case, child_id: int, since: int) ->
     def shows_the_end(status: DynamicEventStatus) -> bool:
         return status.id == child_id and machine.robot_waits(status)
 
-    if not probe.link.wait_seen(shows_the_end, since, probe.options.timeout):
+    if not probe.link.wait_seen(shows_the_end, since, probe.timeout):
         return Finding(case, Verdict.FAIL, expected=expected, seen="no status after the child", absent=True)
     for after in filter(shows_the_end, probe.link.history()[since:]):
         if after.dynamic_state == DynamicState.WAITING and after.status == _STANDBY:
@@ -836,7 +878,7 @@ def _finished(probe: Probe, case: Case) -> Finding:
     if not probe.link.wait_seen(
         lambda s: s.dynamic_state == DynamicState.INACTIVE and s.dynamic_event_seq == seq,
         since,
-        probe.options.timeout,
+        probe.timeout,
     ):
         return Finding(case, Verdict.FAIL, expected=expected, seen="no INACTIVE status", absent=True)
     return Finding(case, Verdict.PASS, expected=expected, seen="so")
@@ -937,7 +979,7 @@ def _numbered_by_server(finding: Finding, exchange: Exchange, asked: int, above:
 
 def _id_zero(probe: Probe, case: Case) -> Finding:
     status = probe.waiting()
-    child_id = (status.id + 1) % _U64
+    child_id = machine.next_child_id(Goal(id=0), status.id, _SERVER_NUMBERS)
     exchange = probe.send(probe.next_goal(status, goal_id=0))
     finding = _ran_finding(probe, case, exchange, child_id, f"child {child_id} runs and completes")
     return _numbered_by_server(finding, exchange, child_id, status.id)
@@ -946,7 +988,7 @@ def _id_zero(probe: Probe, case: Case) -> Finding:
 def _id_chosen(probe: Probe, case: Case) -> Finding:
     status = probe.waiting()
     chosen = status.id + 5
-    if chosen >= _U64:
+    if chosen > U64_MAX:
         raise _Unreachable(f"no id above {status.id} is left to choose")
     exchange = probe.send(probe.next_goal(status, goal_id=chosen))
     finding = _ran_finding(
@@ -960,18 +1002,19 @@ def _stateless_id(probe: Probe, case: Case) -> Finding:
     first = probe.next_goal(status)
     ran = probe.send(first)
     if not ran.answers:
-        raise _TimedOut(f"the first child did not end within {probe.options.timeout:g} s")
+        raise _TimedOut(f"the first child did not end within {probe.timeout:g} s")
     child = ran.answers[0][1].id or first.id  # R8.1: the result names the child (D10: maybe not first.id)
-    after = probe.link.wait_status(lambda s: s.id == child and machine.robot_waits(s), probe.options.timeout)
+    after = probe.link.wait_status(lambda s: s.id == child and machine.robot_waits(s), probe.timeout)
     if after is None:
-        raise _TimedOut(f"no status after child {child} ended within {probe.options.timeout:g} s")
+        raise _TimedOut(f"no status after child {child} ended within {probe.timeout:g} s")
     phase = DynamicState(after.dynamic_state).name
     probe.note(
         f"status {phase} seq={after.dynamic_event_seq} id={after.id} {after.status}: the client's only state"
     )
-    exchange = probe.send(probe.next_goal(after))  # seq and id + 1 from that status alone
-    finding = _ran_finding(probe, case, exchange, after.id + 1, f"child {after.id + 1} runs and completes")
-    return _numbered_by_server(finding, exchange, after.id + 1, after.id)
+    exchange = probe.send(probe.next_goal(after))  # seq and the fresh id from that status alone
+    fresh = _fresh(after.id)
+    finding = _ran_finding(probe, case, exchange, fresh, f"child {fresh} runs and completes")
+    return _numbered_by_server(finding, exchange, fresh, after.id)
 
 
 def _race(probe: Probe, case: Case) -> Finding:
@@ -980,9 +1023,9 @@ def _race(probe: Probe, case: Case) -> Finding:
     exchanges = [probe.link.send(goal) for goal in goals]  # at once: no wait between them
     probe.exchanges.extend(exchanges)
     for goal, exchange in zip(goals, exchanges, strict=True):
-        exchange.responded(probe.options.timeout)
+        exchange.responded(probe.timeout)
         if exchange.accepted:
-            exchange.answered(probe.options.timeout)
+            exchange.answered(probe.timeout)
         probe.note(f"{_describe_goal(goal)}: {_describe_answer(exchange)}, {len(exchange.feedback)} feedback")
     expected = (
         "one child runs and completes; the other NEXT rejected, or accepted and aborted without a child"
@@ -1011,7 +1054,7 @@ def _log_seq(probe: Probe, case: Case) -> Finding:
     for _ in range(2):
         exchange = probe.send(probe.next_goal(probe.waiting()))
         if not exchange.answers:
-            raise _TimedOut(f"a child did not end within {probe.options.timeout:g} s")
+            raise _TimedOut(f"a child did not end within {probe.timeout:g} s")
         children.append([entry for feedback in exchange.feedback for entry in feedback.logs])
     entries = [entry for logs in children for entry in logs]
     probe.note(f"log seqs of the two children: {[[entry.seq for entry in logs] for logs in children]}")
@@ -1068,10 +1111,10 @@ def _cancel_both_answered(probe: Probe, case: Case) -> Finding:
         cancels = [probe.link.send(_goal(status, EventType.CANCEL, id=child_id)) for _ in range(2)]
         probe.exchanges.extend(cancels)
         for cancel in cancels:
-            cancel.responded(probe.options.timeout)
-            cancel.answered(probe.options.timeout)
+            cancel.responded(probe.timeout)
+            cancel.answered(probe.timeout)
             probe.note(f"{_describe_goal(cancel.goal)}: {_describe_answer(cancel)}")
-        running.answered(probe.options.timeout)
+        running.answered(probe.timeout)
         probe.note(f"the NEXT: {_describe_answer(running)}")
         if not all(cancel.accepted for cancel in cancels):
             absent = any(cancel.accepted is None for cancel in cancels)
@@ -1104,7 +1147,7 @@ def _action_cancel_running(probe: Probe, case: Case) -> Finding:
     expected = "the cancel accepted; the NEXT answered canceled"
     with probe.child() as (running, _):
         accepted = probe.cancel(running)
-        running.answered(probe.options.timeout)
+        running.answered(probe.timeout)
         probe.note(f"the NEXT: {_describe_answer(running)}")
         if accepted is None:
             return Finding(case, Verdict.FAIL, expected=expected, seen="no cancel response", absent=True)
@@ -1122,7 +1165,7 @@ def _action_cancel_running(probe: Probe, case: Case) -> Finding:
 def _action_cancel_answered(probe: Probe, case: Case) -> Finding:
     exchange = probe.send(probe.next_goal(probe.waiting()))
     if not exchange.answers:
-        raise _TimedOut(f"the child did not end within {probe.options.timeout:g} s")
+        raise _TimedOut(f"the child did not end within {probe.timeout:g} s")
     accepted = probe.cancel(exchange)
     if accepted is None:
         return Finding(
@@ -1135,7 +1178,7 @@ def _action_cancel_answered(probe: Probe, case: Case) -> Finding:
 
 def _describe_query(probe: Probe, case: Case) -> Finding:
     status = probe.waiting()
-    answer, why = probe.link.describe(probe.options.timeout)
+    answer, why = probe.link.describe(probe.timeout)
     if answer is None:
         probe.note(why)
         return Finding(case, Verdict.INFO, expected="an answer, where the server offers the query",
@@ -1161,7 +1204,7 @@ def _seq_wrap(probe: Probe, case: Case) -> Finding:
         if not ended.answers:
             raise _Unreachable(f"the FINISHED that ends run {_LAST_SEQ} was {_describe_answer(ended)}")
         probe.link.wait_status(
-            lambda s: s.dynamic_event_seq != _LAST_SEQ and machine.robot_waits(s), probe.options.timeout
+            lambda s: s.dynamic_event_seq != _LAST_SEQ and machine.robot_waits(s), probe.timeout
         )
         status = probe.waiting()
     seqs = [s.dynamic_event_seq for s in probe.link.history() if s.dynamic_state != DynamicState.INACTIVE]
@@ -1173,8 +1216,8 @@ def _seq_wrap(probe: Probe, case: Case) -> Finding:
     last = len(seqs) - 1 - seqs[::-1].index(_LAST_SEQ)
     after = [seq for seq in seqs[last:] if seq != _LAST_SEQ]
     if not after:
-        raise _TimedOut(f"no run began after run {_LAST_SEQ} within {probe.options.timeout:g} s")
-    probe.link.wait_begin(after[0], probe.options.timeout)
+        raise _TimedOut(f"no run began after run {_LAST_SEQ} within {probe.timeout:g} s")
+    probe.link.wait_begin(after[0], probe.timeout)
     begins = sorted({begin.dynamic_event_seq for begin in probe.link.begins})
     probe.note(f"the run after {_LAST_SEQ}: {after[0]}; begins seen for runs {begins}")
     expected = f"run 0 after run {_LAST_SEQ}, begun on the begin topic; a goal for {_LAST_SEQ} refused"
@@ -1239,8 +1282,9 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
             sys.stdout.write(f"\r\033[K{text}")
             sys.stdout.flush()
 
+    trace = _open_trace(options)  # kept in memory too: the judge reads every record of the exchange
     try:
-        findings = run(cases, options, say, progress)
+        findings = run(cases, options, say, progress, trace=trace)
     except ProbeInterrupted as stop:
         if live:
             sys.stdout.write("\r\033[K")
@@ -1248,16 +1292,20 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
             say(probe_cases.format_findings(stop.findings).rstrip("\n"))
         say(f"{stop.name}: stopped after {len(stop.findings)} of {len(cases)} case(s); the rest not run")
         return 128 + stop.signal
+    finally:
+        trace.close()
     if live:
         sys.stdout.write("\r\033[K")
     if findings is None:
         return probe_cases.EXIT_USAGE
-    say(probe_cases.format_findings(findings).rstrip("\n"))
+    judged = probe_cases.judge_exchange(trace.text(), findings, options.known)
+    say(probe_cases.format_findings(findings, judged).rstrip("\n"))
     server = f"{options.fleet}/{options.robot}"
     outputs: list[tuple[str, str | None, Callable[[], str]]] = [
-        ("junit", options.junit, lambda: probe_cases.junit_xml(findings, server)),
+        ("junit", options.junit, lambda: probe_cases.junit_xml(findings, server, judged)),
         ("report", options.report, lambda: probe_cases.report(
-            findings, server, html_form=str(options.report).lower().endswith((".html", ".htm"))
+            findings, server, html_form=str(options.report).lower().endswith((".html", ".htm")),
+            judged=judged,
         )),
     ]  # fmt: skip
     for flag, path, text in outputs:
@@ -1266,7 +1314,7 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
                 files.write_text(path, text(), f"--{flag}")
             except FileError as exc:
                 raise ProbeError(str(exc)) from None
-    return probe_cases.exit_status(findings)
+    return probe_cases.exit_status(findings, judged)
 
 
 class ProbeInterrupted(Interrupted):
@@ -1282,9 +1330,11 @@ def run(
     options: Options,
     say: Callable[[str], None],
     progress: Callable[[str], None] | None = None,
+    *,
+    trace: TraceWriter | None = None,
 ) -> list[Finding] | None:
-    """Carry out ``cases`` against the robot; the findings, or None when no server was found."""
-    trace = _open_trace(options)
+    """Carry out ``cases`` against the robot, writing every record of the exchange to ``trace``; the
+    findings, or None when no server was found."""
     spinning.init(options.ros_args)
     node = rclpy.create_node("dynevent_probe")
     link = Link(node, options.fleet, options.robot, trace)
@@ -1301,9 +1351,12 @@ def run(
                 say(no_server_text(node, options.fleet, options.robot, options.server_wait))
                 return None
             probe = Probe(link, _ready(link, options, cases, say))
+            if not link.statuses:  # _ready waited --timeout for one
+                probe.dead["status"] = f"no status was heard within {options.timeout:g} s (R1.4)"
             for case in cases:
-                if probe.silent:
-                    findings.append(probe.not_run(case, STOPPED_ANSWERING))
+                why = STOPPED_ANSWERING if probe.silent else probe.blocked(case)
+                if why is not None:
+                    findings.append(probe.not_run(case, why))
                     continue
                 if progress is not None:
                     progress(f"{case.id} ...")
@@ -1316,8 +1369,6 @@ def run(
             spinner.stop()
             link.destroy()
             close_down([node])
-        if trace is not None:
-            trace.close()
 
 
 def _ready(link: Link, options: Options, cases: list[Case], say: Callable[[str], None]) -> Options:
@@ -1346,10 +1397,9 @@ def _ready(link: Link, options: Options, cases: list[Case], say: Callable[[str],
     return options
 
 
-def _open_trace(options: Options) -> TraceWriter | None:
-    if options.trace is None:
-        return None
+def _open_trace(options: Options) -> TraceWriter:
+    """The trace of the run: kept in memory for the judge, and written to ``--trace`` when given."""
     try:
-        return TraceWriter(options.trace, fleet=options.fleet, robot=options.robot)
+        return TraceWriter(options.trace, fleet=options.fleet, robot=options.robot, keep=True)
     except FileError as exc:
         raise ProbeError(str(exc)) from None

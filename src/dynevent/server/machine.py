@@ -40,7 +40,7 @@ citations, and that test fails while it is stale::
            config.any_description
     R4.10  _description_invalid, REQUEST_CHECKS, _DESCRIPTION_CHECKS, _check_description
     R4.11  _non_finite_stubborn, REQUEST_CHECKS
-    R4.12  _stale_id, REQUEST_CHECKS, _stale
+    R4.12  fresh_id, next_child_id, _stale_id, REQUEST_CHECKS, _stale
     R4.13  _cancel_idle, _cancel_id_mismatch, REQUEST_CHECKS
     R4.14  _cancel_id_mismatch, REQUEST_CHECKS
     R4.15  _on_goal_requested
@@ -51,7 +51,7 @@ citations, and that test fails while it is stale::
     R5.2   race_lost, _start_goal
     R5.3   _on_goal_submitted, TRANSITIONS
     R6.1   _start_child, _start_goal, _start_next, state.QueuedGoal
-    R6.2   next_child_id
+    R6.2   fresh_id, next_child_id
     R6.3   DEFERRED_START_RULE, state_from_status, TRANSITIONS
     R6.4   START_RULE, _start_child, TRANSITIONS
     R7.1   _on_child_progress
@@ -202,6 +202,7 @@ __all__ = [
     "check_index",
     "child_ended",
     "could_refuse_first",
+    "fresh_id",
     "listed_errors",
     "next_child_id",
     "next_seq",
@@ -395,13 +396,22 @@ def next_seq(seq: int) -> int:
     return (seq + 1) & U32_MAX
 
 
+def fresh_id(last_id: int) -> int | None:
+    """The id above ``last_id``, the highest of a run (R4.12, R6.2): ``last_id + 1``, or ``None`` when
+    ``last_id`` is 2**64 - 1 and no id is left.  What every client, judge and tool that names a
+    NEXT's id asks (the client machine, ``explain``, the probe), so that none adds 1 itself."""
+    return None if last_id >= U64_MAX else last_id + 1
+
+
 def next_child_id(goal: Goal, last_id: int, config: ServerConfig) -> int:
     """The id of the child a NEXT ``goal`` starts in a run whose highest id is ``last_id`` (R6.2): the
     goal's own id, unless it is 0 or the adapter numbers children (id policy ``adapter``), then
-    ``last_id + 1``."""
+    :func:`fresh_id`, modulo 2**64 (under id policy ``goal`` R4.12 refuses id 0 when none is left;
+    the adapter's counter wraps to 0)."""
     if config.id_policy is _GOAL_IDS and goal.id != 0:
         return goal.id
-    return (last_id + 1) & U64_MAX
+    fresh = fresh_id(last_id)
+    return 0 if fresh is None else fresh
 
 
 def begin_description(description: str, config: ServerConfig) -> str:
@@ -865,7 +875,7 @@ def _stale(state: State, goal: Goal, config: ServerConfig) -> bool:
     """R4.12: under id policy ``goal`` a NEXT names a fresh id, or 0 while one is left to assign."""
     if config.id_policy is not _GOAL_IDS:
         return False
-    return state.last_id == U64_MAX if goal.id == 0 else goal.id <= state.last_id
+    return fresh_id(state.last_id) is None if goal.id == 0 else goal.id <= state.last_id
 
 
 # --------------------------------------------------------------------------- step helpers

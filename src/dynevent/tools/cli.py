@@ -494,7 +494,7 @@ def _probe(args: argparse.Namespace) -> int:
         cases = probe_cases.select(args.cases)
         if not cases:
             raise ProbeError(f"--cases {' '.join(args.cases)}: no case matches (see dynevent probe --list)")
-        for flag in ("timeout", "server_wait"):
+        for flag in ("timeout", "server_wait", "deadline"):
             if not 0 < getattr(args, flag) < 1e6:
                 raise ProbeError(
                     f"--{flag.replace('_', '-')}: expected positive seconds (got {getattr(args, flag)})"
@@ -523,7 +523,7 @@ def _probe(args: argparse.Namespace) -> int:
             stubborn_minimum=args.stubborn_minimum, introspection=args.introspection,
             allow_missing=tuple(args.allow_missing), server_wait=args.server_wait,
             ros_args=tuple(args.ros_args), known_missing=probe_cases.KNOWN_MISSING.get(known, frozenset()),
-            junit=args.junit, report=args.report,
+            junit=args.junit, report=args.report, deadline=args.deadline,
         )  # fmt: skip
         return int(probe.main(options, cases, _say))
 
@@ -568,6 +568,12 @@ def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         "--timeout", type=float, default=10.0, metavar="SECONDS",
         help="bound on each wait of a case (default: %(default)s); after 3 cases in a row wait it out and "
         "hear nothing, the rest are not run",
+    )  # fmt: skip
+    parser.add_argument(
+        "--deadline", type=float, default=120.0, metavar="SECONDS",
+        help="bound on the whole run, once the server is found (default: %(default)s, enough for every "
+        "case against the docs' serve): no wait goes past it, and the cases left are not run, with why; "
+        "the run ends within --server-wait, this, and a few seconds to close",
     )  # fmt: skip
     parser.add_argument(
         "--server-wait", type=float, default=10.0, metavar="SECONDS",

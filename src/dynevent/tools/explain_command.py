@@ -13,7 +13,7 @@ from typing import Any
 
 from dynevent import files
 from dynevent.conformance.explain import explain, format_explanation
-from dynevent.errors import DyneventError, FileError, InvalidMessage, short_repr
+from dynevent.errors import DyneventError, FileError, InvalidMessage, shown_path
 from dynevent.wire import _json
 from dynevent.wire.messages import DynamicEventStatus, Goal
 
@@ -41,7 +41,7 @@ def _json_text(argument: str, value: str, stdin_taken: list[str]) -> str:
         try:
             return _bounded(argument, path, files.read_bytes(path, argument, limit=MAX_INPUT_BYTES + 1))
         except FileError as exc:
-            raise _ArgumentError(argument, f"{short_repr(path)} {exc.problem}") from None
+            raise _ArgumentError(argument, f"{shown_path(path)} {exc.problem}") from None
     return value
 
 

@@ -684,9 +684,10 @@ class _Runs(_Part):
 
     def late_begin(self, message: DynamicEventDescription) -> bool:
         """The begin of the run a trace started in (from its status), read after that status: a late
-        subscriber reads the two latched topics in either order (docs/trace-format.md)."""
+        subscriber reads the two latched topics in either order (docs/trace-format.md), whether that
+        run is active or has ended (its INACTIVE status, then its latched begin)."""
         state = self.replica.st
-        if self.begin_seen or not self.replica.partial or not state.active:
+        if self.begin_seen or not self.replica.partial:
             return False
         self.begin_seen = True
         return message.dynamic_event_seq == state.seq

@@ -8,7 +8,7 @@ import math
 import threading
 import time
 from collections.abc import Iterable, Iterator
-from typing import Any
+from typing import Any, TextIO
 
 import attrs
 
@@ -370,11 +370,20 @@ class TraceWriter:
     """
 
     def __init__(
-        self, path: str, *, fleet: str | None = None, robot: str | None = None, config: Any = None
+        self,
+        path: str | None,
+        *,
+        fleet: str | None = None,
+        robot: str | None = None,
+        config: Any = None,
+        keep: bool = False,
     ) -> None:
         self.path = path
         self._lock = threading.Lock()
-        self._stream = files.create_text(path, "--trace")  # closed by close()
+        # closed by close(); with no path, the trace is only kept (``keep``) for :meth:`text`
+        self._stream: TextIO | None = None if path is None else files.create_text(path, "--trace")
+        self._kept: list[str] | None = [] if keep or path is None else None
+        self._closed = False
         header: dict[str, Any] = {"type": "config"}
         header.update({key: value for key, value in (("fleet", fleet), ("robot", robot)) if value})
         if config is not None:
@@ -407,9 +416,18 @@ class TraceWriter:
 
     def _put(self, line: str) -> None:
         with self._lock:
-            if not self._stream.closed:  # a late callback after close writes nothing
+            if self._closed:  # a late callback after close writes nothing
+                return
+            if self._kept is not None:
+                self._kept.append(line)
+            if self._stream is not None:
                 self._stream.write(line + "\n")
                 self._stream.flush()
+
+    def text(self) -> str:
+        """Every line written so far, as a trace's text (a writer made with ``keep``, or no path)."""
+        with self._lock:
+            return "".join(line + "\n" for line in self._kept or ())
 
     def step(self, event: ins.Input, outputs: Iterable[outs.Output]) -> None:
         """Write the records of one step of a server machine (:func:`step_records`)."""
@@ -418,7 +436,9 @@ class TraceWriter:
 
     def close(self) -> None:
         with self._lock:
-            self._stream.close()
+            self._closed = True
+            if self._stream is not None:
+                self._stream.close()
 
 
 def _output_record(output: outs.Output) -> dict[str, Any] | None:
