@@ -69,6 +69,69 @@ def _robot() -> float:
         return _measure(lambda: robot.next("go_to_place", '"pantry"').wait(120.0))
 
 
+def _idle_async(count: int, seconds: float, *, on_hub: bool = False) -> float:
+    """``count`` AsyncRobotClients, each ready and holding no goal, for ``seconds``: CPU / wall.  Each
+    with a context of its own, or ``on_hub``, all on one :class:`~dynevent.ros.RobotClients` hub
+    (docs/ros.md's way for many robots in one process)."""
+    from dynevent.ros import AsyncRobotClient, RobotClients
+
+    async def run(hub: RobotClients | None) -> float:
+        clients = [
+            AsyncRobotClient("tinyRobot", ROBOT, node_name=f"bench_idle_{n}", hub=hub) for n in range(count)
+        ]
+        for client in clients:
+            await client.__aenter__()
+        try:
+            await asyncio.gather(*(client.ready(30.0) for client in clients))
+            cpu, wall = time.process_time(), time.monotonic()
+            await asyncio.sleep(seconds)
+            return (time.process_time() - cpu) / (time.monotonic() - wall)
+        finally:
+            for client in clients:
+                await client.__aexit__(None, None, None)
+
+    if not on_hub:
+        return asyncio.run(run(None))
+    with RobotClients(node_name="bench_idle_hub") as hub:
+        return asyncio.run(run(hub))
+
+
+def _idle_peer(count: int, seconds: float) -> float:
+    """``count`` bare rclpy clients, each what an AsyncRobotClient holds (a context, a node with the
+    status subscription and the action client, an executor spinning it in a thread), idle."""
+    import rclpy
+    from rclpy.action import ActionClient
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from rmf_task_msgs.action import DynamicEvent
+    from rmf_task_msgs.msg import DynamicEventStatus
+
+    latched = QoSProfile(
+        depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+    )
+    made = []
+    for number in range(count):
+        context = rclpy.Context()
+        rclpy.init(context=context)
+        node = rclpy.create_node(f"bench_idle_peer_{number}", context=context)
+        node.create_subscription(
+            DynamicEventStatus, f"rmf/dynamic_event/status/tinyRobot/{ROBOT}", lambda _: None, latched
+        )
+        ActionClient(node, DynamicEvent, f"rmf/dynamic_event/command/tinyRobot/{ROBOT}")
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(node)
+        threading.Thread(target=executor.spin, daemon=True).start()
+        made.append((context, executor, node))
+    try:
+        time.sleep(min(seconds, 5.0))  # discovery settles, as the clients' ready() waits for it
+        return _measure(lambda: time.sleep(seconds))
+    finally:
+        for context, executor, node in made:
+            executor.shutdown(timeout_sec=1)
+            node.destroy_node()
+            rclpy.try_shutdown(context=context)
+
+
 def _peer() -> float:
     import rclpy
     from rclpy.action import ActionClient
@@ -124,6 +187,14 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--child", type=float, default=5.0, help="how long each child takes (default 5 s)")
     parser.add_argument("--write", action="store_true", help="record the result in bench/results.md")
+    parser.add_argument(
+        "--idle",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also N clients holding no goal, beside N bare rclpy clients (default none)",
+    )
+    parser.add_argument("--seconds", type=float, default=30.0, help="how long the idle ones are measured")
     options = parser.parse_args()
     config = Path(tempfile.mkdtemp()) / "fleet.json"
     config.write_text(json.dumps({"categories": {"go_to_place": {"duration": options.child}}}))
@@ -137,6 +208,11 @@ def main() -> int:
             if line.startswith("serving "):
                 break
         measured = {name: run() for name, run in (("async", _async), ("robot", _robot), ("peer", _peer))}
+        if options.idle:
+            idle = options.idle
+            measured[f"{idle} idle async"] = _idle_async(idle, options.seconds)
+            measured[f"{idle} idle async on one hub"] = _idle_async(idle, options.seconds, on_hub=True)
+            measured[f"{idle} idle peers"] = _idle_peer(idle, options.seconds)
     finally:
         serve.terminate()
         serve.wait(timeout=30)
@@ -145,7 +221,12 @@ def main() -> int:
         "",
         *results.machine_description(["dynevent"]),
         "",
-        f"CPU seconds per wall second of the client's process while a NEXT's {options.child:g} s child runs.",
+        f"CPU seconds per wall second of the client's process while a NEXT's {options.child:g} s child runs"
+        + (
+            f"; and, idle for {options.seconds:g} s, {options.idle} clients holding no goal."
+            if options.idle
+            else "."
+        ),
         "",
         "| client | CPU / wall |",
         "|---|---|",

@@ -40,7 +40,10 @@ def pytest_report_header() -> str:
     from ros_support import ROS, WHY
 
     if not ROS:
-        return f"ros: the ROS 2 tests are not collected: {WHY}"
+        return (
+            f"ros: the ROS 2 tests over DDS (tests/ros/test_ros_*.py) are not collected: {WHY}; "
+            "tests/ros's others run (the newcomer's path sets ROS 2 up itself)"
+        )
     import rclpy
 
     return f"ros: the ROS 2 tests run over DDS on loopback (rclpy from {Path(rclpy.__file__).parent})"

@@ -16,7 +16,11 @@ tree was stopped) must not leave its child running on the robot.
   tree halts it (py_trees calls ``terminate(INVALID)``) while its goal is
   open, the child is cancelled: the client machine withdraws the NEXT
   (:func:`dynevent.client.request_withdraw`) and sends a CANCEL naming the
-  child as soon as it is known to run.
+  child as soon as it is known to run.  A behaviour that starts while
+  another of the tree holds the robot waits (RUNNING) for it to be halted
+  and its child to end, then sends: py_trees ticks a higher priority before
+  it halts the lower one (a selector, a parallel's policy, a timeout or a
+  guard); a holder that is not halted in that tick is named in a FAILURE.
 - :class:`FinishRun`: FINISHED; SUCCESS when the run ends ``completed``.
 
 The behaviours take a robot client that spins itself
@@ -30,6 +34,7 @@ from __future__ import annotations
 
 import json
 import time
+import weakref
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -90,12 +95,18 @@ def _withdrawing(robot: Robot) -> bool:
     return any(goal.withdrawn for goal in robot.state.goals)
 
 
+#: The behaviour whose goal holds each robot (sent, and not answered yet): what a behaviour that
+#: starts meanwhile waits for, and names when it cannot.
+_HOLDERS: weakref.WeakKeyDictionary[Any, _GoalBehaviour] = weakref.WeakKeyDictionary()
+
+
 class _GoalBehaviour(py_trees.behaviour.Behaviour):
     """A behaviour that sends one goal when it starts and reads its run on every tick."""
 
     def __init__(self, name: str, robot: Robot) -> None:
         super().__init__(name)
         self.robot = robot
+        self._waited = False  # this start has already waited one tick for the robot's holder
         #: The goal of the current (or last) start, once sent.
         self.run: GoalRun | None = None
         #: How the last goal ended (None while it runs, or before the first).
@@ -103,9 +114,28 @@ class _GoalBehaviour(py_trees.behaviour.Behaviour):
 
     def initialise(self) -> None:
         self.run, self.result = None, None
+        self._waited = False
 
     def send(self) -> GoalRun:  # pragma: no cover - every behaviour sends its own goal
         raise NotImplementedError
+
+    def _wait(self) -> Status | None:
+        """RUNNING while the robot is held by another behaviour of the tree that is being halted (its
+        NEXT withdrawn, the child ending), or that may be halted in this very tick: py_trees ticks a
+        higher priority before it halts the lower one it takes over from.  FAILURE, naming it, when
+        the holder ran on through the tick after; ``None`` when the robot is free."""
+        if _withdrawing(self.robot):
+            self.feedback_message = "waiting for a withdrawn event to end"
+            return Status.RUNNING
+        holder = _HOLDERS.get(self.robot)
+        if holder is None or holder is self or holder.run is None or holder.run.done():
+            return None
+        if not self._waited:
+            self._waited = True
+            self.feedback_message = f"waiting for {holder.name!r}, which holds the robot, to be halted"
+            return Status.RUNNING
+        self.feedback_message = f"the robot is held by {holder.name!r}, which runs on: it was not halted"
+        return Status.FAILURE
 
     def ended(self, result: Result) -> Status:
         """SUCCESS when the goal ran to a ``completed`` end, else FAILURE."""
@@ -113,10 +143,12 @@ class _GoalBehaviour(py_trees.behaviour.Behaviour):
 
     def update(self) -> Status:
         if self.run is None:
-            if _withdrawing(self.robot):  # a halted branch's child is still being cancelled
-                self.feedback_message = "waiting for a withdrawn event to end"
-                return Status.RUNNING
+            waiting = self._wait()
+            if waiting is not None:
+                return waiting
             self.run = self.send()
+            if not self.run.done():
+                _HOLDERS[self.robot] = self
         run = self.run
         if not run.done():
             progress = run.progress[-1] if run.progress else None

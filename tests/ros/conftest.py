@@ -2,7 +2,7 @@
 
 They need ROS 2 and the ``rmf_task_msgs`` interfaces importable (source
 ``build/ros/env.sh``, made by ``tests/ros/setup-ros-env.sh``).  Without them
-the ROS tests are not collected and the run's header says why (see
+the ROS tests over DDS (test_ros_*.py) are not collected and the run's header says why (see
 tests/conftest.py), except under ``CI=true``, where the run fails instead: CI
 must run them.  Every test has a deadline (faulthandler ends a hung
 process) and every wait in them a bound.
@@ -30,8 +30,11 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 
 
 @pytest.fixture(autouse=True)
-def _deadline() -> Iterator[None]:
-    faulthandler.dump_traceback_later(TEST_DEADLINE, exit=True)
+def _deadline(request: pytest.FixtureRequest) -> Iterator[None]:
+    # a test that builds an environment (the newcomer's path) is bounded by its steps' own bounds,
+    # not by the deadline of a test that only talks to a server
+    marker = request.node.get_closest_marker("deadline")
+    faulthandler.dump_traceback_later(marker.args[0] if marker else TEST_DEADLINE, exit=True)
     yield
     faulthandler.cancel_dump_traceback_later()
 

@@ -33,9 +33,15 @@ def _run(command: str, cwd: Path, timeout: float) -> subprocess.CompletedProcess
                           timeout=timeout, check=False)  # fmt: skip
 
 
+#: The bound on each step of the newcomer's path (seconds): a fresh venv and the project, the ROS
+#: set-up, serve's help, the collection; the test's own deadline is their sum and the clone's.
+STEPS = {"install": 600, "ros": 900, "serve": 120, "collect": 300}
+
+
 @pytest.mark.skipif(
     shutil.which("git") is None or not (ROOT / ".git").exists(), reason="needs a git checkout"
 )
+@pytest.mark.deadline(sum(STEPS.values()) + 120)
 def test_the_readme_path_to_ros_from_a_fresh_clone(tmp_path: Path) -> None:
     clone = tmp_path / "dynevent"
     subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True, timeout=120)
@@ -43,17 +49,17 @@ def test_the_readme_path_to_ros_from_a_fresh_clone(tmp_path: Path) -> None:
     install = test.split(" && .venv/bin/python -m pytest", 1)[0]  # the set-up part of the test command
     python = sys.executable if Path(sys.executable).name.startswith("python3") else "python3"
     started = time.monotonic()
-    done = _run(install.replace("python3 -m venv", f"{python} -m venv", 1), clone, 600)
+    done = _run(install.replace("python3 -m venv", f"{python} -m venv", 1), clone, STEPS["install"])
     assert done.returncode == 0, done.stdout + done.stderr
-    ros = _run("bash tests/ros/setup-ros-env.sh", clone, 900)
+    ros = _run("bash tests/ros/setup-ros-env.sh", clone, STEPS["ros"])
     took = time.monotonic() - started
     assert ros.returncode == 0, ros.stdout + ros.stderr
     assert f"venv {clone}/.venv" in ros.stdout, ros.stdout  # the README's environment, not another
-    serve = _run(". build/ros/env.sh && command -v dynevent && dynevent serve --help", clone, 120)
+    serve = _run(". build/ros/env.sh && command -v dynevent && dynevent serve --help", clone, STEPS["serve"])
     assert serve.returncode == 0, serve.stdout + serve.stderr
     assert serve.stdout.splitlines()[0] == f"{clone}/.venv/bin/dynevent", serve.stdout
     assert "usage: dynevent serve" in serve.stdout
     header = _run(". build/ros/env.sh && .venv/bin/python -m pytest --co -q -p no:cacheprovider tests/ros "
-                  "| tail -3", clone, 300)  # fmt: skip
+                  "| tail -3", clone, STEPS["collect"])  # fmt: skip
     assert re.search(r"\d+ tests? collected", header.stdout), header.stdout + header.stderr
     print(f"the README's set-up and the ROS set-up from a fresh clone: {took:.0f} s")

@@ -131,3 +131,86 @@ def test_the_errand_example_runs_as_written(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stdout + done.stderr
     assert "errand: SUCCESS" in done.stdout
     assert 'go_to_place {"one_of": ["hall"]}' in serve.output, serve.output  # the place it was given
+
+
+# ------------------------------------------------------------------- the patterns py_trees users write
+
+
+def _stopped() -> py_trees.behaviour.Behaviour:
+    return py_trees.behaviours.CheckBlackboardVariableValue(
+        "asked to stop", check=py_trees.common.ComparisonExpression("/stop", True, operator.eq)
+    )
+
+
+def _priority(walk: RunEvent, charger: RunEvent) -> py_trees.behaviour.Behaviour:
+    """The pattern everyone writes first: a higher priority (stop, then charge) over a long walk."""
+    return py_trees.composites.Selector("unless stopped", memory=False, children=[
+        py_trees.composites.Sequence("charge when stopped", memory=True, children=[_stopped(), charger]),
+        walk,
+    ])  # fmt: skip
+
+
+def _parallel(walk: RunEvent, charger: RunEvent) -> py_trees.behaviour.Behaviour:
+    """A parallel whose policy halts the walk when the stop comes; then the charger."""
+    until = py_trees.behaviours.WaitForBlackboardVariableValue(
+        "until stopped", check=py_trees.common.ComparisonExpression("/stop", True, operator.eq)
+    )
+    race = py_trees.composites.Parallel(
+        "walk until stopped", policy=py_trees.common.ParallelPolicy.SuccessOnOne(), children=[until, walk]
+    )
+    return py_trees.composites.Sequence("walk, then charge", memory=True, children=[race, charger])
+
+
+def _guarded(walk: RunEvent, charger: RunEvent) -> py_trees.behaviour.Behaviour:
+    """An eternal guard over the walk; the charger is the fallback."""
+    guard = py_trees.decorators.EternalGuard(
+        "while not stopped", child=walk, condition=lambda: not py_trees.blackboard.Blackboard.get("/stop")
+    )
+    return py_trees.composites.Selector("guarded", memory=False, children=[guard, charger])
+
+
+def _timed(walk: RunEvent, charger: RunEvent) -> py_trees.behaviour.Behaviour:
+    """A timeout over the walk (it takes 6 s, the timeout 2 s); the charger is the fallback."""
+    timeout = py_trees.decorators.Timeout("at most 2 s", child=walk, duration=2.0)
+    return py_trees.composites.Selector("in time", memory=True, children=[timeout, charger])
+
+
+PATTERNS = {"priority": _priority, "parallel": _parallel, "eternal guard": _guarded, "timeout": _timed}
+
+
+@pytest.mark.spec("R8.2", "R9.4", "R10.4")
+@pytest.mark.parametrize("mode", ["standard", "rmf_ros2"])
+@pytest.mark.parametrize("pattern", list(PATTERNS))
+def test_a_pattern_that_halts_a_running_event_cancels_its_child_and_runs_the_next(
+    tmp_path: Path, pattern: str, mode: str
+) -> None:
+    """A higher priority, a parallel's policy, a guard or a timeout halts a RunEvent whose child runs:
+    the child is cancelled on the robot, and the RunEvent that takes over, started in the same tick
+    (py_trees ticks it before it halts the other), waits for that child's end, then runs its own."""
+    robot_name = f"bt{pattern.title().replace(' ', '')}{mode.title().replace('_', '')}"
+    serve = _serve(tmp_path, robot_name, mode, duration=6.0)
+    try:
+        with RobotClient("tinyRobot", robot_name, node_name="bt_patterns") as robot:
+            robot.ready(15.0)
+            py_trees.blackboard.Blackboard.set("/stop", False)
+            walk = RunEvent("long walk", robot, "go_to_place", '{"one_of": ["hall"]}')
+            charger = RunEvent("to the charger", robot, "go_to_place", '{"one_of": ["pantry"]}')
+            tree = py_trees.trees.BehaviourTree(PATTERNS[pattern](walk, charger))
+            deadline = time.monotonic() + 20.0
+            while not (walk.run is not None and walk.run.progress):  # the walk's child runs
+                assert time.monotonic() < deadline, walk.feedback_message
+                tree.tick()
+                time.sleep(0.05)
+            child = walk.run.progress[-1].id
+            py_trees.blackboard.Blackboard.set("/stop", True)
+            assert run(tree, 30.0) is Status.SUCCESS, (walk.feedback_message, charger.feedback_message)
+            halted = walk.run.result
+            assert isinstance(halted, Outcome) and (halted.kind, halted.id) == (OutcomeKind.CANCELED, child)
+            assert isinstance(charger.result, Outcome) and charger.result.kind is OutcomeKind.COMPLETED
+            assert charger.result.id != child
+            assert robot.finish().wait(10.0).kind is OutcomeKind.COMPLETED  # the run is not left open
+    finally:
+        py_trees.blackboard.Blackboard.clear()
+        serve.stop()
+    assert f"cancel: child {child}" in serve.output, serve.output
+    assert "client judgement: 4 goal(s) judged, no finding(s)" in serve.output, serve.output

@@ -16,8 +16,8 @@ import rclpy
 from ros_support import Child, child_env, finish
 
 from dynevent.client import Outcome, OutcomeKind, Progress
-from dynevent.errors import NotSpinning, RobotNotReady
-from dynevent.ros import AsyncRobotClient, DynamicEventClient, RobotClient
+from dynevent.errors import LocalError, NotSpinning, RobotNotReady
+from dynevent.ros import AsyncRobotClient, DynamicEventClient, RobotClient, RobotClients
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "examples" / "two_robots.py"
 
@@ -140,3 +140,42 @@ def test_the_client_example_of_docs_ros_runs_as_written(tmp_path: Path) -> None:
     lines = done.stdout.splitlines()
     assert lines[0].startswith("completed "), done.stdout
     assert lines[1] == "completed", done.stdout
+
+
+@pytest.mark.spec("R6.4", "R8.2")
+@pytest.mark.parametrize("mode", ["standard", "rmf_ros2"])
+def test_many_robots_clients_share_one_hub(tmp_path: Path, mode: str) -> None:
+    """Three robots driven at once from one process, their AsyncRobotClients on one RobotClients hub:
+    one context, one node, one spinning thread for all of them; each client closes alone, the hub
+    after them, and nothing is left running."""
+    threads = set(threading.enumerate())
+    robots = ("hubRobotA", "hubRobotB", "hubRobotC")
+    serve = _serve(tmp_path, *robots, mode=mode)
+
+    async def drive(hub: RobotClients) -> list[object]:
+        clients = [AsyncRobotClient("tinyRobot", robot, hub=hub) for robot in robots]
+        for client in clients:
+            await client.__aenter__()
+        try:
+            await asyncio.gather(*(client.ready(15.0) for client in clients))
+            return list(await asyncio.gather(*(client.next("go_to_place", '"pantry"') for client in clients)))
+        finally:
+            for client in clients:
+                await client.__aexit__(None, None, None)
+
+    try:
+        with RobotClients(node_name="hub_client") as hub:
+            before = threading.active_count()
+            outcomes = asyncio.run(drive(hub))
+            assert threading.active_count() <= before + 1  # no thread a robot (asyncio's to_thread aside)
+            # the clients made and destroyed under it did not end its spinning thread (an entity
+            # destroyed while the executor builds its wait set does: "cannot use Destroyable")
+            spinning = [thread for thread in threading.enumerate() if thread.name == "dynevent-clients"]
+            assert len(spinning) == 1 and spinning[0].is_alive()
+    finally:
+        serve.stop()
+    for outcome in outcomes:
+        assert isinstance(outcome, Outcome) and outcome.kind is OutcomeKind.COMPLETED, outcome
+    assert {thread for thread in threading.enumerate() if thread.is_alive()} <= threads
+    with pytest.raises(LocalError, match="the hub is not open"):
+        RobotClient("tinyRobot", robots[0], hub=RobotClients()).open()

@@ -12,7 +12,8 @@ imported on first use, and says what is missing when ROS 2 is.  See docs/ros.md.
 - :class:`~dynevent.ros.client.DynamicEventClient`: the client machine over an
   rclpy action client and the status and begin subscriptions, on a node you spin;
 - :class:`~dynevent.ros.robot.RobotClient` and :class:`~dynevent.ros.robot.AsyncRobotClient`: the
-  same with a node, a context and a spinning thread of their own (blocking, or asyncio);
+  same with a node, a context and a spinning thread of their own (blocking, or asyncio), or on a
+  :class:`~dynevent.ros.robot.RobotClients` hub that many robots' clients share;
 - :mod:`dynevent.ros.convert`: the mirrors to and from the rosidl classes.
 """
 
@@ -31,6 +32,7 @@ _HOMES = {
     "DynamicEventServer": "server",
     "GoalRun": "client",
     "RobotClient": "robot",
+    "RobotClients": "robot",
     "StubbornHolds": "server",
 }
 
@@ -42,6 +44,7 @@ __all__ = [
     "DynamicEventServer",
     "GoalRun",
     "RobotClient",
+    "RobotClients",
     "StubbornHolds",
 ]
 
@@ -79,5 +82,5 @@ _ROS_PACKAGES = frozenset(
 
 if TYPE_CHECKING:  # what type checkers and editors see, without importing anything at run time
     from dynevent.ros.client import DynamicEventClient, GoalRun
-    from dynevent.ros.robot import AsyncRobotClient, RobotClient
+    from dynevent.ros.robot import AsyncRobotClient, RobotClient, RobotClients
     from dynevent.ros.server import ChildEvents, ChildExecution, DynamicEventServer, StubbornHolds

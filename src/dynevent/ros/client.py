@@ -32,6 +32,7 @@ from action_msgs.msg import GoalStatus as RosGoalStatus
 from rclpy.action import ActionClient
 from rclpy.action.client import ClientGoalHandle
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.task import Future
 
 from dynevent import client as cl
@@ -53,6 +54,7 @@ from dynevent.wire.names import (
     begin_topic,
     status_topic,
 )
+from dynevent.wire.units import SECOND
 from dynevent.wire.vocab import Failure, GoalStatus
 
 __all__ = ["DynamicEventClient", "GoalRun", "GoalWaitTimeout", "introspect"]
@@ -63,8 +65,9 @@ _TERMINAL = {
     RosGoalStatus.STATUS_ABORTED: GoalStatus.ABORTED,
 }
 
-#: How often the client machine's clock advances (its NEXT timeouts are checked then), in seconds.
-TICK_PERIOD = 0.1
+#: The shortest wait the client's one timer is armed for (seconds): a deadline already past is
+#: ticked at once, and a clock that moves back cannot set a wait of no length.
+SHORTEST_WAIT = 0.001
 #: How often the client asks again for the results of goals a restarted server took, in seconds.
 ASK_AGAIN_PERIOD = 1.0
 
@@ -156,14 +159,18 @@ class DynamicEventClient:
         self._runs: dict[str, GoalRun] = {}
         self._views = threading.Condition(self._lock)
         self._status_seen = False
+        self._status_topic = status_topic(fleet, robot)
+        self._servers: frozenset[bytes] | None = None  # the status publishers' GIDs last seen
+        self._orphans: set[str] = set()  # goals sent to a server process that has since been replaced
+        self._ask_again_at = 0.0
+        # every attribute above, the timer and the action client before the subscriptions: an executor
+        # that already spins the node (a shared one) may call back as soon as a subscription exists
         group = MutuallyExclusiveCallbackGroup()
-        self._status = node.create_subscription(
-            RosStatus,
-            status_topic(fleet, robot),
-            self._on_status,
-            latched(STATUS_TOPIC_DEPTH),
-            callback_group=group,
-        )
+        # one timer, armed only for the next moment something can be due (a NEXT's timeout, asking a
+        # new server again for a result): a client that waits costs nothing between (_arm)
+        self._timer = node.create_timer(1.0, self._on_tick, callback_group=group)
+        self._timer.cancel()
+        self._action = ActionClient(node, DynamicEvent, action_name(fleet, robot), callback_group=group)
         self._begin = node.create_subscription(
             RosDescription,
             begin_topic(fleet, robot),
@@ -171,12 +178,16 @@ class DynamicEventClient:
             latched(ROBOT_BEGIN_TOPIC_DEPTH),
             callback_group=group,
         )
-        self._action = ActionClient(node, DynamicEvent, action_name(fleet, robot), callback_group=group)
-        self._timer = node.create_timer(TICK_PERIOD, self._on_tick, callback_group=group)
-        self._status_topic = status_topic(fleet, robot)
-        self._servers: frozenset[bytes] | None = None  # the status publishers' GIDs last seen
-        self._orphans: set[str] = set()  # goals sent to a server process that has since been replaced
-        self._ask_again_at = 0.0
+        # a status publisher that matches is a server process (a new one replaces the old, R21.4):
+        # learned from the graph's event, not by asking the graph on a clock
+        self._status = node.create_subscription(
+            RosStatus,
+            status_topic(fleet, robot),
+            self._on_status,
+            latched(STATUS_TOPIC_DEPTH),
+            callback_group=group,
+            event_callbacks=SubscriptionEventCallbacks(matched=self._on_server_matched),
+        )
 
     # ---------------------------------------------------------------- views
 
@@ -305,6 +316,7 @@ class DynamicEventClient:
                 ended = self._runs.pop(output.goal_uuid, None)
                 if ended is not None:
                     ended._end(output)
+        self._arm()
 
     def _send(self, send: cl.SendGoal) -> None:
         uuid = send.goal_uuid
@@ -379,7 +391,32 @@ class DynamicEventClient:
             self._watch_server({goal.goal_uuid for goal in goals})
             self._step(cl.Tick(now=self.now()))
         else:
-            self._servers = None  # the next goal's send looks again
+            self._arm()
+
+    def _on_server_matched(self, info: Any) -> None:
+        """A status publisher came or went: with goals open, a new server process may have taken
+        them (R21.4)."""
+        goals = self.state.goals
+        if goals and info.current_count_change > 0:
+            self._watch_server({goal.goal_uuid for goal in goals})
+            self._arm()
+
+    def _arm(self) -> None:
+        """Set the timer for the next moment something can be due, or stop it when nothing can be:
+        the client machine's next deadline (:func:`dynevent.client.next_deadline`), and the next time
+        to ask a new server process again for the results of the goals it took."""
+        with self._lock:
+            if not self._state.goals:
+                self._servers = None  # the next goal's send looks at the graph again
+            deadline = cl.next_deadline(self._state)
+            waits = [] if deadline is None else [(deadline - self.now()) / SECOND]
+            if self._orphans:
+                waits.append(self._ask_again_at - time.monotonic())
+        if not waits:
+            self._timer.cancel()
+            return
+        self._timer.timer_period_ns = round(max(min(waits), SHORTEST_WAIT) * SECOND)
+        self._timer.reset()
 
     def _server_processes(self) -> frozenset[bytes]:
         """The GIDs of the robot's status publishers: one per server process on the graph."""

@@ -17,12 +17,14 @@ waits costs nothing::
 
 Both start ROS 2 in a context of their own (``ros_args`` are ROS 2's command-line arguments: remaps,
 ``--log-level``...), so that several clients, and a program's own rclpy use, do not meet; each
-close-down is bounded.
+close-down is bounded.  For many robots in one process, :class:`RobotClients` is one context, node
+and spinning thread that their clients share (``hub=``).
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -36,16 +38,91 @@ from dynevent.ros.client import DynamicEventClient, GoalRun
 from dynevent.ros.graph import no_server_text
 from dynevent.ros.spinning import Spinner, bounded_close, close_down
 
-__all__ = ["AsyncRobotClient", "RobotClient"]
+__all__ = ["AsyncRobotClient", "RobotClient", "RobotClients"]
 
 Result = cl.Outcome | cl.Refused
+
+
+def _start(node_name: str, ros_args: Sequence[str]) -> tuple[Any, Any]:
+    """ROS 2 started in a context of its own, and a node in it."""
+    context = rclpy.Context()
+    try:
+        rclpy.init(args=["dynevent", *ros_args], context=context)
+    except Exception as exc:  # rcl's parse errors are not exported
+        raise LocalError(f"{' '.join(ros_args)}: ROS refused these arguments: {exc}") from None
+    return context, rclpy.create_node(node_name, context=context)
+
+
+def _spin(context: Any, node: Any, name: str) -> Spinner:
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    spinner = Spinner(executor, name)
+    spinner.start()
+    return spinner
+
+
+class RobotClients:
+    """One ROS context, node and spinning thread that the clients of many robots share: what a
+    program that drives many robots (a web back end with a client per robot) opens once.  Each
+    :class:`RobotClient` or :class:`AsyncRobotClient` made with ``hub=`` this goes on its node::
+
+        with RobotClients() as hub:
+            with RobotClient("tinyRobot", "tinyRobot1", hub=hub) as one, \
+                 RobotClient("tinyRobot", "tinyRobot2", hub=hub) as two:
+                ...
+
+    A robot's own client costs a context, a DDS participant and a thread; on a hub it costs its
+    subscriptions and action client alone (bench/ros_async_idle.py, docs/ros.md)."""
+
+    def __init__(self, *, node_name: str = "dynevent_clients", ros_args: Sequence[str] = ()) -> None:
+        self._settings = (node_name, tuple(ros_args))
+        self._context: Any = None
+        self._node: Any = None
+        self._spinner: Spinner | None = None
+
+    @property
+    def node(self) -> Any:
+        """The node the hub's clients go on (open)."""
+        if self._node is None:
+            raise LocalError("the hub is not open: use `with RobotClients() as hub` or open()")
+        return self._node
+
+    def paused(self) -> contextlib.AbstractContextManager[None]:
+        """The hub's spinning paused while a client of it is made or destroyed."""
+        if self._spinner is None:
+            raise LocalError("the hub is not open: use `with RobotClients() as hub` or open()")
+        return self._spinner.paused()
+
+    def open(self) -> RobotClients:
+        """Start ROS in a context of the hub's, make its node and spin it."""
+        if self._node is None:
+            self._context, self._node = _start(*self._settings)
+            self._spinner = _spin(self._context, self._node, "dynevent-clients")
+        return self
+
+    def close(self) -> None:
+        """Stop spinning and destroy the node and the context (bounded): close its clients first."""
+        if self._node is None:
+            return
+        with bounded_close():
+            assert self._spinner is not None
+            self._spinner.stop()
+            close_down([self._node], self._context)
+        self._node = self._context = self._spinner = None
+
+    def __enter__(self) -> RobotClients:
+        return self.open()
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
 
 class RobotClient:
     """A :class:`~dynevent.ros.client.DynamicEventClient` of ``fleet``/``robot`` with its own ROS
     context, node (``node_name``) and spinning thread, started by ``with`` (or :meth:`open`) and
     stopped at its end (or :meth:`close`).  The commands return a :class:`~dynevent.ros.GoalRun`.
-    ``categories``, ``validators`` and ``trace`` are the client's (see DynamicEventClient)."""
+    ``categories``, ``validators`` and ``trace`` are the client's (see DynamicEventClient); with
+    ``hub`` (an open :class:`RobotClients`), the client goes on the hub's node instead."""
 
     def __init__(
         self,
@@ -57,9 +134,11 @@ class RobotClient:
         categories: Any = None,
         validators: Any = None,
         trace: TraceWriter | None = None,
+        hub: RobotClients | None = None,
     ) -> None:
         self.fleet, self.robot = fleet, robot
         self._settings = (node_name, tuple(ros_args), categories, validators, trace)
+        self._hub = hub
         self._context: Any = None
         self._node: Any = None
         self._client: DynamicEventClient | None = None
@@ -68,36 +147,45 @@ class RobotClient:
     # ---------------------------------------------------------------- life
 
     def open(self) -> RobotClient:
-        """Start ROS in a context of this client's, make its node and client, and spin them."""
+        """Start ROS in a context of this client's, make its node and client, and spin them; or, with
+        a ``hub``, make the client on the hub's node, which the hub spins."""
         if self._client is not None:
             return self
         node_name, ros_args, categories, validators, trace = self._settings
-        context = rclpy.Context()
-        try:
-            rclpy.init(args=["dynevent", *ros_args], context=context)
-        except Exception as exc:  # rcl's parse errors are not exported
-            raise LocalError(f"{' '.join(ros_args)}: ROS refused these arguments: {exc}") from None
-        self._context = context
-        self._node = rclpy.create_node(node_name, context=context)
+        if self._hub is not None:
+            self._node = self._hub.node
+            with self._hub.paused():  # the hub's executor never meets a half-made client
+                self._client = DynamicEventClient(
+                    self._node,
+                    self.fleet,
+                    self.robot,
+                    categories=categories,
+                    validators=validators,
+                    trace=trace,
+                )
+            return self
+        self._context, self._node = _start(node_name, ros_args)
         # the client is made whole before an executor thread can meet it (docs/ros.md)
         self._client = DynamicEventClient(
             self._node, self.fleet, self.robot, categories=categories, validators=validators, trace=trace
         )
-        executor = SingleThreadedExecutor(context=context)
-        executor.add_node(self._node)
-        self._spinner = Spinner(executor, f"dynevent-{self.fleet}-{self.robot}")
-        self._spinner.start()
+        self._spinner = _spin(self._context, self._node, f"dynevent-{self.fleet}-{self.robot}")
         return self
 
     def close(self) -> None:
-        """Stop spinning and destroy the client, its node and its context (bounded)."""
+        """Stop spinning and destroy the client, its node and its context (bounded); a hub's client
+        only destroys its own entities (the hub closes the rest)."""
         if self._client is None:
             return
         with bounded_close():
-            assert self._spinner is not None
-            self._spinner.stop()
-            self._client.destroy()
-            close_down([self._node], self._context)
+            if self._hub is not None:
+                with self._hub.paused():  # nothing destroyed under the hub's spinning thread
+                    self._client.destroy()
+            else:
+                assert self._spinner is not None
+                self._spinner.stop()
+                self._client.destroy()
+                close_down([self._node], self._context)
         self._client = self._node = self._context = self._spinner = None
 
     def __enter__(self) -> RobotClient:

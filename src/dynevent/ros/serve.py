@@ -60,7 +60,7 @@ from dynevent.sim.config import (
     machine_config,
     plan,
 )
-from dynevent.wire.vocab import Status
+from dynevent.wire.vocab import Compatibility, Status
 
 __all__ = ["BEGIN_COMMAND_TOPIC", "CategorySpec", "ServeConfig", "ServeError", "load_config", "run"]
 
@@ -156,7 +156,8 @@ def _describe(output: outs.Output | outs.Rejected) -> str | None:
     if isinstance(output, outs.AnswerGoal):
         result = output.result
         detail = repr(result.execution_failure.split("\n")[0]) if result.execution_failure else result.status
-        return f"answer: goal {output.goal_uuid[:8]} {output.status.value}: {detail} id={result.id}"
+        # the uuid's last 8 hex: a dynevent client's uuids share a prefix and count up at the end
+        return f"answer: goal …{output.goal_uuid[-8:]} {output.status.value}: {detail} id={result.id}"
     if isinstance(output, outs.Log):
         return f"log: {output.entry.tier}: {output.entry.text}"
     if isinstance(output, outs.DynamicEventFinished):
@@ -369,7 +370,7 @@ class _Robots:
         self.rebegin_timers: dict[str, Any] = {}
         # the description query (R16) as dynevent offers it; rmf_ros2 has none (D17), nor has a
         # rmf_task_msgs without the project's DescribeDynamicEvent
-        self.description_service = None if config.compatibility == "rmf_ros2" else describe_type()
+        self.description_service = None if config.compatibility is Compatibility.RMF_ROS2 else describe_type()
         self._timers_lock = threading.Lock()  # begin commands arrive on lane 0's thread
 
     def observer(self, robot: str) -> Callable[[outs.Output | outs.Rejected], None]:
@@ -498,9 +499,9 @@ def run(
     names = list(robots.servers)
     shown = ", ".join(names if len(names) <= 10 else [*names[:10], f"... ({len(names) - 10} more)"])
     part = "" if count == 1 else f" (shard {index}/{count} of {len(config.robots)})"
-    mode = "as rmf_ros2 behaves" if config.compatibility == "rmf_ros2" else "as the spec says"
-    log(f"serving {len(names)} robot(s) of fleet {config.fleet}{part}, {config.compatibility} mode ({mode}): "
-        f"{shown}")  # fmt: skip
+    mode = "as rmf_ros2 behaves" if config.compatibility is Compatibility.RMF_ROS2 else "as the spec says"
+    named = config.compatibility.value
+    log(f"serving {len(names)} robot(s) of fleet {config.fleet}{part}, {named} mode ({mode}): {shown}")
     stop.wait(seconds)
     now = time.time_ns()
     for judged in robots.judged:  # before the shutdown ends every run

@@ -80,15 +80,34 @@ class Spinner:
                 else:  # an executor without it: a bounded wait, looked at once a second
                     self.executor.spin_once(timeout_sec=1.0)
 
-    def stop(self, timeout: float = 5.0) -> bool:
-        """Stop spinning and wait (at most ``timeout`` seconds) for the thread to leave; True if it did.
-        The executor is shut down only then, so nothing of it is destroyed under the thread."""
+    @contextlib.contextmanager
+    def paused(self, timeout: float = 5.0) -> Iterator[None]:
+        """The thread leaves its loop (the executor kept) while the caller makes or destroys entities
+        of its nodes, then spins again: rclpy's executor builds its wait set from every entity, and
+        one destroyed under it ends the thread ("cannot use Destroyable").  Raises
+        :class:`~dynevent.errors.LocalError` when the thread does not leave within ``timeout``."""
+        if not self._left(timeout):
+            raise LocalError(f"{self._thread.name}: the spinning thread did not pause within {timeout:g} s")
+        try:
+            yield
+        finally:
+            self._stopping = threading.Event()
+            self._thread = threading.Thread(target=self._spin, daemon=True, name=self._thread.name)
+            self._thread.start()
+
+    def _left(self, timeout: float) -> bool:
+        """Ask the thread to leave its loop and wait (at most ``timeout`` seconds); True if it did."""
         self._stopping.set()
         deadline = time.monotonic() + timeout
         while self._thread.is_alive() and time.monotonic() < deadline:
             self.executor.wake()  # its guard condition: the wait returns, the loop sees the flag
             self._thread.join(WAKE_EVERY)
-        if self._thread.is_alive():
+        return not self._thread.is_alive()
+
+    def stop(self, timeout: float = 5.0) -> bool:
+        """Stop spinning and wait (at most ``timeout`` seconds) for the thread to leave; True if it did.
+        The executor is shut down only then, so nothing of it is destroyed under the thread."""
+        if not self._left(timeout):
             return False
         self.executor.shutdown(timeout_sec=0)
         return True

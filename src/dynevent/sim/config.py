@@ -36,6 +36,17 @@ __all__ = [
 ]
 
 
+#: The compatibility modes, as the command line and a ``--config`` file name them.
+_MODES = tuple(mode.value for mode in Compatibility)
+
+
+def _mode(value: Any) -> Compatibility:
+    """A compatibility mode, given as the enum or its name; :class:`ServeError` for any other value."""
+    if isinstance(value, Compatibility) or value in _MODES:
+        return Compatibility(value)
+    raise _wrong("compatibility", "", f"one of {', '.join(_MODES)}", value)
+
+
 @attrs.frozen
 class CategorySpec:
     """How a simulated child of one category behaves: how long it takes (a ``perform_action`` takes
@@ -63,7 +74,7 @@ class ServeConfig:
     fleet: str = "tinyRobot"
     robots: tuple[str, ...] = ("tinyRobot1",)
     categories: dict[str, CategorySpec] = attrs.field(factory=lambda: dict(DEFAULT_CATEGORIES))
-    compatibility: str = "standard"
+    compatibility: Compatibility = attrs.field(default=Compatibility.STANDARD, converter=_mode)
     rebegin: float = 2.0
     #: The seq of each robot's first run (a robot restored from ``--state`` keeps its own): start at
     #: 4294967295 to see the seq wrap to 0 at the next begin (R3.2).
@@ -81,8 +92,6 @@ class ServeConfig:
         return tuple(robot for robot in self.robots if shard_of(robot, count) == index)
 
 
-#: The compatibility modes, as the command line and a ``--config`` file name them.
-_MODES = tuple(mode.value for mode in Compatibility)
 #: A shard's numbers: ASCII digits (``str.isdigit`` takes ``²`` too), at most six of them.
 _DIGITS = re.compile(r"[0-9]{1,6}")
 
@@ -158,7 +167,7 @@ def machine_config(config: ServeConfig) -> ServerConfig:
     }
     robot = descriptions.Robot(places=config.places, actions=config.actions, categories=field)
     validators = robot.validators(others)
-    if config.compatibility == Compatibility.RMF_ROS2.value:
+    if config.compatibility is Compatibility.RMF_ROS2:
         return ServerConfig.rmf_ros2(validators)
     return ServerConfig(categories=validators, id_policy=IdPolicy.GOAL, compatibility=config.compatibility)
 

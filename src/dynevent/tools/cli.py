@@ -75,7 +75,8 @@ def _add_check_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
     )
     parser.add_argument("--json", action="store_true", help="one JSON object per violation, then a summary")
     parser.add_argument(
-        "--compatibility", choices=["standard", "rmf_ros2"], default="standard",
+        "--compatibility", choices=[mode.value for mode in Compatibility],
+        default=Compatibility.STANDARD.value,
         help="judge the server as the spec says (default), or as `dynevent serve --compatibility rmf_ros2` "
         "behaves: what is left is where it differs from that emulation (a trace's config record wins)",
     )  # fmt: skip
@@ -114,7 +115,7 @@ def _add_explain_command(commands: argparse._SubParsersAction[argparse.ArgumentP
         "category is taken as supported)",
     )
     parser.add_argument(
-        "--compat",
+        "--compatibility",
         choices=[mode.value for mode in Compatibility],
         default=Compatibility.STANDARD.value,
         help="judge as the spec says (standard, the default) or as rmf_ros2 does (accept, then abort)",
@@ -422,7 +423,7 @@ def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
     )
     parser.add_argument(
         "--compatibility",
-        choices=("standard", "rmf_ros2"),
+        choices=[mode.value for mode in Compatibility],
         help="serve as the spec says (standard, the default) or as rmf_ros2 does where they differ",
     )
     parser.add_argument(

@@ -81,7 +81,7 @@ def _run(args: argparse.Namespace) -> int:
     except _ArgumentError as exc:
         print(f"dynevent explain: {exc}", file=sys.stderr)
         return 2
-    explanation = explain(status, goal, categories=categories, compatibility=args.compat)
+    explanation = explain(status, goal, categories=categories, compatibility=args.compatibility)
     if args.json:
         print(_json.dumps(explanation.to_dict()))
     else:
