@@ -170,3 +170,13 @@ def test_the_reader_bounds_what_it_reads(tmp_path: Path) -> None:
         files.read_bytes("a\0b", "--config")
     files.write_text(str(tmp_path / "report.txt"), "a lone surrogate: \udc80", "--report")
     assert (tmp_path / "report.txt").read_text(encoding="utf-8") == "a lone surrogate: \\udc80"
+
+
+def test_a_trace_line_past_the_bound_is_one_line_not_held_whole(tmp_path: Path) -> None:
+    from dynevent.tools.check import MAX_TRACE_LINE
+
+    huge = tmp_path / "huge.jsonl"
+    with huge.open("wb") as stream:
+        stream.write(b'{"type": "status", "x": "' + b"x" * (MAX_TRACE_LINE + 10))
+    line = _one_line(dynevent("check", str(huge)))
+    assert f"a line longer than {MAX_TRACE_LINE:,} bytes" in line, line

@@ -182,9 +182,24 @@ def _check_stream(
         progress.close()
 
 
+#: The longest trace line read (bytes): a record carries at most a description of a megabyte, which
+#: JSON's escapes can make six; a longer line is refused before it is held whole.
+MAX_TRACE_LINE = 16_000_000
+
+
+def _lines(stream: Any, source: str) -> Iterator[bytes]:
+    """The stream's lines, each read to at most :data:`MAX_TRACE_LINE` bytes."""
+    number = 0
+    while raw := stream.readline(MAX_TRACE_LINE + 1):
+        number += 1
+        if len(raw) > MAX_TRACE_LINE and not raw.endswith(b"\n"):
+            raise _errors.TraceError(source, number, "$", f"a line longer than {MAX_TRACE_LINE:,} bytes")
+        yield raw
+
+
 def _text_lines(stream: Any, source: str, progress: Progress) -> Iterator[str]:
     done = 0
-    for number, raw in enumerate(stream, start=1):
+    for number, raw in enumerate(_lines(stream, source), start=1):
         done += len(raw)
         progress.update(done, f"(line {number:,})")
         try:
