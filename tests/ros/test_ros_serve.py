@@ -206,6 +206,19 @@ def test_serve_runs_children_of_several_robots_at_once(graph: Graph) -> None:
     assert code == 0, serve.output
 
 
+def test_serves_banner_names_the_namespace_every_name_is_under() -> None:
+    """``--ros-args -r __ns:=/site1`` puts the robot's action and topics under /site1: the banner says
+    so (a client looking for ``rmf/dynamic_event/...`` at the root would never find them)."""
+    serve = Child(["-m", "dynevent", "serve", "--rebegin", "0", "--robot", "nsRobot",
+                   "--ros-args", "-r", "__ns:=/site1"])  # fmt: skip
+    try:
+        serve.wait_line("serving ")
+    finally:
+        serve.stop()
+    banner = next(line for line in serve.output.splitlines() if line.startswith("serving "))
+    assert banner.startswith("serving 1 robot(s) of fleet tinyRobot in namespace /site1, "), banner
+
+
 @pytest.mark.spec("R20.1", "R20.2", "R17.4", "R9.3", "R11.1", "R4.3")
 def test_send_drives_every_flow_of_a_run_in_both_modes(tmp_path: Path, watcher: Any, mode: str) -> None:
     """Each goal from a fresh ``send`` process, which knows only the status topic: places one after

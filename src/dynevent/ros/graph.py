@@ -10,7 +10,7 @@ from rclpy.action import get_action_server_names_and_types_by_node
 from dynevent.errors import InvalidName
 from dynevent.wire.names import NameKind, parse_name
 
-__all__ = ["no_server_text", "servers_seen"]
+__all__ = ["graph_text", "no_server_text", "servers_seen"]
 
 
 def servers_seen(node: Any) -> list[tuple[str, str]]:
@@ -35,11 +35,24 @@ def servers_seen(node: Any) -> list[tuple[str, str]]:
 
 def no_server_text(node: Any, fleet: str, robot: str, waited: float) -> str:
     """One line for a robot whose server did not appear: what was waited for, and what the graph holds."""
+    return f"no Dynamic Event server for {fleet}/{robot} within {waited:g} s; {graph_text(node)}"
+
+
+def graph_text(node: Any) -> str:
+    """What the graph has: every fleet, each with its count of robots and the first few names."""
     seen = servers_seen(node)
     if not seen:
-        where = "no Dynamic Event server is on the graph (ROS_DOMAIN_ID and the discovery range must match)"
-    else:
-        listed = ", ".join(f"{name}/{other}" for name, other in seen[:10])
-        more = f" and {len(seen) - 10} more" if len(seen) > 10 else ""
-        where = f"the graph has {listed}{more}"
-    return f"no Dynamic Event server for {fleet}/{robot} within {waited:g} s; {where}"
+        return "no Dynamic Event server is on the graph (ROS_DOMAIN_ID and the discovery range must match)"
+    fleets: dict[str, list[str]] = {}
+    for fleet, robot in seen:
+        fleets.setdefault(fleet, []).append(robot)
+    listed = []
+    for fleet, robots in fleets.items():
+        first = ", ".join(robots[:_NAMED])
+        more = f", ... ({len(robots) - _NAMED} more)" if len(robots) > _NAMED else ""
+        listed.append(f"fleet {fleet}: {len(robots)} robot(s) ({first}{more})")
+    return "the graph has " + "; ".join(listed)
+
+
+#: The robots named of each fleet the graph has (the rest are counted).
+_NAMED = 5

@@ -30,7 +30,7 @@ from dynevent.errors import (
 )
 from dynevent.ros import spinning
 from dynevent.ros.client import DynamicEventClient, GoalRun, GoalWaitTimeout
-from dynevent.ros.graph import no_server_text, servers_seen
+from dynevent.ros.graph import graph_text, no_server_text, servers_seen
 from dynevent.ros.spinning import Interrupted, Spinner, bounded_close, close_down, interruptible
 from dynevent.server import outputs as outs
 from dynevent.wire.messages import DynamicEventStatus, Goal
@@ -180,7 +180,9 @@ def _found(
             known, changed = seen, elapsed
         settled = elapsed - changed >= SETTLED
         if not keep_waiting and elapsed >= LOOK and settled and seen and (args.fleet, args.robot) not in seen:
-            say(no_server_text(node, args.fleet, args.robot, round(elapsed)))
+            # not "within N s": when the graph settles varies from run to run, the verdict does not
+            missing = f"no Dynamic Event server for {args.fleet}/{args.robot} once the graph settled"
+            say(f"{missing}; {graph_text(node)}")
             return False
     say(no_server_text(node, args.fleet, args.robot, waited))
     return False

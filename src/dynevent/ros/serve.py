@@ -501,7 +501,11 @@ def run(
     part = "" if count == 1 else f" (shard {index}/{count} of {len(config.robots)})"
     mode = "as rmf_ros2 behaves" if config.compatibility is Compatibility.RMF_ROS2 else "as the spec says"
     named = config.compatibility.value
-    log(f"serving {len(names)} robot(s) of fleet {config.fleet}{part}, {named} mode ({mode}): {shown}")
+    space = robots.node.get_namespace()  # ``--ros-args -r __ns:=/site`` puts every name under it
+    inside = "" if space == "/" else f" in namespace {space}"
+    log(
+        f"serving {len(names)} robot(s) of fleet {config.fleet}{inside}{part}, {named} mode ({mode}): {shown}"
+    )
     stop.wait(seconds)
     now = time.time_ns()
     for judged in robots.judged:  # before the shutdown ends every run
