@@ -173,21 +173,8 @@ __all__ = [
 ]
 
 
-#: Names kept for one release, each with its new name (CHANGELOG.md).
-_DEPRECATED = {"accept_any": "any_description"}
-
-
 def __getattr__(name: str) -> Any:
-    """Import a public name's module on first use (PEP 562); a deprecated name warns."""
-    if name in _DEPRECATED:
-        import warnings
-
-        warnings.warn(
-            f"dynevent.{name} is deprecated: use dynevent.{_DEPRECATED[name]}",
-            DeprecationWarning,
-            stacklevel=2,
-        )
-        return __getattr__(_DEPRECATED[name])
+    """Import a public name's module on first use (PEP 562)."""
     if name in _MODULES:
         value = importlib.import_module(f"{__name__}.{_MODULES[name]}")
     elif name in _HOMES:

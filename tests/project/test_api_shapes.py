@@ -3,8 +3,6 @@ a phase prints as its name; renamed names still work for one release, with a war
 
 from __future__ import annotations
 
-import warnings
-
 import pytest
 
 import dynevent
@@ -58,14 +56,10 @@ def test_ignored_is_one_class_for_both_machines() -> None:
 
 
 @pytest.mark.parametrize("module", [dynevent, dynevent.machine])
-def test_a_renamed_name_still_works_with_a_deprecation_warning(module: object) -> None:
-    with pytest.warns(DeprecationWarning, match="accept_any is deprecated: use .*any_description"):
-        old = module.accept_any  # type: ignore[attr-defined]
-    assert old is any_description
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        assert module.any_description is any_description  # type: ignore[attr-defined]
-    assert "accept_any" not in dynevent.__all__
+def test_no_old_name_is_kept_before_the_first_release(module: object) -> None:
+    """0.1.0 is the first release: the names renamed before it (accept_any) are simply gone."""
+    with pytest.raises(AttributeError, match="accept_any"):
+        module.accept_any  # type: ignore[attr-defined]  # noqa: B018
 
 
 def test_the_top_level_keeps_the_query_and_the_validator_apart() -> None:
@@ -74,12 +68,10 @@ def test_the_top_level_keeps_the_query_and_the_validator_apart() -> None:
     assert any_description("go_to_place", {"anything": 1}) == ()
 
 
-def test_the_observers_resync_operations_live_in_one_module_and_the_old_names_warn() -> None:
+def test_the_observers_resync_operations_live_in_one_module() -> None:
     from dynevent.server import machine, resync
 
     assert not [name for name in machine.__all__ if name.startswith("resync_")]
-    with pytest.warns(DeprecationWarning, match="use dynevent.server.resync.seq"):
-        old = machine.resync_seq  # type: ignore[attr-defined]
-    assert old is resync.seq
+    assert callable(resync.seq)
     with pytest.raises(AttributeError):
-        machine.resync_nothing  # type: ignore[attr-defined]  # noqa: B018
+        machine.resync_seq  # type: ignore[attr-defined]  # noqa: B018

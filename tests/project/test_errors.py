@@ -9,7 +9,7 @@ import pkgutil
 import pytest
 
 import dynevent
-from dynevent import _moved, errors
+from dynevent import errors
 
 OLD_HOMES = {
     "dynevent.conformance.judge": ["TraceError"],
@@ -25,8 +25,6 @@ def _modules() -> list[str]:
     for info in pkgutil.walk_packages(dynevent.__path__, "dynevent."):
         if info.name.startswith(("dynevent.ros", "dynevent.testing")) or info.name == "dynevent.__main__":
             continue  # ROS 2 and hypothesis may be absent; their errors are checked below by name
-        if info.name in _moved.MODULES:
-            continue  # an old path, which warns: its module is walked at its new one
         names.append(info.name)
     return names
 

@@ -14,7 +14,6 @@ from pathlib import Path
 import pytest
 
 import dynevent
-from dynevent import _moved
 
 SRC = Path(__file__).resolve().parents[2] / "src" / "dynevent"
 
@@ -29,7 +28,6 @@ ALLOWED: dict[str, frozenset[str]] = {
     "client": frozenset({"errors", "wire", "server"}),
     "conformance": frozenset({"errors", "wire", "server", "descriptions", "files"}),
     "descriptions": frozenset({"errors", "wire", "server"}),
-    "_moved": frozenset(),  # old import paths, kept one release
     # recordings are files: read and judged below ros (no rclpy)
     "bags": frozenset({"errors", "wire", "server", "conformance", "files"}),
     # the simulated fleet serve runs, its configuration checked before rclpy is needed
@@ -37,7 +35,6 @@ ALLOWED: dict[str, frozenset[str]] = {
     # the command line, and what only it runs: nothing below imports it
     "tools": frozenset(
         {"errors", "wire", "server", "client", "conformance", "descriptions", "files", "bags", "sim", "ros"}
-        | {"_moved"}
     ),
     # judging is conformance (docs/design): ros reads the judges from below, never the command line
     "ros": frozenset(
@@ -160,34 +157,6 @@ def test_only_the_ros_binding_imports_ros() -> None:
     }
     assert not wrong, wrong
     assert _top_imports(SRC / "ros" / "record.py") & ROS_PACKAGES  # the reader sees one
-
-
-MOVED = _moved.MODULES
-
-
-@pytest.mark.parametrize(("old", "new"), sorted(MOVED.items()))
-def test_a_moved_module_is_still_found_at_its_old_path_with_a_warning(old: str, new: str) -> None:
-    import importlib
-    import sys
-
-    sys.modules.pop(old, None)
-    with pytest.warns(DeprecationWarning, match=f"{old} has moved to {new}"):
-        module = importlib.import_module(old)
-    assert module is importlib.import_module(new)
-    sys.modules.pop(old, None)
-
-
-def test_the_judging_names_check_held_are_still_found_there_with_a_warning() -> None:
-    from dynevent.conformance import judge
-    from dynevent.tools import check
-
-    with pytest.warns(DeprecationWarning, match="dynevent.tools.check.check_trace has moved"):
-        assert check.check_trace is judge.check_trace
-    with pytest.warns(DeprecationWarning):
-        from dynevent.tools.check import Report
-    assert Report is judge.Report
-    with pytest.raises(AttributeError, match="no_such_name"):
-        check.no_such_name  # noqa: B018
 
 
 #: The longest a class and a function may be, in lines (docstrings included): past them a part no

@@ -29,9 +29,6 @@ class Serve(Child):
     """A ``dynevent serve`` process and its live log."""
 
     def __init__(self, *args: str, mode: str = "standard") -> None:
-        import tempfile
-
-        self.tmp = tempfile.mkdtemp(prefix="dynevent-serve-")
         command = ["-m", "dynevent", "serve", "--robot", ROBOT, "--rebegin", "0", "--compatibility", mode]
         super().__init__([*command, *args])
 
@@ -153,7 +150,7 @@ def test_send_explains_and_exits_by_the_outcome(watcher: Any, mode: str) -> None
 
 @pytest.mark.spec("R3.1", "R4.7")
 def test_serve_begins_on_command_and_send_explains_a_refusal_it_cannot_see(
-    graph: Graph, watcher: Any, mode: str
+    graph: Graph, watcher: Any, mode: str, tmp_path: Path
 ) -> None:
     from rmf_task_msgs.msg import DynamicEventDescription
 
@@ -173,7 +170,7 @@ def test_serve_begins_on_command_and_send_explains_a_refusal_it_cannot_see(
             DynamicEventDescription(fleet="tinyRobot", robot=ROBOT, description='{"category": "tour"}')
         )
         wait_for(lambda: watcher.state.phase == 1 and watcher.state.seq == 2, "run 2 begun on command")
-        refused = send("--file", str(_write(Path(serve.tmp), '{"category": "fly", "description": {}}')))
+        refused = send("--file", str(_write(tmp_path, '{"category": "fly", "description": {}}')))
         assert refused.returncode == 1
         assert "outcome: rejected" in refused.stdout
         assert "does not support this category" in refused.stdout

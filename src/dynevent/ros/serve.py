@@ -472,7 +472,6 @@ def run(
     except InvalidConfig as exc:
         raise ServeError(str(exc)) from None
     log = LiveLog(say)
-    index, count = config.shard
     why_slow = participant.ignore_own_endpoints()  # before the first participant: a fast start
     if why_slow and len(config.served()) > LANE:
         log(why_slow)
@@ -496,16 +495,7 @@ def run(
         lane.spin()
     if robots.judge_lane is not None:
         robots.judge_lane.spin()
-    names = list(robots.servers)
-    shown = ", ".join(names if len(names) <= 10 else [*names[:10], f"... ({len(names) - 10} more)"])
-    part = "" if count == 1 else f" (shard {index}/{count} of {len(config.robots)})"
-    mode = "as rmf_ros2 behaves" if config.compatibility is Compatibility.RMF_ROS2 else "as the spec says"
-    named = config.compatibility.value
-    space = robots.node.get_namespace()  # ``--ros-args -r __ns:=/site`` puts every name under it
-    inside = "" if space == "/" else f" in namespace {space}"
-    log(
-        f"serving {len(names)} robot(s) of fleet {config.fleet}{inside}{part}, {named} mode ({mode}): {shown}"
-    )
+    log(_banner(config, list(robots.servers), robots.node.get_namespace()))
     stop.wait(seconds)
     now = time.time_ns()
     for judged in robots.judged:  # before the shutdown ends every run
@@ -538,6 +528,18 @@ def run(
         close_down([lane.node for lane in robots.lanes])
     log.close()
     return 0
+
+
+def _banner(config: ServeConfig, names: list[str], space: str) -> str:
+    """The line serve says once its robots are on the graph: how many, of which fleet, in which
+    namespace (``--ros-args -r __ns:=/site`` puts every name under it), shard and mode."""
+    index, count = config.shard
+    shown = ", ".join(names if len(names) <= 10 else [*names[:10], f"... ({len(names) - 10} more)"])
+    part = "" if count == 1 else f" (shard {index}/{count} of {len(config.robots)})"
+    mode = "as rmf_ros2 behaves" if config.compatibility is Compatibility.RMF_ROS2 else "as the spec says"
+    inside = "" if space == "/" else f" in namespace {space}"
+    fleet = f"fleet {config.fleet}{inside}{part}"
+    return f"serving {len(names)} robot(s) of {fleet}, {config.compatibility.value} mode ({mode}): {shown}"
 
 
 class LiveLog:

@@ -116,7 +116,6 @@ from __future__ import annotations
 
 import math
 import typing
-import warnings
 from collections.abc import Callable, Iterator, Mapping
 from typing import Any, TypeAlias
 
@@ -236,34 +235,6 @@ _STANDARD, _RMF_ROS2, _GOAL_IDS = Compatibility.STANDARD, Compatibility.RMF_ROS2
 _PARSE_FAILURE = Failure.PARSE.value
 #: "No description parsed yet" (a parsed description may be any JSON value, None included).
 _UNCHECKED: Any = object()
-
-
-#: Names kept for one release, each with its new name (CHANGELOG.md).
-_DEPRECATED = {"accept_any": "any_description"}
-
-
-def __getattr__(name: str) -> Any:
-    """A deprecated name: the object of its new name, with a ``DeprecationWarning``.  The observer's
-    ``resync_*`` operations moved to :mod:`dynevent.server.resync` (``resync_seq`` is ``resync.seq``)."""
-    if name in _DEPRECATED:
-        new = _DEPRECATED[name]
-        warnings.warn(
-            f"dynevent.server.machine.{name} is deprecated: use {new}", DeprecationWarning, stacklevel=2
-        )
-        return globals()[new]
-    if name.startswith("resync_"):
-        from dynevent.server import resync
-
-        operation = getattr(resync, name.removeprefix("resync_"), None)
-        if operation is not None:
-            warnings.warn(
-                f"dynevent.server.machine.{name} is deprecated: use dynevent.server.resync."
-                f"{operation.__name__}",
-                DeprecationWarning,
-                stacklevel=2,
-            )
-            return operation
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 # Messages built from checked state skip their converters; copies skip __init__ (attrs.evolve re-runs it).

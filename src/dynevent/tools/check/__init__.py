@@ -3,9 +3,6 @@
 The judging is :mod:`dynevent.conformance.judge` (the observer, the partial judge, traces) and
 :mod:`dynevent.bags` (recordings): this module reads files and standard input, shows progress on a
 terminal, and prints findings as text or JSON lines (docs/trace-format.md, docs/recordings.md).
-The names it used to hold (``check_trace``, ``read_trace``, ``Report``...) are imported from
-:mod:`dynevent.conformance.judge` now; importing them from here still works, with a
-:class:`DeprecationWarning`, until the release after 0.x that removes it (CHANGELOG).
 """
 
 from __future__ import annotations
@@ -18,7 +15,6 @@ from typing import Any
 
 from dynevent import errors as _errors
 from dynevent import files
-from dynevent._moved import moved_attribute
 from dynevent.conformance import judge as _judge
 from dynevent.errors import FileError
 from dynevent.tools._progress import Progress
@@ -26,16 +22,6 @@ from dynevent.wire import _json
 from dynevent.wire.vocab import Compatibility
 
 __all__ = ["BAG_SUFFIXES", "bag_records", "format_bag"]
-
-#: The names this module held before judging moved below the command line, and where they are now.
-_MOVED = {
-    name: _judge
-    for name in (
-        "RECORD_TYPES", "Finding", "Record", "Report", "TraceError", "check_records", "check_trace",
-        "format_report", "read_trace", "step_records", "trace_records",
-    )
-}  # fmt: skip
-__getattr__ = moved_attribute(__name__, _MOVED)
 
 
 def _run(args: argparse.Namespace) -> int:

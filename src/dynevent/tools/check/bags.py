@@ -1,8 +1,0 @@
-"""Moved to :mod:`dynevent.bags.reader`.
-
-This name keeps working, with a DeprecationWarning, for one release.
-"""
-
-from dynevent._moved import moved_module
-
-moved_module(__name__)
