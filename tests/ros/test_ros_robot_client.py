@@ -61,7 +61,7 @@ def test_a_robot_client_that_finds_no_server_says_what_the_graph_has(tmp_path: P
     finally:
         serve.stop()
     assert "no Dynamic Event server for tinyRobot/noSuchRobot within 3 s" in str(raised.value)
-    assert "tinyRobot/realRobot" in str(raised.value)
+    assert "the graph has fleet tinyRobot: 1 robot(s) (realRobot)" in str(raised.value)
 
 
 def test_a_client_whose_node_nothing_spins_says_so_at_once() -> None:
