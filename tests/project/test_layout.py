@@ -26,7 +26,8 @@ ALLOWED: dict[str, frozenset[str]] = {
     "files": frozenset({"errors", "wire"}),
     "server": frozenset({"errors", "wire"}),
     "client": frozenset({"errors", "wire", "server"}),
-    "conformance": frozenset({"errors", "wire", "server", "descriptions", "files"}),
+    # the probe's in-process link runs the machine as serve's simulated fleet does
+    "conformance": frozenset({"errors", "wire", "server", "descriptions", "files", "sim"}),
     "descriptions": frozenset({"errors", "wire", "server"}),
     # recordings are files: read and judged below ros (no rclpy)
     "bags": frozenset({"errors", "wire", "server", "conformance", "files"}),

@@ -1,40 +1,24 @@
-"""``dynevent probe``: test a live Dynamic Event server over ROS 2 alone, case by case.
-
-The probe is a client that may break the protocol on purpose: it sends raw
-goals (a stale seq, event type 0, a CANCEL naming another event...) through
-its own action client and watches the robot's status and begin topics, with
-nothing of the server's process imported.  Each case of
-:data:`dynevent.conformance.probe_cases.CASES` ends in a
-:class:`~dynevent.conformance.probe_cases.Finding`; every wait is bounded by
-``--timeout``.  Over ROS a refusal carries no reason (D6), so a case judges
-what a client can see: accepted or rejected, the feedback, the answer, the
-status that follows.
-"""
+"""``dynevent probe`` over ROS 2: the probe's cases (:mod:`dynevent.conformance.probing`) carried to a
+live Dynamic Event server through its action, status and begin topics, with nothing of the server's
+process imported.  This module is the link over DDS (:class:`RosLink`) and the command's body."""
 
 from __future__ import annotations
 
-import itertools
-import json
-import os
-import shlex
-import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from typing import Any
 
-import attrs
 import rclpy
 from action_msgs.msg import GoalStatus as RosGoalStatus
 from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 
-from dynevent import files
-from dynevent.conformance import probe_cases
+from dynevent.conformance import probe_cases, probing
 from dynevent.conformance.judge.trace import TraceWriter
-from dynevent.conformance.probe_cases import Case, Finding, Verdict
+from dynevent.conformance.probe_cases import Case, Finding
+from dynevent.conformance.probing import Exchange, Link, Options
 from dynevent.errors import FileError, InvalidMessage, ProbeError
 from dynevent.ros import convert, spinning
 from dynevent.ros.client import introspect
@@ -42,16 +26,7 @@ from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.graph import no_server_text
 from dynevent.ros.qos import latched
 from dynevent.ros.spinning import Interrupted, Spinner, bounded_close, close_down, interruptible
-from dynevent.server import machine
-from dynevent.wire._fields import U64_MAX
-from dynevent.wire.messages import (
-    DynamicEventDescription,
-    DynamicEventStatus,
-    Feedback,
-    Goal,
-    LogEntry,
-    Result,
-)
+from dynevent.wire.messages import Goal
 from dynevent.wire.names import (
     STATUS_TOPIC_DEPTH,
     action_name,
@@ -59,89 +34,28 @@ from dynevent.wire.names import (
     description_service,
     status_topic,
 )
-from dynevent.wire.vocab import DynamicState, EventType, Failure, GoalStatus, Status, Tier
+from dynevent.wire.vocab import GoalStatus
 
-__all__ = ["Exchange", "Link", "Options", "Probe", "main", "run"]
+__all__ = ["Options", "ProbeInterrupted", "RosLink", "main", "run"]
 
 _TERMINAL = {
     RosGoalStatus.STATUS_SUCCEEDED: GoalStatus.SUCCEEDED,
     RosGoalStatus.STATUS_CANCELED: GoalStatus.CANCELED,
     RosGoalStatus.STATUS_ABORTED: GoalStatus.ABORTED,
 }
-_STANDBY, _UNDERWAY = Status.STANDBY.value, Status.UNDERWAY.value
-_COMPLETED, _CANCELED = Status.COMPLETED.value, Status.CANCELED.value
-_U32 = 2**32
-#: The configuration whose server numbers every child itself (id policy adapter): what a NEXT of id
-#: 0 asks of any server (R6.2).
-_SERVER_NUMBERS = machine.ServerConfig(id_policy="adapter")
-
-
-def _fresh(last_id: int) -> int:
-    """The id above ``last_id`` a NEXT names (R4.12, the machine's :func:`~dynevent.server.machine.fresh_id`);
-    a case that needs one where none is left is not run."""
-    fresh = machine.fresh_id(last_id)
-    if fresh is None:
-        raise _Unreachable(f"no id is left above {last_id} in this run (2**64 - 1 is the highest)")
-    return fresh
-
-
 #: How long the description case looks for the service, which a server need not offer (D17).
 _SERVICE_WAIT = 2.0
 #: The history depth of the probe's own subscriptions.
 _READER_DEPTH = 100
 
 
-class Exchange:
-    """One raw goal: whether it was accepted, its feedback, and its answer, each as it arrives."""
-
-    def __init__(self, goal: Goal) -> None:
-        self.goal = goal
-        self.uuid = os.urandom(16).hex()
-        self.accepted: bool | None = None
-        self.feedback: list[Feedback] = []
-        self.answers: list[tuple[GoalStatus, Result]] = []
-        self.handle: Any = None  # rclpy's ClientGoalHandle, once accepted
-        self._changed = threading.Condition()
-
-    def _note(self, update: Callable[[], None]) -> None:
-        with self._changed:
-            update()
-            self._changed.notify_all()
-
-    def wait(self, condition: Callable[[], bool], timeout: float) -> bool:
-        """Wait, at most ``timeout`` seconds, until ``condition()`` holds."""
-        with self._changed:
-            return self._changed.wait_for(condition, timeout)
-
-    def responded(self, timeout: float) -> bool:
-        return self.wait(lambda: self.accepted is not None, timeout)
-
-    def answered(self, timeout: float) -> bool:
-        return self.wait(lambda: bool(self.answers) or self.accepted is False, timeout)
-
-    @property
-    def answer(self) -> tuple[GoalStatus, Result] | None:
-        return self.answers[0] if self.answers else None
-
-
-# the records of what the probe itself sends
-_SENT = frozenset({"goal", "cancel_request"})
-
-
-class Link:
-    """Raw access to one robot: its status and begin topics, and an action client without a client
-    machine, so that the probe can send what a well-behaved client never would."""
+class RosLink(Link):
+    """The probe's :class:`~dynevent.conformance.probing.Link` over DDS: the robot's status and begin
+    topics, and an action client without a client machine."""
 
     def __init__(self, node: Any, fleet: str, robot: str, trace: TraceWriter | None = None) -> None:
+        super().__init__(fleet, robot, trace)
         self._node = node
-        self.fleet, self.robot = fleet, robot
-        self._trace = trace
-        self.statuses: list[DynamicEventStatus] = []
-        self.begins: list[DynamicEventDescription] = []
-        self._changed = threading.Condition()
-        #: how many messages the server has sent the probe (statuses, begins, responses, feedback, answers)
-        self.heard = 0
-        self._heard_lock = threading.Lock()
         # a deep reader history: the writer keeps the last message for late subscribers (R1.4), and
         # the probe, subscribed all along, must miss none of those that follow (an INACTIVE status
         # followed at once by the next run's)
@@ -153,59 +67,31 @@ class Link:
         )
         self._action = ActionClient(node, DynamicEvent, action_name(fleet, robot))
 
+    def clock(self) -> float:
+        return time.monotonic()
+
+    def wait(self, condition: Callable[[], bool], timeout: float) -> bool:
+        with self._changed:
+            return self._changed.wait_for(condition, timeout)
+
     def _on_status(self, message: Any) -> None:
         try:
             status = convert.status_from_ros(message)
         except InvalidMessage:
             return
-        self._record("status", message=status)
-        with self._changed:
-            self.statuses.append(status)
-            self._changed.notify_all()
+        self.hear_status(status)
 
     def _on_begin(self, message: Any) -> None:
         try:
             begin = convert.begin_from_ros(message)
         except InvalidMessage:
             return
-        self._record("begin", message=begin)
-        with self._changed:
-            self.begins.append(begin)
-            self._changed.notify_all()
-
-    def mark(self, text: str) -> None:
-        """A comment in the trace: what the records after it belong to."""
-        if self._trace is not None:
-            self._trace.comment(text)
-
-    def _record(self, kind: str, **fields: Any) -> None:
-        if kind not in _SENT:
-            with self._heard_lock:
-                self.heard += 1
-        if self._trace is not None:
-            self._trace.observe(kind, **fields)
+        self.hear_begin(begin)
 
     def wait_for_server(self, timeout: float) -> bool:
         return bool(self._action.wait_for_server(timeout_sec=timeout))
 
-    @property
-    def status(self) -> DynamicEventStatus | None:
-        with self._changed:
-            return self.statuses[-1] if self.statuses else None
-
-    def wait_status(
-        self, condition: Callable[[DynamicEventStatus], bool], timeout: float
-    ) -> DynamicEventStatus | None:
-        """The latest status once it satisfies ``condition``, or None after ``timeout`` seconds."""
-
-        def holds() -> bool:
-            return bool(self.statuses) and condition(self.statuses[-1])
-
-        with self._changed:
-            return self.statuses[-1] if self._changed.wait_for(holds, timeout) else None
-
     def late_subscriber_hears(self, timeout: float) -> bool:
-        """Whether a subscription made now receives a status (what transient-local keeps)."""
         heard = threading.Event()
         subscription = self._node.create_subscription(
             RosStatus,
@@ -219,8 +105,8 @@ class Link:
             self._node.destroy_subscription(subscription)
 
     def send(self, goal: Goal) -> Exchange:
-        exchange = Exchange(goal)
-        self._record("goal", goal_uuid=exchange.uuid, message=goal)
+        exchange = Exchange(goal, self)
+        self.sent("goal", goal_uuid=exchange.uuid, message=goal)
         future = self._action.send_goal_async(
             convert.goal_to_ros(goal),
             feedback_callback=lambda message: self._on_feedback(exchange, message),
@@ -232,31 +118,25 @@ class Link:
     def _on_response(self, exchange: Exchange, future: Any) -> None:
         handle = future.result()
         accepted = bool(handle is not None and handle.accepted)
-        self._record("goal_response", goal_uuid=exchange.uuid, accepted=accepted)
         if accepted:
             exchange.handle = handle
-        exchange._note(lambda: setattr(exchange, "accepted", accepted))
+        self.hear_response(exchange, accepted)
         if accepted:
             handle.get_result_async().add_done_callback(lambda done: self._on_result(exchange, done))
 
     def _on_result(self, exchange: Exchange, future: Any) -> None:
         response = future.result()
         status = _TERMINAL.get(response.status, GoalStatus.ABORTED)
-        result = convert.result_from_ros(response.result)
-        self._record("result", goal_uuid=exchange.uuid, status=status, message=result)
-        exchange._note(lambda: exchange.answers.append((status, result)))
+        self.hear_answer(exchange, status, convert.result_from_ros(response.result))
 
     def _on_feedback(self, exchange: Exchange, message: Any) -> None:
         try:
             feedback = convert.feedback_from_ros(message.feedback)
         except InvalidMessage:
             return
-        self._record("feedback", goal_uuid=exchange.uuid, message=feedback)
-        exchange._note(lambda: exchange.feedback.append(feedback))
+        self.hear_feedback(exchange, feedback)
 
     def cancel(self, exchange: Exchange, timeout: float) -> bool | None:
-        """Ask for an action-level cancel of ``exchange``'s goal: whether the server accepted it (its
-        response lists the goal as canceling), or None when no response came within ``timeout``."""
         answered = threading.Event()
         accepted: list[bool] = []
 
@@ -264,10 +144,10 @@ class Link:
             response = future.result()
             canceling = [] if response is None else response.goals_canceling
             accepted.append(any(convert.uuid_from_ros(info.goal_id) == exchange.uuid for info in canceling))
-            self._record("cancel_response", goal_uuid=exchange.uuid, accepted=accepted[0])
+            self.hear_cancel_response(exchange, accepted[0])
             answered.set()
 
-        self._record("cancel_request", goal_uuid=exchange.uuid)
+        self.sent("cancel_request", goal_uuid=exchange.uuid)
         exchange.handle.cancel_goal_async().add_done_callback(on_response)
         return accepted[0] if answered.wait(timeout) else None
 
@@ -290,987 +170,12 @@ class Link:
         finally:
             self._node.destroy_client(client)
 
-    def wait_seen(self, condition: Callable[[DynamicEventStatus], bool], since: int, timeout: float) -> bool:
-        """Whether a status received after the first ``since`` satisfies ``condition``, waiting at
-        most ``timeout`` seconds (a later status may have followed it)."""
-        with self._changed:
-            return self._changed.wait_for(lambda: any(map(condition, self.statuses[since:])), timeout)
-
-    def wait_begin(self, seq: int, timeout: float) -> bool:
-        """Whether the begin of run ``seq`` has come, waiting at most ``timeout`` seconds (the begin
-        topic is read apart from the status topic, so a run's begin may follow its status)."""
-        with self._changed:
-            return self._changed.wait_for(
-                lambda: any(begin.dynamic_event_seq == seq for begin in self.begins), timeout
-            )
-
-    def history(self) -> list[DynamicEventStatus]:
-        """Every status received so far, oldest first."""
-        with self._changed:
-            return list(self.statuses)
-
     def introspect(self) -> bool:
         """Publish the probe's action service events (ROS 2 introspection, with contents)."""
         return introspect(self._action, self._node)
 
     def destroy(self) -> None:
         self._action.destroy()
-
-
-@attrs.frozen
-class Options:
-    """What the probe is pointed at and how long it waits."""
-
-    fleet: str
-    robot: str
-    place: str | None = None
-    category: str = "go_to_place"
-    #: more places, taken in turn after ``place`` by the NEXTs that send the robot somewhere, so that a
-    #: child does not end at once where the robot already stands
-    more_places: tuple[str, ...] = ()
-    timeout: float = 10.0
-    begin_command: str | None = None
-    known: frozenset[str] = frozenset()
-    trace: str | None = None
-    stubborn_minimum: float = 2.0
-    introspection: bool = False
-    #: how long to wait for the robot's server to appear (DDS discovery can take seconds: apart from
-    #: the timeout of each wait of a case)
-    server_wait: float = 10.0
-    #: the command line's ROS arguments (``--ros-args ...``), given to rclpy
-    ros_args: tuple[str, ...] = ()
-    #: the cases that may be missing without failing the run: ids, globs, sections or rules
-    allow_missing: tuple[str, ...] = ()
-    #: the cases ``--known`` expects to be missing (:data:`~dynevent.conformance.probe_cases.KNOWN_MISSING`)
-    known_missing: frozenset[str] = frozenset()
-    #: where to write the JUnit report, and the readable report (HTML when the name ends .html/.htm)
-    junit: str | None = None
-    report: str | None = None
-    #: the bound on the whole run once the server is found (seconds): no wait goes past it
-    deadline: float = 120.0
-
-
-#: How many cases in a row may wait out the timeout, the server sending nothing meanwhile, before the
-#: probe takes it as silent and reports the rest as not run (the vector runner stops after three
-#: timeouts in a row too).
-SILENT_AFTER = 3
-
-#: Why the cases after :data:`SILENT_AFTER` timeouts in a row are not run.
-STOPPED_ANSWERING = (
-    f"the server stopped answering ({SILENT_AFTER} cases in a row waited out --timeout and heard nothing)"
-)
-
-#: Why a case that sends the robot somewhere is not run.
-NO_PLACE = "no place to send the robot to: give --place (or begin runs whose estimate names one)"
-
-
-def _waits_or_ended(status: DynamicEventStatus) -> bool:
-    """The robot waits for a NEXT (R20.2 included), or its run has ended."""
-    return machine.robot_waits(status) or status.dynamic_state == DynamicState.INACTIVE
-
-
-class _Unreachable(Exception):
-    """A case cannot be carried out: its finding is ``missing``."""
-
-
-class _TimedOut(_Unreachable):
-    """A case cannot be carried out because the server did not show what it waited for in time."""
-
-
-def _describe_goal(goal: Goal) -> str:
-    kind = {0: "type 0", 1: "NEXT", 2: "CANCEL", 3: "FINISHED"}.get(
-        goal.event_type, f"type {goal.event_type}"
-    )
-    detail = f" {goal.category} {goal.description}" if goal.event_type == EventType.NEXT else ""
-    return f"sent {kind} seq={goal.dynamic_event_seq} id={goal.id}{detail}"
-
-
-def _describe_answer(exchange: Exchange) -> str:
-    if exchange.accepted is None:
-        return "no response"
-    if not exchange.accepted:
-        return "rejected"
-    answer = exchange.answer
-    if answer is None:
-        return "accepted, no answer yet"
-    status, result = answer
-    failure = f" {result.execution_failure.splitlines()[0]!r}" if result.execution_failure else ""
-    return f"accepted, answered {status.value}{failure} (status {result.status!r}, id {result.id})"
-
-
-class Probe:
-    """Carries out cases over a :class:`Link`; :meth:`run` gives one finding per case."""
-
-    def __init__(self, link: Link, options: Options) -> None:
-        self.link = link
-        self.options = options
-        self.messages: list[str] = []
-        self.exchanges: list[Exchange] = []
-        self.timeouts_in_a_row = 0  # cases that waited out the timeout, one after the other
-        self._places_sent = 0
-        self.ends_at = time.monotonic() + options.deadline
-        #: the kinds of wait that have timed out once (``"status"``), and why: the cases that need one
-        #: are not run to wait it out again (the cause is said instead)
-        self.dead: dict[str, str] = {}
-
-    @property
-    def timeout(self) -> float:
-        """The bound on the next wait: ``--timeout``, or what is left of ``--deadline`` when less."""
-        return max(_LEAST_WAIT, min(self.options.timeout, self.ends_at - time.monotonic()))
-
-    @property
-    def past_deadline(self) -> bool:
-        return time.monotonic() >= self.ends_at
-
-    def blocked(self, case: Case) -> str | None:
-        """Why ``case`` is not run: a kind of wait it needs has timed out already, or the deadline passed."""
-        if self.past_deadline:
-            return f"the run's --deadline of {self.options.deadline:g} s passed"
-        for kind, needs in _NEEDS_OF_WAIT.items():
-            if kind in self.dead and case.needs in needs:
-                return self.dead[kind]
-        return None
-
-    # ---------------------------------------------------------------- carrying out
-
-    def run(self, case: Case) -> Finding:
-        self.messages = []
-        self.exchanges = []
-        self.link.mark(f"case {case.id}")
-        started = time.monotonic()
-        heard = self.link.heard
-        timed_out = False
-        try:
-            if case.needs in ("child", "place") and self.options.place is None:
-                raise _Unreachable(NO_PLACE)
-            finding = _CASES[case.id](self, case)
-        except _Unreachable as exc:
-            finding = Finding(case, Verdict.MISSING, seen=str(exc))
-            timed_out = isinstance(exc, _TimedOut)
-        finding = self._answered_once(finding)
-        # silent: the case waited out the timeout and the server sent nothing at all meanwhile
-        silent = (timed_out or finding.absent) and self.link.heard == heard
-        self.timeouts_in_a_row = self.timeouts_in_a_row + 1 if silent else 0
-        return self._settled(finding, started)
-
-    def _settled(self, finding: Finding, started: float) -> Finding:
-        """The finding with the case's messages and time, and whether --known or --allow-missing
-        expected its failure or its absence."""
-        case = finding.case
-        missing = finding.verdict is Verdict.MISSING
-        return attrs.evolve(
-            finding,
-            messages=tuple(self.messages),
-            seconds=time.monotonic() - started,
-            known=finding.verdict is Verdict.FAIL and finding.divergence in self.options.known,
-            expected_missing=missing
-            and (
-                case.id in self.options.known_missing or probe_cases.matches(case, self.options.allow_missing)
-            ),
-        )
-
-    @property
-    def silent(self) -> bool:
-        """Has the server stopped answering: :data:`SILENT_AFTER` cases in a row waited out the timeout
-        with no message from it?"""
-        return self.timeouts_in_a_row >= SILENT_AFTER
-
-    def not_run(self, case: Case, why: str) -> Finding:
-        """The finding of a case the probe did not carry out."""
-        self.messages = []
-        return self._settled(Finding(case, Verdict.MISSING, seen=why), time.monotonic())
-
-    def note(self, text: str) -> None:
-        self.messages.append(text)
-
-    def _answered_once(self, finding: Finding) -> Finding:
-        """Every goal the case saw accepted, its own and its clean-up's, answered exactly once (R19.1):
-        a case that otherwise passed fails when one was not."""
-        for exchange in self.exchanges:
-            goal = _describe_goal(exchange.goal).removeprefix("sent ")
-            if exchange.accepted and not exchange.answered(self.timeout):
-                what = f"{goal} accepted, no answer"
-            elif len(exchange.answers) > 1:
-                what = f"{goal} answered {len(exchange.answers)} times"
-            else:
-                continue
-            self.note(f"{what} within {self.timeout:g} s (R19.1)")
-            if finding.verdict in (Verdict.PASS, Verdict.NON_STRICT, Verdict.INFO):
-                return Finding(
-                    finding.case, Verdict.FAIL, expected="every accepted goal answered exactly once (R19.1)",
-                    seen=what, absent="no answer" in what,
-                )  # fmt: skip
-        return finding
-
-    def waiting(self) -> DynamicEventStatus:
-        """The status of an active run the robot waits in, after the begin command when one is given
-        and the robot is not waiting; else the case is missing.  Waiting is WAITING, or RUNNING with
-        a child's final status (R20.2: what rmf_ros2 keeps publishing after a child ends)."""
-        timeout = self.timeout
-        status = self.link.wait_status(machine.robot_waits, 0.5)
-        if status is None and self.options.begin_command:
-            self._run_begin_command()
-        status = status or self.link.wait_status(machine.robot_waits, timeout)
-        if status is None:
-            raise _TimedOut(f"no active run (a WAITING status) within {timeout:g} s")
-        return status
-
-    def _run_begin_command(self) -> None:
-        """Run ``--begin-command`` (bounded by the timeout); a command that cannot run makes the case
-        missing, with why."""
-        command = self.options.begin_command or ""
-        try:
-            done = subprocess.run(
-                shlex.split(command),
-                timeout=self.timeout,
-                check=False,
-                capture_output=True,
-                text=True,
-            )
-        except (OSError, ValueError, subprocess.TimeoutExpired) as exc:
-            raise _Unreachable(f"--begin-command {command!r} did not run: {exc}") from None
-        self.note(f"ran --begin-command: exit status {done.returncode}")
-
-    def any_status(self) -> DynamicEventStatus:
-        status = self.link.wait_status(lambda s: True, self.timeout)
-        if status is None:
-            raise _TimedOut(f"no status within {self.timeout:g} s")
-        return status
-
-    def send(self, goal: Goal, *, answer: bool = True) -> Exchange:
-        """Send ``goal``; wait for the response and, when accepted and ``answer``, for its answer."""
-        exchange = self.link.send(goal)
-        self.exchanges.append(exchange)
-        self.note(_describe_goal(goal))
-        if not exchange.responded(self.timeout):
-            self.note("no response")
-            return exchange
-        if answer and exchange.accepted:
-            exchange.answered(self.timeout)
-        self.note(_describe_answer(exchange))
-        return exchange
-
-    def cancel(self, exchange: Exchange) -> bool | None:
-        """An action-level cancel of ``exchange``'s goal: accepted, refused, or None (no response)."""
-        accepted = self.link.cancel(exchange, self.timeout)
-        outcome = {None: "no response", True: "accepted", False: "refused"}[accepted]
-        self.note(
-            f"sent an action-level cancel of {_describe_goal(exchange.goal).removeprefix('sent ')}: {outcome}"
-        )
-        return accepted
-
-    def next_goal(self, status: DynamicEventStatus, goal_id: int | None = None) -> Goal:
-        if self.options.place is None:
-            raise _Unreachable(NO_PLACE)
-        places = (self.options.place, *self.options.more_places)
-        place = places[self._places_sent % len(places)]
-        self._places_sent += 1
-        return Goal(
-            dynamic_event_seq=status.dynamic_event_seq,
-            event_type=EventType.NEXT,
-            category=self.options.category,
-            description=json.dumps({"one_of": [place]}),
-            id=_fresh(status.id) if goal_id is None else goal_id,
-        )
-
-    def refused(self, case: Case, goal: Goal, divergence: str | None = None) -> Finding:
-        """A case whose goal the spec refuses: pass when rejected.  Accepted and then aborted is the
-        way ``divergence`` breaks it, when given."""
-        exchange = self.send(goal)
-        if exchange.accepted is False:
-            return Finding(case, Verdict.PASS, expected="rejected", seen="rejected")
-        if exchange.accepted is None:
-            return Finding(case, Verdict.FAIL, expected="rejected", seen="no response", absent=True)
-        answer = exchange.answer
-        aborted = answer is not None and answer[0] is GoalStatus.ABORTED
-        return Finding(
-            case, Verdict.FAIL, expected="rejected", seen=_describe_answer(exchange),
-            divergence=divergence if aborted else None,
-        )  # fmt: skip
-
-    def _running_child(
-        self, goal: Goal, status: DynamicEventStatus, exchange: Exchange
-    ) -> DynamicEventStatus | None:
-        """The status that shows the child of ``goal`` running (the NEXT's id, or a new one the
-        server gave it, D10), or None when the NEXT was answered first or ``--timeout`` passed."""
-
-        def new_child(s: DynamicEventStatus) -> bool:
-            return (
-                machine.runs_a_child(s)
-                and s.dynamic_event_seq == goal.dynamic_event_seq
-                and (s.id == goal.id or s.id > status.id)
-            )
-
-        deadline = time.monotonic() + self.timeout
-        while time.monotonic() < deadline:
-            running = self.link.wait_status(new_child, min(_LOOK_AGAIN, deadline - time.monotonic()))
-            if running is not None:
-                return running
-            if exchange.answers:
-                return None
-        return None
-
-    @contextmanager
-    def child(self) -> Iterator[tuple[Exchange, int]]:
-        """A running child (its NEXT accepted and the status RUNNING with a new child); cancelled after.
-        The child's id is the one the status names: the NEXT's own where the server follows R6.2, the
-        server's where it numbers children itself (D10), as a client that keeps no state reads it."""
-        places = 1 + len(self.options.more_places)
-        for tried in range(1, places + 1):
-            status = self.waiting()
-            goal = self.next_goal(status)
-            exchange = self.send(goal, answer=False)
-            if not exchange.accepted:
-                raise _Unreachable(f"the NEXT that should run a child was {_describe_answer(exchange)}")
-            running = self._running_child(goal, status, exchange)
-            if running is not None:
-                break
-            if not exchange.answers:
-                raise _TimedOut(f"the child of NEXT {goal.id} never showed RUNNING within {self.timeout:g} s")
-            # it ended before it was seen running: the robot stood where it was sent
-            self.note(f"the child of NEXT {goal.id} ended at once ({_describe_answer(exchange)}): "
-                      "the robot stood there")  # fmt: skip
-            if tried == places:
-                raise _Unreachable(f"every child ended at once, at each of the {places} place(s) given")
-            self.link.wait_status(_waits_or_ended, self.timeout)
-        assert running is not None  # every way out of the loop but its break raised
-        if running.id != goal.id:
-            self.note(f"the server numbered the child {running.id} (the NEXT's id was {goal.id})")
-        try:
-            yield exchange, running.id
-        finally:
-            if not exchange.answers:
-                stop = Goal(
-                    dynamic_event_seq=goal.dynamic_event_seq, event_type=EventType.CANCEL, id=running.id
-                )
-                self.send(stop)
-                exchange.answered(self.timeout)
-            self.link.wait_status(_waits_or_ended, self.timeout)
-
-
-#: The shortest wait the deadline leaves (seconds): a message already on its way is still read.
-_LEAST_WAIT = 0.05
-#: Which cases a kind of wait that timed out stops: no status heard stops every case that needs an
-#: active run (the begin command each would run cannot make a status heard that none was).
-_NEEDS_OF_WAIT = {"status": ("run", "place", "child")}
-
-#: How often a wait for a running child looks whether its NEXT was answered first (seconds).
-_LOOK_AGAIN = 0.2
-
-
-# -------------------------------------------------------------------- the cases
-
-
-def _status_latched(probe: Probe, case: Case) -> Finding:
-    expected = "a late subscriber receives the status"
-    if probe.link.wait_status(lambda status: True, probe.timeout) is None:
-        # a server with no transient-local status (a volatile one never matches this subscriber)
-        seen = f"no status within {probe.timeout:g} s"
-        return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=True)
-    if probe.link.late_subscriber_hears(probe.timeout):
-        return Finding(case, Verdict.PASS, expected="a status", seen="a status")
-    return Finding(case, Verdict.FAIL, expected=expected, seen="nothing")
-
-
-def _status_waiting(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    seq = status.dynamic_event_seq
-    begins = [begin.dynamic_event_seq for begin in probe.link.begins]
-    probe.note(f"status WAITING seq={seq} id={status.id} {status.status}; begins seen for runs {begins}")
-    if status.status != _STANDBY:
-        divergence = "D26" if status.status == Status.UNINITIALIZED.value else None
-        return Finding(case, Verdict.FAIL, expected="WAITING, standby", seen=f"WAITING, {status.status}",
-                       divergence=divergence)  # fmt: skip
-    if seq not in begins:
-        return Finding(case, Verdict.FAIL, expected=f"a begin for run {seq}", seen=f"begins for {begins}")
-    return Finding(case, Verdict.PASS, expected="WAITING, standby, begun", seen="so")
-
-
-def _goal(status: DynamicEventStatus, event_type: int, **values: Any) -> Goal:
-    fields: dict[str, Any] = {
-        "dynamic_event_seq": status.dynamic_event_seq,
-        "event_type": event_type,
-        "id": 0,
-    }
-    fields.update(values)
-    return Goal(**fields)
-
-
-def _seq_stale(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    goal = _goal(status, EventType.FINISHED, dynamic_event_seq=(status.dynamic_event_seq - 1) % _U32)
-    return probe.refused(case, goal)
-
-
-def _seq_future(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    goal = _goal(status, EventType.FINISHED, dynamic_event_seq=machine.next_seq(status.dynamic_event_seq))
-    return probe.refused(case, goal)
-
-
-def _event_type_0(probe: Probe, case: Case) -> Finding:
-    return probe.refused(case, _goal(probe.waiting(), 0), divergence="D7")
-
-
-def _event_type_unknown(probe: Probe, case: Case) -> Finding:
-    return probe.refused(case, _goal(probe.waiting(), 4), divergence="D7")
-
-
-def _category_unknown(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    goal = _goal(status, EventType.NEXT, category="dynevent_probe_no_such_category", description="{}",
-                 id=_fresh(status.id))  # fmt: skip
-    return probe.refused(case, goal)
-
-
-def _description_not_json(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    goal = _goal(status, EventType.NEXT, category=probe.options.category, description="{not json",
-                 id=_fresh(status.id))  # fmt: skip
-    return probe.refused(case, goal)
-
-
-def _cancel_idle(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    return probe.refused(case, _goal(status, EventType.CANCEL, id=status.id), divergence="D8")
-
-
-def _runs_a_child(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    goal = probe.next_goal(status)
-    exchange = probe.send(goal)
-    expected = f"accepted; feedback for id {goal.id}; succeeded, completed, id {goal.id}"
-    if not exchange.accepted:
-        return Finding(case, Verdict.FAIL, expected=expected, seen=_describe_answer(exchange))
-    ids = sorted({feedback.id for feedback in exchange.feedback})
-    probe.note(f"feedback: {len(exchange.feedback)} message(s), ids {ids}")
-    answer = exchange.answer
-    if answer is None:
-        return Finding(
-            case,
-            Verdict.FAIL,
-            expected=expected,
-            seen=f"no answer within {probe.timeout:g} s",
-            absent=True,
-        )
-    status_, result = answer
-    if ids != [goal.id] or (status_, result.status, result.id) != (
-        GoalStatus.SUCCEEDED,
-        _COMPLETED,
-        goal.id,
-    ):
-        return Finding(
-            case, Verdict.FAIL, expected=expected, seen=f"feedback ids {ids}; {_describe_answer(exchange)}"
-        )
-    return Finding(case, Verdict.PASS, expected=expected, seen="so")
-
-
-def _id_stale(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    goal = probe.next_goal(status, goal_id=status.id)  # not above the run's highest id
-    if status.id == 0:
-        raise _Unreachable("the run's highest id is 0: no stale id exists")
-    finding = probe.refused(case, goal)
-    if finding.verdict is Verdict.FAIL and "succeeded" in finding.seen:
-        finding = attrs.evolve(finding, divergence="D10")  # the id was ignored and the child ran
-    return finding
-
-
-def _status_after_child(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    goal = probe.next_goal(status)
-    exchange = probe.send(goal)
-    if not exchange.answers:
-        raise _TimedOut(f"the child did not end within {probe.timeout:g} s")
-    answer = exchange.answer
-    child = answer[1].id if answer is not None and answer[1].id else goal.id  # R8.1: the result names it
-    after = probe.link.wait_status(lambda s: s.id == child and s.status != _UNDERWAY, probe.timeout)
-    if after is None:
-        return Finding(
-            case,
-            Verdict.FAIL,
-            expected=f"WAITING, id {child}",
-            seen="no status after the child",
-            absent=True,
-        )
-    phase = DynamicState(after.dynamic_state).name
-    probe.note(f"status {phase} seq={after.dynamic_event_seq} id={after.id} {after.status}")
-    if after.dynamic_state == DynamicState.WAITING and after.status == _STANDBY:
-        return Finding(case, Verdict.PASS, expected=f"WAITING, standby, id {child}", seen="so")
-    divergence = "D2" if after.dynamic_state == DynamicState.RUNNING else None
-    return Finding(case, Verdict.FAIL, expected=f"WAITING, standby, id {child}",
-                   seen=f"{phase}, {after.status}, id {after.id}", divergence=divergence)  # fmt: skip
-
-
-def _busy(probe: Probe, case: Case) -> Finding:
-    with probe.child() as (_, child_id):
-        status = probe.link.status or probe.any_status()
-        return probe.refused(case, probe.next_goal(status, goal_id=_fresh(child_id)))
-
-
-def _busy_finished(probe: Probe, case: Case) -> Finding:
-    with probe.child():
-        status = probe.link.status or probe.any_status()
-        finding = probe.refused(case, _goal(status, EventType.FINISHED))
-        if finding.verdict is Verdict.FAIL and "succeeded" in finding.seen:
-            finding = attrs.evolve(finding, divergence="D30")  # the run ended under the running child
-        return finding
-
-
-def _cancel_wrong_id(probe: Probe, case: Case) -> Finding:
-    with probe.child() as (_, child_id):
-        status = probe.link.status or probe.any_status()
-        return probe.refused(case, _goal(status, EventType.CANCEL, id=child_id + 1000), divergence="D8")
-
-
-def _cancel_running_child(probe: Probe, case: Case) -> Finding:
-    expected = "CANCEL succeeded; the NEXT answered once, its child canceled"
-    with probe.child() as (running, child_id):
-        status = probe.link.status or probe.any_status()
-        since = len(probe.link.history())
-        cancel = probe.send(_goal(status, EventType.CANCEL, id=child_id))
-        running.answered(probe.timeout)
-        probe.note(f"the NEXT: {_describe_answer(running)}")
-        cancel_answer, next_answer = cancel.answer, running.answer
-        if cancel_answer is None or next_answer is None:
-            return Finding(
-                case, Verdict.FAIL, expected=expected, seen="a goal left without an answer", absent=True
-            )
-        if len(running.answers) != 1 or len(cancel.answers) != 1:
-            return Finding(case, Verdict.FAIL, expected=expected, seen="a goal answered twice")
-        if cancel_answer[0] is not GoalStatus.SUCCEEDED or next_answer[1].status != _CANCELED:
-            seen = f"CANCEL {_describe_answer(cancel)}; NEXT {_describe_answer(running)}"
-            return Finding(case, Verdict.FAIL, expected=expected, seen=seen)
-        return _status_after_cancel(probe, case, child_id, since)
-
-
-def _status_after_cancel(probe: Probe, case: Case, child_id: int, since: int) -> Finding:
-    """R8.4: once a cancelled child has ended, the status says WAITING ``standby`` with its id; every
-    status after the CANCEL that shows the robot waiting must say so (rmf_ros2's says WAITING
-    ``canceled``, D28, or RUNNING with the child's end, D2)."""
-    expected = f"WAITING, standby, id {child_id}"
-
-    def shows_the_end(status: DynamicEventStatus) -> bool:
-        return status.id == child_id and machine.robot_waits(status)
-
-    if not probe.link.wait_seen(shows_the_end, since, probe.timeout):
-        return Finding(case, Verdict.FAIL, expected=expected, seen="no status after the child", absent=True)
-    for after in filter(shows_the_end, probe.link.history()[since:]):
-        if after.dynamic_state == DynamicState.WAITING and after.status == _STANDBY:
-            continue
-        phase = DynamicState(after.dynamic_state).name
-        probe.note(f"status {phase} seq={after.dynamic_event_seq} id={after.id} {after.status}")
-        divergence = "D2" if after.dynamic_state == DynamicState.RUNNING else "D28"
-        seen = f"{phase}, {after.status}, id {after.id}"
-        return Finding(case, Verdict.FAIL, expected=expected, seen=seen, divergence=divergence)
-    return Finding(case, Verdict.PASS, expected=expected, seen="so")
-
-
-def _finished(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    since = len(probe.link.history())
-    exchange = probe.send(_goal(status, EventType.FINISHED))
-    expected = "succeeded, completed; then INACTIVE"
-    answer = exchange.answer
-    if answer is None or (answer[0], answer[1].status) != (GoalStatus.SUCCEEDED, _COMPLETED):
-        return Finding(case, Verdict.FAIL, expected=expected, seen=_describe_answer(exchange))
-    seq = status.dynamic_event_seq
-    if not probe.link.wait_seen(
-        lambda s: s.dynamic_state == DynamicState.INACTIVE and s.dynamic_event_seq == seq,
-        since,
-        probe.timeout,
-    ):
-        return Finding(case, Verdict.FAIL, expected=expected, seen="no INACTIVE status", absent=True)
-    return Finding(case, Verdict.PASS, expected=expected, seen="so")
-
-
-def _ended(probe: Probe) -> DynamicEventStatus:
-    """The status of a run that has ended: the latest, or the last INACTIVE one seen."""
-    status = probe.any_status()
-    if status.dynamic_state != DynamicState.INACTIVE:
-        ended = [s for s in probe.link.statuses if s.dynamic_state == DynamicState.INACTIVE]
-        if not ended:
-            raise _Unreachable("no run has ended (no INACTIVE status seen)")
-        status = ended[-1]
-    return status
-
-
-def _next_after(probe: Probe, case: Case) -> Finding:
-    # a NEXT the server would run but for R4.3: a server that refuses it only for its description
-    # would pass a NEXT without a place
-    return probe.refused(case, probe.next_goal(_ended(probe)))
-
-
-def _cancel_after(probe: Probe, case: Case) -> Finding:
-    status = _ended(probe)
-    return probe.refused(case, _goal(status, EventType.CANCEL, id=status.id))
-
-
-def _finished_after(probe: Probe, case: Case) -> Finding:
-    return probe.refused(case, _goal(_ended(probe), EventType.FINISHED))
-
-
-def _seq_stale_next(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    goal = attrs.evolve(probe.next_goal(status), dynamic_event_seq=(status.dynamic_event_seq - 1) % _U32)
-    return probe.refused(case, goal)
-
-
-def _seq_future_next(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    goal = attrs.evolve(probe.next_goal(status), dynamic_event_seq=machine.next_seq(status.dynamic_event_seq))
-    return probe.refused(case, goal)
-
-
-def _cancel_seq(probe: Probe, case: Case, seq_of: Callable[[int], int]) -> Finding:
-    """A CANCEL naming the running child, but for another run than the child's."""
-    with probe.child() as (_, child_id):
-        status = probe.link.status or probe.any_status()
-        seq = seq_of(status.dynamic_event_seq)
-        return probe.refused(case, _goal(status, EventType.CANCEL, id=child_id, dynamic_event_seq=seq))
-
-
-def _cancel_seq_stale(probe: Probe, case: Case) -> Finding:
-    return _cancel_seq(probe, case, lambda seq: (seq - 1) % _U32)
-
-
-def _cancel_seq_future(probe: Probe, case: Case) -> Finding:
-    return _cancel_seq(probe, case, machine.next_seq)
-
-
-def _ran(exchange: Exchange, child_id: int) -> str | None:
-    """None when ``exchange``'s NEXT ran child ``child_id`` to its end (feedback with that id only,
-    answered succeeded, completed, with it); else what was seen instead."""
-    if not exchange.accepted or exchange.answer is None:
-        return _describe_answer(exchange)
-    ids = sorted({feedback.id for feedback in exchange.feedback})
-    status, result = exchange.answer
-    if ids != [child_id] or (status, result.status, result.id) != (
-        GoalStatus.SUCCEEDED,
-        _COMPLETED,
-        child_id,
-    ):
-        return f"feedback ids {ids}; {_describe_answer(exchange)}"
-    return None
-
-
-def _ran_finding(probe: Probe, case: Case, exchange: Exchange, child_id: int, expected: str) -> Finding:
-    seen = _ran(exchange, child_id)
-    if seen is None:
-        return Finding(case, Verdict.PASS, expected=expected, seen="so")
-    absent = bool(exchange.accepted) and exchange.answer is None
-    return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=absent)
-
-
-def _numbered_by_server(finding: Finding, exchange: Exchange, asked: int, above: int) -> Finding:
-    """A NEXT whose child ran and completed under another fresh id (above ``above``) than the one
-    asked for: the server numbered the child itself, by a counter of its own (D10)."""
-    answer = exchange.answer
-    numbered = (
-        answer is not None
-        and answer[0] is GoalStatus.SUCCEEDED
-        and answer[1].id != asked
-        and answer[1].id > above
-    )
-    return (
-        attrs.evolve(finding, divergence="D10") if finding.verdict is Verdict.FAIL and numbered else finding
-    )
-
-
-def _id_zero(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    child_id = machine.next_child_id(Goal(id=0), status.id, _SERVER_NUMBERS)
-    exchange = probe.send(probe.next_goal(status, goal_id=0))
-    finding = _ran_finding(probe, case, exchange, child_id, f"child {child_id} runs and completes")
-    return _numbered_by_server(finding, exchange, child_id, status.id)
-
-
-def _id_chosen(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    chosen = status.id + 5
-    if chosen > U64_MAX:
-        raise _Unreachable(f"no id above {status.id} is left to choose")
-    exchange = probe.send(probe.next_goal(status, goal_id=chosen))
-    finding = _ran_finding(
-        probe, case, exchange, chosen, f"child {chosen} (the NEXT's id) runs and completes"
-    )
-    return _numbered_by_server(finding, exchange, chosen, status.id)  # the id ignored
-
-
-def _stateless_id(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    first = probe.next_goal(status)
-    ran = probe.send(first)
-    if not ran.answers:
-        raise _TimedOut(f"the first child did not end within {probe.timeout:g} s")
-    child = ran.answers[0][1].id or first.id  # R8.1: the result names the child (D10: maybe not first.id)
-    after = probe.link.wait_status(lambda s: s.id == child and machine.robot_waits(s), probe.timeout)
-    if after is None:
-        raise _TimedOut(f"no status after child {child} ended within {probe.timeout:g} s")
-    phase = DynamicState(after.dynamic_state).name
-    probe.note(
-        f"status {phase} seq={after.dynamic_event_seq} id={after.id} {after.status}: the client's only state"
-    )
-    exchange = probe.send(probe.next_goal(after))  # seq and the fresh id from that status alone
-    fresh = _fresh(after.id)
-    finding = _ran_finding(probe, case, exchange, fresh, f"child {fresh} runs and completes")
-    return _numbered_by_server(finding, exchange, fresh, after.id)
-
-
-def _race(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    goals = [probe.next_goal(status), probe.next_goal(status, goal_id=status.id + 2)]
-    exchanges = [probe.link.send(goal) for goal in goals]  # at once: no wait between them
-    probe.exchanges.extend(exchanges)
-    for goal, exchange in zip(goals, exchanges, strict=True):
-        exchange.responded(probe.timeout)
-        if exchange.accepted:
-            exchange.answered(probe.timeout)
-        probe.note(f"{_describe_goal(goal)}: {_describe_answer(exchange)}, {len(exchange.feedback)} feedback")
-    expected = (
-        "one child runs and completes; the other NEXT rejected, or accepted and aborted without a child"
-    )
-    ran = [exchange for exchange in exchanges if exchange.feedback]
-    if len(ran) != 1:
-        return Finding(case, Verdict.FAIL, expected=expected, seen=f"{len(ran)} of the NEXTs ran a child")
-    seen = _ran(ran[0], ran[0].goal.id)
-    if seen is not None:
-        absent = ran[0].answer is None
-        return Finding(
-            case, Verdict.FAIL, expected=expected, seen=f"the child that ran: {seen}", absent=absent
-        )
-    other = exchanges[1] if ran[0] is exchanges[0] else exchanges[0]
-    if other.accepted is None:
-        return Finding(case, Verdict.FAIL, expected=expected, seen="the other NEXT: no response", absent=True)
-    if other.accepted and other.answer is not None and other.answer[0] is not GoalStatus.ABORTED:
-        return Finding(
-            case, Verdict.FAIL, expected=expected, seen=f"the other NEXT: {_describe_answer(other)}"
-        )
-    return Finding(case, Verdict.PASS, expected=expected, seen="so")  # an unanswered other: R19.1 below
-
-
-def _log_seq(probe: Probe, case: Case) -> Finding:
-    children: list[list[LogEntry]] = []
-    for _ in range(2):
-        exchange = probe.send(probe.next_goal(probe.waiting()))
-        if not exchange.answers:
-            raise _TimedOut(f"a child did not end within {probe.timeout:g} s")
-        children.append([entry for feedback in exchange.feedback for entry in feedback.logs])
-    entries = [entry for logs in children for entry in logs]
-    probe.note(f"log seqs of the two children: {[[entry.seq for entry in logs] for logs in children]}")
-    expected = "each entry's seq one above the one before (modulo 2^32), across children; tiers " + ", ".join(
-        tier.value for tier in Tier
-    )
-    if len(entries) < 2:
-        return Finding(
-            case, Verdict.INFO, expected=expected, seen=f"{len(entries)} log entries: nothing to judge"
-        )
-    tiers = sorted({entry.tier for entry in entries} - {tier.value for tier in Tier})
-    if tiers:
-        return Finding(case, Verdict.FAIL, expected=expected, seen=f"tiers {tiers}")
-    within = all((b.seq - a.seq) % _U32 == 1 for logs in children for a, b in itertools.pairwise(logs))
-    gaps = [(b.seq - a.seq) % _U32 for a, b in itertools.pairwise(entries)]
-    if within and all(0 < gap <= 2**31 for gap in gaps):
-        return Finding(case, Verdict.PASS, expected=expected, seen="so")
-    seq = probe.link.status.dynamic_event_seq if probe.link.status else None
-    same_as_run = all(entry.seq == seq for entry in entries)
-    seen = "every entry's seq is the run's seq" if same_as_run else f"steps between entries {gaps}"
-    return Finding(case, Verdict.FAIL, expected=expected, seen=seen, divergence="D9" if same_as_run else None)
-
-
-def _clamp_notice(probe: Probe, case: Case) -> Finding:
-    minimum = probe.options.stubborn_minimum
-    if minimum <= 0:
-        return Finding(case, Verdict.INFO, expected="a clamp", seen="--stubborn-minimum 0: nothing to clamp")
-    goal = attrs.evolve(probe.next_goal(probe.waiting()), stubborn_period=minimum / 4)  # float32 on the wire
-    period = goal.stubborn_period
-    exchange = probe.send(goal)
-    expected = (
-        f"a warning log entry in the first feedback (stubborn period {period:g} s, minimum {minimum:g} s)"
-    )
-    if not exchange.feedback:
-        seen = f"{_describe_answer(exchange)}, no feedback"
-        return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=True)
-    warnings = [(i, entry) for i, feedback in enumerate(exchange.feedback) for entry in feedback.logs
-                if entry.tier == Tier.WARNING.value]  # fmt: skip
-    for index, entry in warnings:
-        probe.note(f"feedback {index + 1}: warning {entry.text!r}")
-    if not warnings:
-        return Finding(case, Verdict.FAIL, expected=expected, seen="no warning: the clamp is silent",
-                       divergence="D11")  # fmt: skip
-    if warnings[0][0] != 0:
-        return Finding(case, Verdict.NON_STRICT, expected=expected,
-                       seen=f"the warning came with feedback {warnings[0][0] + 1}")  # fmt: skip
-    return Finding(case, Verdict.PASS, expected=expected, seen="so")
-
-
-def _cancel_both_answered(probe: Probe, case: Case) -> Finding:
-    expected = "both CANCELs accepted and answered succeeded with the child's result; the NEXT answered once"
-    with probe.child() as (running, child_id):
-        status = probe.link.status or probe.any_status()
-        cancels = [probe.link.send(_goal(status, EventType.CANCEL, id=child_id)) for _ in range(2)]
-        probe.exchanges.extend(cancels)
-        for cancel in cancels:
-            cancel.responded(probe.timeout)
-            cancel.answered(probe.timeout)
-            probe.note(f"{_describe_goal(cancel.goal)}: {_describe_answer(cancel)}")
-        running.answered(probe.timeout)
-        probe.note(f"the NEXT: {_describe_answer(running)}")
-        if not all(cancel.accepted for cancel in cancels):
-            absent = any(cancel.accepted is None for cancel in cancels)
-            return Finding(case, Verdict.FAIL, expected=expected, seen="a CANCEL not accepted", absent=absent)
-        if running.answer is None or any(cancel.answer is None for cancel in cancels):
-            return Finding(case, Verdict.FAIL, expected=expected, seen="a goal left without an answer",
-                           absent=True)  # fmt: skip
-        result = running.answer[1]
-        wrong = [cancel for cancel in cancels if cancel.answer != (GoalStatus.SUCCEEDED, result)]
-        if wrong:
-            seen = f"a CANCEL {_describe_answer(wrong[0])}; the NEXT {_describe_answer(running)}"
-            # the first CANCEL freed the robot before its child ended (D1), and the second, accepted,
-            # was aborted as idle (in D8's words)
-            idle = [cancel for cancel in wrong if _aborted_with(cancel, Failure.IDLE_CANCEL)]
-            return Finding(case, Verdict.FAIL, expected=expected, seen=seen,
-                           divergence="D1" if idle == wrong else None)  # fmt: skip
-        return Finding(case, Verdict.PASS, expected=expected, seen="so")
-
-
-def _aborted_with(exchange: Exchange, failure: Failure) -> bool:
-    answer = exchange.answer
-    return (
-        answer is not None
-        and answer[0] is GoalStatus.ABORTED
-        and answer[1].execution_failure == failure.value
-    )
-
-
-def _action_cancel_running(probe: Probe, case: Case) -> Finding:
-    expected = "the cancel accepted; the NEXT answered canceled"
-    with probe.child() as (running, _):
-        accepted = probe.cancel(running)
-        running.answered(probe.timeout)
-        probe.note(f"the NEXT: {_describe_answer(running)}")
-        if accepted is None:
-            return Finding(case, Verdict.FAIL, expected=expected, seen="no cancel response", absent=True)
-        if not accepted:
-            return Finding(case, Verdict.FAIL, expected=expected, seen="the cancel refused", divergence="D31")
-        if running.answer is None:
-            return Finding(case, Verdict.FAIL, expected=expected, seen="the NEXT not answered", absent=True)
-        if running.answer[0] is not GoalStatus.CANCELED:
-            return Finding(
-                case, Verdict.FAIL, expected=expected, seen=f"the NEXT {_describe_answer(running)}"
-            )
-        return Finding(case, Verdict.PASS, expected=expected, seen="so")
-
-
-def _action_cancel_answered(probe: Probe, case: Case) -> Finding:
-    exchange = probe.send(probe.next_goal(probe.waiting()))
-    if not exchange.answers:
-        raise _TimedOut(f"the child did not end within {probe.timeout:g} s")
-    accepted = probe.cancel(exchange)
-    if accepted is None:
-        return Finding(
-            case, Verdict.FAIL, expected="the cancel refused", seen="no cancel response", absent=True
-        )
-    if accepted:
-        return Finding(case, Verdict.FAIL, expected="the cancel refused", seen="the cancel accepted")
-    return Finding(case, Verdict.PASS, expected="the cancel refused", seen="so")
-
-
-def _describe_query(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    answer, why = probe.link.describe(probe.timeout)
-    if answer is None:
-        probe.note(why)
-        return Finding(case, Verdict.INFO, expected="an answer, where the server offers the query",
-                       seen=f"{why} (a server need not offer it: rmf_ros2 does not, D17)")  # fmt: skip
-    begun = [begin for begin in probe.link.begins if begin.dynamic_event_seq == status.dynamic_event_seq]
-    wanted = (True, status.status, status.id)
-    got = (bool(answer.running), str(answer.status), int(answer.id))
-    probe.note(f"answer: running={got[0]} status={got[1]} id={got[2]} description={answer.description!r}")
-    expected = f"running, {status.status}, id {status.id}, the begin's description"
-    if got != wanted or (begun and answer.description != begun[-1].description):
-        return Finding(case, Verdict.FAIL, expected=expected,
-                       seen=f"running={got[0]}, {got[1]}, id {got[2]}, {answer.description!r}")  # fmt: skip
-    return Finding(case, Verdict.PASS, expected=expected, seen="so")
-
-
-_LAST_SEQ = _U32 - 1
-
-
-def _seq_wrap(probe: Probe, case: Case) -> Finding:
-    status = probe.waiting()
-    if status.dynamic_event_seq == _LAST_SEQ:
-        ended = probe.send(_goal(status, EventType.FINISHED))
-        if not ended.answers:
-            raise _Unreachable(f"the FINISHED that ends run {_LAST_SEQ} was {_describe_answer(ended)}")
-        probe.link.wait_status(
-            lambda s: s.dynamic_event_seq != _LAST_SEQ and machine.robot_waits(s), probe.timeout
-        )
-        status = probe.waiting()
-    seqs = [s.dynamic_event_seq for s in probe.link.history() if s.dynamic_state != DynamicState.INACTIVE]
-    if _LAST_SEQ not in seqs:
-        raise _Unreachable(
-            f"the wrap needs a run {_LAST_SEQ} (e.g. dynevent serve --first-seq {_LAST_SEQ}); this run is "
-            f"{status.dynamic_event_seq}"
-        )
-    last = len(seqs) - 1 - seqs[::-1].index(_LAST_SEQ)
-    after = [seq for seq in seqs[last:] if seq != _LAST_SEQ]
-    if not after:
-        raise _TimedOut(f"no run began after run {_LAST_SEQ} within {probe.timeout:g} s")
-    probe.link.wait_begin(after[0], probe.timeout)
-    begins = sorted({begin.dynamic_event_seq for begin in probe.link.begins})
-    probe.note(f"the run after {_LAST_SEQ}: {after[0]}; begins seen for runs {begins}")
-    expected = f"run 0 after run {_LAST_SEQ}, begun on the begin topic; a goal for {_LAST_SEQ} refused"
-    if after[0] != 0 or 0 not in begins:
-        return Finding(case, Verdict.FAIL, expected=expected, seen=f"run {after[0]}; begins for {begins}")
-    if status.dynamic_event_seq != 0:
-        raise _Unreachable(f"run 0 is over: the robot is in run {status.dynamic_event_seq}")
-    finding = probe.refused(case, _goal(status, EventType.FINISHED, dynamic_event_seq=_LAST_SEQ))
-    return attrs.evolve(finding, expected=expected)
-
-
-_CASES: dict[str, Callable[[Probe, Case], Finding]] = {
-    "status.latched": _status_latched,
-    "status.waiting": _status_waiting,
-    "describe.query": _describe_query,
-    "request.seq_stale": _seq_stale,
-    "request.seq_future": _seq_future,
-    "request.seq_stale_next": _seq_stale_next,
-    "request.seq_future_next": _seq_future_next,
-    "request.event_type_0": _event_type_0,
-    "request.event_type_unknown": _event_type_unknown,
-    "request.category_unknown": _category_unknown,
-    "request.description_not_json": _description_not_json,
-    "request.cancel_idle": _cancel_idle,
-    "next.runs_a_child": _runs_a_child,
-    "next.id_zero": _id_zero,
-    "next.id_chosen": _id_chosen,
-    "next.stateless_id": _stateless_id,
-    "next.id_stale": _id_stale,
-    "next.status_after_child": _status_after_child,
-    "next.busy": _busy,
-    "next.busy_finished": _busy_finished,
-    "next.race": _race,
-    "feedback.log_seq": _log_seq,
-    "stubborn.clamp_notice": _clamp_notice,
-    "cancel.wrong_id": _cancel_wrong_id,
-    "cancel.seq_stale": _cancel_seq_stale,
-    "cancel.seq_future": _cancel_seq_future,
-    "cancel.running_child": _cancel_running_child,
-    "cancel.both_answered": _cancel_both_answered,
-    "action.cancel_running": _action_cancel_running,
-    "action.cancel_answered": _action_cancel_answered,
-    "finished.ends_the_run": _finished,
-    "finished.next_after": _next_after,
-    "finished.cancel_after": _cancel_after,
-    "finished.finished_after": _finished_after,
-    "begin.seq_wrap": _seq_wrap,
-}
-
-
-def implemented() -> frozenset[str]:
-    """The ids of the cases this module carries out."""
-    return frozenset(_CASES)
 
 
 def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int:
@@ -1298,23 +203,7 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
         sys.stdout.write("\r\033[K")
     if findings is None:
         return probe_cases.EXIT_USAGE
-    judged = probe_cases.judge_exchange(trace.text(), findings, options.known)
-    say(probe_cases.format_findings(findings, judged).rstrip("\n"))
-    server = f"{options.fleet}/{options.robot}"
-    outputs: list[tuple[str, str | None, Callable[[], str]]] = [
-        ("junit", options.junit, lambda: probe_cases.junit_xml(findings, server, judged)),
-        ("report", options.report, lambda: probe_cases.report(
-            findings, server, html_form=str(options.report).lower().endswith((".html", ".htm")),
-            judged=judged,
-        )),
-    ]  # fmt: skip
-    for flag, path, text in outputs:
-        if path:
-            try:
-                files.write_text(path, text(), f"--{flag}")
-            except FileError as exc:
-                raise ProbeError(str(exc)) from None
-    return probe_cases.exit_status(findings, judged)
+    return probing.conclude(findings, trace.text(), options, say)
 
 
 class ProbeInterrupted(Interrupted):
@@ -1337,7 +226,7 @@ def run(
     findings, or None when no server was found."""
     spinning.init(options.ros_args)
     node = rclpy.create_node("dynevent_probe")
-    link = Link(node, options.fleet, options.robot, trace)
+    link = RosLink(node, options.fleet, options.robot, trace)
     if options.introspection:
         link.introspect()
     executor = SingleThreadedExecutor()
@@ -1350,17 +239,7 @@ def run(
             if not link.wait_for_server(options.server_wait):
                 say(no_server_text(node, options.fleet, options.robot, options.server_wait))
                 return None
-            probe = Probe(link, _ready(link, options, cases, say))
-            if not link.statuses:  # _ready waited --timeout for one
-                probe.dead["status"] = f"no status was heard within {options.timeout:g} s (R1.4)"
-            for case in cases:
-                why = STOPPED_ANSWERING if probe.silent else probe.blocked(case)
-                if why is not None:
-                    findings.append(probe.not_run(case, why))
-                    continue
-                if progress is not None:
-                    progress(f"{case.id} ...")
-                findings.append(probe.run(case))
+            probing.run_cases(link, options, cases, say, progress, findings)
         return findings
     except Interrupted as stop:
         raise ProbeInterrupted(stop.signal, findings) from None
@@ -1369,32 +248,6 @@ def run(
             spinner.stop()
             link.destroy()
             close_down([node])
-
-
-def _ready(link: Link, options: Options, cases: list[Case], say: Callable[[str], None]) -> Options:
-    """Say, before any case runs, what the run will lack: a status (R1.4: a late subscriber gets one at
-    once), or a place for the cases that send the robot somewhere (taken, without ``--place``, from
-    the go_to_place estimate of the run's description when it names one)."""
-    if link.wait_status(lambda status: True, options.timeout) is None:
-        say(
-            f"no status from {options.fleet}/{options.robot} within {options.timeout:g} s: its status topic "
-            "should hold the latest status for a late subscriber (transient-local, R1.4)"
-        )
-    if options.place is not None:
-        return options
-    placed = [case for case in cases if case.needs in ("child", "place")]
-    for begin in reversed(link.begins):
-        named = probe_cases.place_of_run(begin.description)
-        if named is not None:
-            say(
-                f"place: {named} (the go_to_place estimate of run {begin.dynamic_event_seq}; "
-                "--place chooses another)"
-            )
-            return attrs.evolve(options, place=named)
-    if placed:
-        say(f"no --place, and no run's description names one: the {len(placed)} case(s) that send the robot "
-            "somewhere will not run")  # fmt: skip
-    return options
 
 
 def _open_trace(options: Options) -> TraceWriter:

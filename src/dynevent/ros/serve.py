@@ -18,9 +18,7 @@ A readable live log of goals and answers goes to standard output.
 
 from __future__ import annotations
 
-import bisect
 import contextlib
-import itertools
 import os
 import queue
 import signal
@@ -52,21 +50,20 @@ from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.machine import ServerConfig, State
 from dynevent.server.store import StateStore
+from dynevent.sim.children import SimulatedChild
 from dynevent.sim.config import (
+    DEFAULT_DESCRIPTION,
     CategorySpec,
     ServeConfig,
-    Step,
     load_config,
     machine_config,
-    plan,
 )
-from dynevent.wire.vocab import Compatibility, Status
+from dynevent.wire.vocab import Compatibility
 
 __all__ = ["BEGIN_COMMAND_TOPIC", "CategorySpec", "ServeConfig", "ServeError", "load_config", "run"]
 
 #: Publish a DynamicEventDescription naming a robot here to begin a dynamic event for it.
 BEGIN_COMMAND_TOPIC = "dynevent/serve/begin"
-DEFAULT_DESCRIPTION = '{"category": "dynevent_serve", "detail": "a simulated dynamic event"}'
 
 
 class SimulatedChildren:
@@ -80,45 +77,15 @@ class SimulatedChildren:
         self._lock = threading.Lock()
 
     def start(self, execution: ChildExecution) -> None:
-        spec = self._config.categories.get(execution.category, CategorySpec())
-        try:
-            steps = plan(execution.category, execution.parsed, self._config)
-        except Exception as exc:  # a defect here must end this child, never the lane's thread
-            steps = [
-                Step(execution.category, 0.001, f"the simulation cannot run it: {type(exc).__name__}: {exc}")
-            ]
-        ends = list(itertools.accumulate(step.duration for step in steps))
+        child = SimulatedChild(execution.category, execution.parsed, self._config)
         began = time.monotonic()
-        told = [0]  # the last step told of (the first is told by the progress lines)
 
         def report() -> None:
-            if execution.done:
-                return self._forget(execution)
-            elapsed = time.monotonic() - began + 1e-3
-            if execution.stopping is not None:
-                execution.finished()
-                return self._forget(execution)
-            current = min(bisect.bisect_right(ends, elapsed), len(steps) - 1)
-            while told[0] < current and steps[told[0]].failure is None:  # every step is told of
-                told[0] += 1
-                execution.underway(f"now {steps[told[0]].label}")
-            step = steps[told[0]]
-            if step.failure is not None:
-                execution.error(step.failure)
-                execution.finished(Status.FAILED)
-            elif elapsed >= ends[-1]:
-                execution.finished()
-            else:
-                into = elapsed - (ends[told[0]] - step.duration)
-                execution.underway(f"{step.label}: {into:.0f} of {step.duration:g} s")
-            if execution.done:
+            if child.report(execution, time.monotonic() - began):
                 self._forget(execution)
 
-        # the child's own report period, shorter only for a child shorter than it: a sequence's brief
-        # activities are each told of at the next report, not by reporting as often as the briefest
-        period = min(spec.report_every, ends[-1])
         with self._lock:
-            self._timers[execution] = self._node.create_timer(max(period, 0.001), report)
+            self._timers[execution] = self._node.create_timer(child.period, report)
 
     def _forget(self, execution: ChildExecution) -> None:
         with self._lock:

@@ -25,6 +25,7 @@ from dynevent.wire.vocab import Compatibility, IdPolicy
 
 __all__ = [
     "DEFAULT_CATEGORIES",
+    "DEFAULT_DESCRIPTION",
     "CategorySpec",
     "ServeConfig",
     "Step",
@@ -45,6 +46,10 @@ def _mode(value: Any) -> Compatibility:
     if isinstance(value, Compatibility) or value in _MODES:
         return Compatibility(value)
     raise _wrong("compatibility", "", f"one of {', '.join(_MODES)}", value)
+
+
+#: The description of the dynamic events the simulated fleet begins (a begin command may give another).
+DEFAULT_DESCRIPTION = '{"category": "dynevent_serve", "detail": "a simulated dynamic event"}'
 
 
 @attrs.frozen

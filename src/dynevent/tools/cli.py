@@ -514,9 +514,9 @@ def _probe(args: argparse.Namespace) -> int:
             return 2
         return 0
 
-    def run(probe: Any, cases: list[probe_cases.Case]) -> int:
+    def options(options_type: Any) -> Any:
         known = args.known or ""
-        options = probe.Options(
+        return options_type(
             fleet=args.fleet, robot=args.robot, place=args.place[0] if args.place else None,
             more_places=tuple(args.place[1:]) if args.place else (), category=args.category,
             timeout=args.timeout, begin_command=args.begin_command,
@@ -526,9 +526,42 @@ def _probe(args: argparse.Namespace) -> int:
             ros_args=tuple(args.ros_args), known_missing=probe_cases.KNOWN_MISSING.get(known, frozenset()),
             junit=args.junit, report=args.report, deadline=args.deadline,
         )  # fmt: skip
-        return int(probe.main(options, cases, _say))
+
+    if args.loopback:
+        return _probe_in_process(args, check, options)
+
+    def run(probe: Any, cases: list[probe_cases.Case]) -> int:
+        return int(probe.main(options(probe.Options), cases, _say))
 
     return _ros_command("probe", check, run)
+
+
+def _probe_in_process(
+    args: argparse.Namespace, check: Callable[[], Any], options: Callable[[Any], Any]
+) -> int:
+    """``dynevent probe --loopback``: the cases against dynevent's own machine as ``dynevent serve``
+    would run the robot (``--config``, ``--compatibility``), on simulated time, with no ROS."""
+    import attrs
+
+    from dynevent.conformance import in_process, probing
+    from dynevent.errors import DyneventError
+    from dynevent.sim.config import load_config
+
+    try:
+        cases = check()
+        config = load_config(
+            args.config, fleet=args.fleet, robots=[args.robot], compatibility=args.compatibility,
+            first_seq=args.first_seq,
+        )  # fmt: skip
+        chosen = options(probing.Options)
+        if chosen.place is None:  # the simulated map takes any place when none is configured
+            named = [str(place) for place in config.places or () if place is not None] or in_process.PLACES
+            chosen = attrs.evolve(chosen, place=named[0], more_places=tuple(named[1:3]))
+        code, _ = in_process.probe_in_process(chosen, cases, _say, config)
+    except DyneventError as exc:
+        print(f"dynevent probe: {exc}", file=sys.stderr)
+        return 2
+    return code
 
 
 def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -538,7 +571,8 @@ def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         description="Point at a fleet and robot on a live ROS 2 graph and run the probe's cases as a "
         "client would (raw goals, the status and begin topics): each case cites the rules it tests and "
         "ends pass, non-strict, fail (with the D-number when docs/divergences.md records that way of "
-        "breaking it), info or missing.  --list prints the cases without ROS.  Exit status: 0 every "
+        "breaking it), info or missing.  --list prints the cases without ROS; --loopback runs them "
+        "without ROS against dynevent's own machine, as dynevent serve would run the robot.  Exit status: 0 every "
         "case ran and none failed, 1 a case failed, 2 bad usage or no server, 3 a case was not run "
         "(missing) that --allow-missing or --known did not expect.",
     )
@@ -595,6 +629,13 @@ def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         help="count the divergences docs/divergences.md records for rmf_ros2 as known (shown, not failing), "
         "and the cases it cannot reach (begin.seq_wrap) as expected to be missing",
     )  # fmt: skip
+    _add_probe_outputs(parser)
+    _add_loopback_arguments(parser)
+    parser.set_defaults(run=_probe)
+
+
+def _add_probe_outputs(parser: argparse.ArgumentParser) -> None:
+    """What probe writes beside its terminal report, and what it publishes of its own goals."""
     parser.add_argument("--junit", metavar="FILE", help="write the findings as JUnit XML")
     parser.add_argument(
         "--report", metavar="FILE",
@@ -610,7 +651,27 @@ def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         help="publish the probe's action service events (ROS 2 introspection, with contents), so that a "
         "recording holds its goals and their answers (docs/recordings.md)",
     )  # fmt: skip
-    parser.set_defaults(run=_probe)
+
+
+def _add_loopback_arguments(parser: argparse.ArgumentParser) -> None:
+    """probe's ``--loopback`` and what configures the server it runs in process."""
+    loopback = parser.add_argument_group("in process, without ROS")
+    loopback.add_argument(
+        "--loopback", action="store_true",
+        help="probe dynevent's own machine in this process, as dynevent serve runs the robot, on simulated "
+        "time (every case in well under a second; no ROS needed); --place defaults to the configured "
+        "places, or pantry and lounge",
+    )  # fmt: skip
+    loopback.add_argument("--config", metavar="FILE", help="with --loopback: serve's --config file")
+    loopback.add_argument(
+        "--first-seq", default=2**32 - 1, metavar="SEQ",
+        help="with --loopback: the seq of the robot's first run (default: %(default)s, so that the next "
+        "run shows the seq wrap to 0 and begin.seq_wrap runs)",
+    )  # fmt: skip
+    loopback.add_argument(
+        "--compatibility", choices=[mode.value for mode in Compatibility],
+        help="with --loopback: the mode serve runs in (default: the --config file's, else standard)",
+    )  # fmt: skip
 
 
 def _add_send_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

@@ -1,0 +1,243 @@
+"""The probe's link to a server in this process: dynevent's machine as ``dynevent serve`` runs one
+robot (its ``--config``, either compatibility mode), on simulated time.
+
+:class:`InProcessLink` is a :class:`~dynevent.conformance.probing.Link` whose far end is not a
+network but the machine itself, carried out the way serve's binding carries it out: a goal request
+is stepped (``GoalRequested``) and, accepted, handed over at once (``GoalStarted``, the
+``handle_accepted`` moment); the outputs are carried out in order (a status published, feedback and
+answers delivered to the goal's :class:`~dynevent.conformance.probing.Exchange`, a child started or
+told to stop); children are :class:`~dynevent.sim.children.SimulatedChild`, reporting on serve's
+periods; a run that ends begins again after serve's ``rebegin``.  Time is simulated: a wait runs
+what is due up to its end and takes no time at all, so every case runs in well under a second, and
+the same cases give the same findings every run.
+
+The server can be replaced (``stepper``): any ``apply(input) -> outputs`` over the machine's inputs
+and outputs, so that a deliberately broken server (the test kit's) is probed the same way.
+"""
+
+from __future__ import annotations
+
+import collections
+import heapq
+import itertools
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import attrs
+
+from dynevent.conformance import probing
+from dynevent.conformance.judge.trace import TraceWriter
+from dynevent.conformance.probe_cases import Case, Finding
+from dynevent.conformance.probing import Exchange, Link, Options
+from dynevent.server import inputs as ins
+from dynevent.server import outputs as outs
+from dynevent.server.holder import Execution, RobotServer
+from dynevent.server.machine import State
+from dynevent.sim.children import SimulatedChild
+from dynevent.sim.config import DEFAULT_DESCRIPTION, ServeConfig, machine_config
+from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.names import description_service
+from dynevent.wire.vocab import Compatibility, Status
+
+__all__ = ["PLACES", "START", "InProcessLink", "Stepper", "probe_in_process"]
+
+#: Where simulated time starts (ns since the epoch: 2023-11-14, within what the machine accepts).
+START = 1_700_000_000 * 1_000_000_000
+_SECOND = 1_000_000_000
+#: The places the probe sends the robot to where none is given: the simulated map takes any place
+#: when none is configured.
+PLACES = ["pantry", "lounge"]
+
+#: A server as the link drives it: one input applied, its outputs in order.
+Stepper = Callable[[ins.Input], Sequence[outs.Output]]
+
+
+class _Child:
+    """A running simulated child: the adapter's handle on it (:class:`Execution`, on the link's clock),
+    and when it began."""
+
+    def __init__(self, link: InProcessLink, start: outs.StartChild) -> None:
+        self._link = link
+        self._execution = Execution(link, start.id, automatic_cancel=False)
+        self.began = link.now
+        self.simulation = SimulatedChild(start.category, start.parsed, link.config)
+
+    @property
+    def done(self) -> bool:
+        return self._execution.done
+
+    @property
+    def stopping(self) -> str | None:
+        return self._execution.stopping
+
+    def underway(self, text: str | None = None) -> Any:
+        return self._execution.underway(text, now=self._link.now)
+
+    def error(self, text: str | None = None) -> Any:
+        return self._execution.error(text, now=self._link.now)
+
+    def finished(self, status: Status = Status.COMPLETED) -> Any:
+        return self._execution.finished(now=self._link.now, status=status)
+
+    def stop(self, kill: bool) -> None:
+        now = self._link.now
+        if kill:
+            self._execution.kill(now=now)
+        else:
+            self._execution.cancel(now=now)
+
+
+class InProcessLink(Link):
+    """The machine as ``dynevent serve`` runs ``robot`` of ``config`` (its first robot by default), on
+    simulated time, with a run begun; ``stepper`` replaces the machine (the server under test)."""
+
+    def __init__(
+        self,
+        config: ServeConfig | None = None,
+        *,
+        robot: str | None = None,
+        trace: TraceWriter | None = None,
+        stepper: Stepper | None = None,
+    ) -> None:
+        self.config = ServeConfig() if config is None else config
+        robot = self.config.robots[0] if robot is None else robot
+        super().__init__(self.config.fleet, robot, trace)
+        self.now = START
+        first = attrs.evolve(State.new(self.fleet, robot), seq=(self.config.first_seq - 1) % 2**32)
+        self._server = RobotServer(self.fleet, robot, machine_config(self.config), first)
+        self._apply: Stepper = self._server.step if stepper is None else stepper
+        self._agenda: list[tuple[int, int, Callable[[], None]]] = []
+        self._order = itertools.count()
+        self._outbox: collections.deque[outs.Output] = collections.deque()
+        self._exchanges: dict[str, Exchange] = {}
+        self._children: dict[int, _Child] = {}
+        self._latest: DynamicEventStatus | None = None
+        self.step(ins.Begin(description=DEFAULT_DESCRIPTION, event_id=1, now=self.now))
+        self._drain()
+
+    # ---------------------------------------------------------------- the server's side
+
+    def step(self, event: ins.Input) -> tuple[outs.Output, ...]:
+        """Apply ``event`` to the server; its outputs join those to carry out (the child handles step
+        through here, as a binding's do)."""
+        outputs = tuple(self._apply(event))
+        self._outbox.extend(outputs)
+        return outputs
+
+    def _drain(self) -> None:
+        while self._outbox:
+            self._carry_out(self._outbox.popleft())
+
+    def _carry_out(self, output: outs.Output) -> None:
+        exchange = self._exchanges.get(getattr(output, "goal_uuid", ""))
+        if isinstance(output, outs.PublishStatus):
+            self._latest = output.message
+            self.hear_status(output.message)
+        elif isinstance(output, outs.PublishBegin):
+            self.hear_begin(output.message)
+        elif isinstance(output, outs.PublishFeedback) and exchange is not None:
+            self.hear_feedback(exchange, output.feedback)
+        elif isinstance(output, outs.AnswerGoal) and exchange is not None:
+            self.hear_answer(exchange, output.status, output.result)
+        elif isinstance(output, outs.StartChild):
+            child = _Child(self, output)
+            self._children[output.id] = child
+            self._report_later(output.id, child)
+        elif isinstance(output, (outs.CancelChild, outs.KillChild)):
+            stopped = self._children.get(output.id)
+            if stopped is not None:
+                stopped.stop(isinstance(output, outs.KillChild))
+        elif isinstance(output, outs.DynamicEventFinished) and self.config.rebegin > 0:
+            self._at(self.now + round(self.config.rebegin * _SECOND), self._begin_again)
+
+    def _report_later(self, child_id: int, child: _Child) -> None:
+        def report() -> None:
+            if self._children.get(child_id) is not child:
+                return
+            if child.simulation.report(child, (self.now - child.began) / _SECOND):
+                del self._children[child_id]
+            else:
+                self._report_later(child_id, child)
+
+        self._at(self.now + round(child.simulation.period * _SECOND), report)
+
+    def _begin_again(self) -> None:
+        self.step(ins.Begin(description=DEFAULT_DESCRIPTION, event_id=1, now=self.now))
+
+    def _at(self, when: int, action: Callable[[], None]) -> None:
+        heapq.heappush(self._agenda, (when, next(self._order), action))
+
+    # ---------------------------------------------------------------- the link
+
+    def clock(self) -> float:
+        return (self.now - START) / _SECOND
+
+    def wait(self, condition: Callable[[], bool], timeout: float) -> bool:
+        """Run what is due, in time order, until ``condition()`` holds or ``timeout`` seconds of
+        simulated time have passed."""
+        end = self.now + max(round(timeout * _SECOND), 0)
+        while not condition():
+            if not self._agenda or self._agenda[0][0] > end:
+                self.now = max(self.now, end)
+                return condition()
+            when, _, action = heapq.heappop(self._agenda)
+            self.now = max(self.now, when)
+            action()
+            self._drain()
+        return True
+
+    def wait_for_server(self, timeout: float) -> bool:
+        return True
+
+    def late_subscriber_hears(self, timeout: float) -> bool:
+        return self._latest is not None
+
+    def send(self, goal: Goal) -> Exchange:
+        exchange = Exchange(goal, self)
+        self._exchanges[exchange.uuid] = exchange
+        self.sent("goal", goal_uuid=exchange.uuid, message=goal)
+        outputs = self.step(ins.GoalRequested(goal_uuid=exchange.uuid, goal=goal, now=self.now))
+        accepted = any(isinstance(output, outs.GoalAccepted) for output in outputs)
+        self._drain()
+        self.hear_response(exchange, accepted)
+        if accepted:  # handed over for execution at once, as rclpy's handle_accepted does
+            self.step(ins.GoalStarted(goal_uuid=exchange.uuid, now=self.now))
+            self._drain()
+        return exchange
+
+    def cancel(self, exchange: Exchange, timeout: float) -> bool | None:
+        self.sent("cancel_request", goal_uuid=exchange.uuid)
+        outputs = self.step(ins.CancelRequested(goal_uuid=exchange.uuid, now=self.now))
+        response = next((output for output in outputs if isinstance(output, outs.CancelResponse)), None)
+        if response is not None:  # the response first: rclpy answers the cancel before its effects
+            self.hear_cancel_response(exchange, response.accepted)
+        self._drain()
+        return None if response is None else response.accepted
+
+    def describe(self, timeout: float) -> tuple[Any, str]:
+        if self.config.compatibility is Compatibility.RMF_ROS2:  # serve offers none there, as rmf_ros2 (D17)
+            return None, f"no description service {description_service(self.fleet, self.robot)}"
+        outputs = self._apply(ins.DescriptionQuery(now=self.now))
+        answer = next((output for output in outputs if isinstance(output, outs.DescriptionAnswer)), None)
+        if answer is None:
+            return None, "the description query gave no answer"
+        return answer.response, ""
+
+
+def probe_in_process(
+    options: Options,
+    cases: list[Case],
+    say: Callable[[str], None],
+    config: ServeConfig | None = None,
+    *,
+    stepper: Stepper | None = None,
+) -> tuple[int, list[Finding]]:
+    """Run ``cases`` against the machine as serve runs ``config``'s robot, judge every record of the
+    exchange, write the reports ``options`` asks for; the exit status and the findings."""
+    trace = TraceWriter(options.trace, fleet=options.fleet, robot=options.robot, keep=True)
+    try:
+        link = InProcessLink(config, robot=options.robot, trace=trace, stepper=stepper)
+        findings = probing.run_cases(link, options, cases, say)
+    finally:
+        trace.close()
+    return probing.conclude(findings, trace.text(), options, say), findings

@@ -1,0 +1,172 @@
+"""The probe in process (``dynevent probe --loopback``): every case against dynevent's own machine as
+``dynevent serve`` runs it, on simulated time, with no ROS.  The standard mode passes every case, the
+rmf_ros2 mode fails exactly where it reproduces rmf_ros2, and each deliberately broken server of the
+test kit is caught: by the cases that look at what it breaks, or by the judge over every record of
+the exchange.  The same expectations hold over DDS (tests/ros/test_ros_probe.py)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import attrs
+import pytest
+
+from dynevent.conformance import probe_cases, probing
+from dynevent.conformance.in_process import InProcessLink, probe_in_process
+from dynevent.conformance.judge.trace import TraceWriter
+from dynevent.conformance.probe_cases import CASES, Finding, Verdict
+from dynevent.conformance.probing import Options
+from dynevent.server.holder import RobotServer
+from dynevent.server.machine import State
+from dynevent.sim.config import CategorySpec, ServeConfig, machine_config
+from dynevent.testing.broken import DEFECTS, broken_stepper
+from dynevent.wire.vocab import Compatibility
+from probe_expected import BROKEN, RMF_ROS2_FAILS, UNSEEN_IN_PROCESS
+
+#: serve as the DDS tests run it: brief children that log often, the first run at the seq wrap.
+LAST_SEQ = 2**32 - 1
+CONFIG = ServeConfig(
+    categories={"go_to_place": CategorySpec(duration=0.5, report_every=0.1)}, rebegin=0.3, first_seq=LAST_SEQ
+)
+OPTIONS = Options(fleet="tinyRobot", robot="tinyRobot1", place="pantry", more_places=("lounge",), timeout=3)
+
+
+def _probe(
+    mode: str = "standard", defect: str | None = None, **options: object
+) -> tuple[int, list[Finding], str]:
+    config = attrs.evolve(CONFIG, compatibility=mode)
+    stepper = None
+    if defect is not None:
+        first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
+        server = RobotServer("tinyRobot", "tinyRobot1", machine_config(config), first)
+        stepper = broken_stepper(server, defect)
+    said: list[str] = []
+    code, findings = probe_in_process(
+        attrs.evolve(OPTIONS, **options), list(CASES), said.append, config, stepper=stepper
+    )
+    return code, findings, "\n".join(said)
+
+
+def _verdicts(findings: list[Finding]) -> dict[str, str]:
+    def shown(finding: Finding) -> str:
+        verdict = "known" if finding.known else finding.verdict.value
+        return f"{verdict} ({finding.divergence})" if finding.divergence else verdict
+
+    return {finding.case.id: shown(finding) for finding in findings}
+
+
+def _judge_section(text: str) -> str:
+    """The judge's own section of the terminal report ("" when it found nothing beside the cases)."""
+    parts = text.split("the judge, over every record of the exchange: ", 1)
+    return parts[1] if len(parts) == 2 else ""
+
+
+def test_every_case_is_carried_out() -> None:
+    assert probing.implemented() == {case.id for case in CASES}
+
+
+@pytest.mark.spec(
+    "R3.2", "R4.2", "R4.4", "R4.13", "R7.3", "R9.3", "R10.3", "R10.5", "R11.1", "R12.2", "R16.2", "R20.1"
+)
+def test_the_standard_mode_passes_every_case_and_the_judge_finds_nothing(tmp_path: Path) -> None:
+    junit = tmp_path / "probe.xml"
+    code, findings, text = _probe(junit=str(junit), trace=str(tmp_path / "trace.jsonl"))
+    assert code == 0, text
+    assert _verdicts(findings) == {case.id: "pass" for case in CASES}, text
+    assert _judge_section(text) == "", text
+    assert text.rstrip().endswith(f"{len(CASES)} pass")
+    suite = ET.parse(junit).getroot().find("testsuite")
+    assert suite is not None and suite.get("tests") == str(len(CASES)) and suite.get("failures") == "0"
+    assert (tmp_path / "trace.jsonl").read_text("utf-8").count("# case ") == len(CASES)
+
+
+@pytest.mark.spec("R17.4")
+def test_the_rmf_ros2_mode_fails_exactly_at_its_recorded_divergences() -> None:
+    code, findings, text = _probe("rmf_ros2")
+    assert code == 1, text
+    expected = {case.id: "pass" for case in CASES}
+    expected["describe.query"] = "info"  # no description service (D17): the spec leaves it open
+    expected.update({case: f"fail ({number})" for case, number in RMF_ROS2_FAILS.items()})
+    assert _verdicts(findings) == expected, text
+    code, findings, text = _probe(
+        "rmf_ros2", known=probe_cases.KNOWN["rmf_ros2"], known_missing=probe_cases.KNOWN_MISSING["rmf_ros2"]
+    )
+    assert code == 0, text
+    expected.update({case: f"known ({number})" for case, number in RMF_ROS2_FAILS.items()})
+    assert _verdicts(findings) == expected, text
+
+
+@pytest.mark.parametrize("defect", list(BROKEN))
+def test_a_broken_server_is_caught_by_the_case_of_the_rule_it_breaks(defect: str) -> None:
+    """Every other case passes: no false failure (a case that cannot be reached is missing, and only
+    where the defect makes it so)."""
+    code, findings, text = _probe(defect=defect)
+    assert code == 1, text
+    expected = {case.id: "pass" for case in CASES}
+    expected.update(BROKEN[defect])
+    assert _verdicts(findings) == expected, text
+
+
+@pytest.mark.spec("R3.1", "R19.1")
+@pytest.mark.parametrize("defect", list(UNSEEN_IN_PROCESS))
+def test_the_judge_over_every_record_finds_what_no_case_looks_for(tmp_path: Path, defect: str) -> None:
+    cases, found = UNSEEN_IN_PROCESS[defect]
+    junit = tmp_path / "j.xml"
+    code, findings, text = _probe(defect=defect, junit=str(junit))
+    assert code == 1, text
+    expected = {case.id: "pass" for case in CASES}
+    expected.update(cases)
+    assert _verdicts(findings) == expected, text
+    assert f": fail: {found}: " in _judge_section(text), text
+    suites = ET.parse(junit).getroot().findall("testsuite")
+    assert [suite.get("name") for suite in suites][1:] == ["the judge, over every record"]
+    assert int(suites[1].get("failures", "0")) >= 1
+
+
+def test_every_defect_of_the_kit_is_caught_in_process() -> None:
+    assert set(DEFECTS) == set(BROKEN) | set(UNSEEN_IN_PROCESS)
+
+
+def test_a_server_that_never_answers_a_next_ends_the_run_within_its_deadline() -> None:
+    """Simulated time keeps the bound as real time does: the run ends by --deadline, each case not run
+    says why."""
+    trace = TraceWriter(None, fleet="tinyRobot", robot="tinyRobot1", keep=True)
+    silent: dict[str, bool] = {}
+
+    def never_answers(event: object) -> tuple[()]:
+        silent["asked"] = True
+        return ()
+
+    link = InProcessLink(CONFIG, trace=trace, stepper=never_answers)
+    findings = probing.run_cases(link, attrs.evolve(OPTIONS, deadline=20), list(CASES), lambda _: None)
+    assert silent and link.clock() <= 20 + 3  # the last wait began before the deadline
+    assert all(finding.verdict in (Verdict.FAIL, Verdict.MISSING) for finding in findings)
+    assert any(finding.seen.startswith("no status was heard") for finding in findings)
+
+
+def test_the_command_line_probes_in_process(tmp_path: Path) -> None:
+    def probe(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run(
+            [sys.executable, "-m", "dynevent", "probe", "--loopback", *args],
+            capture_output=True, text=True, timeout=120, check=False,
+        )  # fmt: skip
+
+    done = probe()
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert done.stdout.rstrip().endswith(f"{len(CASES)} pass"), done.stdout
+    known = probe("--compatibility", Compatibility.RMF_ROS2.value, "--known", "rmf_ros2")
+    assert known.returncode == 0, known.stdout + known.stderr
+    assert f"{len(RMF_ROS2_FAILS)} of the failures known" in known.stdout
+    for args, said in [
+        (("--config", str(tmp_path / "none.json")), "--config"),
+        (("--first-seq", "x"), "--first-seq"),
+        (("--cases", "nothing.here"), "--cases"),
+    ]:
+        wrong = probe(*args)
+        assert wrong.returncode == 2, wrong.stdout + wrong.stderr
+        assert wrong.stderr.startswith(f"dynevent probe: {said}"), wrong.stderr
+        assert wrong.stderr.count("\n") == 1, wrong.stderr
+        assert "Traceback" not in wrong.stderr

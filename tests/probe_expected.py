@@ -1,0 +1,72 @@
+"""What the probe's cases find against ``dynevent serve`` and its deliberately broken variants: the
+same over DDS (tests/ros/test_ros_probe.py) and in process (tests/conformance/test_probe_in_process.py).
+Not a test module."""
+
+from __future__ import annotations
+
+#: What the rmf_ros2 mode of serve reproduces of rmf_ros2, case by case: the D-number the probe names.
+RMF_ROS2_FAILS = {
+    "request.event_type_0": "D7",
+    "request.event_type_unknown": "D7",
+    "request.cancel_idle": "D8",
+    "next.id_chosen": "D10",
+    "next.id_stale": "D10",
+    "next.status_after_child": "D2",
+    "cancel.wrong_id": "D8",
+    "cancel.running_child": "D28",
+}
+
+
+#: Each deliberately broken server (dynevent.testing.broken) and the cases that must catch it.
+BROKEN = {
+    # a goal for the run before the wrap is stale too
+    "accepts_stale_seq": {
+        "request.seq_stale": "fail", "request.seq_future": "fail", "request.seq_stale_next": "fail",
+        "request.seq_future_next": "fail", "cancel.seq_stale": "fail", "cancel.seq_future": "fail",
+        "begin.seq_wrap": "fail",
+    },
+    # a server that checks the seq of a FINISHED only would pass every case but these
+    "accepts_stale_next": {"request.seq_stale_next": "fail", "request.seq_future_next": "fail"},
+    "accepts_stale_cancel": {"cancel.seq_stale": "fail", "cancel.seq_future": "fail"},
+    "accepts_cancel_after_the_run": {"finished.cancel_after": "fail"},
+    "accepts_unknown_category": {"request.category_unknown": "fail"},
+    "accepts_when_busy": {"next.busy": "fail", "next.busy_finished": "fail"},
+    # the CANCEL that ends a child after next.busy and cancel.wrong_id goes unanswered too (R19.1)
+    "never_answers_cancel": {
+        "next.busy": "fail", "next.busy_finished": "fail", "cancel.wrong_id": "fail",
+        "cancel.seq_stale": "fail", "cancel.seq_future": "fail", "cancel.running_child": "fail",
+        "cancel.both_answered": "fail",
+    },
+    # every case that runs a child to its end waits for an answer that never comes (R19.1)
+    "hangs_next": {
+        "next.runs_a_child": "fail", "next.id_zero": "fail", "next.id_chosen": "fail", "next.race": "fail",
+        "stubborn.clamp_notice": "fail", "next.stateless_id": "missing", "next.status_after_child": "missing",
+        "feedback.log_seq": "missing", "action.cancel_answered": "missing",
+    },
+    # R8.4 after a completed child, and after a cancelled one
+    "running_after_child": {"next.status_after_child": "fail (D2)", "cancel.running_child": "fail (D2)"},
+    # every case that holds a child's feedback to its id
+    "wrong_feedback_id": {
+        "next.runs_a_child": "fail", "next.id_zero": "fail", "next.id_chosen": "fail",
+        "next.stateless_id": "fail", "next.race": "fail",
+    },
+    "ignores_finished": {
+        "finished.ends_the_run": "fail", "finished.next_after": "missing", "finished.cancel_after": "missing",
+        "finished.finished_after": "missing",
+    },
+    "ignores_clamp": {"stubborn.clamp_notice": "fail (D11)"},
+}  # fmt: skip
+
+
+#: Defects no case looks for, and what the judge over the probe's exchange finds of each.
+UNSEEN_BY_CASES = {
+    # runs 1, 3, 5: the first run is not the wrap's 4294967295, so the wrap case cannot run
+    "skips_seq": ({"begin.seq_wrap": "missing"}, "R3.1 begin_seq"),
+}
+
+#: Defects only the in-process probe meets: dynevent serve's binding drops a feedback after its goal's
+#: answer (the goal handle is gone), where a server of another make may send it.
+UNSEEN_IN_PROCESS = {
+    **UNSEEN_BY_CASES,
+    "feedback_after_answer": ({}, "R19.1 after_answer"),
+}
