@@ -170,3 +170,38 @@ def test_the_command_line_probes_in_process(tmp_path: Path) -> None:
         assert wrong.stderr.startswith(f"dynevent probe: {said}"), wrong.stderr
         assert wrong.stderr.count("\n") == 1, wrong.stderr
         assert "Traceback" not in wrong.stderr
+
+
+# --------------------------------------------------------------------------- over the driver protocol
+
+TESTS = Path(__file__).resolve().parent.parent
+
+
+def _probe_impl(command: str, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "dynevent", "probe", "--impl", command, *args],
+        capture_output=True, text=True, timeout=120, check=False,
+    )  # fmt: skip
+
+
+def test_an_implementation_behind_the_driver_protocol_is_probed_without_ros() -> None:
+    """dynevent's own driver, run as a separate program, passes every case; the broken driver of the
+    vectors' tests (a started CANCEL frees the robot at once, R9.3) fails the cases of that rule."""
+    own = _probe_impl(f"{sys.executable} -m dynevent.conformance.driver")
+    assert own.returncode == 0, own.stdout + own.stderr
+    assert own.stdout.startswith("implementation: dynevent "), own.stdout
+    assert own.stdout.rstrip().endswith(f"{len(CASES)} pass"), own.stdout
+    broken = _probe_impl(f"{sys.executable} {TESTS / 'broken_driver.py'}")
+    assert broken.returncode == 1, broken.stdout + broken.stderr
+    assert "cancel.both_answered (R9.3, R8.3, R19.1): fail" in broken.stdout, broken.stdout
+
+
+@pytest.mark.parametrize("mode", ["hang", "exit", "garbage"])
+def test_an_implementation_that_breaks_the_protocol_ends_the_run_within_its_bound(mode: str) -> None:
+    """A driver that stops answering, dies or answers garbage mid-run: the run ends (each request
+    bounded by --timeout), the cases after it fail or are not run, and the line names where."""
+    command = f"{sys.executable} {TESTS / 'misbehaving_driver.py'} {mode} 40"
+    done = _probe_impl(command, "--timeout", "1")
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert "the implementation broke the driver protocol at " in done.stdout, done.stdout
+    assert "Traceback" not in done.stderr

@@ -25,21 +25,33 @@ from typing import Any
 
 import attrs
 
+from dynevent import descriptions
 from dynevent.conformance import probing
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.conformance.probe_cases import Case, Finding
 from dynevent.conformance.probing import Exchange, Link, Options
+from dynevent.conformance.records import InvalidRecord, input_to_json, output_from_json
+from dynevent.conformance.runner import Implementation
+from dynevent.errors import ImplementationError
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.holder import Execution, RobotServer
-from dynevent.server.machine import State
+from dynevent.server.machine import ServerConfig, State
 from dynevent.sim.children import SimulatedChild
 from dynevent.sim.config import DEFAULT_DESCRIPTION, ServeConfig, machine_config
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.names import description_service
 from dynevent.wire.vocab import Compatibility, Status
 
-__all__ = ["PLACES", "START", "InProcessLink", "Stepper", "probe_in_process"]
+__all__ = [
+    "PLACES",
+    "START",
+    "DriverServer",
+    "InProcessLink",
+    "Stepper",
+    "config_record",
+    "probe_in_process",
+]
 
 #: Where simulated time starts (ns since the epoch: 2023-11-14, within what the machine accepts).
 START = 1_700_000_000 * 1_000_000_000
@@ -222,6 +234,54 @@ class InProcessLink(Link):
         if answer is None:
             return None, "the description query gave no answer"
         return answer.response, ""
+
+
+def config_record(config: ServeConfig) -> dict[str, Any]:
+    """The machine's configuration of serve's robots (:func:`~dynevent.sim.config.machine_config`) as
+    the driver protocol's configuration record: the field's categories as ``{"accept": "field"}``
+    with the configured map and actions, the others as ``{"accept": "any"}``."""
+    machine = machine_config(config)
+    field: dict[str, Any] = {"accept": "field"}
+    if config.places is not None:
+        field["places"] = list(config.places)
+    if config.actions is not None:
+        field["actions"] = list(config.actions)
+    record: dict[str, Any] = {
+        "categories": {
+            name: dict(field) if name in descriptions.CATEGORIES else {"accept": "any"}
+            for name in config.categories
+        }
+    }
+    for attribute in attrs.fields(ServerConfig):
+        if attribute.name != "categories":
+            value = getattr(machine, attribute.name)
+            record[attribute.name] = getattr(value, "value", value)
+    return record
+
+
+class DriverServer:
+    """An implementation behind the driver protocol (``dynevent vectors --impl``'s), as the in-process
+    link's server: reset once for the robot, at the seq before ``config``'s first run, then each input
+    applied.  Once it breaks the protocol (dies, stalls, answers what is not a record) it says
+    nothing more, and :attr:`broken` says why."""
+
+    def __init__(self, implementation: Implementation, fleet: str, robot: str, config: ServeConfig) -> None:
+        self.implementation = implementation
+        self.broken: str | None = None
+        state = {"seq": (config.first_seq - 1) % 2**32}
+        implementation.reset(fleet, robot, config_record(config), state)
+
+    def __call__(self, event: ins.Input) -> tuple[outs.Output, ...]:
+        if self.broken is not None:
+            return ()
+        try:
+            outputs, _ = self.implementation.apply(input_to_json(event))
+            return tuple(
+                output_from_json(output, f"$.outputs[{index}]") for index, output in enumerate(outputs)
+            )
+        except (ImplementationError, InvalidRecord) as exc:
+            self.broken = f"{type(event).__name__}: {exc}"
+            return ()
 
 
 def probe_in_process(

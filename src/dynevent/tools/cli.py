@@ -527,7 +527,7 @@ def _probe(args: argparse.Namespace) -> int:
             junit=args.junit, report=args.report, deadline=args.deadline,
         )  # fmt: skip
 
-    if args.loopback:
+    if args.loopback or args.impl:
         return _probe_in_process(args, check, options)
 
     def run(probe: Any, cases: list[probe_cases.Case]) -> int:
@@ -544,6 +544,7 @@ def _probe_in_process(
     import attrs
 
     from dynevent.conformance import in_process, probing
+    from dynevent.conformance.runner import MAX_TIMEOUT, ExternalImplementation
     from dynevent.errors import DyneventError
     from dynevent.sim.config import load_config
 
@@ -557,11 +558,22 @@ def _probe_in_process(
         if chosen.place is None:  # the simulated map takes any place when none is configured
             named = [str(place) for place in config.places or () if place is not None] or in_process.PLACES
             chosen = attrs.evolve(chosen, place=named[0], more_places=tuple(named[1:3]))
-        code, _ = in_process.probe_in_process(chosen, cases, _say, config)
+        if not args.impl:
+            return in_process.probe_in_process(chosen, cases, _say, config)[0]
+        implementation = ExternalImplementation(args.impl, timeout=min(args.timeout, MAX_TIMEOUT))
+        try:
+            _say(f"implementation: {implementation.name}")
+            server = in_process.DriverServer(implementation, config.fleet, args.robot, config)
+            code, _ = in_process.probe_in_process(chosen, cases, _say, config, stepper=server)
+        finally:
+            implementation.close()
+        if server.broken is not None:
+            _say(f"the implementation broke the driver protocol at {server.broken}")
+            return max(code, 1)
+        return code
     except DyneventError as exc:
         print(f"dynevent probe: {exc}", file=sys.stderr)
         return 2
-    return code
 
 
 def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -572,7 +584,8 @@ def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         "client would (raw goals, the status and begin topics): each case cites the rules it tests and "
         "ends pass, non-strict, fail (with the D-number when docs/divergences.md records that way of "
         "breaking it), info or missing.  --list prints the cases without ROS; --loopback runs them "
-        "without ROS against dynevent's own machine, as dynevent serve would run the robot.  Exit status: 0 every "
+        "without ROS against dynevent's own machine, as dynevent serve would run the robot, and --impl "
+        "against an implementation behind the conformance driver protocol.  Exit status: 0 every "
         "case ran and none failed, 1 a case failed, 2 bad usage or no server, 3 a case was not run "
         "(missing) that --allow-missing or --known did not expect.",
     )
@@ -662,15 +675,21 @@ def _add_loopback_arguments(parser: argparse.ArgumentParser) -> None:
         "time (every case in well under a second; no ROS needed); --place defaults to the configured "
         "places, or pantry and lounge",
     )  # fmt: skip
-    loopback.add_argument("--config", metavar="FILE", help="with --loopback: serve's --config file")
+    loopback.add_argument(
+        "--impl", metavar="CMD",
+        help="probe an implementation behind the conformance driver protocol (as dynevent vectors --impl "
+        "runs it), configured as dynevent serve would configure the machine, on simulated time; no ROS",
+    )  # fmt: skip
+    loopback.add_argument("--config", metavar="FILE", help="with --loopback or --impl: serve's --config file")
     loopback.add_argument(
         "--first-seq", default=2**32 - 1, metavar="SEQ",
-        help="with --loopback: the seq of the robot's first run (default: %(default)s, so that the next "
-        "run shows the seq wrap to 0 and begin.seq_wrap runs)",
+        help="with --loopback or --impl: the seq of the robot's first run (default: %(default)s, so that "
+        "the next run shows the seq wrap to 0 and begin.seq_wrap runs)",
     )  # fmt: skip
     loopback.add_argument(
         "--compatibility", choices=[mode.value for mode in Compatibility],
-        help="with --loopback: the mode serve runs in (default: the --config file's, else standard)",
+        help="with --loopback or --impl: the mode serve runs in (default: the --config file's, else "
+        "standard)",
     )  # fmt: skip
 
 
