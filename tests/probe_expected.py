@@ -46,9 +46,11 @@ BROKEN = {
     # R8.4 after a completed child, and after a cancelled one
     "running_after_child": {"next.status_after_child": "fail (D2)", "cancel.running_child": "fail (D2)"},
     # every case that holds a child's feedback to its id
+    # and the clean-up's CANCEL of the child the status names: the judge, which took the child's id
+    # from its feedback, reads it as naming another event (the way D8 breaks R4.14)
     "wrong_feedback_id": {
         "next.runs_a_child": "fail", "next.id_zero": "fail", "next.id_chosen": "fail",
-        "next.stateless_id": "fail", "next.race": "fail",
+        "next.stateless_id": "fail", "next.race": "fail", "cancel.wrong_id": "fail (D8)",
     },
     "ignores_finished": {
         "finished.ends_the_run": "fail", "finished.next_after": "missing", "finished.cancel_after": "missing",
@@ -65,8 +67,29 @@ UNSEEN_BY_CASES = {
 }
 
 #: Defects only the in-process probe meets: dynevent serve's binding drops a feedback after its goal's
-#: answer (the goal handle is gone), where a server of another make may send it.
-UNSEEN_IN_PROCESS = {
-    **UNSEEN_BY_CASES,
-    "feedback_after_answer": ({}, "R19.1 after_answer"),
+#: answer (the goal handle is gone), where a server of another make may send it.  No case's script
+#: looks for it: the judge over every record finds it in the records of each case that runs a child to
+#: its answer, and fails those cases on R19.1.
+JUDGED_IN_PROCESS = {
+    "feedback_after_answer": dict.fromkeys(
+        [
+            "next.runs_a_child",
+            "next.id_zero",
+            "next.id_chosen",
+            "next.stateless_id",
+            "next.busy",
+            "next.busy_finished",
+            "next.race",
+            "feedback.log_seq",
+            "stubborn.clamp_notice",
+            "cancel.wrong_id",
+            "cancel.seq_stale",
+            "cancel.seq_future",
+            "cancel.running_child",
+            "cancel.both_answered",
+            "action.cancel_running",
+            "action.cancel_answered",
+        ],
+        "fail",
+    ),
 }

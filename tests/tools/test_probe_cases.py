@@ -227,13 +227,14 @@ def _finding(case_id: str, verdict: probe_cases.Verdict) -> probe_cases.Finding:
     return probe_cases.Finding(case, verdict)
 
 
-def _late_feedback() -> str:
-    """The clean trace with NEXT 6's feedback sent again after its answer and the status after it."""
+def _late_feedback(case: str = "next.runs_a_child") -> str:
+    """The clean trace with NEXT 6's feedback sent again after its answer and the status after it,
+    the records from NEXT 6 on those of ``case``."""
     lines = CLEAN.splitlines()
     end = next(n for n, line in enumerate(lines) if line.startswith('{"time":103,"type":"status"'))
     lines.insert(end + 1, LATE_FEEDBACK)
     first = '"goal_uuid":"00000000000000000000000000000001"'
-    return _with_cases("\n".join(lines) + "\n", ("next.runs_a_child", first))
+    return _with_cases("\n".join(lines) + "\n", (case, first))
 
 
 @pytest.mark.spec("R19.1")
@@ -294,3 +295,42 @@ def test_an_open_item_of_the_judge_is_uncertain_and_does_not_fail_the_run() -> N
     assert item.label == "response_seen_late" and item.uncertain and not item.counts
     assert probe_cases.exit_status([], [item]) == probe_cases.EXIT_OK
     assert "uncertain" in item.line() and "(1 uncertain)" in probe_cases.judged_summary([item])
+
+
+@pytest.mark.spec("R19.1", "R7.3")
+def test_a_case_whose_own_records_break_its_rules_fails_with_the_judges_finding() -> None:
+    """judge_verdicts: the judge decides a case its script passed when the case's own records break
+    one of its rules (or R19.1); a finding on another rule stays beside the cases; an untraced case
+    keeps its script's verdict."""
+    passed = [_finding("next.runs_a_child", probe_cases.Verdict.PASS)]
+    verdicts, judged = probe_cases.judge_verdicts(_late_feedback(), passed)
+    assert judged == []
+    (finding,) = verdicts
+    assert finding.verdict is probe_cases.Verdict.FAIL and finding.divergence is None
+    assert finding.seen.startswith("the judge: feedback underway id=6") and "(R19.1)" in finding.expected
+    assert probe_cases.exit_status(verdicts, judged) == probe_cases.EXIT_FAILED
+    # the log seq the deployed server repeats: R7.3 is no rule of request.seq_stale, whose records
+    # hold it here: the finding stays beside the cases, and the case keeps its verdict
+    repeated = _with_cases(
+        CLEAN.replace('"logs":[{"seq":1,', '"logs":[{"seq":0,', 1),
+        ("request.seq_stale", '"goal_uuid":"00000000000000000000000000000001"'),
+    )
+    stale = [_finding("request.seq_stale", probe_cases.Verdict.PASS)]
+    verdicts, judged = probe_cases.judge_verdicts(repeated, stale, known=KNOWN["rmf_ros2"])
+    assert verdicts == stale
+    assert [(item.finding.rule, item.label, item.known) for item in judged] == [("R7.3", "D9", True)]
+    # in feedback.log_seq's records the same finding fails the case, known as the deployed server's
+    logs = _with_cases(
+        CLEAN.replace('"logs":[{"seq":1,', '"logs":[{"seq":0,', 1),
+        ("feedback.log_seq", '"goal_uuid":"00000000000000000000000000000001"'),
+    )
+    verdicts, judged = probe_cases.judge_verdicts(
+        logs, [_finding("feedback.log_seq", probe_cases.Verdict.PASS)], known=KNOWN["rmf_ros2"]
+    )
+    assert judged == [] and verdicts[0].verdict is probe_cases.Verdict.FAIL
+    assert (verdicts[0].divergence, verdicts[0].known) == ("D9", True)
+    assert probe_cases.exit_status(verdicts, judged) == probe_cases.EXIT_OK
+    # an untraced case (what it fails on a trace cannot show) keeps its script's verdict
+    untraced = [_finding("next.status_after_child", probe_cases.Verdict.PASS)]
+    verdicts, judged = probe_cases.judge_verdicts(_late_feedback("next.status_after_child"), untraced)
+    assert verdicts == untraced and [item.finding.code for item in judged] == ["after_answer"]

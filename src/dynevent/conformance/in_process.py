@@ -300,4 +300,4 @@ def probe_in_process(
         findings = probing.run_cases(link, options, cases, say)
     finally:
         trace.close()
-    return probing.conclude(findings, trace.text(), options, say), findings
+    return probing.conclude(findings, trace.text(), options, say)

@@ -50,6 +50,7 @@ __all__ = [
     "format_findings",
     "format_list",
     "judge_exchange",
+    "judge_verdicts",
     "judged_summary",
     "junit_xml",
     "matches",
@@ -164,6 +165,42 @@ def judge_exchange(text: str, findings: Sequence[Finding], known: Iterable[str] 
         divergence = divergences.label(finding)
         judged.append(Judged(case, finding, divergence, known=divergence in covered))
     return judged
+
+
+def judge_verdicts(
+    text: str, findings: Sequence[Finding], known: Iterable[str] = ()
+) -> tuple[list[Finding], list[Judged]]:
+    """The cases' verdicts with the judge's (:func:`judge_exchange`, over the probe's trace ``text``):
+    a case carried out whose own records hold a finding of the judge on one of its rules, or on
+    R19.1 (every goal answered exactly once, which each case holds its goals to), fails with that
+    finding, its divergence and whether ``known`` covers it, whatever its script saw; an uncertain
+    finding (an open item of the judge) fails no case.  The findings, and what the judge found that
+    no case's verdict says: the section beside the cases."""
+    judged = judge_exchange(text, findings, known)
+    taken: set[int] = set()
+    verdicts = []
+    for scripted in findings:
+        case = scripted.case
+        rules = {*case.rules, "R19.1"}
+        mine = [
+            item for item in judged
+            if item.case == case.id and not item.uncertain and item.finding.rule in rules
+        ]  # fmt: skip
+        finding = scripted
+        if case.traced and mine and scripted.verdict in (Verdict.PASS, Verdict.NON_STRICT):
+            first = mine[0].finding
+            divergence = mine[0].label if mine[0].label.startswith("D") else None
+            said = [
+                f"the judge: {item.finding.rule} {item.finding.code}: {item.finding.message}" for item in mine
+            ]
+            finding = attrs.evolve(
+                scripted, verdict=Verdict.FAIL, expected=f"{first.expected} ({first.rule})",
+                seen=f"the judge: {first.message}", divergence=divergence, known=mine[0].known,
+                messages=(*scripted.messages, *said),
+            )  # fmt: skip
+            taken.update(id(item) for item in mine)
+        verdicts.append(finding)
+    return verdicts, [item for item in judged if id(item) not in taken]
 
 
 #: Every case, in the order they run (the ones that end a run come last).

@@ -1254,11 +1254,15 @@ def _ready(link: Link, options: Options, cases: list[Case], say: Callable[[str],
     return options
 
 
-def conclude(findings: list[Finding], trace: str, options: Options, say: Callable[[str], None]) -> int:
-    """The end of a run: the judge over every record of the exchange (``trace``, the trace's text),
-    the findings and the judge's own said, the JUnit and readable reports written where asked; the
-    exit status.  A report that cannot be written raises :class:`~dynevent.errors.ProbeError`."""
-    judged = probe_cases.judge_exchange(trace, findings, options.known)
+def conclude(
+    findings: list[Finding], trace: str, options: Options, say: Callable[[str], None]
+) -> tuple[int, list[Finding]]:
+    """The end of a run: the judge over every record of the exchange (``trace``, the trace's text)
+    fails the cases whose own records show a finding on their rules
+    (:func:`~dynevent.conformance.probe_cases.judge_verdicts`), the findings and the judge's own
+    section said, the JUnit and readable reports written where asked; the exit status and the
+    findings.  A report that cannot be written raises :class:`~dynevent.errors.ProbeError`."""
+    findings, judged = probe_cases.judge_verdicts(trace, findings, options.known)
     say(probe_cases.format_findings(findings, judged).rstrip("\n"))
     server = f"{options.fleet}/{options.robot}"
     outputs: list[tuple[str, str | None, Callable[[], str]]] = [
@@ -1274,4 +1278,4 @@ def conclude(findings: list[Finding], trace: str, options: Options, say: Callabl
                 files.write_text(path, text(), f"--{flag}")
             except FileError as exc:
                 raise ProbeError(str(exc)) from None
-    return probe_cases.exit_status(findings, judged)
+    return probe_cases.exit_status(findings, judged), findings

@@ -203,7 +203,7 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
         sys.stdout.write("\r\033[K")
     if findings is None:
         return probe_cases.EXIT_USAGE
-    return probing.conclude(findings, trace.text(), options, say)
+    return probing.conclude(findings, trace.text(), options, say)[0]
 
 
 class ProbeInterrupted(Interrupted):
