@@ -21,6 +21,7 @@ from ros_support import Child, child_env, finish
 from dynevent.conformance.judge import check_trace
 from dynevent.conformance.judge.trace import Finding
 from dynevent.conformance.probe_cases import CASES
+from dynevent.ros.probe import VOLATILE, RosLink
 from probe_expected import BROKEN, RMF_ROS2_FAILS, UNSEEN_BY_CASES
 
 #: The last seq before the wrap: serve starts there, so that the probe sees the seq wrap (R3.2).
@@ -250,10 +251,51 @@ def test_a_volatile_status_is_caught_and_the_run_stops_early(tmp_path: Path, beg
         serve.stop()
     assert done.returncode == 1, done.stdout + done.stderr
     lines = done.stdout.splitlines()
-    assert lines[0].startswith("no status from tinyRobot/brokenVolatile within 2 s"), done.stdout
+    # the cause, from rclpy's incompatible-QoS event: the topic's durability, not a silent server
+    said = f"within 2 s: the status topic is {VOLATILE}"
+    assert lines[0] == f"no status from tinyRobot/brokenVolatile {said}", done.stdout
     assert _verdicts(done.stdout)["status.latched"] == "fail", done.stdout
-    assert "no status was heard within 2 s (R1.4)" in done.stdout
+    assert f"seen:     the status topic is {VOLATILE}" in done.stdout
+    assert f"no status was heard {said}" in done.stdout
     assert took < silent_bound(2.0), f"{took:.1f} s"
+
+
+@pytest.mark.spec("R1.4")
+def test_a_status_topic_offered_volatile_is_named_and_still_heard() -> None:
+    """The probe's reader asks for transient-local; a volatile writer never matches it.  The link
+    names the durability from rclpy's incompatible-QoS event and reads the topic volatile too, so
+    that what the server publishes from then on is heard, and the rest of it can still be judged."""
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from ros_support import Graph, wait_for
+
+    from dynevent.ros import convert
+    from dynevent.wire.messages import DynamicEventStatus, Time
+    from dynevent.wire.names import status_topic
+
+    server_side, probe_side = Graph(), Graph()  # two participants, as a server and a probe are
+    try:
+        qos = QoSProfile(
+            depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE
+        )
+        topic = status_topic("tinyRobot", "volatile1")
+        publisher = server_side.node(
+            "volatile_server", lambda node: node.create_publisher(convert.RosStatus, topic, qos)
+        )
+        link = probe_side.node("volatile_probe", lambda node: RosLink(node, "tinyRobot", "volatile1"))
+        wait_for(lambda: link.offered.get("status") == VOLATILE, "the durability named")
+        status = DynamicEventStatus(
+            dynamic_event_seq=3, dynamic_state=1, status="standby", id=1, time=Time(sec=5, nanosec=0)
+        )
+
+        def heard() -> bool:  # the volatile reader is matched a moment after the event: publish till then
+            publisher.publish(convert.status_to_ros(status))
+            return link.wait_status(lambda _: True, 0.1) is not None
+
+        wait_for(heard, "a status heard on the volatile reader")
+        assert link.status == status
+    finally:
+        probe_side.close()
+        server_side.close()
 
 
 def silent_bound(timeout: float) -> float:

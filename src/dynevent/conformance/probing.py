@@ -124,6 +124,9 @@ class Link:
         self._changed = threading.Condition()
         #: how many messages the server has sent the probe (statuses, begins, responses, feedback, answers)
         self.heard = 0
+        #: what the transport found wrong in how a topic (``"status"``, ``"begin"``) is offered, which
+        #: no trace carries (DDS: a durability that a transient-local reader cannot match)
+        self.offered: dict[str, str] = {}
 
     # ---------------------------------------------------------------- the transport's part
 
@@ -592,6 +595,10 @@ _LOOK_AGAIN = 0.2
 
 def _status_latched(probe: Probe, case: Case) -> Finding:
     expected = "a late subscriber receives the status"
+    offered = probe.link.offered.get("status")
+    if offered is not None:  # what the transport saw of the topic: no trace carries it
+        probe.note(f"the status topic is {offered}")
+        return Finding(case, Verdict.FAIL, expected=expected, seen=f"the status topic is {offered}")
     if probe.link.wait_status(lambda status: True, probe.timeout) is None:
         # a server with no transient-local status (a volatile one never matches this subscriber)
         seen = f"no status within {probe.timeout:g} s"
@@ -1216,7 +1223,9 @@ def run_cases(
     findings = [] if findings is None else findings
     probe = Probe(link, _ready(link, options, cases, say))
     if not link.statuses:  # _ready waited --timeout for one
-        probe.dead["status"] = f"no status was heard within {options.timeout:g} s (R1.4)"
+        offered = link.offered.get("status")
+        cause = f": the status topic is {offered}" if offered is not None else " (R1.4)"
+        probe.dead["status"] = f"no status was heard within {options.timeout:g} s{cause}"
     for case in cases:
         why = STOPPED_ANSWERING if probe.silent else probe.blocked(case)
         if why is not None:
@@ -1233,10 +1242,14 @@ def _ready(link: Link, options: Options, cases: list[Case], say: Callable[[str],
     once), or a place for the cases that send the robot somewhere (taken, without ``--place``, from
     the go_to_place estimate of the run's description when it names one)."""
     if link.wait_status(lambda status: True, options.timeout) is None:
-        say(
-            f"no status from {options.fleet}/{options.robot} within {options.timeout:g} s: its status topic "
-            "should hold the latest status for a late subscriber (transient-local, R1.4)"
+        offered = link.offered.get("status")
+        why = (
+            f"the status topic is {offered}"
+            if offered is not None
+            else "its status topic should hold the latest status for a late subscriber "
+            "(transient-local, R1.4)"
         )
+        say(f"no status from {options.fleet}/{options.robot} within {options.timeout:g} s: {why}")
     if options.place is not None:
         return options
     placed = [case for case in cases if case.needs in ("child", "place")]

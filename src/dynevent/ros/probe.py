@@ -13,7 +13,9 @@ from typing import Any
 import rclpy
 from action_msgs.msg import GoalStatus as RosGoalStatus
 from rclpy.action import ActionClient
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSPolicyKind, QoSProfile, ReliabilityPolicy
 
 from dynevent.conformance import probe_cases, probing
 from dynevent.conformance.judge.trace import TraceWriter
@@ -45,6 +47,8 @@ _TERMINAL = {
 }
 #: How long the description case looks for the service, which a server need not offer (D17).
 _SERVICE_WAIT = 2.0
+#: How a topic offered volatile is said.
+VOLATILE = "offered volatile, not transient-local: a late subscriber gets nothing (R1.4)"
 #: The history depth of the probe's own subscriptions.
 _READER_DEPTH = 100
 
@@ -59,13 +63,34 @@ class RosLink(Link):
         # a deep reader history: the writer keeps the last message for late subscribers (R1.4), and
         # the probe, subscribed all along, must miss none of those that follow (an INACTIVE status
         # followed at once by the next run's)
-        self._status = node.create_subscription(
-            RosStatus, status_topic(fleet, robot), self._on_status, latched(_READER_DEPTH)
-        )
-        self._begin = node.create_subscription(
-            RosDescription, begin_topic(fleet, robot), self._on_begin, latched(_READER_DEPTH)
-        )
+        self._topics = {
+            "status": (RosStatus, status_topic(fleet, robot), self._on_status),
+            "begin": (RosDescription, begin_topic(fleet, robot), self._on_begin),
+        }
+        self._subscriptions = [self._subscribe(name, latched(_READER_DEPTH)) for name in self._topics]
         self._action = ActionClient(node, DynamicEvent, action_name(fleet, robot))
+
+    def _subscribe(self, name: str, qos: QoSProfile) -> Any:
+        kind, topic, callback = self._topics[name]
+        events = SubscriptionEventCallbacks(incompatible_qos=lambda info: self._incompatible(name, info))
+        return self._node.create_subscription(kind, topic, callback, qos, event_callbacks=events)
+
+    def _incompatible(self, name: str, info: Any) -> None:
+        """A writer on the topic offers a QoS the probe's transient-local reader cannot match: said
+        (:attr:`~dynevent.conformance.probing.Link.offered`), and, for a volatile writer, a volatile
+        reader too, so that what it publishes from now on is still heard."""
+        policy = QoSPolicyKind(info.last_policy_kind)
+        if name in self.offered:
+            return
+        if policy is QoSPolicyKind.DURABILITY:
+            self.offered[name] = VOLATILE
+            volatile = QoSProfile(
+                history=HistoryPolicy.KEEP_LAST, depth=_READER_DEPTH, reliability=ReliabilityPolicy.RELIABLE,
+                durability=DurabilityPolicy.VOLATILE,
+            )  # fmt: skip
+            self._subscriptions.append(self._subscribe(name, volatile))
+        else:
+            self.offered[name] = f"offered a QoS the probe's reader cannot match ({policy.name.lower()})"
 
     def clock(self) -> float:
         return time.monotonic()
