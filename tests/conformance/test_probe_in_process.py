@@ -274,3 +274,28 @@ def test_against_any_configuration_of_serve_the_cases_and_the_judge_agree(
     recorded = {case: f"known ({number})" for case, number in RMF_ROS2_FAILS.items()}
     assert all(allowed.get(case) == verdict or recorded.get(case) == verdict for case, verdict in odd.items())
     assert code == 0, text
+
+
+def test_a_server_that_starts_children_without_end_cannot_fill_the_link() -> None:
+    """A broken server that starts a thousand children at every step: the link simulates at most
+    MAX_CHILDREN at once, and the run ends within its deadline like any other."""
+    from dynevent.conformance.in_process import MAX_CHILDREN
+    from dynevent.server import outputs as outs
+
+    first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
+    server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG), first)
+    started = iter(range(1, 10**9))
+
+    def breeding(event: object) -> tuple[outs.Output, ...]:
+        outputs = server.step(event)  # type: ignore[arg-type]
+        extra = tuple(
+            outs.StartChild(id=next(started), category="go_to_place", description='"a"', parsed="a")
+            for _ in range(1_000)
+        )
+        return (*outputs, *extra)
+
+    trace = TraceWriter(None, fleet="tinyRobot", robot="tinyRobot1", keep=True)
+    link = InProcessLink(CONFIG, trace=trace, stepper=breeding)
+    findings = probing.run_cases(link, attrs.evolve(OPTIONS, deadline=30), list(CASES), lambda _: None)
+    assert len(link._children) <= MAX_CHILDREN
+    assert len(findings) == len(CASES) and link.clock() <= 30 + 3

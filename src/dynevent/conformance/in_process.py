@@ -44,6 +44,7 @@ from dynevent.wire.names import description_service
 from dynevent.wire.vocab import Compatibility, Status
 
 __all__ = [
+    "MAX_CHILDREN",
     "PLACES",
     "START",
     "DriverServer",
@@ -56,6 +57,9 @@ __all__ = [
 #: Where simulated time starts (ns since the epoch: 2023-11-14, within what the machine accepts).
 START = 1_700_000_000 * 1_000_000_000
 _SECOND = 1_000_000_000
+#: The most children the link simulates at once: the machine runs one; a server under test that
+#: starts more (a broken one) gets no more than these, so that it cannot fill memory.
+MAX_CHILDREN = 16
 #: The places the probe sends the robot to where none is given: the simulated map takes any place
 #: when none is configured.
 PLACES = ["pantry", "lounge"]
@@ -152,6 +156,8 @@ class InProcessLink(Link):
         elif isinstance(output, outs.AnswerGoal) and exchange is not None:
             self.hear_answer(exchange, output.status, output.result)
         elif isinstance(output, outs.StartChild):
+            if output.id in self._children or len(self._children) >= MAX_CHILDREN:
+                return  # a server that starts a child twice, or without end, runs no more of them
             child = _Child(self, output)
             self._children[output.id] = child
             self._report_later(output.id, child)
