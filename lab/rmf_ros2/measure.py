@@ -4,8 +4,8 @@
     python3 lab/rmf_ros2/measure.py --out DIR [--timeout 45] [--with-stubborn] [--skip-send]
 
 In a shell with the lab's environment (Open-RMF's fleet adapter built from its sources over
-dynevent's pinned wheels, dynevent with its bags extra installed in the same Python: lab/rmf_ros2/README.md) and a
-ROS_DOMAIN_ID of the caller's, this:
+dynevent's pinned wheels, dynevent with its bags extra installed in the same Python:
+lab/rmf_ros2/README.md) and a ROS_DOMAIN_ID of the caller's, this:
 
 1. starts the site (site/run_site.py), and waits for its READY line;
 2. records the robot (``dynevent record``) while ``dynevent probe`` runs every case (but
