@@ -110,7 +110,7 @@ def run(argv: Sequence[str], log: Path, timeout: float) -> subprocess.CompletedP
         done = subprocess.run(argv, capture_output=True, text=True, timeout=timeout, check=False)
     except subprocess.TimeoutExpired:
         raise Failed(f"{' '.join(argv[2:5])}: not done within {timeout:g} s") from None
-    log.write_text(done.stdout + done.stderr, encoding="utf-8")
+    log.write_text(f"{done.stdout}{done.stderr}EXIT {done.returncode}\n", encoding="utf-8")
     return done
 
 

@@ -72,6 +72,10 @@ def label(finding: Finding) -> str:
         return "D10"
     if rule == "R10.3" and code == "cancel_response":
         return "D31"
+    # the same refusal where the judge still held the NEXT queued when its cancel came (its start's
+    # records read after the cancel's): the cancel refused, the NEXT answered at its child's end
+    if rule == "R10.1" and code in ("cancel_response", "goal_status"):
+        return "D31"
     if code == "status_mismatch" and "status INACTIVE" in message and _COMPLETED in expected:
         return "D30"
     if code == "feedback_not_running" and "whose event has ended" in message:
