@@ -98,7 +98,7 @@ def test_a_file_flag_names_what_it_cannot_read_in_one_line(
     assert SAID[kind] in line or (kind == "not UTF-8" and "UTF-8" in line), line
 
 
-# (a directory is a bag for check: tests/tools/test_bags.py)
+# (a directory is a bag for check: tests/bags/test_bags.py)
 @pytest.mark.parametrize("kind", ["a FIFO", "a character device", "too long", "missing"])
 def test_check_names_a_trace_it_cannot_read_in_one_line(kind: str, hostile: dict[str, str]) -> None:
     line = _one_line(dynevent(*STREAMED["check TRACE"](hostile[kind])))

@@ -5,7 +5,7 @@ these findings of the judge :func:`~dynevent.conformance.judge.check_trace` as o
 divergences docs/divergences.md records (its D-number), or as one of the judge's open items: what a
 client's view of an exchange cannot settle (a response recorded after the statuses its acceptance
 caused).  ``dynevent probe`` labels every finding of its own exchange by :func:`label`, and
-tests/tools/test_rmf_ros2_recordings.py holds the labels to the recordings.
+tests/conformance/judge/test_rmf_ros2_recordings.py holds the labels to the recordings.
 """
 
 from __future__ import annotations

@@ -19,7 +19,7 @@ from dynevent.server import machine
 from dynevent.wire import _json
 from dynevent.wire.messages import Goal
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 EXAMPLES = ROOT / "docs" / "examples"
 CONFIG = {
     "type": "config",
@@ -575,9 +575,9 @@ RMF_ROS2_DEFECTS: dict[str, set[tuple[str, str]]] = {
 #: itinerary (D24) travels on the traffic schedule, not on the Dynamic Event topics.
 NOT_ON_THE_WIRE = {"D3", "D4", "D14", "D15", "D21", "D22", "D23", "D24"}
 #: Defects first seen on the deployed adapter, which the example trace predates: the lab's recordings
-#: show them, and tests/tools/test_rmf_ros2_recordings.py holds check to what it finds there (D26 as
-#: R2.2 at every begin; D27 is the adapter's crash, an absence; D29 a log line no rule forbids a
-#: child to write; D30 and D31 are flagged in the probe's recording).
+#: show them, and tests/conformance/judge/test_rmf_ros2_recordings.py holds check to what it finds
+#: there (D26 as R2.2 at every begin; D27 is the adapter's crash, an absence; D29 a log line no rule
+#: forbids a child to write; D30 and D31 are flagged in the probe's recording).
 IN_THE_RECORDINGS = {"D26", "D27", "D29", "D30", "D31"}
 
 
@@ -706,7 +706,7 @@ def test_check_reads_a_trace_as_a_stream_holding_a_few_records(monkeypatch: pyte
 
     from dynevent.conformance.judge import observer
 
-    root = str(Path(__file__).resolve().parents[2])
+    root = str(Path(__file__).resolve().parents[3])
     if root not in sys.path:
         sys.path.insert(0, root)
     from bench.traces import cycle_lines

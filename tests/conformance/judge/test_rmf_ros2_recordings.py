@@ -21,8 +21,8 @@ pytest.importorskip("rosbags", reason="the bags extra (rosbags) reads the record
 from dynevent.bags.reader import check_bag
 from dynevent.conformance.judge.divergences import OPEN_ITEMS, label
 
-DATA = Path(__file__).resolve().parents[1] / "data" / "rmf_ros2"
-DOC = Path(__file__).resolve().parents[2] / "docs" / "divergences.md"
+DATA = Path(__file__).resolve().parents[2] / "data" / "rmf_ros2"
+DOC = Path(__file__).resolve().parents[3] / "docs" / "divergences.md"
 
 #: Open items: findings that are check's own misreading of what a recording does not hold.
 OPEN = OPEN_ITEMS
@@ -80,7 +80,7 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("cancel_seen_late", "R9.1", "goal_status"): 1,
         ("response_seen_late", "R2.2", "status_mismatch"): 18,
     },
-    # the probe's calibration run (tests/tools/test_probe_calibration.py): every case but the stubborn
+    # the probe's calibration run (tests/conformance/test_probe_calibration.py): every case but the stubborn
     # one, with the probe as it is now
     ("calibration", "standard"): {
         ("D1", "R4.6", "accepted_busy"): 1,
