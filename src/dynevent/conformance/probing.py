@@ -38,6 +38,7 @@ from dynevent.conformance.probe_cases import Case, Finding, Verdict
 from dynevent.errors import FileError, ProbeError
 from dynevent.server import machine
 from dynevent.wire._fields import U64_MAX
+from dynevent.wire._text import goal_text
 from dynevent.wire.messages import (
     DynamicEventDescription,
     DynamicEventStatus,
@@ -310,11 +311,7 @@ class _TimedOut(_Unreachable):
 
 
 def _describe_goal(goal: Goal) -> str:
-    kind = {0: "type 0", 1: "NEXT", 2: "CANCEL", 3: "FINISHED"}.get(
-        goal.event_type, f"type {goal.event_type}"
-    )
-    detail = f" {goal.category} {goal.description}" if goal.event_type == EventType.NEXT else ""
-    return f"sent {kind} seq={goal.dynamic_event_seq} id={goal.id}{detail}"
+    return f"sent {goal_text(goal)}"
 
 
 def _describe_answer(exchange: Exchange) -> str:

@@ -58,6 +58,7 @@ from dynevent.sim.config import (
     load_config,
     machine_config,
 )
+from dynevent.wire._text import status_text
 from dynevent.wire.vocab import Compatibility
 
 __all__ = ["BEGIN_COMMAND_TOPIC", "CategorySpec", "ServeConfig", "ServeError", "load_config", "run"]
@@ -113,9 +114,7 @@ def _describe(output: outs.Output | outs.Rejected) -> str | None:
     if isinstance(output, outs.PublishBegin):
         return f"begin: run {output.message.dynamic_event_seq}"
     if isinstance(output, outs.PublishStatus):
-        message = output.message
-        phase = ("INACTIVE", "WAITING", "RUNNING")[message.dynamic_state]
-        return f"status: {phase} seq={message.dynamic_event_seq} id={message.id} {message.status}"
+        return f"status: {status_text(output.message)}"
     if isinstance(output, outs.StartChild):
         return f"start: child {output.id} {output.category} {output.description}"
     if isinstance(output, (outs.CancelChild, outs.KillChild)):
