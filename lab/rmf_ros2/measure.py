@@ -205,8 +205,30 @@ def comparison(out: Path) -> str:
               "| label | findings then | findings now |", "|---|---|---|"]  # fmt: skip
     for key in sorted(set(then_seen) | set(now_seen)):
         lines.append(f"| {key} | {then_seen.get(key, 0)} | {now_seen.get(key, 0)} |")
-    lines += ["", f"{changed} case verdict(s) changed."]
+    lines += ["", f"{changed} case verdict(s) changed.", *replayed(out / "probe-bag")]
     return "\n".join(lines) + "\n"
+
+
+def replayed(bag: Path) -> list[str]:
+    """serve's rmf_ros2 mode driven through the new probe session (the clients' goals and the site's
+    events, dynevent.conformance.replay): each difference left, with the divergence it stands for
+    ("?": none recorded yet), and the ids the site's children took."""
+    from dynevent.bags import bag_records
+    from dynevent.conformance.judge.divergences import label_difference
+    from dynevent.conformance.replay import compare_recording
+    from dynevent.sim.config import ServeConfig, machine_config
+
+    if not bag.exists():
+        return []
+    served = machine_config(ServeConfig(places=("dock", *PLACES, "lobby"), compatibility="rmf_ros2"))
+    lines = ["", "## serve's rmf_ros2 mode, replayed through the new probe session", ""]
+    for (fleet, robot), records in bag_records(bag).items():
+        comparison = compare_recording(records, served, fleet=fleet, robot=robot, source=str(bag))
+        lines.append(f"{fleet}/{robot}: {comparison.goals} goals replayed, {len(comparison.differences)} "
+                     "difference(s)")  # fmt: skip
+        lines += [f"- {', '.join(label_difference(item))}: {item}" for item in comparison.differences]
+        lines += [f"- the site's ids: {item}" for item in comparison.counter]
+    return lines
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -22,8 +22,9 @@ import pytest
 pytest.importorskip("rosbags", reason="the bags extra (rosbags) reads the recordings")
 
 from dynevent.bags.reader import bag_records
+from dynevent.conformance.judge.divergences import label_difference
 from dynevent.conformance.judge.trace import read_trace, step_records
-from dynevent.conformance.replay import Comparison, Difference, compare_recording
+from dynevent.conformance.replay import Comparison, compare_recording
 from dynevent.errors import TraceError
 from dynevent.server import inputs as ins
 from dynevent.server import machine
@@ -42,27 +43,6 @@ def served_as(compatibility: str) -> ServerConfig:
     return machine_config(ServeConfig(places=PLACES, compatibility=compatibility))
 
 
-def label(difference: Difference) -> tuple[str, ...]:
-    """The D-numbers a difference between the adapter and serve's rmf_ros2 mode stands for."""
-    recorded, replayed = " ".join(difference.recorded), " ".join(difference.replayed)
-    found: list[str] = []
-    if difference.channel == "statuses":
-        if "WAITING uninitialized id=0" in recorded and "canceled" not in recorded:
-            found.append("D26")  # and the standby before it, where the recorder missed that one
-        if "WAITING standby" in recorded and "RUNNING standby" in replayed:
-            found.append("D1")  # a CANCEL frees the robot while its child winds down
-        if "WAITING canceled" in recorded and "RUNNING canceled" in replayed:
-            found.append("D28")  # mended (R17.4): no recording shows it any more
-    if difference.channel == "feedback":
-        if re.search(r"goal \d+: (completed|canceled) id=#\d+", recorded) and "id=#" not in replayed:
-            found.append("D32")  # mended (R17.7): no recording shows it any more
-        if "logs warning" in replayed and "logs warning" not in recorded:
-            found.append("D11")
-    if difference.channel == "answers" and "failed to begin" in recorded and "canceled" in replayed:
-        found.append("D1")  # the second CANCEL found the robot freed by the first, and idle
-    return tuple(found) or ("?",)
-
-
 def compared(name: str, compatibility: str = "rmf_ros2") -> Comparison:
     ((key, records),) = bag_records(DATA / name).items()
     return compare_recording(records, served_as(compatibility), fleet=key[0], robot=key[1])
@@ -70,7 +50,7 @@ def compared(name: str, compatibility: str = "rmf_ros2") -> Comparison:
 
 def labels(comparison: Comparison) -> collections.Counter[tuple[str, str]]:
     return collections.Counter(
-        (name, item.channel) for item in comparison.differences for name in label(item)
+        (name, item.channel) for item in comparison.differences for name in label_difference(item)
     )
 
 
@@ -97,7 +77,7 @@ COUNTER = {
 def test_serve_in_rmf_ros2_mode_parts_from_the_adapter_only_where_the_page_says(name: str) -> None:
     comparison = compared(name)
     found = labels(comparison)
-    assert all(label_ != "?" for label_, _ in found), [str(d) for d in comparison.differences]
+    assert all(name != "?" for name, _ in found), [str(d) for d in comparison.differences]
     assert dict(found) == EXPECTED[name]
     # every goal of the recording was replayed (probe's first two lost their requests: it starts after)
     assert comparison.goals == {"send": 7, "probe": 31, "stubborn": 1}[name]

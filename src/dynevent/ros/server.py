@@ -618,38 +618,41 @@ class DynamicEventServer:
             self._ros.begin.publish(message)
             self._ros.fleet_begin.publish(message)
         else:
-            self._carry_out_other(output)
+            _carry_out_effect(self, output)
 
-    def _carry_out_other(self, output: outs.Output) -> None:
-        holds = self._stubbornness
-        if isinstance(output, outs.StubbornBegin):
-            self._log.info(f"stubborn for {output.period:g} s")
-            self._ros.refresh(True)
-            if holds is not None:
-                holds.begin(output.period, output.map_name, output.x, output.y)
-        elif isinstance(output, outs.StubbornHold):
-            if holds is not None:
-                holds.hold(output.period, output.map_name, output.x, output.y)
-        elif isinstance(output, outs.StubbornDelay):
-            if holds is not None:
-                holds.delay(output.delay)
-        elif isinstance(output, outs.StubbornEnd):
-            self._ros.refresh(False)
-            if holds is not None:
-                holds.end()
-        elif isinstance(output, outs.DynamicEventFinished):
-            self._log.info(f"dynamic event finished: {output.status}")
-            if self._on_finished is not None:
-                self._on_finished(output.status)
-        elif isinstance(output, outs.InterruptConfirmed):
-            if self._on_interrupt_confirmed is not None:
-                self._on_interrupt_confirmed()
-        elif isinstance(output, outs.Log):
-            _LOG_CALLS[output.entry.tier](self._log, output.entry.text)
-        elif isinstance(output, outs.StubbornClamped):
-            self._log.warning(f"stubborn_period {output.requested:g} s clamped to {output.applied:g} s")
-        elif isinstance(output, (outs.SeqWrapped, outs.Ignored)):
-            self._log.debug(repr(output))
+
+def _carry_out_effect(server: DynamicEventServer, output: outs.Output) -> None:
+    """Carry out an output that is neither an answer, a publication nor a child's: stubbornness, the
+    run's end, an interruption confirmed, a log line, a notice."""
+    holds = server._stubbornness
+    if isinstance(output, outs.StubbornBegin):
+        server._log.info(f"stubborn for {output.period:g} s")
+        server._ros.refresh(True)
+        if holds is not None:
+            holds.begin(output.period, output.map_name, output.x, output.y)
+    elif isinstance(output, outs.StubbornHold):
+        if holds is not None:
+            holds.hold(output.period, output.map_name, output.x, output.y)
+    elif isinstance(output, outs.StubbornDelay):
+        if holds is not None:
+            holds.delay(output.delay)
+    elif isinstance(output, outs.StubbornEnd):
+        server._ros.refresh(False)
+        if holds is not None:
+            holds.end()
+    elif isinstance(output, outs.DynamicEventFinished):
+        server._log.info(f"dynamic event finished: {output.status}")
+        if server._on_finished is not None:
+            server._on_finished(output.status)
+    elif isinstance(output, outs.InterruptConfirmed):
+        if server._on_interrupt_confirmed is not None:
+            server._on_interrupt_confirmed()
+    elif isinstance(output, outs.Log):
+        _LOG_CALLS[output.entry.tier](server._log, output.entry.text)
+    elif isinstance(output, outs.StubbornClamped):
+        server._log.warning(f"stubborn_period {output.requested:g} s clamped to {output.applied:g} s")
+    elif isinstance(output, (outs.SeqWrapped, outs.Ignored)):
+        server._log.debug(repr(output))
 
 
 class _RunningChildren:

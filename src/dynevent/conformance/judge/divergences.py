@@ -13,9 +13,10 @@ from __future__ import annotations
 import re
 
 from dynevent.conformance.judge.trace import Finding
+from dynevent.conformance.replay import Difference
 from dynevent.wire.vocab import Status
 
-__all__ = ["OPEN_ITEMS", "label"]
+__all__ = ["OPEN_ITEMS", "label", "label_difference"]
 
 # the status texts the judge's sentences quote
 _CANCELED, _COMPLETED = Status.CANCELED.value, Status.COMPLETED.value
@@ -106,3 +107,26 @@ def label(finding: Finding) -> str:
     if rule == "R5.2" and code == "goal_status" and "succeeded: completed id=0" in message:
         return "finished_seen_late"  # a FINISHED's answer (id 0), the FINISHED read after the run ended
     return "?"
+
+
+def label_difference(difference: Difference) -> tuple[str, ...]:
+    """The D-numbers a difference between the deployed server and serve's rmf_ros2 mode, replayed
+    through the same recording (:func:`dynevent.conformance.replay.compare_recording`), stands for;
+    ``("?",)`` for one no divergence explains."""
+    recorded, replayed = " ".join(difference.recorded), " ".join(difference.replayed)
+    found: list[str] = []
+    if difference.channel == "statuses":
+        if "WAITING uninitialized id=0" in recorded and _CANCELED not in recorded:
+            found.append("D26")  # and the standby before it, where the recorder missed that one
+        if "WAITING standby" in recorded and "RUNNING standby" in replayed:
+            found.append("D1")  # a CANCEL frees the robot while its child winds down
+        if "WAITING canceled" in recorded and "RUNNING canceled" in replayed:
+            found.append("D28")  # mended (R17.4): no recording shows it any more
+    if difference.channel == "feedback":
+        if re.search(r"goal \d+: (completed|canceled) id=#\d+", recorded) and "id=#" not in replayed:
+            found.append("D32")  # mended (R17.7): no recording shows it any more
+        if "logs warning" in replayed and "logs warning" not in recorded:
+            found.append("D11")
+    if difference.channel == "answers" and "failed to begin" in recorded and _CANCELED in replayed:
+        found.append("D1")  # the second CANCEL found the robot freed by the first, and idle
+    return tuple(found) or ("?",)
