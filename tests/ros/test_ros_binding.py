@@ -615,3 +615,34 @@ def test_a_received_message_the_mirror_refuses_is_the_senders_fault() -> None:
     assert isinstance(refused.value, RemoteError) and not isinstance(refused.value, LocalError)
     assert refused.value.field == "uuid", refused.value
     assert convert.uuid_from_ros(UUID(uuid=list(range(16)))) == "000102030405060708090a0b0c0d0e0f"
+
+
+@pytest.mark.spec("R21.1", "R21.4")
+def test_a_restarted_server_holds_its_restart_answers_before_it_first_spins(graph: Graph) -> None:
+    """A goal running when the process before ended is answered ``server restarted`` at the restart
+    (R21.1), and a client that asks for its result from then on gets that answer (R21.4): the answer
+    is held at the restart's step, not at the drain that carries the step out, which the executor may
+    take after the client's request (under load a client once got 'goal lost in a server restart')."""
+    from dynevent.server import inputs as ins
+    from dynevent.server.holder import RobotServer
+    from dynevent.wire.messages import Goal
+    from dynevent.wire.vocab import Failure, GoalStatus
+
+    before = RobotServer(FLEET, ROBOT, CONFIG)
+    before.step(ins.Begin(description="{}", event_id=1, now=1))
+    goal = Goal(dynamic_event_seq=1, event_type=1, category="go_to_place", description='"a"', id=2)
+    uuid = "5" * 32
+    before.step(ins.GoalSubmitted(goal_uuid=uuid, goal=goal, now=2))
+    assert before.state.running is not None and before.state.running.goal_uuid == uuid
+    held: list[Any] = []
+
+    def build(node: Any) -> DynamicEventServer:
+        server = DynamicEventServer(node, FLEET, ROBOT, CONFIG, Adapter(), state=before.state)
+        server.restart()
+        held.append(server._ros.action._owed(uuid))  # before the node first spins: no drain yet
+        return server
+
+    graph.node("restarted", build)
+    (answer,) = held
+    assert answer is not None, "the restart's answer is not held for a client that asks now"
+    assert (answer.status, answer.result.execution_failure) == (GoalStatus.ABORTED, Failure.RESTART.value)

@@ -408,6 +408,11 @@ class DynamicEventServer:
         if self._on_step is not None:  # under the lock: steps are seen in the order they were taken
             self._on_step(event, transition.outputs)
         self._keep(transition.state, transition.outputs)
+        for output in transition.outputs:  # a goal of the process before a restart (R21.1)
+            if isinstance(output, outs.AnswerGoal) and output.goal_uuid not in self._answers:
+                # its answer is given to a client that asks from now on (R21.4), not from the drain
+                # that carries the step out: a result request the executor takes first would find none
+                self._owed.setdefault(output.goal_uuid, output)
         self._outbox.extend(transition.outputs)
         return transition.outputs
 
