@@ -37,6 +37,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import IO
 
+from dynevent.errors import DyneventError
+
 HERE = Path(__file__).resolve().parent
 DATA = HERE.parents[1] / "tests" / "data" / "rmf_ros2"
 FLEET, ROBOT = "tinyRobot", "tinyRobot1"
@@ -135,7 +137,8 @@ def probe(out: Path, timeout: float, with_stubborn: bool) -> subprocess.Complete
     )  # fmt: skip
     done = run(argv, out / "probe-known.txt", timeout * 5 * len(cases))
     if done.returncode == 2:
-        raise Failed(f"the probe could not run: {done.stdout.strip().splitlines()[-1:]}")
+        said = (done.stderr.strip() or done.stdout.strip()).splitlines()[-1:] or ["(nothing said)"]
+        raise Failed(f"the probe could not run: {said[0]}")
     return done
 
 
@@ -143,10 +146,15 @@ def send_session(out: Path) -> None:
     """A NEXT to pantry; a NEXT to lounge, cancelled while it runs; FINISHED."""
 
     def send(*args: str, timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
-        argv = dynevent(
-            "send", "--fleet", FLEET, "--robot", ROBOT, "--introspection", "--timeout", "60", *args
-        )
-        return subprocess.run(argv, capture_output=True, text=True, timeout=timeout, check=False)
+        argv = dynevent("send", "--fleet", FLEET, "--robot", ROBOT, "--introspection", "--timeout", "60")
+        argv += args
+        try:
+            done = subprocess.run(argv, capture_output=True, text=True, timeout=timeout, check=False)
+        except subprocess.TimeoutExpired:
+            raise Failed(f"send {' '.join(args)}: not done within {timeout:g} s") from None
+        if done.returncode == 2:  # no server, no status, a bad request: the session cannot go on
+            raise Failed(f"send {' '.join(args)}: {(done.stderr.strip() or done.stdout.strip())[-300:]}")
+        return done
 
     said = [send("--place", "pantry")]
     lounge = dynevent("send", "--fleet", FLEET, "--robot", ROBOT, "--introspection", "--place", "lounge")
@@ -271,7 +279,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             record.stop()
         if site is not None:
             site.stop()
-    (out / "comparison.md").write_text(comparison(out), encoding="utf-8")
+    try:
+        (out / "comparison.md").write_text(comparison(out), encoding="utf-8")
+    except (OSError, DyneventError) as exc:
+        say(f"measure: the comparison could not be written: {exc}")
+        return 1
     say(f"comparison: {out / 'comparison.md'}")
     return 0
 

@@ -334,3 +334,21 @@ def test_a_case_whose_own_records_break_its_rules_fails_with_the_judges_finding(
     untraced = [_finding("next.status_after_child", probe_cases.Verdict.PASS)]
     verdicts, judged = probe_cases.judge_verdicts(_late_feedback("next.status_after_child"), untraced)
     assert verdicts == untraced and [item.finding.code for item in judged] == ["after_answer"]
+
+
+@pytest.mark.spec("R19.1")
+def test_a_late_record_of_a_goal_belongs_to_the_case_that_sent_it() -> None:
+    """A feedback after its goal's answer, received once a later case had begun: the finding is the
+    case's that sent the goal, not the later one's, which did nothing wrong; and a case the script
+    left ``info`` fails on a finding of its own rules too."""
+    text = _late_feedback()
+    late = text.index(LATE_FEEDBACK)
+    start = text.rindex("\n", 0, late) + 1
+    text = text[:start] + "# case request.seq_stale\n" + text[start:]  # the late feedback falls here
+    cases = [
+        _finding("next.runs_a_child", probe_cases.Verdict.INFO),
+        _finding("request.seq_stale", probe_cases.Verdict.PASS),
+    ]
+    verdicts, judged = probe_cases.judge_verdicts(text, cases)
+    assert [finding.verdict for finding in verdicts] == [probe_cases.Verdict.FAIL, probe_cases.Verdict.PASS]
+    assert judged == []

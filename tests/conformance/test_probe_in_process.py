@@ -6,10 +6,12 @@ the exchange.  The same expectations hold over DDS (tests/ros/test_ros_probe.py)
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import Any
 
 import attrs
 import pytest
@@ -19,6 +21,8 @@ from dynevent.conformance.in_process import InProcessLink, probe_in_process
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.conformance.probe_cases import CASES, Finding, Verdict
 from dynevent.conformance.probing import Options
+from dynevent.server import inputs as ins
+from dynevent.server import outputs as outs
 from dynevent.server.holder import RobotServer
 from dynevent.server.machine import State
 from dynevent.sim.config import CategorySpec, ServeConfig, machine_config
@@ -177,7 +181,7 @@ def test_the_command_line_probes_in_process(tmp_path: Path) -> None:
     assert f"{len(RMF_ROS2_FAILS)} of the failures known" in known.stdout
     for args, said in [
         (("--config", str(tmp_path / "none.json")), "--config"),
-        (("--first-seq", "x"), "--first-seq"),
+        (("--first-seq", "4294967296"), "--first-seq"),
         (("--cases", "nothing.here"), "--cases"),
     ]:
         wrong = probe(*args)
@@ -299,3 +303,121 @@ def test_a_server_that_starts_children_without_end_cannot_fill_the_link() -> Non
     findings = probing.run_cases(link, attrs.evolve(OPTIONS, deadline=30), list(CASES), lambda _: None)
     assert len(link._children) <= MAX_CHILDREN
     assert len(findings) == len(CASES) and link.clock() <= 30 + 3
+
+
+# --------------------------------------------------------------------------- edges the review found
+
+
+def _with_alarm(seconds: int) -> Any:
+    """A bound on a test of something that once never ended: SIGALRM fails it instead of hanging."""
+    import contextlib
+    import signal
+
+    @contextlib.contextmanager
+    def bounded() -> Any:
+        def expire(*_: object) -> None:
+            raise AssertionError(f"did not end within {seconds} s")
+
+        previous = signal.signal(signal.SIGALRM, expire)
+        signal.alarm(seconds)
+        try:
+            yield
+        finally:
+            signal.alarm(0)
+            signal.signal(signal.SIGALRM, previous)
+
+    return bounded()
+
+
+@pytest.mark.parametrize("timeout", [0.3, 0.7, 1.0000000001, 2.9])
+def test_a_server_that_accepts_a_next_and_never_runs_it_ends_every_wait(timeout: float) -> None:
+    """A NEXT accepted, no child shown, no answer: the wait for a running child takes short waits up to
+    its bound; simulated time rounded down once made one of them take no time, and the loop never
+    ended."""
+    first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
+    server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG), first)
+
+    def never_runs(event: Any) -> Any:
+        outputs = server.step(event)
+        if isinstance(event, ins.GoalStarted):  # started in the machine, nothing of it said
+            return tuple(output for output in outputs if isinstance(output, outs.GoalAccepted))
+        return outputs
+
+    link = InProcessLink(CONFIG, stepper=never_runs)
+    cases = [case for case in CASES if case.id == "next.busy"]
+    with _with_alarm(60):
+        findings = probing.run_cases(link, attrs.evolve(OPTIONS, timeout=timeout), cases, lambda _: None)
+    assert [finding.verdict for finding in findings] == [Verdict.MISSING], findings
+
+
+def test_a_status_of_an_unknown_state_is_a_verdict_not_a_traceback() -> None:
+    first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
+    server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG), first)
+
+    def odd_state(event: Any) -> Any:
+        return tuple(
+            attrs.evolve(output, message=attrs.evolve(output.message, dynamic_state=9))
+            if isinstance(output, outs.PublishStatus) and output.message.status == "standby"
+            and output.message.id > 1 else output
+            for output in server.step(event)
+        )  # fmt: skip
+
+    link = InProcessLink(CONFIG, stepper=odd_state)
+    cases = [case for case in CASES if case.id == "next.status_after_child"]
+    (finding,) = probing.run_cases(link, OPTIONS, cases, lambda _: None)
+    assert finding.verdict is Verdict.FAIL and "dynamic_state=9" in finding.seen, finding
+
+
+def test_a_case_that_needs_an_id_above_the_highest_is_not_run() -> None:
+    """The run's ids at the top of their range: the race's second NEXT would need 2**64 + 1."""
+    server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG))
+
+    def high(event: Any) -> Any:
+        if isinstance(event, ins.Begin):
+            event = attrs.evolve(event, event_id=2**64 - 2)
+        return server.step(event)
+
+    link = InProcessLink(CONFIG, stepper=high)
+    cases = [case for case in CASES if case.id == "next.race"]
+    (finding,) = probing.run_cases(link, OPTIONS, cases, lambda _: None)
+    assert finding.verdict is Verdict.MISSING and "2**64 - 1" in finding.seen, finding
+
+
+def test_the_deadline_bounds_the_first_wait_too() -> None:
+    link = InProcessLink(CONFIG, stepper=lambda event: ())
+    options = attrs.evolve(OPTIONS, timeout=100, deadline=1)
+    findings = probing.run_cases(link, options, list(CASES), lambda _: None)
+    assert link.clock() <= 1 + 0.1 and all(finding.verdict is not Verdict.PASS for finding in findings)
+
+
+def test_the_command_line_in_process_takes_the_servers_own_settings(tmp_path: Path) -> None:
+    """--first-seq, the configured first run, map and least stubborn period; a ROS flag or both ways
+    at once are one line."""
+
+    def probe(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run(
+            [sys.executable, "-m", "dynevent", "probe", *args],
+            capture_output=True, text=True, timeout=120, check=False,
+        )  # fmt: skip
+
+    assert "begin.seq_wrap" in probe("--loopback", "--first-seq", "5", "--cases", "begin.seq_wrap").stdout
+    wrapped = probe("--loopback", "--first-seq", "5", "--cases", "begin.seq_wrap")
+    assert "missing" in wrapped.stdout and "this run is 5" in wrapped.stdout, wrapped.stdout
+    config = tmp_path / "fleet.json"
+    config.write_text('{"first_seq": 7, "places": []}', encoding="utf-8")
+    configured = probe(
+        "--loopback", "--config", str(config), "--cases", "begin.seq_wrap", "next.runs_a_child"
+    )
+    assert "this run is 7" in configured.stdout, configured.stdout  # the file's first run
+    assert re.search(r"^next.runs_a_child +missing", configured.stdout, re.M), configured.stdout  # no place
+    clamp = probe("--loopback", "--stubborn-minimum", "10", "--cases", "stubborn.clamp_notice")
+    assert clamp.returncode == 0 and clamp.stdout.rstrip().endswith("1 pass"), clamp.stdout
+    for args, said in [
+        (("--loopback", "--impl", "true"), "--impl: not with --loopback"),
+        (("--loopback", "--introspection"), "--introspection: not with --loopback"),
+    ]:
+        wrong = probe(*args)
+        assert (
+            wrong.returncode == 2
+            and wrong.stderr == f"dynevent probe: {said}, which runs in this process, without ROS\n"
+        ), wrong.stderr

@@ -20,6 +20,7 @@ from __future__ import annotations
 import collections
 import heapq
 import itertools
+import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -36,12 +37,12 @@ from dynevent.errors import ImplementationError
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.holder import Execution, RobotServer
-from dynevent.server.machine import ServerConfig, State
+from dynevent.server.machine import ServerConfig
 from dynevent.sim.children import SimulatedChild
 from dynevent.sim.config import DEFAULT_DESCRIPTION, ServeConfig, machine_config
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.names import description_service
-from dynevent.wire.vocab import Compatibility, Status
+from dynevent.wire.vocab import Status
 
 __all__ = [
     "MAX_CHILDREN",
@@ -119,7 +120,7 @@ class InProcessLink(Link):
         robot = self.config.robots[0] if robot is None else robot
         super().__init__(self.config.fleet, robot, trace)
         self.now = START
-        first = attrs.evolve(State.new(self.fleet, robot), seq=(self.config.first_seq - 1) % 2**32)
+        first = self.config.first_state(robot)
         self._server = RobotServer(self.fleet, robot, machine_config(self.config), first)
         self._apply: Stepper = self._server.step if stepper is None else stepper
         self._agenda: list[tuple[int, int, Callable[[], None]]] = []
@@ -193,7 +194,8 @@ class InProcessLink(Link):
     def wait(self, condition: Callable[[], bool], timeout: float) -> bool:
         """Run what is due, in time order, until ``condition()`` holds or ``timeout`` seconds of
         simulated time have passed."""
-        end = self.now + max(round(timeout * _SECOND), 0)
+        # rounded up: a wait of any positive length lets time pass, so a loop of short waits ends
+        end = self.now + (max(math.ceil(timeout * _SECOND), 1) if timeout > 0 else 0)
         while not condition():
             if not self._agenda or self._agenda[0][0] > end:
                 self.now = max(self.now, end)
@@ -233,7 +235,7 @@ class InProcessLink(Link):
         return None if response is None else response.accepted
 
     def describe(self, timeout: float) -> tuple[Any, str]:
-        if self.config.compatibility is Compatibility.RMF_ROS2:  # serve offers none there, as rmf_ros2 (D17)
+        if not self.config.offers_description:  # as serve: none in rmf_ros2 mode (D17)
             return None, f"no description service {description_service(self.fleet, self.robot)}"
         outputs = self._apply(ins.DescriptionQuery(now=self.now))
         answer = next((output for output in outputs if isinstance(output, outs.DescriptionAnswer)), None)
@@ -274,7 +276,7 @@ class DriverServer:
     def __init__(self, implementation: Implementation, fleet: str, robot: str, config: ServeConfig) -> None:
         self.implementation = implementation
         self.broken: str | None = None
-        state = {"seq": (config.first_seq - 1) % 2**32}
+        state = {"seq": config.first_state(robot).seq}
         implementation.reset(fleet, robot, config_record(config), state)
 
     def __call__(self, event: ins.Input) -> tuple[outs.Output, ...]:

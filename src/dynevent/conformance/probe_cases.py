@@ -23,6 +23,7 @@ import enum
 import fnmatch
 import html
 import json
+import re
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Sequence
 
@@ -143,6 +144,10 @@ class Judged:
         )
 
 
+#: A trace record's goal UUID.
+_GOAL_UUID = re.compile(r'"goal_uuid"\s*:\s*"([0-9a-f]{32})"')
+
+
 def judge_exchange(text: str, findings: Sequence[Finding], known: Iterable[str] = ()) -> list[Judged]:
     """What the judge finds in the probe's trace ``text`` beside the cases' verdicts: every finding
     but those of a rule a case that holds it failed on (its verdict says so already); ``known`` are
@@ -152,14 +157,22 @@ def judge_exchange(text: str, findings: Sequence[Finding], known: Iterable[str] 
         finding.case.id: set(finding.case.rules) for finding in findings if finding.verdict is Verdict.FAIL
     }
     case_at: list[str] = [""]
+    goal_at: list[str] = [""]  # the goal a line's record names
+    sent_in: dict[str, str] = {}  # the case whose records hold a goal's request
     current = ""
     for line in text.splitlines():
         if line.startswith("# case "):
             current = line.removeprefix("# case ")
         case_at.append(current)
+        uuid = _GOAL_UUID.search(line) if line.startswith("{") else None
+        goal_at.append(uuid[1] if uuid else "")
+        if uuid and '"type":"goal"' in line.replace(" ", ""):
+            sent_in.setdefault(uuid[1], current)
     judged = []
     for finding in check_trace(text, "the probe's exchange").findings:
-        case = case_at[finding.line] if 0 < finding.line < len(case_at) else ""
+        at = finding.line if 0 < finding.line < len(case_at) else 0
+        # a late record of a goal belongs to the case that sent it, not to the case it fell in
+        case = sent_in.get(goal_at[at], case_at[at])
         if finding.rule in failed.get(case, ()):
             continue
         divergence = divergences.label(finding)
@@ -187,7 +200,7 @@ def judge_verdicts(
             if item.case == case.id and not item.uncertain and item.finding.rule in rules
         ]  # fmt: skip
         finding = scripted
-        if case.traced and mine and scripted.verdict in (Verdict.PASS, Verdict.NON_STRICT):
+        if case.traced and mine and scripted.verdict in (Verdict.PASS, Verdict.NON_STRICT, Verdict.INFO):
             first = mine[0].finding
             divergence = mine[0].label if mine[0].label.startswith("D") else None
             said = [

@@ -14,7 +14,7 @@ The cases reach the server through a :class:`Link`: raw access to one robot
 for what it hears).  dynevent.ros carries the link over DDS;
 :mod:`dynevent.conformance.in_process` runs the machine itself, as ``dynevent
 serve`` configures it, on simulated time, so that every case runs in the core
-test suite without ROS (``dynevent probe --in-process``).
+test suite without ROS (``dynevent probe --loopback``).
 """
 
 from __future__ import annotations
@@ -37,8 +37,8 @@ from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.conformance.probe_cases import Case, Finding, Verdict
 from dynevent.errors import FileError, ProbeError
 from dynevent.server import machine
-from dynevent.wire._fields import U64_MAX
-from dynevent.wire._text import goal_text
+from dynevent.wire._fields import U32_MAX, U64_MAX
+from dynevent.wire._text import goal_text, status_text
 from dynevent.wire.messages import (
     DynamicEventDescription,
     DynamicEventStatus,
@@ -62,10 +62,17 @@ __all__ = [
 
 _STANDBY, _UNDERWAY = Status.STANDBY.value, Status.UNDERWAY.value
 _COMPLETED, _CANCELED = Status.COMPLETED.value, Status.CANCELED.value
-_U32 = 2**32
+_U32 = U32_MAX + 1
 #: The configuration whose server numbers every child itself (id policy adapter): what a NEXT of id
 #: 0 asks of any server (R6.2).
 _SERVER_NUMBERS = machine.ServerConfig(id_policy="adapter")
+
+
+def _within_ids(goal_id: int) -> int:
+    """An id a case names beyond the next one; a case that needs one above 2**64 - 1 is not run."""
+    if goal_id > U64_MAX:
+        raise _Unreachable(f"the case needs id {goal_id}, above 2**64 - 1, the highest")
+    return goal_id
 
 
 def _fresh(last_id: int) -> int:
@@ -229,10 +236,15 @@ class Link:
     ) -> DynamicEventStatus | None:
         """The latest status once it satisfies ``condition``, or None after ``timeout`` seconds."""
 
-        def holds() -> bool:
-            return bool(self.statuses) and condition(self.statuses[-1])
+        matched: list[DynamicEventStatus] = []
 
-        return self.statuses[-1] if self.wait(holds, timeout) else None
+        def holds() -> bool:  # asked under the lock: the status that held is the one returned
+            if self.statuses and condition(self.statuses[-1]):
+                matched.append(self.statuses[-1])
+                return True
+            return False
+
+        return matched[-1] if self.wait(holds, timeout) else None
 
     def wait_seen(self, condition: Callable[[DynamicEventStatus], bool], since: int, timeout: float) -> bool:
         """Whether a status received after the first ``since`` satisfies ``condition``, waiting at
@@ -609,7 +621,7 @@ def _status_waiting(probe: Probe, case: Case) -> Finding:
     status = probe.waiting()
     seq = status.dynamic_event_seq
     begins = [begin.dynamic_event_seq for begin in probe.link.begins]
-    probe.note(f"status WAITING seq={seq} id={status.id} {status.status}; begins seen for runs {begins}")
+    probe.note(f"status {status_text(status)}; begins seen for runs {begins}")
     if status.status != _STANDBY:
         divergence = "D26" if status.status == Status.UNINITIALIZED.value else None
         return Finding(case, Verdict.FAIL, expected="WAITING, standby", seen=f"WAITING, {status.status}",
@@ -726,13 +738,12 @@ def _status_after_child(probe: Probe, case: Case) -> Finding:
             seen="no status after the child",
             absent=True,
         )
-    phase = DynamicState(after.dynamic_state).name
-    probe.note(f"status {phase} seq={after.dynamic_event_seq} id={after.id} {after.status}")
+    probe.note(f"status {status_text(after)}")
     if after.dynamic_state == DynamicState.WAITING and after.status == _STANDBY:
         return Finding(case, Verdict.PASS, expected=f"WAITING, standby, id {child}", seen="so")
     divergence = "D2" if after.dynamic_state == DynamicState.RUNNING else None
     return Finding(case, Verdict.FAIL, expected=f"WAITING, standby, id {child}",
-                   seen=f"{phase}, {after.status}, id {after.id}", divergence=divergence)  # fmt: skip
+                   seen=f"status {status_text(after)}", divergence=divergence)  # fmt: skip
 
 
 def _busy(probe: Probe, case: Case) -> Finding:
@@ -753,7 +764,8 @@ def _busy_finished(probe: Probe, case: Case) -> Finding:
 def _cancel_wrong_id(probe: Probe, case: Case) -> Finding:
     with probe.child() as (_, child_id):
         status = probe.link.status or probe.any_status()
-        return probe.refused(case, _goal(status, EventType.CANCEL, id=child_id + 1000), divergence="D8")
+        other = _within_ids(child_id + 1000)
+        return probe.refused(case, _goal(status, EventType.CANCEL, id=other), divergence="D8")
 
 
 def _cancel_running_child(probe: Probe, case: Case) -> Finding:
@@ -791,10 +803,9 @@ def _status_after_cancel(probe: Probe, case: Case, child_id: int, since: int) ->
     for after in filter(shows_the_end, probe.link.history()[since:]):
         if after.dynamic_state == DynamicState.WAITING and after.status == _STANDBY:
             continue
-        phase = DynamicState(after.dynamic_state).name
-        probe.note(f"status {phase} seq={after.dynamic_event_seq} id={after.id} {after.status}")
+        probe.note(f"status {status_text(after)}")
         divergence = "D2" if after.dynamic_state == DynamicState.RUNNING else "D28"
-        seen = f"{phase}, {after.status}, id {after.id}"
+        seen = f"status {status_text(after)}"
         return Finding(case, Verdict.FAIL, expected=expected, seen=seen, divergence=divergence)
     return Finding(case, Verdict.PASS, expected=expected, seen="so")
 
@@ -940,10 +951,7 @@ def _stateless_id(probe: Probe, case: Case) -> Finding:
     after = probe.link.wait_status(lambda s: s.id == child and machine.robot_waits(s), probe.timeout)
     if after is None:
         raise _TimedOut(f"no status after child {child} ended within {probe.timeout:g} s")
-    phase = DynamicState(after.dynamic_state).name
-    probe.note(
-        f"status {phase} seq={after.dynamic_event_seq} id={after.id} {after.status}: the client's only state"
-    )
+    probe.note(f"status {status_text(after)}: the client's only state")
     exchange = probe.send(probe.next_goal(after))  # seq and the fresh id from that status alone
     fresh = _fresh(after.id)
     finding = _ran_finding(probe, case, exchange, fresh, f"child {fresh} runs and completes")
@@ -952,7 +960,7 @@ def _stateless_id(probe: Probe, case: Case) -> Finding:
 
 def _race(probe: Probe, case: Case) -> Finding:
     status = probe.waiting()
-    goals = [probe.next_goal(status), probe.next_goal(status, goal_id=status.id + 2)]
+    goals = [probe.next_goal(status), probe.next_goal(status, goal_id=_within_ids(status.id + 2))]
     exchanges = [probe.link.send(goal) for goal in goals]  # at once: no wait between them
     probe.exchanges.extend(exchanges)
     for goal, exchange in zip(goals, exchanges, strict=True):
@@ -1127,7 +1135,7 @@ def _describe_query(probe: Probe, case: Case) -> Finding:
     return Finding(case, Verdict.PASS, expected=expected, seen="so")
 
 
-_LAST_SEQ = _U32 - 1
+_LAST_SEQ = U32_MAX
 
 
 def _seq_wrap(probe: Probe, case: Case) -> Finding:
@@ -1218,8 +1226,9 @@ def run_cases(
     (a list the caller keeps, so that an interruption keeps those of the cases that ended); the
     findings."""
     findings = [] if findings is None else findings
-    probe = Probe(link, _ready(link, options, cases, say))
-    if not link.statuses:  # _ready waited --timeout for one
+    probe = Probe(link, options)  # the deadline runs from here: the first wait is within it too
+    probe.options = _ready(link, options, cases, say, probe.timeout)
+    if not link.statuses:  # _ready waited --timeout (or what the deadline left) for one
         offered = link.offered.get("status")
         cause = f": the status topic is {offered}" if offered is not None else " (R1.4)"
         probe.dead["status"] = f"no status was heard within {options.timeout:g} s{cause}"
@@ -1234,11 +1243,14 @@ def run_cases(
     return findings
 
 
-def _ready(link: Link, options: Options, cases: list[Case], say: Callable[[str], None]) -> Options:
+def _ready(
+    link: Link, options: Options, cases: list[Case], say: Callable[[str], None], timeout: float
+) -> Options:
     """Say, before any case runs, what the run will lack: a status (R1.4: a late subscriber gets one at
-    once), or a place for the cases that send the robot somewhere (taken, without ``--place``, from
-    the go_to_place estimate of the run's description when it names one)."""
-    if link.wait_status(lambda status: True, options.timeout) is None:
+    once, waited for ``timeout`` seconds), or a place for the cases that send the robot somewhere
+    (taken, without ``--place``, from the go_to_place estimate of the run's description when it names
+    one).  A begin topic offered so that the probe's reader cannot match it is said too."""
+    if link.wait_status(lambda status: True, timeout) is None:
         offered = link.offered.get("status")
         why = (
             f"the status topic is {offered}"
@@ -1246,7 +1258,9 @@ def _ready(link: Link, options: Options, cases: list[Case], say: Callable[[str],
             else "its status topic should hold the latest status for a late subscriber "
             "(transient-local, R1.4)"
         )
-        say(f"no status from {options.fleet}/{options.robot} within {options.timeout:g} s: {why}")
+        say(f"no status from {options.fleet}/{options.robot} within {timeout:g} s: {why}")
+    if "begin" in link.offered:
+        say(f"the begin topic of {options.fleet}/{options.robot} is {link.offered['begin']}")
     if options.place is not None:
         return options
     placed = [case for case in cases if case.needs in ("child", "place")]

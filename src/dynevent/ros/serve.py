@@ -336,7 +336,7 @@ class _Robots:
         self.rebegin_timers: dict[str, Any] = {}
         # the description query (R16) as dynevent offers it; rmf_ros2 has none (D17), nor has a
         # rmf_task_msgs without the project's DescribeDynamicEvent
-        self.description_service = None if config.compatibility is Compatibility.RMF_ROS2 else describe_type()
+        self.description_service = describe_type() if config.offers_description else None
         self._timers_lock = threading.Lock()  # begin commands arrive on lane 0's thread
 
     def observer(self, robot: str) -> Callable[[outs.Output | outs.Rejected], None]:
@@ -378,7 +378,7 @@ class _Robots:
             lane.children,
             begin_publisher=self.begins,
             description_service=self.description_service,
-            state=restored or self._fresh(robot),
+            state=restored or self.config.first_state(robot),
             on_state=store.save if store is not None else None,
             on_answers=(lambda answers: store.keep_answers(fleet, robot, answers)) if store else None,
             answers=store.answers(fleet, robot) if store is not None else None,
@@ -400,10 +400,6 @@ class _Robots:
             server.restart()
         if not server.state.active:
             server.begin(DEFAULT_DESCRIPTION, 1)
-
-    def _fresh(self, robot: str) -> State:
-        """A robot's state before its first run: the begin that follows gives it ``first_seq``."""
-        return attrs.evolve(State.new(self.config.fleet, robot), seq=(self.config.first_seq - 1) % 2**32)
 
     def _trace(self, robot: str) -> TraceWriter | None:
         path = self.watch.trace

@@ -19,7 +19,8 @@ import attrs
 from dynevent import descriptions, files
 from dynevent.descriptions import shapes
 from dynevent.errors import FileError, InvalidConfig, InvalidName, MissingExtra, ServeError, short_repr
-from dynevent.server.machine import ServerConfig, Validator, any_description
+from dynevent.server.machine import ServerConfig, State, Validator, any_description
+from dynevent.wire._fields import U32_MAX
 from dynevent.wire.names import validate_token
 from dynevent.wire.vocab import Compatibility, IdPolicy
 
@@ -95,6 +96,16 @@ class ServeConfig:
         """The robots this process serves: its shard of the fleet's robots."""
         index, count = self.shard
         return tuple(robot for robot in self.robots if shard_of(robot, count) == index)
+
+    def first_state(self, robot: str) -> State:
+        """A robot's state before its first run: the begin that follows gives it :attr:`first_seq`."""
+        return attrs.evolve(State.new(self.fleet, robot), seq=(self.first_seq - 1) & U32_MAX)
+
+    @property
+    def offers_description(self) -> bool:
+        """Whether the robots answer the description query (R16): not in rmf_ros2 mode, as rmf_ros2
+        offers none (D17)."""
+        return self.compatibility is not Compatibility.RMF_ROS2
 
 
 #: A shard's numbers: ASCII digits (``str.isdigit`` takes ``²`` too), at most six of them.

@@ -539,41 +539,72 @@ def _probe(args: argparse.Namespace) -> int:
 def _probe_in_process(
     args: argparse.Namespace, check: Callable[[], Any], options: Callable[[Any], Any]
 ) -> int:
-    """``dynevent probe --loopback``: the cases against dynevent's own machine as ``dynevent serve``
-    would run the robot (``--config``, ``--compatibility``), on simulated time, with no ROS."""
-    import attrs
-
-    from dynevent.conformance import in_process, probing
-    from dynevent.conformance.runner import MAX_TIMEOUT, ExternalImplementation
-    from dynevent.errors import DyneventError
-    from dynevent.sim.config import load_config
+    """``dynevent probe --loopback`` (dynevent's own machine as ``dynevent serve`` would run the robot:
+    ``--config``, ``--compatibility``, ``--first-seq``) or ``--impl CMD`` (an implementation behind the
+    driver protocol, configured the same), on simulated time, with no ROS."""
+    from dynevent.conformance import in_process
+    from dynevent.errors import DyneventError, ProbeError
 
     try:
         cases = check()
-        config = load_config(
-            args.config, fleet=args.fleet, robots=[args.robot], compatibility=args.compatibility,
-            first_seq=args.first_seq,
-        )  # fmt: skip
-        chosen = options(probing.Options)
-        if chosen.place is None:  # the simulated map takes any place when none is configured
-            named = [str(place) for place in config.places or () if place is not None] or in_process.PLACES
-            chosen = attrs.evolve(chosen, place=named[0], more_places=tuple(named[1:3]))
+        for flag, given in (("--impl", args.loopback and args.impl), ("--introspection", args.introspection),
+                            ("--ros-args", args.ros_args)):  # fmt: skip
+            if given:
+                mode = "--loopback" if args.loopback else "--impl"
+                raise ProbeError(f"{flag}: not with {mode}, which runs in this process, without ROS")
+        config, chosen = _in_process_options(args, options)
         if not args.impl:
             return in_process.probe_in_process(chosen, cases, _say, config)[0]
-        implementation = ExternalImplementation(args.impl, timeout=min(args.timeout, MAX_TIMEOUT))
-        try:
-            _say(f"implementation: {implementation.name}")
-            server = in_process.DriverServer(implementation, config.fleet, args.robot, config)
-            code, _ = in_process.probe_in_process(chosen, cases, _say, config, stepper=server)
-        finally:
-            implementation.close()
-        if server.broken is not None:
-            _say(f"the implementation broke the driver protocol at {server.broken}")
-            return max(code, 1)
-        return code
+        return _probe_implementation(args, chosen, cases, config)
     except DyneventError as exc:
         print(f"dynevent probe: {exc}", file=sys.stderr)
         return 2
+
+
+def _in_process_options(args: argparse.Namespace, options: Callable[[Any], Any]) -> tuple[Any, Any]:
+    """The served configuration and the probe's options for ``--loopback`` and ``--impl``: the robot
+    starts at the seq wrap unless ``--first-seq`` or the ``--config`` file says where; the places, the
+    configured ones (the simulated map takes any place when none is configured); the least stubborn
+    period, the configured machine's."""
+    import attrs
+
+    from dynevent.conformance import in_process, probing
+    from dynevent.sim.config import load_config, machine_config
+
+    first_seq = args.first_seq
+    if first_seq is None and args.config is None:
+        first_seq = 2**32 - 1
+    config = load_config(
+        args.config, fleet=args.fleet, robots=[args.robot], compatibility=args.compatibility,
+        first_seq=first_seq,
+    )  # fmt: skip
+    chosen = attrs.evolve(options(probing.Options), stubborn_minimum=machine_config(config).stubborn_minimum)
+    if chosen.place is None:
+        named = [str(place) for place in config.places or () if place is not None]
+        if config.places is None:
+            named = list(in_process.PLACES)
+        if named:
+            chosen = attrs.evolve(chosen, place=named[0], more_places=tuple(named[1:3]))
+    return config, chosen
+
+
+def _probe_implementation(args: argparse.Namespace, chosen: Any, cases: Any, config: Any) -> int:
+    """``--impl CMD``: the driver started (its start bounded apart from --timeout), probed, closed."""
+    from dynevent.conformance import in_process
+    from dynevent.conformance.runner import MAX_TIMEOUT, ExternalImplementation
+
+    implementation = ExternalImplementation(args.impl, timeout=min(max(args.timeout, 10.0), MAX_TIMEOUT))
+    try:
+        _say(f"implementation: {implementation.name}")
+        implementation.timeout = min(args.timeout, MAX_TIMEOUT)  # each request, once it has started
+        server = in_process.DriverServer(implementation, config.fleet, args.robot, config)
+        code, _ = in_process.probe_in_process(chosen, cases, _say, config, stepper=server)
+    finally:
+        implementation.close()
+    if server.broken is not None:
+        _say(f"the implementation broke the driver protocol at {server.broken}")
+        return max(code, 1)
+    return code
 
 
 def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -682,9 +713,9 @@ def _add_loopback_arguments(parser: argparse.ArgumentParser) -> None:
     )  # fmt: skip
     loopback.add_argument("--config", metavar="FILE", help="with --loopback or --impl: serve's --config file")
     loopback.add_argument(
-        "--first-seq", default=2**32 - 1, metavar="SEQ",
-        help="with --loopback or --impl: the seq of the robot's first run (default: %(default)s, so that "
-        "the next run shows the seq wrap to 0 and begin.seq_wrap runs)",
+        "--first-seq", type=int, metavar="SEQ",
+        help="with --loopback or --impl: the seq of the robot's first run (default: the --config file's, "
+        "else 4294967295, so that the next run shows the seq wrap to 0 and begin.seq_wrap runs)",
     )  # fmt: skip
     loopback.add_argument(
         "--compatibility", choices=[mode.value for mode in Compatibility],
