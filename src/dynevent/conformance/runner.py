@@ -56,6 +56,9 @@ __all__ = [
 
 #: The longest an external implementation may take to answer one request, in seconds.
 MAX_TIMEOUT = 3600.0
+#: The least time a program is given to start and answer its ``hello`` (seconds), whatever the
+#: timeout of a request: an interpreter's start on a busy machine is no answer of the protocol's.
+START_TIMEOUT = 10.0
 #: The longest answer line an external implementation may write, in bytes.
 MAX_ANSWER_BYTES = 16 * 1024 * 1024
 #: The most values (a separator, an array or an object each) an answer line may hold: what parsing
@@ -179,7 +182,7 @@ class ExternalImplementation:
         assert self._process.stderr is not None
         threading.Thread(target=_keep_tail, args=(self._process.stderr, self._stderr), daemon=True).start()
         try:
-            hello = self._request({"op": "hello"})
+            hello = self._request({"op": "hello"}, max(self.timeout, START_TIMEOUT))
             if hello.get("ok") is not True or hello.get("protocol") != 1:
                 raise ImplementationError(f"it does not speak driver protocol 1: {hello!r}")
         except ImplementationError as exc:
@@ -216,14 +219,15 @@ class ExternalImplementation:
 
     # ------------------------------------------------------------------ one exchange
 
-    def _request(self, request: Any) -> dict[str, Any]:
+    def _request(self, request: Any, timeout: float | None = None) -> dict[str, Any]:
+        """Send one request; its answer, within ``timeout`` seconds (the request timeout when None)."""
         assert self._process is not None and self._process.stdin is not None
         try:
             self._process.stdin.write((_json.dumps(request) + "\n").encode("utf-8"))
             self._process.stdin.flush()
         except OSError:
             raise self._break(f"the driver closed its input (exit code {self._process.poll()})") from None
-        raw = self._read_line()
+        raw = self._read_line(self.timeout if timeout is None else timeout)
         try:
             line = raw.decode("utf-8")
         except UnicodeDecodeError as exc:
@@ -239,16 +243,16 @@ class ExternalImplementation:
             raise self._break(f"the driver answered with a JSON value that is not an object: {line[:200]!r}")
         return answer
 
-    def _read_line(self) -> bytes:
-        """One answer line, within the timeout however the program writes it (a half line and a stall too)."""
+    def _read_line(self, timeout: float) -> bytes:
+        """One answer line, within ``timeout`` however the program writes it (a half line and a stall too)."""
         assert self._process is not None and self._process.stdout is not None
         stdout = self._process.stdout
-        deadline = time.monotonic() + self.timeout
+        deadline = time.monotonic() + timeout
         while b"\n" not in self._pending:
             left = deadline - time.monotonic()
             ready, _, _ = select.select([stdout], [], [], max(left, 0.0))
             if not ready:
-                raise self._break(f"the driver did not answer within {self.timeout:g} s", stalled=True)
+                raise self._break(f"the driver did not answer within {timeout:g} s", stalled=True)
             chunk = os.read(stdout.fileno(), 65536)
             if not chunk:
                 try:

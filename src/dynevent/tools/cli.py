@@ -589,14 +589,13 @@ def _in_process_options(args: argparse.Namespace, options: Callable[[Any], Any])
 
 
 def _probe_implementation(args: argparse.Namespace, chosen: Any, cases: Any, config: Any) -> int:
-    """``--impl CMD``: the driver started (its start bounded apart from --timeout), probed, closed."""
+    """``--impl CMD``: the driver started (given at least the runner's START_TIMEOUT), probed, closed."""
     from dynevent.conformance import in_process
     from dynevent.conformance.runner import MAX_TIMEOUT, ExternalImplementation
 
-    implementation = ExternalImplementation(args.impl, timeout=min(max(args.timeout, 10.0), MAX_TIMEOUT))
+    implementation = ExternalImplementation(args.impl, timeout=min(args.timeout, MAX_TIMEOUT))
     try:
         _say(f"implementation: {implementation.name}")
-        implementation.timeout = min(args.timeout, MAX_TIMEOUT)  # each request, once it has started
         server = in_process.DriverServer(implementation, config.fleet, args.robot, config)
         code, _ = in_process.probe_in_process(chosen, cases, _say, config, stepper=server)
     finally:
