@@ -27,12 +27,11 @@ from typing import Any
 import attrs
 
 from dynevent import descriptions
-from dynevent.conformance import probing
+from dynevent.conformance import probing, runner
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.conformance.probe_cases import Case, Finding
 from dynevent.conformance.probing import Exchange, Link, Options
 from dynevent.conformance.records import InvalidRecord, input_to_json, output_from_json
-from dynevent.conformance.runner import Implementation
 from dynevent.errors import ImplementationError
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
@@ -273,7 +272,9 @@ class DriverServer:
     applied.  Once it breaks the protocol (dies, stalls, answers what is not a record) it says
     nothing more, and :attr:`broken` says why."""
 
-    def __init__(self, implementation: Implementation, fleet: str, robot: str, config: ServeConfig) -> None:
+    def __init__(
+        self, implementation: runner.Implementation, fleet: str, robot: str, config: ServeConfig
+    ) -> None:
         self.implementation = implementation
         self.broken: str | None = None
         state = {"seq": config.first_state(robot).seq}
