@@ -23,7 +23,8 @@ OLD_HOMES = {
 def _modules() -> list[str]:
     names = []
     for info in pkgutil.walk_packages(dynevent.__path__, "dynevent."):
-        if info.name.startswith(("dynevent.ros", "dynevent.testing")) or info.name == "dynevent.__main__":
+        needs = ("dynevent.ros", "dynevent.tools.live", "dynevent.testing")
+        if info.name.startswith(needs) or info.name == "dynevent.__main__":
             continue  # ROS 2 and hypothesis may be absent; their errors are checked below by name
         names.append(info.name)
     return names

@@ -189,11 +189,14 @@ def test_no_class_or_function_is_too_long_to_read_as_one_thing() -> None:
 
 def test_the_ros_entry_points_take_typed_options_not_the_command_lines_namespace() -> None:
     """serve, send, record and probe are called with typed options the command line builds: none of
-    dynevent.ros reads argparse, and judging below the command line does not either."""
+    their bodies (dynevent.tools.live) nor of dynevent.ros reads argparse, and judging below the
+    command line does not either."""
+    below = ("ros", "conformance", "bags", "sim")
     readers = sorted(
         module
         for module, path in _modules()
-        if _part(module) in ("ros", "conformance", "bags", "sim") and "argparse" in _top_imports(path)
+        if (_part(module) in below or module.startswith("dynevent.tools.live"))
+        and "argparse" in _top_imports(path)
     )
     assert readers == [], readers
 
@@ -297,3 +300,25 @@ def test_the_observers_parts_change_what_the_rooms_keep_only_through_their_metho
         "line 10: seen.log.append() called",
         "line 11: seen.b changed",
     ]
+
+
+#: The most lines the ROS binding may hold.  It is a binding: the nodes, the action server and client,
+#: conversions, spinning, the participant, the probe's link over DDS, the recorder's subscriptions and
+#: the simulated fleet's hosting.  What the commands do with it (their terminal lines, their reports)
+#: is dynevent.tools.live's, and what needs no rclpy is below it (the adapter's side of a server, a
+#: goal run, the restart watch, the probe's cases).
+ROS_LINES = 2_400
+
+
+def test_the_ros_package_is_a_binding_only() -> None:
+    """Under :data:`ROS_LINES`, and it writes nothing to a terminal: every line a command shows goes
+    through the command's own ``say`` and the one progress writer (dynevent.tools._progress)."""
+    sources = {path.name: path.read_text(encoding="utf-8") for path in sorted((SRC / "ros").glob("*.py"))}
+    lines = sum(len(text.splitlines()) for text in sources.values())
+    assert lines < ROS_LINES, f"dynevent/ros holds {lines} lines"
+    writers = {name for name, text in sources.items() for word in ("print(", "sys.stdout", "sys.stderr",
+               "isatty") if word in text}  # fmt: skip
+    assert writers == set(), writers
+    live = SRC / "tools" / "live"
+    bodies = {path.name: path.read_text(encoding="utf-8") for path in live.glob("*.py")}
+    assert {name for name, text in bodies.items() if "\\033[" in text or "\\x1b[" in text} == set()

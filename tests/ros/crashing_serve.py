@@ -14,18 +14,18 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-from dynevent.ros import serve
 from dynevent.server import outputs as outs
 from dynevent.tools.cli import main
+from dynevent.tools.live import serve
 
 POINTS: dict[str, type[outs.Output]] = {"started": outs.StartChild, "answered": outs.AnswerGoal}
 
 
 def _crashing(point: type[outs.Output]) -> Callable[..., Any]:
-    observer = serve._Robots.observer
+    observer = serve._observer
 
-    def crashing_observer(self: Any, robot: str) -> Callable[[Any], None]:
-        observe = observer(self, robot)
+    def crashing_observer(fleet: str, robot: str, say: Callable[[str], None]) -> Callable[[Any], None]:
+        observe = observer(fleet, robot, say)
 
         def crash(output: Any) -> None:
             observe(output)
@@ -39,5 +39,5 @@ def _crashing(point: type[outs.Output]) -> Callable[..., Any]:
 
 
 if __name__ == "__main__":
-    serve._Robots.observer = _crashing(POINTS[sys.argv[1]])  # type: ignore[method-assign]
+    serve._observer = _crashing(POINTS[sys.argv[1]])
     sys.exit(main(["serve", *sys.argv[2:]]))

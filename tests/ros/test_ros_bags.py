@@ -237,8 +237,9 @@ def test_a_partial_view_of_rmf_ros2_finds_the_running_status_after_a_childs_end(
 
 
 def test_record_shows_its_progress_on_a_terminal_and_stops_at_its_time(tmp_path: Path) -> None:
-    """On a terminal, record keeps one progress line (topics, messages, bytes) up to date, then clears
-    it and says what it recorded; --seconds stops it cleanly (the bag closed, metadata.yaml written)."""
+    """On a terminal, record keeps one progress line (topics, messages, bytes) up to date on standard
+    error, as every command's progress, erased before each line it prints and at the end, and says
+    what it recorded; --seconds stops it cleanly (the bag closed, metadata.yaml written)."""
     import os
     import pty
     import re
@@ -252,7 +253,7 @@ def test_record_shows_its_progress_on_a_terminal_and_stops_at_its_time(tmp_path:
     primary, secondary = pty.openpty()
     bag = tmp_path / "bag"
     command = [sys.executable, "-m", "dynevent", "record", "-o", str(bag), "--seconds", "4"]
-    process = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=secondary, stderr=subprocess.PIPE,
+    process = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=secondary, stderr=secondary,
                                text=True, env=child_env())  # fmt: skip
     os.close(secondary)
     output = b""
@@ -271,7 +272,8 @@ def test_record_shows_its_progress_on_a_terminal_and_stops_at_its_time(tmp_path:
     os.close(primary)
     done = finish(process, 30)
     text = output.decode("utf-8", "replace")
-    assert done.returncode == 0, text + (done.stderr or "")
-    assert re.search(r"\r\x1b\[Krecording \S+: \d+ topics, [\d,]+ messages, [\d,]+ bytes", text), text
-    assert re.search(r"recorded \d+ messages \(\d+ bytes\) on \d+ topics into ", text), text
+    assert done.returncode == 0, text
+    assert re.search(r"\rrecording \S+: \d+ topics, [\d,]+ messages, [\d,]+ bytes\x1b\[K", text), text
+    # the line is erased before the summary: nothing printed is written over it
+    assert re.search(r"\r\x1b\[K(\r?\n)*recorded \d+ messages \(\d+ bytes\) on \d+ topics into ", text), text
     assert (bag / "metadata.yaml").is_file()

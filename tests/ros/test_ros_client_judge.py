@@ -113,9 +113,9 @@ def test_without_introspection_a_refused_goal_is_judged_as_the_one_clients() -> 
     """Where rclpy cannot introspect the action server, every goal is one client's, judged from the
     server's steps: a refused goal is the step of its request (the binding knows its UUID), so it is
     judged too."""
-    from dynevent.ros.serve import Watch, _Clients, _Judged
     from dynevent.server import inputs as ins
     from dynevent.server import machine
+    from dynevent.tools.live.serve import Watch, _Clients, _Judged
     from dynevent.wire.messages import Goal
 
     said: list[str] = []

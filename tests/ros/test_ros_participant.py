@@ -32,19 +32,19 @@ HEAR = textwrap.dedent("""
     import time, rclpy
     from rmf_task_msgs.msg import DynamicEventStatus as String
     from dynevent.ros import participant
+    from dynevent.ros.spinning import Session
     assert participant.ignore_own_endpoints() == ""
-    own = participant.own_context()
-    node = rclpy.create_node("speaker", context=own)
-    other = participant.own_context()
-    listener = rclpy.create_node("listener", context=other)
+    own = Session("speaker", own_context=True)
+    node = own.node
+    other = Session("listener", own_context=True)
+    listener = other.node
     heard = {"own": 0, "other": 0}
     def counter(key):
         return lambda message: heard.__setitem__(key, heard[key] + 1)
     node.create_subscription(String, "chatter", counter("own"), 10)
     listener.create_subscription(String, "chatter", counter("other"), 10)
     publisher = node.create_publisher(String, "chatter", 10)
-    ex = [rclpy.executors.SingleThreadedExecutor(context=c) for c in (own, other)]
-    ex[0].add_node(node); ex[1].add_node(listener)
+    ex = [own.spinner.executor, other.spinner.executor]
     deadline = time.monotonic() + 10
     while time.monotonic() < deadline and heard["other"] < 5:
         publisher.publish(String(status="hello"))

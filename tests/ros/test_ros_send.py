@@ -144,7 +144,7 @@ def test_send_waits_on_while_discovery_still_shows_new_servers(monkeypatch: pyte
     fleet whose servers it had seen 28 of)."""
     import argparse
 
-    from dynevent.ros import send as send_module
+    from dynevent.tools.live import send as send_module
 
     monkeypatch.setattr(send_module, "WAKE", 0.02)
     monkeypatch.setattr(send_module, "LOOK", 0.1)

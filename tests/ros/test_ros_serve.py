@@ -154,7 +154,7 @@ def test_serve_begins_on_command_and_send_explains_a_refusal_it_cannot_see(
 ) -> None:
     from rmf_task_msgs.msg import DynamicEventDescription
 
-    from dynevent.ros.serve import BEGIN_COMMAND_TOPIC
+    from dynevent.ros.fleet import BEGIN_COMMAND_TOPIC
     from dynevent.ros.server import latched
 
     serve = Serve(mode=mode).ready()
@@ -372,7 +372,7 @@ def test_a_fleet_larger_than_a_lane_is_served_by_every_lane(tmp_path: Path, grap
     a robot of the first lane and one of the last are both served, begins on command included."""
     from rmf_task_msgs.msg import DynamicEventDescription
 
-    from dynevent.ros.serve import BEGIN_COMMAND_TOPIC, LANE
+    from dynevent.ros.fleet import BEGIN_COMMAND_TOPIC, LANE
     from dynevent.ros.server import latched
 
     robots = [f"laneRobot{index:03d}" for index in range(LANE + 2)]

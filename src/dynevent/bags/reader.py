@@ -38,7 +38,7 @@ import os
 import stat
 from collections.abc import Callable, Iterator
 from pathlib import Path, PurePath
-from typing import Any
+from typing import Any, NamedTuple
 
 import attrs
 
@@ -71,7 +71,9 @@ __all__ = [
     "HIDDEN_SUFFIXES",
     "SKEW",
     "BagReport",
+    "Channel",
     "RobotReport",
+    "channel_of",
     "check_bag",
     "message_definition",
     "typestore",
@@ -99,6 +101,36 @@ TYPES = {
 }
 #: The suffixes of the action's hidden topics, after ``<action>``.
 HIDDEN_SUFFIXES = tuple(HIDDEN)
+
+
+class Channel(NamedTuple):
+    """What a topic on a Dynamic Event name carries: the robot (an empty fleet and robot for the
+    fleet-wide begin topic, which carries every robot's begins) and the channel (``status``,
+    ``begin``, or one of the action's hidden topics, :data:`HIDDEN`)."""
+
+    fleet: str
+    robot: str
+    channel: str
+
+
+def channel_of(topic: str) -> Channel | None:
+    """The robot and channel of ``topic``, or None for a topic on no Dynamic Event name (the
+    action's own name is no topic, and a hidden suffix on a topic's name is no name)."""
+    if topic.lstrip("/") == BEGIN_TOPIC:
+        return Channel("", "", "begin")
+    name, channel = topic, ""
+    for suffix, hidden in HIDDEN.items():
+        if topic.endswith(suffix):
+            name, channel = topic[: -len(suffix)], hidden
+    try:
+        parsed = parse_name(name)
+    except InvalidName:
+        return None
+    if (parsed.kind is NameKind.ACTION) != bool(channel):
+        return None
+    return Channel(parsed.fleet, parsed.robot, channel or str(parsed.kind))
+
+
 #: The channels a robot's judgement needs, in the words a partial view line uses.
 CHANNELS = {
     "status": "the status topic",
@@ -353,28 +385,13 @@ def _routes(
     routes: dict[int, tuple[_Robot, str]] = {}
     fleet_wide = []
     for connection in connections:
-        topic = connection.topic
-        if topic.lstrip("/") == BEGIN_TOPIC:
-            if connection.msgtype == TYPES["begin"]:
-                fleet_wide.append(connection)
-            continue
-        name, channel = topic, ""
-        for suffix, hidden in HIDDEN.items():
-            if topic.endswith(suffix):
-                name, channel = topic[: -len(suffix)], hidden
-        try:
-            parsed = parse_name(name)
-        except InvalidName:
-            continue
-        if parsed.kind is NameKind.ACTION and not channel:
-            continue
-        if parsed.kind is not NameKind.ACTION:
-            if channel:
-                continue
-            channel = str(parsed.kind)
-        if connection.msgtype != TYPES[channel]:
+        found = channel_of(connection.topic)
+        if found is None or connection.msgtype != TYPES[found.channel]:
             continue  # a Dynamic Event name with another type: not this protocol's
-        key = (parsed.fleet, parsed.robot)
+        key, channel = (found.fleet, found.robot), found.channel
+        if not found.robot:  # the fleet-wide begin topic
+            fleet_wide.append(connection)
+            continue
         robot = robots.setdefault(key, _Robot(*key, compatibility=compatibility, keep=keep))
         if connection.msgcount:  # a topic subscribed to in vain holds nothing to judge
             robot.channels.add(channel)

@@ -35,13 +35,13 @@ from dynevent.conformance.records import InvalidRecord, input_to_json, output_fr
 from dynevent.errors import ImplementationError
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
-from dynevent.server.holder import Execution, RobotServer
+from dynevent.server.adapter import ChildExecution
+from dynevent.server.holder import RobotServer
 from dynevent.server.machine import ServerConfig
 from dynevent.sim.children import SimulatedChild
 from dynevent.sim.config import DEFAULT_DESCRIPTION, ServeConfig, machine_config
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.names import description_service
-from dynevent.wire.vocab import Status
 
 __all__ = [
     "MAX_CHILDREN",
@@ -69,38 +69,13 @@ Stepper = Callable[[ins.Input], Sequence[outs.Output]]
 
 
 class _Child:
-    """A running simulated child: the adapter's handle on it (:class:`Execution`, on the link's clock),
-    and when it began."""
+    """A running simulated child: the adapter's handle on it (on the link's clock), when it began,
+    and what it does."""
 
     def __init__(self, link: InProcessLink, start: outs.StartChild) -> None:
-        self._link = link
-        self._execution = Execution(link, start.id, automatic_cancel=False)
+        self.execution = ChildExecution(link, start, lambda: link.now)
         self.began = link.now
         self.simulation = SimulatedChild(start.category, start.parsed, link.config)
-
-    @property
-    def done(self) -> bool:
-        return self._execution.done
-
-    @property
-    def stopping(self) -> str | None:
-        return self._execution.stopping
-
-    def underway(self, text: str | None = None) -> Any:
-        return self._execution.underway(text, now=self._link.now)
-
-    def error(self, text: str | None = None) -> Any:
-        return self._execution.error(text, now=self._link.now)
-
-    def finished(self, status: Status = Status.COMPLETED) -> Any:
-        return self._execution.finished(now=self._link.now, status=status)
-
-    def stop(self, kill: bool) -> None:
-        now = self._link.now
-        if kill:
-            self._execution.kill(now=now)
-        else:
-            self._execution.cancel(now=now)
 
 
 class InProcessLink(Link):
@@ -164,7 +139,7 @@ class InProcessLink(Link):
         elif isinstance(output, (outs.CancelChild, outs.KillChild)):
             stopped = self._children.get(output.id)
             if stopped is not None:
-                stopped.stop(isinstance(output, outs.KillChild))
+                stopped.execution.stop(isinstance(output, outs.KillChild))
         elif isinstance(output, outs.DynamicEventFinished) and self.config.rebegin > 0:
             self._at(self.now + round(self.config.rebegin * _SECOND), self._begin_again)
 
@@ -172,7 +147,7 @@ class InProcessLink(Link):
         def report() -> None:
             if self._children.get(child_id) is not child:
                 return
-            if child.simulation.report(child, (self.now - child.began) / _SECOND):
+            if child.simulation.report(child.execution, (self.now - child.began) / _SECOND):
                 del self._children[child_id]
             else:
                 self._report_later(child_id, child)

@@ -3,8 +3,9 @@
 A case is data: an id (``section.name``), what it checks, the rules of
 docs/spec.md it tests, what it needs of the server (an active run, a child
 it can run), and the divergences of docs/divergences.md whose way of
-breaking it shows.  The ROS part (:mod:`dynevent.ros.probe`) carries each case
-out over the wire and gives a :class:`Finding` per case; this module selects
+breaking it shows.  :mod:`dynevent.conformance.probing` carries each case out over a link (in
+process, through the driver protocol, or over DDS with :mod:`dynevent.ros.probe`) and gives a
+:class:`Finding` per case; this module selects
 cases, lists them, and reports findings (a table, JUnit XML) and the exit
 status, so that ``dynevent probe --list`` needs no ROS.
 

@@ -36,6 +36,8 @@ from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.task import Future
 
 from dynevent import client as cl
+from dynevent.client.restart import RestartWatch
+from dynevent.client.run import GoalRun
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.errors import (
     GoalWaitTimeout,  # defined there with every error; importable here too
@@ -68,66 +70,6 @@ _TERMINAL = {
 #: The shortest wait the client's one timer is armed for (seconds): a deadline already past is
 #: ticked at once, and a clock that moves back cannot set a wait of no length.
 SHORTEST_WAIT = 0.001
-#: How often the client asks again for the results of goals a restarted server took, in seconds.
-ASK_AGAIN_PERIOD = 1.0
-
-
-class GoalRun:
-    """One goal of a :class:`DynamicEventClient`: its progress, then its one outcome.
-
-    ``result`` is the :class:`~dynevent.client.Outcome` once the goal is
-    over, or the :class:`~dynevent.client.Refused` of a goal never sent.
-    ``progress`` holds every :class:`~dynevent.client.Progress` so far.
-    """
-
-    def __init__(self, on_progress: Callable[[cl.Progress], None] | None = None) -> None:
-        self.goal_uuid: str | None = None
-        self.progress: list[cl.Progress] = []
-        self.result: cl.Outcome | cl.Refused | None = None
-        self._on_progress = on_progress
-        self._over = threading.Event()
-        self._future: Any = Future()
-        self._callbacks: list[Callable[[cl.Outcome | cl.Refused], None]] = []
-        self._callbacks_lock = threading.Lock()
-
-    def done(self) -> bool:
-        """The goal is over (or was never sent)."""
-        return self._over.is_set()
-
-    def wait(self, timeout: float) -> cl.Outcome | cl.Refused:
-        """Block until the goal is over, at most ``timeout`` seconds (another thread spins the node)."""
-        if not self._over.wait(timeout):
-            raise GoalWaitTimeout(f"goal {self.goal_uuid} still open after {timeout:g} s")
-        assert self.result is not None
-        return self.result
-
-    def __await__(self) -> Any:
-        """Await the outcome inside the node's executor."""
-        return self._future.__await__()
-
-    def _report(self, progress: cl.Progress) -> None:
-        self.progress.append(progress)
-        if self._on_progress is not None:
-            self._on_progress(progress)
-
-    def add_done_callback(self, callback: Callable[[cl.Outcome | cl.Refused], None]) -> None:
-        """Call ``callback`` with the result when the goal is over (at once when it is): on the
-        executor's thread, or on the caller's when the goal is already over."""
-        with self._callbacks_lock:
-            if self.result is None:
-                self._callbacks.append(callback)
-                return
-            result = self.result
-        callback(result)
-
-    def _end(self, result: cl.Outcome | cl.Refused) -> None:
-        with self._callbacks_lock:
-            self.result = result
-            callbacks, self._callbacks = self._callbacks, []
-        self._over.set()
-        self._future.set_result(result)
-        for callback in callbacks:
-            callback(result)
 
 
 class DynamicEventClient:
@@ -160,9 +102,7 @@ class DynamicEventClient:
         self._views = threading.Condition(self._lock)
         self._status_seen = False
         self._status_topic = status_topic(fleet, robot)
-        self._servers: frozenset[bytes] | None = None  # the status publishers' GIDs last seen
-        self._orphans: set[str] = set()  # goals sent to a server process that has since been replaced
-        self._ask_again_at = 0.0
+        self._restarts = RestartWatch()  # the server processes (status publishers) and their goals
         # every attribute above, the timer and the action client before the subscriptions: an executor
         # that already spins the node (a shared one) may call back as soon as a subscription exists
         group = MutuallyExclusiveCallbackGroup()
@@ -283,7 +223,7 @@ class DynamicEventClient:
         command: Callable[[cl.ClientState, int], cl.ClientTransition],
         on_progress: Callable[[cl.Progress], None] | None,
     ) -> GoalRun:
-        run = GoalRun(on_progress)
+        run = GoalRun(on_progress, Future())
         with self._lock:
             transition = command(self._state, self.now())
             self._state = transition.state
@@ -293,7 +233,7 @@ class DynamicEventClient:
                     self._runs[output.goal_uuid] = run
         for output in transition.outputs:
             if isinstance(output, cl.Refused):
-                run._end(output)
+                run.end(output)
         self._carry_out(transition.outputs)
         return run
 
@@ -311,17 +251,17 @@ class DynamicEventClient:
             elif isinstance(output, cl.Progress):
                 run = self._runs.get(output.goal_uuid)
                 if run is not None:
-                    run._report(output)
+                    run.report(output)
             elif isinstance(output, cl.Outcome):
                 ended = self._runs.pop(output.goal_uuid, None)
                 if ended is not None:
-                    ended._end(output)
+                    ended.end(output)
         self._arm()
 
     def _send(self, send: cl.SendGoal) -> None:
         uuid = send.goal_uuid
-        if self._servers is None:  # the server processes this goal is sent to, to see a new one come
-            self._servers = self._server_processes()
+        with self._lock:  # the server processes this goal is sent to, to see a new one come
+            self._restarts.sending(self._server_processes)
         if self._trace is not None:
             self._trace.observe("goal", goal_uuid=uuid, message=send.goal)
         response = self._action.send_goal_async(
@@ -350,7 +290,7 @@ class DynamicEventClient:
             if self._trace is not None:
                 self._trace.observe("result", goal_uuid=uuid, status=status, message=result)
         with self._lock:
-            self._orphans.discard(uuid)
+            self._restarts.answered(uuid)
         self._step(cl.ResultReceived(goal_uuid=uuid, status=status, result=result))
 
     def _on_feedback(self, uuid: str, message: Any) -> None:
@@ -407,11 +347,11 @@ class DynamicEventClient:
         to ask a new server process again for the results of the goals it took."""
         with self._lock:
             if not self._state.goals:
-                self._servers = None  # the next goal's send looks at the graph again
+                self._restarts.idle()
             deadline = cl.next_deadline(self._state)
+            again = self._restarts.wait(time.monotonic())
             waits = [] if deadline is None else [(deadline - self.now()) / SECOND]
-            if self._orphans:
-                waits.append(self._ask_again_at - time.monotonic())
+            waits += [] if again is None else [again]
         if not waits:
             self._timer.cancel()
             return
@@ -427,16 +367,11 @@ class DynamicEventClient:
         """Ask again for the results of the goals a replaced server process took (R21.4)."""
         servers = self._server_processes()
         with self._lock:
-            if self._servers is not None and servers - self._servers:
-                self._orphans |= open_goals  # sent before the new server process appeared
-                self._ask_again_at = 0.0
-            self._servers = servers
-            self._orphans &= open_goals
-            due = bool(self._orphans) and time.monotonic() >= self._ask_again_at
-            orphans = sorted(self._orphans) if due else []
+            orphans = self._restarts.seen(servers, open_goals, time.monotonic())
         if not orphans or not self._action.server_is_ready():
             return
-        self._ask_again_at = time.monotonic() + ASK_AGAIN_PERIOD
+        with self._lock:
+            self._restarts.asked(time.monotonic())
         for uuid in orphans:
             response = DynamicEvent.Impl.SendGoalService.Response(accepted=True)
             handle = ClientGoalHandle(self._action, convert.uuid_to_ros(uuid), response)

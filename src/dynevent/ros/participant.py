@@ -11,17 +11,17 @@ itself, so its participants need not match their own endpoints: Fast DDS's parti
 profiles file Fast DDS reads (``FASTDDS_DEFAULT_PROFILES_FILE``, pointed at the one this package
 ships), unless the user has a profiles file of their own or another middleware.  What listens to
 the process's own topics (serve's judge, which follows its action servers' service events) must then
-live in a participant of its own: a context of its own (:func:`own_context`).
+live in a participant of its own: a context of its own (:class:`dynevent.ros.spinning.Session` with
+``own_context``).
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import MutableMapping, Sequence
+from collections.abc import MutableMapping
 from pathlib import Path
-from typing import Any
 
-__all__ = ["PROFILE", "ignore_own_endpoints", "own_context"]
+__all__ = ["PROFILE", "ignore_own_endpoints"]
 
 #: The Fast DDS profiles file whose default participant ignores its own endpoints.
 PROFILE = Path(__file__).resolve().parent / "setup" / "fastdds-serve.xml"
@@ -45,13 +45,3 @@ def ignore_own_endpoints(environ: MutableMapping[str, str] | None = None) -> str
             )
     environ["FASTDDS_DEFAULT_PROFILES_FILE"] = str(PROFILE)
     return ""
-
-
-def own_context(ros_args: Sequence[str] = ()) -> Any:
-    """A new, initialised rclpy context: a DDS participant of its own, with the command line's ROS
-    arguments (its nodes hear the process's other participants as any process would)."""
-    import rclpy
-
-    context = rclpy.Context()
-    rclpy.init(args=["dynevent", *ros_args], context=context)
-    return context

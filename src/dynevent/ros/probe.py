@@ -1,33 +1,26 @@
-"""``dynevent probe`` over ROS 2: the probe's cases (:mod:`dynevent.conformance.probing`) carried to a
-live Dynamic Event server through its action, status and begin topics, with nothing of the server's
-process imported.  This module is the link over DDS (:class:`RosLink`) and the command's body."""
+"""The probe's link over DDS (:class:`RosLink`): the probe's cases (:mod:`dynevent.conformance.probing`)
+carried to a live Dynamic Event server through its action, status and begin topics, with nothing of
+the server's process imported.  ``dynevent probe`` (:mod:`dynevent.tools.live.probe`) runs them."""
 
 from __future__ import annotations
 
-import sys
 import threading
 import time
 from collections.abc import Callable
 from typing import Any
 
-import rclpy
 from action_msgs.msg import GoalStatus as RosGoalStatus
 from rclpy.action import ActionClient
 from rclpy.event_handler import SubscriptionEventCallbacks
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSPolicyKind, QoSProfile, ReliabilityPolicy
 
-from dynevent.conformance import probe_cases, probing
 from dynevent.conformance.judge.trace import TraceWriter
-from dynevent.conformance.probe_cases import Case, Finding
-from dynevent.conformance.probing import Exchange, Link, Options
-from dynevent.errors import FileError, InvalidMessage, ProbeError
-from dynevent.ros import convert, spinning
+from dynevent.conformance.probing import Exchange, Link
+from dynevent.errors import InvalidMessage
+from dynevent.ros import convert
 from dynevent.ros.client import introspect
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
-from dynevent.ros.graph import no_server_text
 from dynevent.ros.qos import latched
-from dynevent.ros.spinning import Interrupted, Spinner, bounded_close, close_down, interruptible
 from dynevent.wire.messages import Goal
 from dynevent.wire.names import (
     STATUS_TOPIC_DEPTH,
@@ -38,7 +31,7 @@ from dynevent.wire.names import (
 )
 from dynevent.wire.vocab import GoalStatus
 
-__all__ = ["Options", "ProbeInterrupted", "RosLink", "main", "run"]
+__all__ = ["VOLATILE", "RosLink"]
 
 _TERMINAL = {
     RosGoalStatus.STATUS_SUCCEEDED: GoalStatus.SUCCEEDED,
@@ -201,83 +194,3 @@ class RosLink(Link):
 
     def destroy(self) -> None:
         self._action.destroy()
-
-
-def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int:
-    """``dynevent probe``: run the cases, print the findings, write the reports; the exit status."""
-    live = sys.stdout.isatty()
-
-    def progress(text: str) -> None:
-        if live:
-            sys.stdout.write(f"\r\033[K{text}")
-            sys.stdout.flush()
-
-    trace = _open_trace(options)  # kept in memory too: the judge reads every record of the exchange
-    try:
-        findings = run(cases, options, say, progress, trace=trace)
-    except ProbeInterrupted as stop:
-        if live:
-            sys.stdout.write("\r\033[K")
-        if stop.findings:
-            say(probe_cases.format_findings(stop.findings).rstrip("\n"))
-        say(f"{stop.name}: stopped after {len(stop.findings)} of {len(cases)} case(s); the rest not run")
-        return 128 + stop.signal
-    finally:
-        trace.close()
-    if live:
-        sys.stdout.write("\r\033[K")
-    if findings is None:
-        return probe_cases.EXIT_USAGE
-    return probing.conclude(findings, trace.text(), options, say)[0]
-
-
-class ProbeInterrupted(Interrupted):
-    """Ctrl-C or SIGTERM during a probe run: ``findings`` are those of the cases that ended before."""
-
-    def __init__(self, signum: int, findings: list[Finding]) -> None:
-        super().__init__(signum)
-        self.findings = list(findings)
-
-
-def run(
-    cases: list[Case],
-    options: Options,
-    say: Callable[[str], None],
-    progress: Callable[[str], None] | None = None,
-    *,
-    trace: TraceWriter | None = None,
-) -> list[Finding] | None:
-    """Carry out ``cases`` against the robot, writing every record of the exchange to ``trace``; the
-    findings, or None when no server was found."""
-    spinning.init(options.ros_args)
-    node = rclpy.create_node("dynevent_probe")
-    link = RosLink(node, options.fleet, options.robot, trace)
-    if options.introspection:
-        link.introspect()
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
-    spinner = Spinner(executor, "dynevent-probe")
-    spinner.start()
-    findings: list[Finding] = []
-    try:
-        with interruptible():
-            if not link.wait_for_server(options.server_wait):
-                say(no_server_text(node, options.fleet, options.robot, options.server_wait))
-                return None
-            probing.run_cases(link, options, cases, say, progress, findings)
-        return findings
-    except Interrupted as stop:
-        raise ProbeInterrupted(stop.signal, findings) from None
-    finally:
-        with bounded_close():
-            spinner.stop()
-            link.destroy()
-            close_down([node])
-
-
-def _open_trace(options: Options) -> TraceWriter:
-    """The trace of the run: kept in memory for the judge, and written to ``--trace`` when given."""
-    try:
-        return TraceWriter(options.trace, fleet=options.fleet, robot=options.robot, keep=True)
-    except FileError as exc:
-        raise ProbeError(str(exc)) from None

@@ -1,6 +1,6 @@
-"""``dynevent record``: record a live system's Dynamic Event conversations into a rosbag2 bag.
+"""What ``dynevent record`` (:mod:`dynevent.tools.live.record`) records: the subscriptions.
 
-The recorder looks at the ROS 2 graph once a second and subscribes to every
+The recorder looks at the ROS 2 graph (each :meth:`Recorder.discover`) and subscribes to every
 Dynamic Event name it finds for the robots asked for (``--fleet``,
 ``--robot``; every robot by default): each robot's status and begin topics,
 the fleet-wide begin topic, the action's feedback and goal status topics and,
@@ -10,39 +10,25 @@ answers (docs/recordings.md).  Each message is written as it arrives,
 serialised as received, with its receive time, into an MCAP bag in the
 rosbag2 layout (``metadata.yaml`` beside it), which ``ros2 bag`` and other
 rosbag2 readers open and ``dynevent check`` judges.
-
-A progress line (messages, bytes) is shown on a terminal.  Ctrl-C (or
-SIGTERM, or ``--seconds``) stops it cleanly: the bag is closed with its index
-and metadata, and nothing received is lost.
 """
 
 from __future__ import annotations
 
-import os
-import signal
-import sys
 import threading
 import time
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
-import attrs
-import rclpy
 from action_msgs.msg import GoalStatusArray
 from action_msgs.srv import CancelGoal
 from rclpy.event_handler import SubscriptionEventCallbacks
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from dynevent.bags import reader as bags
-from dynevent.errors import InvalidName, RecordError
-from dynevent.ros import spinning
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
-from dynevent.ros.spinning import Spinner, bounded_close, close_down
-from dynevent.wire.names import BEGIN_TOPIC, NameKind, action_name, begin_topic, parse_name, status_topic
+from dynevent.wire.names import action_name, begin_topic, status_topic
 
-__all__ = ["RecordOptions", "Recorder", "run"]
+__all__ = ["DISCOVERY_PERIOD", "Recorder"]
 
 #: The message class of each type a Dynamic Event conversation uses.
 _CLASSES: dict[str, Any] = {
@@ -93,6 +79,16 @@ class Recorder:
             rihs01 = next((str(info.topic_type_hash) for info in infos if info.topic_type_hash), "")
             self._subscribe(topic, msgtype, _qos_for(infos), rihs01)
 
+    def keep_discovering(self, then: Callable[[], None], period: float = DISCOVERY_PERIOD) -> None:
+        """:meth:`discover` every ``period`` seconds from now on, on the node's executor, and ``then()``
+        after each look (a progress line)."""
+
+        def tick() -> None:
+            self.discover()
+            then()
+
+        self.node.create_timer(period, tick)
+
     def expect(self, fleet: str, robot: str) -> None:
         """Subscribe now to every name of this robot, before any publisher is there: a short-lived
         client's introspection (its first goal) is recorded too."""
@@ -132,19 +128,8 @@ class Recorder:
     def _named(self, topic: str) -> bool:
         """Whether ``topic`` is a Dynamic Event name of a robot asked for (the fleet-wide begin topic
         always is: it carries every robot's begins)."""
-        if topic.lstrip("/") == BEGIN_TOPIC:
-            return True
-        name = topic
-        for suffix in bags.HIDDEN_SUFFIXES:
-            if topic.endswith(suffix):
-                name = topic[: -len(suffix)]
-        try:
-            parsed = parse_name(name)
-        except InvalidName:
-            return False
-        if (parsed.kind is NameKind.ACTION) == (name == topic):
-            return False  # the action's own name is no topic; a hidden suffix on a topic is no name
-        return self.wanted(parsed.fleet, parsed.robot)
+        found = bags.channel_of(topic)
+        return found is not None and (not found.robot or self.wanted(found.fleet, found.robot))
 
     def _write(self, topic: str, data: bytes) -> None:
         now = time.time_ns()
@@ -173,81 +158,3 @@ def _qos_for(infos: Any) -> QoSProfile:
         reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
         durability=DurabilityPolicy.TRANSIENT_LOCAL if transient else DurabilityPolicy.VOLATILE,
     )
-
-
-@attrs.frozen(kw_only=True)
-class RecordOptions:
-    """What ``dynevent record`` is asked to do, its flags read and checked by the command line."""
-
-    output: str | None = None  # the bag's directory; by default dynevent_<date>-<time>
-    fleets: tuple[str, ...] = ()  # the fleets recorded (every fleet when none)
-    robots: tuple[str, ...] = ()  # the robots recorded (every robot when none)
-    seconds: float | None = None  # stop after this long (by default at Ctrl-C or SIGTERM)
-    ros_args: tuple[str, ...] = ()  # ROS 2's own command-line arguments (``--ros-args ...``)
-
-
-def run(args: RecordOptions, say: Callable[[str], None]) -> int:
-    """Record until SIGINT, SIGTERM or ``--seconds``; 0, or 2 when the bag cannot be written."""
-    try:
-        from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
-    except ImportError:
-        from dynevent.errors import MissingExtra
-
-        raise MissingExtra("bags", "rosbags", "writes rosbag2 recordings") from None
-    output = Path(args.output or time.strftime("dynevent_%Y_%m_%d-%H_%M_%S"))
-    if os.path.lexists(output):  # lexists: a path too long to stat is for the writer to name
-        raise RecordError(f"--output {output}: exists already (a bag is a new directory)")
-    fleets, robots = set(args.fleets), set(args.robots)
-
-    def wanted(fleet: str, robot: str) -> bool:
-        return (not fleets or fleet in fleets) and (not robots or robot in robots)
-
-    try:
-        writer = Writer(output, version=9, storage_plugin=StoragePlugin.MCAP)
-        writer.open()
-    except (OSError, WriterError) as exc:
-        raise RecordError(f"--output {output}: cannot write: {exc}") from None
-    spinning.init(args.ros_args)
-    node = rclpy.create_node("dynevent_record")
-    live = sys.stdout.isatty()
-
-    def line(text: str) -> None:
-        say(f"\r\033[K{text}" if live else text)
-
-    recorder = Recorder(node, writer, wanted, line)
-
-    def tick() -> None:
-        recorder.discover()
-        if live:
-            sys.stdout.write(f"\r\033[Krecording {output}: {len(recorder.topics)} topics, "
-                             f"{recorder.messages:,} messages, {recorder.bytes:,} bytes")  # fmt: skip
-            sys.stdout.flush()
-
-    timer = node.create_timer(DISCOVERY_PERIOD, tick)
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
-    spinner = Spinner(executor, "dynevent-record")
-    stop = threading.Event()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda *_: stop.set())
-    for fleet in sorted(fleets) if robots else ():  # robots named in full: their names are known now
-        for robot in sorted(robots):
-            recorder.expect(fleet, robot)
-    recorder.discover()
-    spinner.start()
-    say(f"recording into {output} (Ctrl-C to stop)")
-    try:
-        stop.wait(args.seconds)
-    finally:
-        # the bag is closed (its index and metadata.yaml written) before anything that could hang
-        spinner.stop()
-        recorder.close()  # a write in progress ends first; none follows
-        writer.close()
-        with bounded_close():
-            node.destroy_timer(timer)
-            close_down([node])
-        if live:
-            sys.stdout.write("\r\033[K")
-    say(f"recorded {recorder.messages} messages ({recorder.bytes} bytes) on {len(recorder.topics)} topics "
-        f"into {output}")  # fmt: skip
-    return 0

@@ -28,37 +28,16 @@ import contextlib
 from collections.abc import Callable, Sequence
 from typing import Any
 
-import rclpy
-from rclpy.executors import SingleThreadedExecutor
-
 from dynevent import client as cl
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.errors import LocalError, RobotNotReady
 from dynevent.ros.client import DynamicEventClient, GoalRun
 from dynevent.ros.graph import no_server_text
-from dynevent.ros.spinning import Spinner, bounded_close, close_down
+from dynevent.ros.spinning import Session, bounded_close
 
 __all__ = ["AsyncRobotClient", "RobotClient", "RobotClients"]
 
 Result = cl.Outcome | cl.Refused
-
-
-def _start(node_name: str, ros_args: Sequence[str]) -> tuple[Any, Any]:
-    """ROS 2 started in a context of its own, and a node in it."""
-    context = rclpy.Context()
-    try:
-        rclpy.init(args=["dynevent", *ros_args], context=context)
-    except Exception as exc:  # rcl's parse errors are not exported
-        raise LocalError(f"{' '.join(ros_args)}: ROS refused these arguments: {exc}") from None
-    return context, rclpy.create_node(node_name, context=context)
-
-
-def _spin(context: Any, node: Any, name: str) -> Spinner:
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(node)
-    spinner = Spinner(executor, name)
-    spinner.start()
-    return spinner
 
 
 class RobotClients:
@@ -76,39 +55,35 @@ class RobotClients:
 
     def __init__(self, *, node_name: str = "dynevent_clients", ros_args: Sequence[str] = ()) -> None:
         self._settings = (node_name, tuple(ros_args))
-        self._context: Any = None
-        self._node: Any = None
-        self._spinner: Spinner | None = None
+        self._session: Session | None = None
+
+    def _open(self) -> Session:
+        if self._session is None:
+            raise LocalError("the hub is not open: use `with RobotClients() as hub` or open()")
+        return self._session
 
     @property
     def node(self) -> Any:
         """The node the hub's clients go on (open)."""
-        if self._node is None:
-            raise LocalError("the hub is not open: use `with RobotClients() as hub` or open()")
-        return self._node
+        return self._open().node
 
     def paused(self) -> contextlib.AbstractContextManager[None]:
         """The hub's spinning paused while a client of it is made or destroyed."""
-        if self._spinner is None:
-            raise LocalError("the hub is not open: use `with RobotClients() as hub` or open()")
-        return self._spinner.paused()
+        return self._open().spinner.paused()
 
     def open(self) -> RobotClients:
         """Start ROS in a context of the hub's, make its node and spin it."""
-        if self._node is None:
-            self._context, self._node = _start(*self._settings)
-            self._spinner = _spin(self._context, self._node, "dynevent-clients")
+        if self._session is None:
+            node_name, ros_args = self._settings
+            self._session = Session(node_name, ros_args, own_context=True, thread="dynevent-clients")
+            self._session.start()
         return self
 
     def close(self) -> None:
         """Stop spinning and destroy the node and the context (bounded): close its clients first."""
-        if self._node is None:
-            return
-        with bounded_close():
-            assert self._spinner is not None
-            self._spinner.stop()
-            close_down([self._node], self._context)
-        self._node = self._context = self._spinner = None
+        if self._session is not None:
+            self._session.close()
+            self._session = None
 
     def __enter__(self) -> RobotClients:
         return self.open()
@@ -139,10 +114,9 @@ class RobotClient:
         self.fleet, self.robot = fleet, robot
         self._settings = (node_name, tuple(ros_args), categories, validators, trace)
         self._hub = hub
-        self._context: Any = None
-        self._node: Any = None
         self._client: DynamicEventClient | None = None
-        self._spinner: Spinner | None = None
+        self._session: Session | None = None
+        self._node: Any = None  # the node the client is on: its own session's, or the hub's
 
     # ---------------------------------------------------------------- life
 
@@ -152,24 +126,18 @@ class RobotClient:
         if self._client is not None:
             return self
         node_name, ros_args, categories, validators, trace = self._settings
+        settings = {"categories": categories, "validators": validators, "trace": trace}
         if self._hub is not None:
             self._node = self._hub.node
             with self._hub.paused():  # the hub's executor never meets a half-made client
-                self._client = DynamicEventClient(
-                    self._node,
-                    self.fleet,
-                    self.robot,
-                    categories=categories,
-                    validators=validators,
-                    trace=trace,
-                )
+                self._client = DynamicEventClient(self._node, self.fleet, self.robot, **settings)
             return self
-        self._context, self._node = _start(node_name, ros_args)
+        thread = f"dynevent-{self.fleet}-{self.robot}"
+        self._session = Session(node_name, ros_args, own_context=True, thread=thread)
         # the client is made whole before an executor thread can meet it (docs/ros.md)
-        self._client = DynamicEventClient(
-            self._node, self.fleet, self.robot, categories=categories, validators=validators, trace=trace
-        )
-        self._spinner = _spin(self._context, self._node, f"dynevent-{self.fleet}-{self.robot}")
+        self._node = self._session.node
+        self._client = DynamicEventClient(self._node, self.fleet, self.robot, **settings)
+        self._session.start()
         return self
 
     def close(self) -> None:
@@ -177,16 +145,13 @@ class RobotClient:
         only destroys its own entities (the hub closes the rest)."""
         if self._client is None:
             return
-        with bounded_close():
-            if self._hub is not None:
-                with self._hub.paused():  # nothing destroyed under the hub's spinning thread
-                    self._client.destroy()
-            else:
-                assert self._spinner is not None
-                self._spinner.stop()
+        if self._session is not None:
+            self._session.close(self._client.destroy)
+        else:
+            assert self._hub is not None
+            with bounded_close(), self._hub.paused():  # nothing destroyed under the hub's spinning thread
                 self._client.destroy()
-                close_down([self._node], self._context)
-        self._client = self._node = self._context = self._spinner = None
+        self._client = self._session = self._node = None
 
     def __enter__(self) -> RobotClient:
         return self.open()

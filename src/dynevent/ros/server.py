@@ -36,7 +36,7 @@ import collections
 import contextlib
 import threading
 from collections.abc import Callable, Mapping
-from typing import Any, Protocol
+from typing import Any
 
 from action_msgs.msg import GoalStatus as RosGoalStatus
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
@@ -50,7 +50,14 @@ from dynevent.ros.qos import EVENTS_KEPT, introspect, latched
 from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
-from dynevent.server.holder import Execution
+from dynevent.server.adapter import (
+    AdapterInputs,
+    ChildEvents,
+    ChildExecution,
+    RunningChildren,
+    StubbornHolds,
+    carry_out_stubbornness,
+)
 from dynevent.server.inputs import NOW_RANGE
 from dynevent.server.machine import ServerConfig, State
 from dynevent.wire import names
@@ -64,108 +71,9 @@ from dynevent.wire.names import (
     begin_topic,
     status_topic,
 )
-from dynevent.wire.vocab import GoalStatus, Status, Tier
+from dynevent.wire.vocab import GoalStatus, Tier
 
 __all__ = ["ChildEvents", "ChildExecution", "DynamicEventServer", "StubbornHolds", "latched"]
-
-
-class ChildExecution:
-    """The adapter's handle on one running child event, with the node's clock.
-
-    Report with :meth:`underway`, :meth:`delayed`, :meth:`blocked` and
-    :meth:`error` (each with an optional log line) and end it with
-    :meth:`finished`.  After a cancel or kill was asked for, :attr:`stopping`
-    says which; the status given to :meth:`finished` is then the stop's
-    unless it says otherwise.  Calls after the end do nothing.
-    """
-
-    def __init__(self, server: DynamicEventServer, start: outs.StartChild) -> None:
-        self._server = server
-        self._execution = Execution(server, start.id, automatic_cancel=False)
-        #: The child's id, its category, its description (JSON text) and the parsed description.
-        self.id = start.id
-        self.category = start.category
-        self.description = start.description
-        self.parsed = start.parsed
-
-    @property
-    def done(self) -> bool:
-        """The child has finished."""
-        return self._execution.done
-
-    @property
-    def stopping(self) -> str | None:
-        """``"canceled"`` or ``"killed"`` once the child was told to stop."""
-        return self._execution.stopping
-
-    def okay(self) -> bool:
-        """Neither told to stop nor finished."""
-        return self._execution.okay()
-
-    def underway(self, text: str | None = None) -> None:
-        """The child is making progress (an info log line when ``text`` is given)."""
-        self._execution.underway(text, now=self._server.now())
-
-    def delayed(self, text: str | None = None) -> None:
-        """The child is delayed (warning)."""
-        self._execution.delayed(text, now=self._server.now())
-
-    def blocked(self, text: str | None = None) -> None:
-        """The child is blocked (warning)."""
-        self._execution.blocked(text, now=self._server.now())
-
-    def error(self, text: str | None = None) -> None:
-        """The child hit an error (error)."""
-        self._execution.error(text, now=self._server.now())
-
-    def finished(self, status: Status | str = Status.COMPLETED) -> None:
-        """The child ended with ``status`` (``completed`` unless it was stopped early)."""
-        self._execution.finished(now=self._server.now(), status=Status(status))
-
-    def _stop(self, kill: bool) -> None:
-        now = self._server.now()
-        if kill:
-            self._execution.kill(now=now)
-        else:
-            self._execution.cancel(now=now)
-
-    def __repr__(self) -> str:
-        return f"ChildExecution(id={self.id}, category={self.category!r}, {self._execution!r})"
-
-
-class ChildEvents(Protocol):
-    """What the adapter implements to run child events.  Every method must return quickly."""
-
-    def start(self, execution: ChildExecution) -> None:
-        """Start the child; report through ``execution`` from any thread."""
-
-    def cancel(self, execution: ChildExecution) -> None:
-        """Stop the child, then call ``execution.finished()``."""
-
-    def kill(self, execution: ChildExecution) -> None:
-        """Stop the child at once, then call ``execution.finished()``."""
-
-    def interrupt(self, execution: ChildExecution) -> None:
-        """The task is interrupted: pause the child."""
-
-    def resume(self, execution: ChildExecution) -> None:
-        """The task's interruption is over: go on."""
-
-
-class StubbornHolds(Protocol):
-    """What the adapter implements to hold its place in traffic after a child (stubbornness)."""
-
-    def begin(self, period: float, map_name: str | None, x: float, y: float) -> None:
-        """Declare a holding itinerary of ``period`` seconds here and negotiate stubbornly."""
-
-    def hold(self, period: float, map_name: str, x: float, y: float) -> None:
-        """The robot moved: hold again from its new place."""
-
-    def delay(self, seconds: float) -> None:
-        """Report the cumulative delay since the hold began."""
-
-    def end(self) -> None:
-        """Release the hold."""
 
 
 _ROS_GOAL_STATUS = {
@@ -267,28 +175,6 @@ class _Entities:
             self.node.destroy_timer(self.timer)
             self.timer = None
 
-    def introspect(self) -> bool:
-        """Turn on the introspection of the action server (the requests' contents), its events kept
-        for a follower that joins late (:data:`~dynevent.ros.qos.EVENTS_KEPT`).  False where rclpy
-        cannot."""
-        return introspect(self.action, self.node, latched(EVENTS_KEPT))
-
-    def follow(self, on_goal: Callable[[Any], None], follower: Any) -> None:
-        """Follow the ``send_goal`` service events with ``on_goal`` on ``follower`` (a node; this
-        robot's when None), the ones kept from before included: how a server learns which client
-        sent a goal (R22.1)."""
-        if self.introspection is not None:
-            return
-        own = follower is None
-        self.follower = self.node if own else follower
-        self.introspection = self.follower.create_subscription(
-            DynamicEvent.Impl.SendGoalService.Event,
-            f"{self.action_name}/_action/send_goal/_service_event",
-            on_goal,
-            latched(EVENTS_KEPT),
-            callback_group=self.group if own else None,
-        )
-
     def destroy(self, node: Any) -> None:
         if self.introspection is not None:
             self.follower.destroy_subscription(self.introspection)
@@ -301,7 +187,7 @@ class _Entities:
             node.destroy_service(self.service)
 
 
-class DynamicEventServer:
+class DynamicEventServer(AdapterInputs):
     """One robot's Dynamic Event server on ``node`` (several may share a node: a fleet).
 
     ``children`` runs child events; ``stubbornness`` holds the robot's place
@@ -348,7 +234,7 @@ class DynamicEventServer:
         self._node = node
         self._on_step = on_step
         self._config = config
-        self._children = _RunningChildren(self, children)
+        self._children = RunningChildren(self, children, self.now)
         self._stubbornness = stubbornness
         self._on_finished = on_finished
         self._on_interrupt_confirmed = on_interrupt_confirmed
@@ -428,40 +314,10 @@ class DynamicEventServer:
 
     # ---------------------------------------------------------------- the adapter's inputs
 
-    def begin(self, description: str, event_id: int, *, interrupted: bool = False) -> None:
-        """A task reached its ``dynamic_event`` phase (R3)."""
-        self.step(
-            ins.Begin(description=description, event_id=event_id, now=self.now(), interrupted=interrupted)
-        )
-
-    def interrupt(self) -> None:
-        """The task was interrupted (R14)."""
-        self.step(ins.Interrupt(now=self.now()))
-
-    def resume(self) -> None:
-        """The task's interruption is over (R14)."""
-        self.step(ins.Resume(now=self.now()))
-
-    def task_cancel(self) -> None:
-        """The whole task was cancelled (R13)."""
-        self.step(ins.TaskCancel(now=self.now()))
-
-    def task_kill(self) -> None:
-        """The whole task was killed (R13)."""
-        self.step(ins.TaskKill(now=self.now()))
-
     def update_position(self, map_name: str, x: float, y: float) -> None:
         """Where the robot is; stubbornness refreshes from the last position given (R12.3)."""
         self._position = (map_name, x, y)
         self.step(ins.Tick(now=self.now(), map_name=map_name, x=x, y=y))
-
-    def restart(self) -> None:
-        """The state was restored after the process that served it ended (R21)."""
-        self.step(ins.Restart(now=self.now()))
-
-    def shutdown(self) -> None:
-        """Answer every open goal ``shutting down`` and refuse later requests (R15)."""
-        self.step(ins.Shutdown(now=self.now()))
 
     def destroy(self) -> None:
         """Release the action server, publishers, timer and guard condition (after :meth:`shutdown`)."""
@@ -471,7 +327,7 @@ class DynamicEventServer:
         """Turn on the introspection of this robot's action server (its service events, with their
         contents, for a recording) and, with ``on_goal``, follow its ``send_goal`` events at once
         (:meth:`follow`).  False where rclpy cannot introspect an action."""
-        if not self._ros.introspect():
+        if not introspect(self._ros.action, self._node, latched(EVENTS_KEPT)):  # kept for a late follower
             return False
         if on_goal is not None:
             self.follow(on_goal, follower)
@@ -481,8 +337,17 @@ class DynamicEventServer:
         """Follow the ``send_goal`` service events of this robot's action server (introspected):
         ``on_goal(event)`` for each, the last few published before included, on ``follower`` (a
         node; this robot's when None).  In a process whose participants ignore their own endpoints
-        (:mod:`dynevent.ros.participant`) the follower is a node of another context."""
-        self._ros.follow(on_goal, follower)
+        (:mod:`dynevent.ros.participant`) the follower is a node of another context.  How a server
+        learns which client sent a goal (R22.1)."""
+        ros = self._ros
+        if ros.introspection is not None:
+            return
+        own = follower is None
+        ros.follower = self._node if own else follower
+        ros.introspection = ros.follower.create_subscription(
+            DynamicEvent.Impl.SendGoalService.Event, f"{ros.action_name}/_action/send_goal/_service_event",
+            on_goal, latched(EVENTS_KEPT), callback_group=ros.group if own else None,
+        )  # fmt: skip
 
     def _describe(self, request: Any, response: Any) -> Any:
         with self._lock:  # a query: its one output is the answer, not an effect for the outbox (R16)
@@ -629,23 +494,13 @@ class DynamicEventServer:
 def _carry_out_effect(server: DynamicEventServer, output: outs.Output) -> None:
     """Carry out an output that is neither an answer, a publication nor a child's: stubbornness, the
     run's end, an interruption confirmed, a log line, a notice."""
-    holds = server._stubbornness
     if isinstance(output, outs.StubbornBegin):
         server._log.info(f"stubborn for {output.period:g} s")
-        server._ros.refresh(True)
-        if holds is not None:
-            holds.begin(output.period, output.map_name, output.x, output.y)
-    elif isinstance(output, outs.StubbornHold):
-        if holds is not None:
-            holds.hold(output.period, output.map_name, output.x, output.y)
-    elif isinstance(output, outs.StubbornDelay):
-        if holds is not None:
-            holds.delay(output.delay)
-    elif isinstance(output, outs.StubbornEnd):
-        server._ros.refresh(False)
-        if holds is not None:
-            holds.end()
-    elif isinstance(output, outs.DynamicEventFinished):
+    if isinstance(output, (outs.StubbornBegin, outs.StubbornEnd)):
+        server._ros.refresh(isinstance(output, outs.StubbornBegin))
+    if carry_out_stubbornness(server._stubbornness, output):
+        return
+    if isinstance(output, outs.DynamicEventFinished):
         server._log.info(f"dynamic event finished: {output.status}")
         if server._on_finished is not None:
             server._on_finished(output.status)
@@ -658,43 +513,6 @@ def _carry_out_effect(server: DynamicEventServer, output: outs.Output) -> None:
         server._log.warning(f"stubborn_period {output.requested:g} s clamped to {output.applied:g} s")
     elif isinstance(output, (outs.SeqWrapped, outs.Ignored)):
         server._log.debug(repr(output))
-
-
-class _RunningChildren:
-    """The children the adapter runs, by id: the machine's child outputs carried out on them."""
-
-    def __init__(self, server: DynamicEventServer, children: ChildEvents) -> None:
-        self._server = server
-        self._children = children
-        self._executions: dict[int, ChildExecution] = {}
-
-    def carry_out(self, output: outs.Output) -> bool:
-        """Carry out a child's output (start, cancel, kill, interrupt, resume); False for another."""
-        try:
-            return self._carry_out(output)
-        finally:  # after every output: a child that ended is forgotten
-            for child_id in [key for key, execution in self._executions.items() if execution.done]:
-                del self._executions[child_id]
-
-    def _carry_out(self, output: outs.Output) -> bool:
-        if isinstance(output, outs.StartChild):
-            started = ChildExecution(self._server, output)
-            self._executions[output.id] = started
-            self._children.start(started)
-        elif isinstance(output, (outs.CancelChild, outs.KillChild)):
-            execution = self._executions.get(output.id)
-            if execution is not None:
-                kill = isinstance(output, outs.KillChild)
-                execution._stop(kill)
-                (self._children.kill if kill else self._children.cancel)(execution)
-        elif isinstance(output, (outs.InterruptChild, outs.ResumeChild)):
-            paused = self._executions.get(output.id)
-            if paused is not None:
-                interrupt = isinstance(output, outs.InterruptChild)
-                (self._children.interrupt if interrupt else self._children.resume)(paused)
-        else:
-            return False
-        return True
 
 
 def _abort_at_once(why: str) -> Callable[[Any], Any]:

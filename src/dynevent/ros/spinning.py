@@ -23,26 +23,30 @@ import faulthandler
 import signal
 import threading
 import time
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import Any
 
 from rclpy.executors import ExternalShutdownException
 
 from dynevent.errors import LocalError
 
-__all__ = ["CLOSE_BOUND", "Interrupted", "Spinner", "bounded_close", "close_down", "init", "interruptible"]
+__all__ = [
+    "CLOSE_BOUND", "Interrupted", "Session", "Spinner", "bounded_close", "close_down", "init",
+    "interruptible",
+]  # fmt: skip
 
 
-def init(ros_args: Sequence[str] = ()) -> None:
-    """``rclpy.init`` with the command line's ROS arguments (``--ros-args`` and what follows it:
-    remaps, ``__ns:=``, ``--log-level``, ``-p`` parameters), as any ROS 2 program takes them.  Arguments
-    rcl refuses are one line, :class:`~dynevent.errors.LocalError`, naming them."""
+def init(ros_args: Sequence[str] = (), context: Any = None) -> None:
+    """``rclpy.init`` of ``context`` (the default one when None) with the command line's ROS arguments
+    (``--ros-args`` and what follows it: remaps, ``__ns:=``, ``--log-level``, ``-p`` parameters), as any
+    ROS 2 program takes them.  Arguments rcl refuses are one line,
+    :class:`~dynevent.errors.LocalError`, naming them."""
     import rclpy
 
     try:
-        rclpy.init(args=["dynevent", *ros_args])
+        rclpy.init(args=["dynevent", *ros_args], context=context)
     except Exception as exc:  # rcl's parse errors (RCLError, RCLInvalidROSArgsError) are not exported
-        rclpy.try_shutdown()
+        rclpy.try_shutdown(context=context)
         raise LocalError(
             f"{' '.join(ros_args)}: ROS refused these arguments: {str(exc).splitlines()[0]}"
         ) from None
@@ -111,6 +115,40 @@ class Spinner:
             return False
         self.executor.shutdown(timeout_sec=0)
         return True
+
+
+class Session:
+    """A node named ``node_name`` and its executor, spun on a thread of its own from :meth:`start`:
+    in the process's default context (started here with ``ros_args`` unless it is), or with
+    ``own_context`` in a context, and so a DDS participant, of its own; ``thread`` names the thread.
+    :meth:`close` ends it all, bounded."""
+
+    def __init__(
+        self, node_name: str, ros_args: Sequence[str] = (), *, own_context: bool = False, thread: str = ""
+    ) -> None:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+
+        self.context = rclpy.Context() if own_context else None
+        if own_context or not rclpy.ok():  # the default context once, for every session on it
+            init(ros_args, self.context)
+        self.node = rclpy.create_node(node_name, context=self.context)
+        executor = SingleThreadedExecutor(context=self.context)
+        executor.add_node(self.node)
+        self.spinner = Spinner(executor, thread or node_name.replace("_", "-"))
+
+    def start(self) -> None:
+        """Spin the node."""
+        self.spinner.start()
+
+    def close(self, *first: Callable[[], object], bound: float = CLOSE_BOUND) -> None:
+        """Stop spinning, call each of ``first`` (what is to be destroyed before the node), destroy the
+        node and the context: all within ``bound`` seconds (:func:`bounded_close`)."""
+        with bounded_close(bound):
+            self.spinner.stop()
+            for destroy in first:
+                destroy()
+            close_down([self.node], self.context)
 
 
 def close_down(nodes: Iterable[Any], context: Any = None) -> None:

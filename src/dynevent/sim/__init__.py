@@ -4,7 +4,7 @@
 :class:`~dynevent.sim.config.ServeConfig` (the fleet, its robots, the simulated categories, the
 robots' map and actions, the mode, the shard) and says what a simulated child does with its
 description (:func:`~dynevent.sim.config.plan`).  The command line checks its input with it before
-it needs rclpy; :mod:`dynevent.ros.serve` runs what it describes.
+it needs rclpy; :mod:`dynevent.ros.fleet` runs what it describes, for ``dynevent serve``.
 """
 
 from __future__ import annotations

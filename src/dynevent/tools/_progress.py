@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Callable
 from typing import TextIO
 
 __all__ = ["Progress"]
@@ -33,14 +34,36 @@ class Progress:
 
     def update(self, done: int, detail: str = "") -> None:
         """Say that ``done`` units of ``total`` are done (``detail``: what they are)."""
+        if self._due():
+            amount = f"{min(100, 100 * done // self._total)}%" if self._total else f"{done:,}"
+            self._show(f"{amount}{' ' + detail if detail else ''}")
+
+    def show(self, text: str) -> None:
+        """Show ``text`` after the label: what is going on, where there is no count."""
+        if self._due():
+            self._show(text)
+
+    def above(self, say: Callable[[str], None]) -> Callable[[str], None]:
+        """``say``, for the lines a command prints while its progress shows: the progress line is
+        erased first (the next update draws it again), so that no printed line is written over it."""
+
+        def said(line: str) -> None:
+            self.close()
+            say(line)
+
+        return said
+
+    def _due(self) -> bool:
         if not self.active:
-            return
+            return False
         now = time.monotonic()
         if now - self._last < self._interval:
-            return
+            return False
         self._last = now
-        amount = f"{min(100, 100 * done // self._total)}%" if self._total else f"{done:,}"
-        self._write(f"\r{self._label}: {amount}{' ' + detail if detail else ''}\x1b[K")
+        return True
+
+    def _show(self, text: str) -> None:
+        self._write(f"\r{self._label}: {text}\x1b[K")
         self._shown = True
 
     def close(self) -> None:

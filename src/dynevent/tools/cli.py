@@ -273,10 +273,11 @@ def _add_diagram_command(commands: argparse._SubParsersAction[argparse.ArgumentP
 
 
 def _ros_module(command: str) -> Any:
-    """``dynevent.ros.<command>``, or None after two lines on standard error: what is missing, and
-    how to get it (the setup script ships in the package: ``dynevent/ros/setup/setup-ros-env.sh``)."""
+    """``dynevent.tools.live.<command>`` (over the ROS binding), or None after two lines on standard
+    error: what is missing, and how to get it (the setup script ships in the package:
+    ``dynevent/ros/setup/setup-ros-env.sh``)."""
     try:
-        return importlib.import_module(f"dynevent.ros.{command}")
+        return importlib.import_module(f"dynevent.tools.live.{command}")
     except ImportError as exc:
         missing = (exc.name or "rclpy").split(".")[0]  # the package to install, not its submodule
         script = Path(__file__).resolve().parent.parent / "ros" / "setup" / "setup-ros-env.sh"
@@ -300,7 +301,8 @@ def _say(line: str) -> None:
 
 def _ros_command(command: str, check: Callable[[], Any], run: Callable[[Any, Any], int]) -> int:
     """A ROS command: ``check()`` its own input first (a mistake there needs no ROS to be told), then
-    ``run(module, checked)`` with ``dynevent.ros.<command>``; a DyneventError is one line, exit 2."""
+    ``run(module, checked)`` with ``dynevent.tools.live.<command>``; a DyneventError is one line,
+    exit 2."""
     from dynevent.errors import DyneventError
 
     try:

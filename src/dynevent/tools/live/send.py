@@ -1,4 +1,4 @@
-"""``dynevent send``: one goal to one robot, over the binding's client, with its feedback and outcome.
+"""``dynevent send``: one goal to one robot, over the ROS binding's client, with its feedback and outcome.
 
 It prints the robot's status as first seen, every feedback as it arrives,
 and the typed outcome; for a goal the robot refused (a ROS refusal carries
@@ -17,8 +17,6 @@ import time
 from collections.abc import Callable
 
 import attrs
-import rclpy
-from rclpy.executors import SingleThreadedExecutor
 
 from dynevent import client as cl
 from dynevent import descriptions
@@ -28,10 +26,9 @@ from dynevent.errors import (
     FileError,
     SendError,  # defined there with every error; importable here too
 )
-from dynevent.ros import spinning
 from dynevent.ros.client import DynamicEventClient, GoalRun, GoalWaitTimeout
 from dynevent.ros.graph import graph_text, no_server_text, servers_seen
-from dynevent.ros.spinning import Interrupted, Spinner, bounded_close, close_down, interruptible
+from dynevent.ros.spinning import Interrupted, Session, interruptible
 from dynevent.server import outputs as outs
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import EventType, GoalStatus
@@ -78,8 +75,8 @@ def run(args: SendOptions, say: Callable[[str], None]) -> int:
         return max(timeout - (time.monotonic() - started), 0.0)
 
     trace = _open_trace(args)
-    spinning.init(args.ros_args)
-    node = rclpy.create_node("dynevent_send")
+    session = Session("dynevent_send", args.ros_args)
+    node = session.node
     # a description of the field's categories is checked here as every server checks its shape
     # (R4.18): one the robot would refuse is refused here, with the server's errors, and never sent
     client = DynamicEventClient(
@@ -87,10 +84,7 @@ def run(args: SendOptions, say: Callable[[str], None]) -> int:
     )
     if args.introspection:
         client.introspect()
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
-    spinner = Spinner(executor, "dynevent-send")
-    spinner.start()
+    session.start()
     try:
         try:
             with interruptible():
@@ -135,10 +129,7 @@ def run(args: SendOptions, say: Callable[[str], None]) -> int:
             say(_why_refused(status, result.goal))
         return 0 if _succeeded(event_type, result) else 1
     finally:
-        with bounded_close():
-            spinner.stop()
-            client.destroy()
-            close_down([node])
+        session.close(client.destroy)
         if trace is not None:
             trace.close()
 

@@ -1,0 +1,83 @@
+"""One goal a client sent, as its caller follows it, whatever carries it: its progress as it comes,
+then its one outcome, waited for with a bound from any thread, called back, or awaited.
+
+The binding reports through the run (:meth:`GoalRun.report`, :meth:`GoalRun.end`) from its own
+threads.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from typing import Any
+
+from dynevent.client import outputs as cl
+from dynevent.errors import GoalWaitTimeout, LocalError
+
+__all__ = ["GoalRun"]
+
+
+class GoalRun:
+    """One goal of a client (the ROS binding's :class:`dynevent.ros.client.DynamicEventClient`): its
+    progress, then its one outcome.  ``future`` (an awaitable with ``set_result``) makes it awaitable
+    in the executor that completes it.
+
+    ``result`` is the :class:`~dynevent.client.Outcome` once the goal is
+    over, or the :class:`~dynevent.client.Refused` of a goal never sent.
+    ``progress`` holds every :class:`~dynevent.client.Progress` so far.
+    """
+
+    def __init__(self, on_progress: Callable[[cl.Progress], None] | None = None, future: Any = None) -> None:
+        self.goal_uuid: str | None = None
+        self.progress: list[cl.Progress] = []
+        self.result: cl.Outcome | cl.Refused | None = None
+        self._on_progress = on_progress
+        self._over = threading.Event()
+        self._future = future
+        self._callbacks: list[Callable[[cl.Outcome | cl.Refused], None]] = []
+        self._callbacks_lock = threading.Lock()
+
+    def done(self) -> bool:
+        """The goal is over (or was never sent)."""
+        return self._over.is_set()
+
+    def wait(self, timeout: float) -> cl.Outcome | cl.Refused:
+        """Block until the goal is over, at most ``timeout`` seconds (another thread spins the node)."""
+        if not self._over.wait(timeout):
+            raise GoalWaitTimeout(f"goal {self.goal_uuid} still open after {timeout:g} s")
+        assert self.result is not None
+        return self.result
+
+    def __await__(self) -> Any:
+        """Await the outcome inside the executor that completes ``future`` (rclpy's, for the ROS
+        binding's client)."""
+        if self._future is None:
+            raise LocalError("this goal run has no future to await: wait() for it, or add_done_callback")
+        return self._future.__await__()
+
+    def report(self, progress: cl.Progress) -> None:
+        """The binding's: the goal made ``progress`` (kept, and handed to ``on_progress``)."""
+        self.progress.append(progress)
+        if self._on_progress is not None:
+            self._on_progress(progress)
+
+    def add_done_callback(self, callback: Callable[[cl.Outcome | cl.Refused], None]) -> None:
+        """Call ``callback`` with the result when the goal is over (at once when it is): on the
+        executor's thread, or on the caller's when the goal is already over."""
+        with self._callbacks_lock:
+            if self.result is None:
+                self._callbacks.append(callback)
+                return
+            result = self.result
+        callback(result)
+
+    def end(self, result: cl.Outcome | cl.Refused) -> None:
+        """The binding's: the goal is over with ``result`` (waiters woken, callbacks called)."""
+        with self._callbacks_lock:
+            self.result = result
+            callbacks, self._callbacks = self._callbacks, []
+        self._over.set()
+        if self._future is not None:
+            self._future.set_result(result)
+        for callback in callbacks:
+            callback(result)

@@ -1,0 +1,86 @@
+"""``dynevent probe`` over ROS 2: the probe's cases (:mod:`dynevent.conformance.probing`) run against
+a live server through the ROS binding's link (:class:`dynevent.ros.probe.RosLink`), with a progress
+line on a terminal, the findings printed and the reports written; Ctrl-C or SIGTERM stops it, with
+the findings of the cases that ended."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from dynevent.conformance import probe_cases, probing
+from dynevent.conformance.judge.trace import TraceWriter
+from dynevent.conformance.probe_cases import Case, Finding
+from dynevent.conformance.probing import Options
+from dynevent.errors import FileError, ProbeError
+from dynevent.ros.graph import no_server_text
+from dynevent.ros.probe import RosLink
+from dynevent.ros.spinning import Interrupted, Session, interruptible
+from dynevent.tools._progress import Progress
+
+__all__ = ["Options", "ProbeInterrupted", "main", "run"]
+
+
+def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int:
+    """``dynevent probe``: run the cases, print the findings, write the reports; the exit status."""
+    progress = Progress("dynevent probe", len(cases), interval=0.0)
+    say = progress.above(say)
+    trace = _open_trace(options)  # kept in memory too: the judge reads every record of the exchange
+    try:
+        findings = run(cases, options, say, progress.show, trace=trace)
+    except ProbeInterrupted as stop:
+        progress.close()
+        if stop.findings:
+            say(probe_cases.format_findings(stop.findings).rstrip("\n"))
+        say(f"{stop.name}: stopped after {len(stop.findings)} of {len(cases)} case(s); the rest not run")
+        return 128 + stop.signal
+    finally:
+        trace.close()
+    progress.close()
+    if findings is None:
+        return probe_cases.EXIT_USAGE
+    return probing.conclude(findings, trace.text(), options, say)[0]
+
+
+class ProbeInterrupted(Interrupted):
+    """Ctrl-C or SIGTERM during a probe run: ``findings`` are those of the cases that ended before."""
+
+    def __init__(self, signum: int, findings: list[Finding]) -> None:
+        super().__init__(signum)
+        self.findings = list(findings)
+
+
+def run(
+    cases: list[Case],
+    options: Options,
+    say: Callable[[str], None],
+    progress: Callable[[str], None] | None = None,
+    *,
+    trace: TraceWriter | None = None,
+) -> list[Finding] | None:
+    """Carry out ``cases`` against the robot over DDS, writing every record of the exchange to
+    ``trace``; the findings, or None when no server was found."""
+    session = Session("dynevent_probe", options.ros_args)
+    link = RosLink(session.node, options.fleet, options.robot, trace)
+    if options.introspection:
+        link.introspect()
+    session.start()
+    findings: list[Finding] = []
+    try:
+        with interruptible():
+            if not link.wait_for_server(options.server_wait):
+                say(no_server_text(session.node, options.fleet, options.robot, options.server_wait))
+                return None
+            probing.run_cases(link, options, cases, say, progress, findings)
+        return findings
+    except Interrupted as stop:
+        raise ProbeInterrupted(stop.signal, findings) from None
+    finally:
+        session.close(link.destroy)
+
+
+def _open_trace(options: Options) -> TraceWriter:
+    """The trace of the run: kept in memory for the judge, and written to ``--trace`` when given."""
+    try:
+        return TraceWriter(options.trace, fleet=options.fleet, robot=options.robot, keep=True)
+    except FileError as exc:
+        raise ProbeError(str(exc)) from None
