@@ -16,7 +16,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0.dev0"
+__version__ = "0.1.0"
 
 #: Where the project lives; the documentation is under ``docs/`` there.
 HOME = "https://github.com/dynevent/dynevent"
