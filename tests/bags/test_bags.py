@@ -836,3 +836,27 @@ def test_a_robot_without_goals_in_an_introspected_recording_is_said_to_have_had_
     ], done.stdout
     alone = _topics(_partial_clean()).write(tmp_path / "topics", StoragePlugin.MCAP)
     assert "partial view, judged from its topics alone" in _check(str(alone)).stdout
+
+
+def test_each_topic_is_read_as_its_robot_and_channel_and_no_other_is() -> None:
+    """One reading of a topic's name, for the bag reader and the recorder: a robot's status and begin
+    topics, the action's hidden topics, the fleet-wide begin topic; not the action's own name, a hidden
+    suffix on a topic's name, the description service (no topic), or another name."""
+    from dynevent.bags.reader import Channel, channel_of
+
+    action = "/rmf/dynamic_event/command/tinyRobot/r1"
+    assert channel_of("/rmf/dynamic_event/status/tinyRobot/r1") == Channel("tinyRobot", "r1", "status")
+    assert channel_of("rmf/dynamic_event/begin/tinyRobot/r1") == Channel("tinyRobot", "r1", "begin")
+    assert channel_of("/rmf/dynamic_event/begin") == Channel("", "", "begin")
+    assert channel_of(action + "/_action/feedback") == Channel("tinyRobot", "r1", "feedback")
+    assert channel_of(action + "/_action/cancel_goal/_service_event") == Channel(
+        "tinyRobot", "r1", "cancel_goal"
+    )
+    for other in (
+        action,
+        "/rmf/dynamic_event/status/tinyRobot/r1/_action/feedback",
+        "/rmf_dynamic_event/description/tinyRobot/r1",
+        "/chatter",
+        "/rmf/dynamic_event/status/a b/r",
+    ):
+        assert channel_of(other) is None, other

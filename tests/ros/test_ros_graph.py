@@ -126,3 +126,47 @@ def test_a_spinner_of_an_idle_node_waits_without_a_timeout_and_still_stops() -> 
     finally:
         assert spinner.stop(timeout=2) is True  # woken by the stop, well within the bound
         close_down([node], context)
+
+
+SESSIONS = """
+import threading
+import rclpy
+from dynevent.errors import LocalError
+from dynevent.ros.spinning import Session
+first = Session("dynevent_first", ["--ros-args", "-r", "__ns:=/one"])
+first.start()
+print(first.node.get_namespace(), [t.name for t in threading.enumerate() if t.name.startswith("dynevent")])
+try:
+    Session("dynevent_refused", ["--ros-args", "-r", "__ns:=/two"])
+except LocalError as exc:
+    print("refused:", exc)
+lane = Session("dynevent_lane")  # the default context already up: shared, not started again
+print(lane.node.get_namespace(), lane.context is None)
+lane.close()
+first.close()
+second = Session("dynevent_second", ["--ros-args", "-r", "__ns:=/three"])  # a new default context
+second.start()
+print(second.node.get_namespace(), rclpy.ok())
+second.close()
+print("ok" if not rclpy.ok() else "still up")
+"""
+
+
+def test_sessions_start_the_default_context_once_and_a_closed_one_is_started_anew() -> None:
+    """A Session on the default context starts it with its ROS arguments unless it is up; then it
+    shares it, and refuses arguments of its own (they would be lost without a word).  Once closed, the
+    default context is retired: the process's next Session starts a new one (rclpy's own default
+    would be the destroyed context, which no init can use again)."""
+    import subprocess
+    import sys
+
+    from ros_support import child_env
+
+    done = subprocess.run([sys.executable, "-c", SESSIONS], capture_output=True, text=True, timeout=60,
+                          env=child_env(), check=False)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0] == "/one ['dynevent-first']", lines
+    assert lines[1] == "refused: --ros-args -r __ns:=/two: ROS is already started in this process, with " \
+        "arguments of its own", lines  # fmt: skip
+    assert lines[2:] == ["/one True", "/three True", "ok"], lines

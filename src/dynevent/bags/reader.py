@@ -126,8 +126,8 @@ def channel_of(topic: str) -> Channel | None:
         parsed = parse_name(name)
     except InvalidName:
         return None
-    if (parsed.kind is NameKind.ACTION) != bool(channel):
-        return None
+    if (parsed.kind is NameKind.ACTION) != bool(channel) or parsed.kind is NameKind.DESCRIPTION:
+        return None  # the description query is a service: no topic of a recording
     return Channel(parsed.fleet, parsed.robot, channel or str(parsed.kind))
 
 

@@ -11,7 +11,7 @@ monotonic seconds.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Set
+from collections.abc import Set
 
 __all__ = ["ASK_AGAIN_PERIOD", "RestartWatch"]
 
@@ -28,10 +28,16 @@ class RestartWatch:
         self.orphans: set[str] = set()
         self.ask_again_at = 0.0
 
-    def sending(self, servers: Callable[[], frozenset[bytes]]) -> None:
-        """A goal is being sent: the processes it goes to are learned (``servers()``) if not known."""
-        if self.servers is None:
-            self.servers = servers()
+    @property
+    def looking(self) -> bool:
+        """The processes are not known: the binding looks at the graph before the next goal goes."""
+        return self.servers is None
+
+    def sending(self, servers: frozenset[bytes] | None) -> None:
+        """A goal is being sent to ``servers``, the processes the binding saw if it looked
+        (:attr:`looking`); None when it did not."""
+        if self.servers is None and servers is not None:
+            self.servers = servers
 
     def seen(self, servers: frozenset[bytes], open_goals: Set[str], now: float) -> list[str]:
         """The processes seen now, with these goals open: the orphans whose results are due to be

@@ -37,16 +37,9 @@ _HOMES = {
 }
 
 __all__ = [
-    "AsyncRobotClient",
-    "ChildEvents",
-    "ChildExecution",
-    "DynamicEventClient",
-    "DynamicEventServer",
-    "GoalRun",
-    "RobotClient",
-    "RobotClients",
-    "StubbornHolds",
-]
+    "AsyncRobotClient", "ChildEvents", "ChildExecution", "DynamicEventClient", "DynamicEventServer",
+    "GoalRun", "RobotClient", "RobotClients", "StubbornHolds",
+]  # fmt: skip
 
 
 def __getattr__(name: str) -> Any:

@@ -261,7 +261,10 @@ class DynamicEventClient:
     def _send(self, send: cl.SendGoal) -> None:
         uuid = send.goal_uuid
         with self._lock:  # the server processes this goal is sent to, to see a new one come
-            self._restarts.sending(self._server_processes)
+            looking = self._restarts.looking
+        servers = self._server_processes() if looking else None  # the graph asked outside the lock
+        with self._lock:
+            self._restarts.sending(servers)
         if self._trace is not None:
             self._trace.observe("goal", goal_uuid=uuid, message=send.goal)
         response = self._action.send_goal_async(
@@ -293,37 +296,35 @@ class DynamicEventClient:
             self._restarts.answered(uuid)
         self._step(cl.ResultReceived(goal_uuid=uuid, status=status, result=result))
 
-    def _on_feedback(self, uuid: str, message: Any) -> None:
+    def _heard(self, kind: str, read: Callable[[Any], Any], message: Any, **fields: Any) -> Any:
+        """``message`` read as dynevent's mirror (None, after a warning, when it is not valid), and
+        written to the trace as a ``kind`` record."""
         try:
-            feedback = convert.feedback_from_ros(message.feedback)
+            mirror = read(message)
         except InvalidMessage as exc:
-            self._node.get_logger().warning(f"feedback for goal {uuid} refused: {exc}")
-            return
+            goal = f" for goal {fields['goal_uuid']}" if fields else ""
+            self._node.get_logger().warning(f"{kind}{goal} refused: {exc}")
+            return None
         if self._trace is not None:
-            self._trace.observe("feedback", goal_uuid=uuid, message=feedback)
-        self._step(cl.FeedbackReceived(goal_uuid=uuid, feedback=feedback))
+            self._trace.observe(kind, message=mirror, **fields)
+        return mirror
+
+    def _on_feedback(self, uuid: str, message: Any) -> None:
+        feedback = self._heard("feedback", convert.feedback_from_ros, message.feedback, goal_uuid=uuid)
+        if feedback is not None:
+            self._step(cl.FeedbackReceived(goal_uuid=uuid, feedback=feedback))
 
     def _on_status(self, message: Any) -> None:
-        try:
-            status = convert.status_from_ros(message)
-        except InvalidMessage as exc:
-            self._node.get_logger().warning(f"status refused: {exc}")
-            return
-        if self._trace is not None:
-            self._trace.observe("status", message=status)
-        with self._lock:
-            self._status_seen = True
-        self._step(cl.StatusReceived(message=status))
+        status = self._heard("status", convert.status_from_ros, message)
+        if status is not None:
+            with self._lock:
+                self._status_seen = True
+            self._step(cl.StatusReceived(message=status))
 
     def _on_begin(self, message: Any) -> None:
-        try:
-            begin = convert.begin_from_ros(message)
-        except InvalidMessage as exc:
-            self._node.get_logger().warning(f"begin refused: {exc}")
-            return
-        if self._trace is not None:
-            self._trace.observe("begin", message=begin)
-        self._step(cl.BeginReceived(message=begin))
+        begin = self._heard("begin", convert.begin_from_ros, message)
+        if begin is not None:
+            self._step(cl.BeginReceived(message=begin))
 
     def _on_tick(self) -> None:
         goals = self.state.goals

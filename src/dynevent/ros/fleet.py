@@ -122,7 +122,7 @@ class _Lane(Session):
     """A node, its own single-threaded executor and thread, and the simulated children of its robots."""
 
     def __init__(self, name: str, config: ServeConfig) -> None:
-        super().__init__(name, thread=f"dynevent-serve-{name}")
+        super().__init__(name)  # its thread: the name, dashed
         self.node.get_logger().set_level(LoggingSeverity.WARN)  # the live log says the rest
         self.children = SimulatedChildren(self.node, config)
 

@@ -112,8 +112,8 @@ class Recorder:
             )  # fmt: skip
         heard = SubscriptionEventCallbacks(matched=lambda info, topic=topic: self._matched(topic, info))
         self.topics[topic] = self.node.create_subscription(
-            _CLASSES[msgtype], topic, lambda data, topic=topic: self._write(topic, data), qos, raw=True,
-            event_callbacks=heard,
+            _CLASSES[msgtype], topic, lambda data, info, topic=topic: self._write(topic, data, info), qos,
+            raw=True, event_callbacks=heard,
         )  # fmt: skip
         self.say(f"recording {topic} ({msgtype})")
 
@@ -131,8 +131,10 @@ class Recorder:
         found = bags.channel_of(topic)
         return found is not None and (not found.robot or self.wanted(found.fleet, found.robot))
 
-    def _write(self, topic: str, data: bytes) -> None:
-        now = time.time_ns()
+    def _write(self, topic: str, data: bytes, info: Any) -> None:
+        # when the middleware received it, not when the executor got to it: a recorder that falls
+        # behind (a busy machine) takes messages in bursts, and the bag's order must still be theirs
+        now = info.get("received_timestamp") or time.time_ns()
         with self._lock:
             connection = self._connections.get(topic)
             if connection is None:  # after close

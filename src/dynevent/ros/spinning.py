@@ -132,6 +132,10 @@ class Session:
         self.context = rclpy.Context() if own_context else None
         if own_context or not rclpy.ok():  # the default context once, for every session on it
             init(ros_args, self.context)
+        elif ros_args:
+            raise LocalError(
+                f"{' '.join(ros_args)}: ROS is already started in this process, with arguments of its own"
+            )
         self.node = rclpy.create_node(node_name, context=self.context)
         executor = SingleThreadedExecutor(context=self.context)
         executor.add_node(self.node)
@@ -163,8 +167,8 @@ def close_down(nodes: Iterable[Any], context: Any = None) -> None:
             if destroy is not None:
                 destroy()
         node.destroy_node()
-    if context is None:
-        context = rclpy.get_default_context()
+    if context is None:  # retired: the next rclpy.init of this process starts a new default context
+        context = rclpy.get_default_context(shutting_down=True)
     rclpy.try_shutdown(context=context)
     destroy = getattr(context, "destroy", None)  # rclpy 9 (Kilted); older ones free it with the object
     if destroy is not None:

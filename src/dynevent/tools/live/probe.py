@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 from dynevent.conformance import probe_cases, probing
 from dynevent.conformance.judge.trace import TraceWriter
-from dynevent.conformance.probe_cases import Case, Finding
+from dynevent.conformance.probe_cases import Case
 from dynevent.conformance.probing import Options
 from dynevent.errors import FileError, ProbeError
 from dynevent.ros.graph import no_server_text
@@ -17,7 +17,7 @@ from dynevent.ros.probe import RosLink
 from dynevent.ros.spinning import Interrupted, Session, interruptible
 from dynevent.tools._progress import Progress
 
-__all__ = ["Options", "ProbeInterrupted", "main", "run"]
+__all__ = ["ProbeInterrupted", "main", "run"]
 
 
 def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int:
@@ -44,7 +44,7 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
 class ProbeInterrupted(Interrupted):
     """Ctrl-C or SIGTERM during a probe run: ``findings`` are those of the cases that ended before."""
 
-    def __init__(self, signum: int, findings: list[Finding]) -> None:
+    def __init__(self, signum: int, findings: list[probe_cases.Finding]) -> None:
         super().__init__(signum)
         self.findings = list(findings)
 
@@ -56,7 +56,7 @@ def run(
     progress: Callable[[str], None] | None = None,
     *,
     trace: TraceWriter | None = None,
-) -> list[Finding] | None:
+) -> list[probe_cases.Finding] | None:
     """Carry out ``cases`` against the robot over DDS, writing every record of the exchange to
     ``trace``; the findings, or None when no server was found."""
     session = Session("dynevent_probe", options.ros_args)
@@ -64,7 +64,7 @@ def run(
     if options.introspection:
         link.introspect()
     session.start()
-    findings: list[Finding] = []
+    findings: list[probe_cases.Finding] = []
     try:
         with interruptible():
             if not link.wait_for_server(options.server_wait):

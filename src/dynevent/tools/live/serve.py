@@ -38,16 +38,16 @@ from dynevent.errors import (
     ServeError,  # defined there with every error; importable here too
 )
 from dynevent.ros import participant, spinning
-from dynevent.ros.fleet import BEGIN_COMMAND_TOPIC, LANE, Fleet, GoalEvent
+from dynevent.ros.fleet import LANE, Fleet, GoalEvent
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.machine import ServerConfig
 from dynevent.server.store import StateStore
-from dynevent.sim.config import CategorySpec, ServeConfig, load_config, machine_config
+from dynevent.sim.config import ServeConfig, machine_config
 from dynevent.wire._text import status_text
 from dynevent.wire.vocab import Compatibility
 
-__all__ = ["BEGIN_COMMAND_TOPIC", "CategorySpec", "ServeConfig", "ServeError", "Watch", "load_config", "run"]
+__all__ = ["Watch", "run"]
 
 
 def _describe(output: outs.Output | outs.Rejected) -> str | None:
