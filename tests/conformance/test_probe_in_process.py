@@ -421,3 +421,24 @@ def test_the_command_line_in_process_takes_the_servers_own_settings(tmp_path: Pa
             wrong.returncode == 2
             and wrong.stderr == f"dynevent probe: {said}, which runs in this process, without ROS\n"
         ), wrong.stderr
+
+
+def test_a_next_is_not_sent_where_the_robot_already_stands() -> None:
+    """A go_to_place to where the robot stands ends at once on a real adapter (the lab's EasyFullControl
+    site ran one in 2 ms), so a case that needs a running child would test nothing: the probe sends
+    the robot elsewhere than the place its last NEXT completed at."""
+    link = InProcessLink(CONFIG)
+    probe = probing.Probe(link, attrs.evolve(OPTIONS, more_places=("lounge", "hall")))
+    first = probe.next_goal(probe.waiting())  # pantry, the first of the rotation
+    assert first.description == '{"one_of": ["pantry"]}'
+    done = probe.send(first)
+    assert done.answer is not None and done.answer[1].status == "completed"
+    assert [probe.next_goal(probe.waiting()).description for _ in range(2)] == [
+        '{"one_of": ["lounge"]}',
+        '{"one_of": ["hall"]}',
+    ]
+    # the rotation's next is pantry, where the robot stands: it goes on to lounge
+    assert probe.next_goal(probe.waiting()).description == '{"one_of": ["lounge"]}'
+    alone = probing.Probe(link, attrs.evolve(OPTIONS, more_places=()))
+    alone.send(alone.next_goal(alone.waiting()))
+    assert alone.next_goal(alone.waiting()).description == '{"one_of": ["pantry"]}'  # no other place

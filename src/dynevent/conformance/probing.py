@@ -349,6 +349,7 @@ class Probe:
         self.exchanges: list[Exchange] = []
         self.timeouts_in_a_row = 0  # cases that waited out the timeout, one after the other
         self._places_sent = 0
+        self._nexts: list[Exchange] = []  # every NEXT sent, across cases: where the robot went
         self.ends_at = link.clock() + options.deadline
         #: the kinds of wait that have timed out once (``"status"``), and why: the cases that need one
         #: are not run to wait it out again (the cause is said instead)
@@ -482,6 +483,8 @@ class Probe:
         """Send ``goal``; wait for the response and, when accepted and ``answer``, for its answer."""
         exchange = self.link.send(goal)
         self.exchanges.append(exchange)
+        if goal.event_type == EventType.NEXT.value:
+            self._nexts.append(exchange)
         self.note(_describe_goal(goal))
         if not exchange.responded(self.timeout):
             self.note("no response")
@@ -506,6 +509,9 @@ class Probe:
         places = (self.options.place, *self.options.more_places)
         place = places[self._places_sent % len(places)]
         self._places_sent += 1
+        if place == self._standing_at() and len(places) > 1:  # a child there would end at once
+            place = places[self._places_sent % len(places)]
+            self._places_sent += 1
         return Goal(
             dynamic_event_seq=status.dynamic_event_seq,
             event_type=EventType.NEXT,
@@ -513,6 +519,19 @@ class Probe:
             description=json.dumps({"one_of": [place]}),
             id=_fresh(status.id) if goal_id is None else goal_id,
         )
+
+    def _standing_at(self) -> str | None:
+        """The place the robot was last sent to and reached (its NEXT answered ``completed``), as far
+        as the probe's own goals tell; None when none did."""
+        for exchange in reversed(self._nexts):
+            answer = exchange.answer
+            if answer is not None and answer[1].status == Status.COMPLETED.value:
+                try:
+                    places = json.loads(exchange.goal.description).get("one_of") or [None]
+                except (ValueError, AttributeError):
+                    return None
+                return str(places[0])
+        return None
 
     def refused(self, case: Case, goal: Goal, divergence: str | None = None) -> Finding:
         """A case whose goal the spec refuses: pass when rejected.  Accepted and then aborted is the
