@@ -253,7 +253,7 @@ CASES: tuple[Case, ...] = (
     Case("next.busy_finished", "a FINISHED while a child runs is refused", ("R4.6",), needs="child",
          divergences=("D30",)),
     Case("next.race", "two NEXTs at once: one child runs, the other NEXT is refused or aborted, each "
-         "answered once", ("R4.16", "R5.2", "R19.2", "R19.1"), needs="child"),
+         "answered once", ("R4.16", "R5.2", "R19.2", "R19.1"), needs="child", divergences=("D10",)),
     Case("feedback.log_seq", "log entries are numbered one by one per robot, across children, in known tiers",
          ("R7.2", "R7.3"), needs="child", divergences=("D9",)),
     Case("stubborn.clamp_notice", "a stubborn period below the minimum is clamped with a warning in the "

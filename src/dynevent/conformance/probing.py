@@ -996,9 +996,10 @@ def _race(probe: Probe, case: Case) -> Finding:
     seen = _ran(ran[0], ran[0].goal.id)
     if seen is not None:
         absent = ran[0].answer is None
-        return Finding(
+        failed = Finding(
             case, Verdict.FAIL, expected=expected, seen=f"the child that ran: {seen}", absent=absent
         )
+        return _numbered_by_server(failed, ran[0], ran[0].goal.id, status.id)
     other = exchanges[1] if ran[0] is exchanges[0] else exchanges[0]
     if other.accepted is None:
         return Finding(case, Verdict.FAIL, expected=expected, seen="the other NEXT: no response", absent=True)
