@@ -2,12 +2,14 @@
 """Measure the deployed adapter again, and compare it with the recordings CI holds dynevent to.
 
     python3 lab/rmf_ros2/measure.py --out DIR [--timeout 45] [--with-stubborn] [--skip-send]
+                                    [--site full_control|easy]
 
 In a shell with the lab's environment (Open-RMF's fleet adapter built from its sources over
 dynevent's pinned wheels, dynevent with its bags extra installed in the same Python:
 lab/rmf_ros2/README.md) and a ROS_DOMAIN_ID of the caller's, this:
 
-1. starts the site (site/run_site.py), and waits for its READY line;
+1. starts the site (site/run_site.py, the robot added with full_control's parameters, or through
+   EasyFullControl with ``--site easy``), and waits for its READY line;
 2. records the robot (``dynevent record``) while ``dynevent probe`` runs every case (but
    ``stubborn.clamp_notice``, whose stubborn period takes the adapter down, D27, unless
    ``--with-stubborn``) with ``--known rmf_ros2``, its trace, report and JUnit kept;
@@ -188,12 +190,13 @@ def divergences_seen(bag: Path) -> collections.Counter[str]:
     return collections.Counter(label(finding) for robot in report.robots for finding in robot.report.findings)
 
 
-def comparison(out: Path) -> str:
+def comparison(out: Path, site: str = "full_control") -> str:
     then_verdicts = verdicts((DATA / "calibration" / "probe-known.txt").read_text("utf-8"))
     now_verdicts = verdicts((out / "probe-known.txt").read_text("utf-8"))
     lines = [
         "# The deployed adapter, measured again", "",
-        f"Recordings then: {DATA} (calibration, probe, send); now: {out}.", "",
+        f"Recordings then: {DATA} (calibration, probe, send: the full_control site); now: {out} "
+        f"(the {site} site).", "",
         "## The probe's verdicts", "", "| case | then (calibration) | now |", "|---|---|---|",
     ]  # fmt: skip
     changed = 0
@@ -245,6 +248,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--timeout", type=float, default=45.0, help="the probe's --timeout (default 45)")
     parser.add_argument("--with-stubborn", action="store_true", help="run stubborn.clamp_notice too (D27)")
     parser.add_argument("--skip-send", action="store_true", help="no send session")
+    parser.add_argument("--site", choices=("full_control", "easy"), default="full_control",
+                        help="how the site adds its robot (site/run_site.py --site)")  # fmt: skip
     args = parser.parse_args(argv)
     if "ROS_DOMAIN_ID" not in os.environ:
         print("measure: set ROS_DOMAIN_ID to a domain of your own first", file=sys.stderr)
@@ -254,8 +259,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     site: Child | None = None
     record: Child | None = None
     try:
-        site = Child([sys.executable, str(HERE / "site" / "run_site.py"), "--logs", str(out / "site-logs")],
-                     out / "site.log")  # fmt: skip
+        site = Child([sys.executable, str(HERE / "site" / "run_site.py"), "--logs", str(out / "site-logs"),
+                      "--site", args.site], out / "site.log")  # fmt: skip
         site.wait_line("READY ", UP, "the site")
         say(f"site ready; probing (every wait up to {args.timeout:g} s)")
         record = recording(out, "probe-bag")
@@ -280,7 +285,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if site is not None:
             site.stop()
     try:
-        (out / "comparison.md").write_text(comparison(out), encoding="utf-8")
+        (out / "comparison.md").write_text(comparison(out, args.site), encoding="utf-8")
     except (OSError, DyneventError) as exc:
         say(f"measure: the comparison could not be written: {exc}")
         return 1

@@ -8,6 +8,9 @@ Starts, each as a child process with its own log file under --logs:
 3. ``fleet_driver`` fleet_driver.py, the robot tinyRobot1 that the adapter drives;
 4. ``dispatcher``   dispatcher.py, which keeps a Dynamic Event task on the robot.
 
+With ``--site easy`` the adapter is easy_adapter.py instead: the fleet made through EasyFullControl
+(rmf_fleet_adapter_python), with the robot simulated in its process (no fleet_driver).
+
 It waits for each to come up (bounded), then for the robot's Dynamic Event action server and
 a Dynamic Event begin, and prints one line on stdout::
 
@@ -135,6 +138,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, help="stop by itself after this long (after READY)")
     parser.add_argument("--nav-graph", type=Path, default=HERE / "navgraph.yaml")
     parser.add_argument("--up-timeout", type=float, default=60.0, help="bound, in s, for each step")
+    parser.add_argument(
+        "--site",
+        choices=("full_control", "easy"),
+        default="full_control",
+        help="how the robot is added: full_control's parameters (the default) or EasyFullControl",
+    )
     args = parser.parse_args(argv)
 
     if not os.environ.get("ROS_DOMAIN_ID"):
@@ -197,6 +206,25 @@ def main(argv: list[str] | None = None) -> int:
             logs / "dispatcher.log",
         ),
     ]
+    if args.site == "easy":  # the fleet through EasyFullControl, the robot in the adapter's process
+        children[1:3] = [
+            Child(
+                "adapter",
+                [
+                    python,
+                    str(HERE / "easy_adapter.py"),
+                    "--config",
+                    str(HERE / "easy_config.yaml"),
+                    "--nav-graph",
+                    str(nav_graph),
+                    "--robot",
+                    ROBOT,
+                    "--start",
+                    START,
+                ],
+                logs / "adapter.log",
+            )
+        ]
 
     stop_reason: list[str] = []
 
@@ -260,12 +288,20 @@ def main(argv: list[str] | None = None) -> int:
         say(f"{culprit.name} did not come up within {args.up_timeout:g} s ({what}): see {culprit.log_path}")
         return False
 
-    schedule, adapter, driver, dispatcher = children
+    schedule, adapter, dispatcher = children[0], children[1], children[-1]
     steps: list[tuple[Child | None, str, Callable[[], bool], Child]] = [
-        (schedule, "schedule up", node_named("rmf_traffic_schedule_node"), schedule),
-        # The adapter subscribes to fleet states once it has found the schedule and made its fleet.
-        (adapter, "adapter up", endpoint("/fleet_states", "fleet_adapter", publisher=False), adapter),
-        (driver, "driver up", endpoint("/fleet_states", f"{FLEET}_fleet_driver", publisher=True), driver),
+        (schedule, "schedule up", node_named("rmf_traffic_schedule_node"), schedule)
+    ]
+    if args.site == "easy":  # its node is up once it has found the schedule
+        steps.append((adapter, "adapter up", node_named(f"{FLEET}_fleet_adapter"), adapter))
+    else:
+        driver = children[2]
+        steps += [
+            # The adapter subscribes to fleet states once it has found the schedule and made its fleet.
+            (adapter, "adapter up", endpoint("/fleet_states", "fleet_adapter", publisher=False), adapter),
+            (driver, "driver up", endpoint("/fleet_states", f"{FLEET}_fleet_driver", publisher=True), driver),
+        ]
+    steps += [
         # The robot's Dynamic Event server exists once the adapter has added the robot.
         (None, f"action server of {ROBOT} up", action.server_is_ready, adapter),
         (dispatcher, "dispatcher up", node_named("dynevent_site_dispatcher"), dispatcher),
@@ -279,7 +315,7 @@ def main(argv: list[str] | None = None) -> int:
             if not wait_for(what, ready, culprit):
                 status = 0 if stop_reason else 1  # a signal while starting is a clean stop
                 return status
-        print(f"READY fleet={FLEET} robot={ROBOT} places={','.join(places)}", flush=True)
+        print(f"READY fleet={FLEET} robot={ROBOT} places={','.join(places)} site={args.site}", flush=True)
         ready_at = time.monotonic()
         while not stop_reason:
             if args.seconds is not None and time.monotonic() - ready_at >= args.seconds:

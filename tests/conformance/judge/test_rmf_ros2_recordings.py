@@ -147,6 +147,40 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("cancel_seen_late", "R2.2", "status_mismatch"): 4,
         ("response_seen_late", "R2.2", "status_mismatch"): 18,
     },
+    # the same probe against the site that adds its robot through EasyFullControl (lab/rmf_ros2/site/
+    # easy_adapter.py), every case, the stubborn one included (the adapter survives it there, D27):
+    # D31 in a third shape (the cancel's callback stopped the child at once; the NEXT answered
+    # aborted `canceled` before the cancel's refusal was read)
+    ("easy", "standard"): {
+        ("D10", "R4.12", "accepted_stale_id"): 1,
+        ("D10", "R5.2", "race_not_lost"): 1,
+        ("D10", "R6.2", "child_id"): 17,
+        ("D11", "R12.2", "clamp_not_reported"): 1,
+        ("D26", "R2.2", "status_mismatch"): 1,
+        ("D31", "R10.3", "cancel_response"): 1,
+        ("D31", "R8.2", "goal_status"): 1,
+        ("D7", "R4.4", "accepted_uninitialized_event_type"): 1,
+        ("D7", "R4.5", "accepted_unknown_event_type"): 1,
+        ("D8", "R4.13", "accepted_cancel_idle"): 1,
+        ("D8", "R4.14", "accepted_cancel_id_mismatch"): 1,
+        ("D9", "R7.3", "log_seq"): 48,
+        ("cancel_seen_late", "R2.2", "status_mismatch"): 7,
+        ("finished_seen_late", "R4.3", "accepted_inactive"): 1,
+        ("finished_seen_late", "R5.2", "goal_status"): 1,
+        ("response_seen_late", "R2.2", "status_mismatch"): 19,
+    },
+    ("easy", "rmf_ros2"): {
+        ("D1", "R8.3", "goal_status"): 1,
+        ("D10", "R6.2", "child_id"): 18,
+        ("D11", "R12.2", "clamp_not_reported"): 1,
+        ("D26", "R2.2", "status_mismatch"): 1,
+        ("D31", "R10.3", "cancel_response"): 1,
+        ("D31", "R8.2", "goal_status"): 1,
+        ("D9", "R7.3", "log_seq"): 48,
+        ("finished_seen_late", "R4.3", "accepted_inactive"): 1,
+        ("finished_seen_late", "R5.2", "goal_status"): 1,
+        ("response_seen_late", "R2.2", "status_mismatch"): 19,
+    },
     ("probe", "rmf_ros2"): {
         ("D1", "R2.2", "status_mismatch"): 3,
         ("D1", "R4.6", "accepted_busy"): 1,

@@ -77,6 +77,15 @@ def label(finding: Finding) -> str:
     # records read after the cancel's): the cancel refused, the NEXT answered at its child's end
     if rule == "R10.1" and code in ("cancel_response", "goal_status"):
         return "D31"
+    # and where the cancel's callback stopped the child at once: the NEXT answered aborted `canceled`
+    # before the cancel's refusal was read (the EasyFullControl site)
+    if (
+        rule == "R8.2"
+        and code == "goal_status"
+        and "answered aborted: canceled" in message
+        and expected.startswith("canceled: canceled")
+    ):
+        return "D31"
     if code == "status_mismatch" and "status INACTIVE" in message and _COMPLETED in expected:
         return "D30"
     if code == "feedback_not_running" and "whose event has ended" in message:
