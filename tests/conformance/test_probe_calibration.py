@@ -31,6 +31,7 @@ LEFT_OUT = {"stubborn.clamp_notice": "D27: a stubborn period crashes the full_co
 def _left_out(run: Path) -> set[str]:
     return set() if run.parent.name == "easy" else set(LEFT_OUT)
 
+
 VERDICT = r"(?P<verdict>pass|fail|info|non-strict|known \((?P<d>D\d+)\)|missing \(allowed\)|missing)"
 LINE = re.compile(r"^(?P<case>[a-z]+\.[a-z0-9_]+) +" + VERDICT + "  +")
 
