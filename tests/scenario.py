@@ -299,6 +299,9 @@ class Run:
     def query(self, now: int | None = None) -> tuple[Any, ...]:
         return self.step(ins.DescriptionQuery(now=self._now(now)))
 
+    def id_drawn(self, now: int | None = None) -> tuple[Any, ...]:
+        return self.step(ins.IdDrawn(now=self._now(now)))
+
     # ---- checks
 
     def assert_ignored(self, outputs: tuple[Any, ...], kind: str) -> None:

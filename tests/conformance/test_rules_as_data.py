@@ -79,7 +79,7 @@ def _attributed(vector: vectors.Vector) -> set[str]:
 #: (R4.18 says what a field category's validator finds, R4.19 how much is listed; R4.10 refuses with it).
 STATE_RULES = {
     "R3.1", "R4.17", "R4.18", "R4.19", "R6.2", "R7.3", "R7.4", "R8.1", "R8.4", "R12.3",
-    "R13.4", "R13.5", "R13.6", "R14.3", "R15.2", "R17.1", "R17.3", "R17.6",
+    "R13.4", "R13.5", "R13.6", "R14.3", "R15.2", "R17.1", "R17.3", "R17.6", "R17.8",
 }  # fmt: skip
 
 

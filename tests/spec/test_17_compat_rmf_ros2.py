@@ -27,6 +27,7 @@ from scenario import (
     RACE,
     RMF_ROS2,
     RUNNING,
+    WAITING,
     Run,
     aborted,
     cancel_goal,
@@ -180,3 +181,36 @@ def test_adapter_policy_in_standard_mode_checks_cancels_against_the_servers_id()
         rejected(u(9), R.CANCEL_ID_MISMATCH, current_id=11, requested_id=99, execution_failure=CANCEL_ID),
     )
     assert run.request(u(8), cancel_goal(1, 11)) == _accepted(u(8))
+
+
+@pytest.mark.spec("R17.8")
+def test_an_id_the_adapter_draws_puts_the_next_child_above_it() -> None:
+    """rmf_ros2's go_to_place child draws a second id for its plan: the run's children come 1, 3, 5."""
+    run = waiting(event_id=0, config=RMF_ROS2)
+    run.submit(u(1), next_goal(run.seq, 0))
+    assert run.state.running is not None and run.state.running.child_id == 1
+    assert run.id_drawn() == ()  # while the child runs the status names it: nothing to publish
+    assert run.state.last_id == 2
+    run.child_end()
+    run.submit(u(2), next_goal(run.seq, 0))
+    assert run.state.running is not None and run.state.running.child_id == 3
+
+
+@pytest.mark.spec("R17.8", "R2.2", "R2.3")
+def test_an_id_drawn_while_waiting_shows_in_the_status_and_wraps_as_the_counter_does() -> None:
+    run = waiting(event_id=4, config=RMF_ROS2)
+    assert run.id_drawn() == (status(run.seq, WAITING, "standby", 5, now=run.now),)
+    top = Run(RMF_ROS2, attrs.evolve(run.state, last_id=2**64 - 1), now=run.now)
+    top.id_drawn()
+    assert top.state.last_id == 0  # the adapter's counter wraps, as its children's ids do (R6.2)
+
+
+@pytest.mark.spec("R17.8", "R19.8")
+def test_a_state_whose_adapter_drew_ids_under_the_running_child_restores() -> None:
+    from dynevent.server import snapshot
+
+    run = waiting(event_id=0, config=RMF_ROS2)
+    run.submit(u(1), next_goal(run.seq, 0))
+    run.id_drawn()
+    restored = snapshot.loads(snapshot.dumps(run.state))
+    assert restored == run.state and restored.last_id == 2 and restored.current_id == 1

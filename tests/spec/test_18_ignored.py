@@ -14,6 +14,7 @@ from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.holder import Execution
 from scenario import (
+    RMF_ROS2,
     T0,
     Run,
     cancel_goal,
@@ -255,3 +256,13 @@ def test_signals_after_a_kill_are_ignored_until_the_child_ends() -> None:
     run.child_end("killed")
     # the run is over: now R18.5 applies
     run.assert_ignored(run.task_kill(), "task_kill")
+
+
+@pytest.mark.spec("R18.8", "R18.1")
+def test_an_id_drawn_under_the_goal_policy_or_while_inactive_is_ignored() -> None:
+    """The NEXT goals name the children under id policy goal: an adapter's own ids are no business of
+    the protocol's; and no run, no counter to move on."""
+    named = waiting()
+    named.assert_ignored(named.id_drawn(), "id_drawn")
+    idle = Run(RMF_ROS2)
+    idle.assert_ignored(idle.id_drawn(), "id_drawn")

@@ -47,6 +47,7 @@ __all__ = [
     "GoalRequested",
     "GoalStarted",
     "GoalSubmitted",
+    "IdDrawn",
     "Input",
     "Interrupt",
     "Restart",
@@ -336,6 +337,16 @@ class Interrupt(_Input):
 
 @fast_init
 @attrs.frozen(kw_only=True)
+class IdDrawn(_Input):
+    """The adapter drew an id for work of its own from the counter it numbers children with (under id
+    policy ``adapter``: rmf_ros2's go_to_place child draws one for its plan, R17.8)."""
+
+    KIND: ClassVar[str] = "id_drawn"
+    now: int = _now_field()
+
+
+@fast_init
+@attrs.frozen(kw_only=True)
 class Resume(_Input):
     """The task's interruption was released."""
 
@@ -400,6 +411,7 @@ Input: TypeAlias = (
     | Tick
     | Interrupt
     | Resume
+    | IdDrawn
     | TaskCancel
     | TaskKill
     | Shutdown
@@ -421,6 +433,7 @@ INPUT_TYPES: dict[str, type[Input]] = {
         Tick,
         Interrupt,
         Resume,
+        IdDrawn,
         TaskCancel,
         TaskKill,
         Shutdown,

@@ -98,6 +98,7 @@ citations, and that test fails while it is stale::
     R17.5  _running_status, _on_child_progress
     R17.6  begin_description, _on_begin
     R17.7  _on_child_finished
+    R17.8  _on_id_drawn
     R18.1  _on_begin, _on_shutdown
     R18.2  _on_goal_requested, _on_goal_submitted
     R18.3  _on_goal_started
@@ -105,6 +106,7 @@ citations, and that test fails while it is stale::
     R18.5  _on_interrupt, _on_task_signal
     R18.6  _on_interrupt, _on_resume
     R18.7  _on_task_signal
+    R18.8  _on_id_drawn
     R20.2  child_ended, runs_a_child, robot_waits, state_from_status
     R21.1  _on_restart
     R21.2  _end_stubbornness, _on_restart, TRANSITIONS
@@ -1350,6 +1352,17 @@ def _on_resume(state: State, event: ins.Resume, config: ServerConfig) -> Transit
     return _finish(state, after, outputs, event.now)
 
 
+def _on_id_drawn(state: State, event: ins.IdDrawn, config: ServerConfig) -> Transition:
+    """The adapter's counter moved on (R17.8): the next child's id is above the id drawn."""
+    if config.id_policy is _GOAL_IDS:
+        return _ignored("R18.8", state, event.KIND, "the NEXT goals name the children (id policy goal)")
+    if not state.active:
+        return _ignored("R18.8", state, event.KIND, "no dynamic event is active")
+    fresh = fresh_id(state.last_id)  # the adapter's counter wraps to 0, as next_child_id does
+    after = _replace_state(state, last_id=0 if fresh is None else fresh)
+    return _finish(state, after, [], event.now)
+
+
 def _on_task_signal(state: State, event: ins.TaskCancel | ins.TaskKill, config: ServerConfig) -> Transition:
     kill = isinstance(event, ins.TaskKill)
     signal = Status.KILLED.value if kill else Status.CANCELED.value
@@ -1457,6 +1470,7 @@ HANDLERS: Mapping[str, _Handler] = {
     ins.Tick.KIND: _on_tick,
     ins.Interrupt.KIND: _on_interrupt,
     ins.Resume.KIND: _on_resume,
+    ins.IdDrawn.KIND: _on_id_drawn,
     ins.TaskCancel.KIND: _on_task_signal,
     ins.TaskKill.KIND: _on_task_signal,
     ins.Shutdown.KIND: _on_shutdown,

@@ -22,7 +22,7 @@ from dynevent.server.inputs import LOWER_HEX, NOW_RANGE
 from dynevent.server.machine import SECONDS_RANGE, State
 from dynevent.wire import _json
 from dynevent.wire._codec import CodecError, decode, encode
-from dynevent.wire._fields import SECOND, U32_MAX, U64_MAX
+from dynevent.wire._fields import SECOND, U32_MAX, U64_MAX, id_not_after
 from dynevent.wire.description import EventDescription
 from dynevent.wire.names import validate_robot, validate_token
 from dynevent.wire.vocab import TASK_SIGNAL_LOGS, EventType, Status
@@ -167,11 +167,11 @@ def _phase_problems(state: State) -> list[tuple[str, str]]:
     if running is not None:
         if running.goal.event_type != EventType.NEXT:
             found.append(("$.state.running.goal", "only a NEXT goal holds the running slot (R2.1)"))
-        if running.child_id != state.last_id:
+        if not id_not_after(running.child_id, state.last_id):  # ids the adapter drew since (R17.8)
             found.append(
                 (
                     "$.state.last_id",
-                    f"is {state.last_id}, not the running child's id {running.child_id} (R6.2)",
+                    f"is {state.last_id}, before the running child's id {running.child_id} (R6.2)",
                 )
             )
         if not math.isfinite(running.goal.stubborn_period):

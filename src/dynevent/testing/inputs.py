@@ -134,6 +134,7 @@ def server_inputs(
         "resume": (1, st.builds(ins.Resume, now=times)),
         "signal": (1, st.one_of(st.builds(ins.TaskCancel, now=times), st.builds(ins.TaskKill, now=times))),
         "describe": (1, st.builds(ins.DescriptionQuery, now=times)),
+        "id_drawn": (1, st.builds(ins.IdDrawn, now=times)),
     }
     # one_of draws its branches alike (and merges equal ones): a weight is that many distinct copies
     common: st.SearchStrategy[ins.Input] = st.one_of(

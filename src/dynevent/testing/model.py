@@ -380,6 +380,9 @@ class _Children(_Model):
             self.interrupted = True
         elif isinstance(event, ins.Resume):
             self.interrupted = False
+        elif isinstance(event, ins.IdDrawn) and self.active:  # R17.8: the adapter's counter moved on
+            fresh = machine.fresh_id(self.last_id)
+            self.last_id = 0 if fresh is None else fresh
         elif isinstance(event, ins.Shutdown):
             self.shut_down = True
             self.active = False

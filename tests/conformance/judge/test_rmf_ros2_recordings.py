@@ -35,6 +35,8 @@ STUBBORN = {
     ("D9", "R7.3", "log_seq"): 1,
 }
 
+#: In ``rmf_ros2`` mode (id policy ``adapter``) a child whose id is above the next one is read as ids
+#: the adapter drew for work of its own (R17.8): D10's two-apart numbering is no finding there.
 EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
     ("send", "standard"): {
         ("D10", "R6.2", "child_id"): 2,
@@ -48,7 +50,6 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
     # the status of a cancelled child's end, read before its late CANCEL, is what serve's rmf_ros2
     # mode publishes at that end (WAITING canceled, R17.4): only the standard mode finds it
     ("send", "rmf_ros2"): {
-        ("D10", "R6.2", "child_id"): 2,
         ("D26", "R2.2", "status_mismatch"): 3,
         ("D9", "R7.3", "log_seq"): 9,
         ("response_seen_late", "R2.2", "status_mismatch"): 3,
@@ -102,7 +103,6 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
     ("calibration", "rmf_ros2"): {
         ("D1", "R4.6", "accepted_busy"): 1,
         ("D1", "R8.3", "goal_status"): 1,
-        ("D10", "R6.2", "child_id"): 14,
         ("D26", "R2.2", "status_mismatch"): 2,
         ("D30", "R2.2", "status_mismatch"): 1,
         ("D31", "R10.3", "cancel_response"): 1,
@@ -136,7 +136,6 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("D1", "R2.2", "status_mismatch"): 8,
         ("D1", "R4.6", "accepted_busy"): 4,
         ("D1", "R5.2", "race_not_lost"): 3,
-        ("D10", "R6.2", "child_id"): 13,
         ("D26", "R2.2", "status_mismatch"): 3,
         ("D30", "R10.1", "feedback_not_running"): 2,
         ("D30", "R2.2", "status_mismatch"): 1,
@@ -171,7 +170,6 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
     },
     ("easy", "rmf_ros2"): {
         ("D1", "R8.3", "goal_status"): 1,
-        ("D10", "R6.2", "child_id"): 18,
         ("D11", "R12.2", "clamp_not_reported"): 1,
         ("D26", "R2.2", "status_mismatch"): 1,
         ("D31", "R10.3", "cancel_response"): 1,
@@ -185,7 +183,6 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("D1", "R2.2", "status_mismatch"): 3,
         ("D1", "R4.6", "accepted_busy"): 1,
         ("D1", "R5.2", "race_not_lost"): 1,
-        ("D10", "R6.2", "child_id"): 12,
         ("D26", "R2.2", "status_mismatch"): 2,
         ("D30", "R2.2", "status_mismatch"): 1,
         ("D31", "R10.3", "cancel_response"): 1,

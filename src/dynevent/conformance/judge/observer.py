@@ -44,7 +44,7 @@ from dynevent.server.machine import (
     State,
     state_from_status,
 )
-from dynevent.wire._fields import U32_MAX, seq_after
+from dynevent.wire._fields import U32_MAX, id_not_after, seq_after
 from dynevent.wire._text import answer_text, goal_text, status_text
 from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
 from dynevent.wire.vocab import (
@@ -886,7 +886,14 @@ class _Feedback(_Part):
         assert isinstance(owed.output, outs.PublishFeedback)
         expected = owed.output.feedback
         if expected.id != feedback.id:
-            if isinstance(events[-1], (ins.GoalStarted, ins.Resume)):
+            started = isinstance(events[-1], (ins.GoalStarted, ins.Resume))
+            if (
+                started
+                and self.replica.config.id_policy is IdPolicy.ADAPTER
+                and id_not_after(expected.id, feedback.id)
+            ):  # R17.8: the adapter drew ids for work of its own since its last child; no wire shows them
+                self.replica.learn_child_id(feedback.id)
+            elif started:
                 policy = (
                     "the NEXT goal's id" if self.replica.config.id_policy is IdPolicy.GOAL else "the next id"
                 )
