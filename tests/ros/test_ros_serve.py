@@ -92,6 +92,7 @@ def test_serve_and_send_survive_kill_9_in_the_middle_of_a_child(
         encoding="utf-8",
     )
     state = tmp_path / "state.db"
+    planned = _plan_ids(mode)
     serve = Serve("--config", str(config), "--state", str(state), mode=mode).ready()
     try:
         done = send("--place", "pantry")
@@ -100,23 +101,32 @@ def test_serve_and_send_survive_kill_9_in_the_middle_of_a_child(
         wait_for(lambda: waiting_after(watcher, 2), "waiting, id 2")
         (tmp_path / "slow.json").write_text('{"category": "slow", "description": {}}', encoding="utf-8")
         slow = send_in_background("--file", str(tmp_path / "slow.json"), timeout=40)
-        wait_for(lambda: watcher.state.phase == 2 and watcher.state.current_id == 3, "child 3 running")
+        child = 3 + planned  # after the pantry child's plan id, in rmf_ros2 mode (R17.8)
+        wait_for(
+            lambda: watcher.state.phase == 2 and watcher.state.current_id == child, f"child {child} running"
+        )
         serve.process.send_signal(signal.SIGKILL)
         assert serve.stop() == -signal.SIGKILL
         serve = Serve("--config", str(config), "--state", str(state), mode=mode).ready()
         output = finish(slow, 30).stdout  # R21.4: it asks again and gets the restart's answer
         assert slow.returncode == 1 and "server restarted" in output, output
-        wait_for(lambda: serve.saw("restored: run 1, last id 3"), "the restore")
-        wait_for(lambda: watcher.state.phase == 1 and watcher.state.current_id == 3, "WAITING id 3 again")
+        wait_for(lambda: serve.saw(f"restored: run 1, last id {child}"), "the restore")
+        wait_for(lambda: watcher.state.phase == 1 and watcher.state.current_id == child, "WAITING again")
         assert watcher.state.seq == 1  # the same run goes on
         done = send("--place", "lobby")
         assert done.returncode == 0, done.stdout + done.stderr
-        assert "[id 4]" in done.stdout  # ids continue
+        assert f"[id {child + 1}]" in done.stdout  # ids continue
         ended = send("--end")
         assert ended.returncode == 0, ended.stdout
     finally:
         code = serve.stop()
     assert code == 0, serve.output
+
+
+def _plan_ids(mode: str) -> int:
+    """The ids a go_to_place child that moves draws for its plan: one in rmf_ros2 mode, as rmf_ros2's
+    does (R17.8, D10), none in standard mode."""
+    return 1 if mode == "rmf_ros2" else 0
 
 
 def test_a_foreign_state_file_is_refused_and_left_as_it_was(tmp_path: Path) -> None:
@@ -236,15 +246,16 @@ def test_send_drives_every_flow_of_a_run_in_both_modes(tmp_path: Path, watcher: 
         encoding="utf-8",
     )
     serve = Serve("--config", str(config), mode=mode).ready()
+    planned = _plan_ids(mode)  # each go_to_place that moves draws an id for its plan (R17.8)
     try:
-        for place, child in (("pantry", 2), ("lobby", 3)):
+        for place, child in (("pantry", 2), ("lobby", 3 + planned)):
             done = send("--place", place)
             assert done.returncode == 0, done.stdout + done.stderr
             assert "outcome: completed" in done.stdout and f"[id {child}]" in done.stdout
             wait_for(lambda last=child: waiting_after(watcher, last), f"waiting, id {child}")
-        failed = send("--place", "nowhere")
+        failed = send("--place", "nowhere")  # no plan: no id drawn
         assert failed.returncode == 1 and "outcome: failed" in failed.stdout, failed.stdout
-        wait_for(lambda: waiting_after(watcher, 4), "waiting after the failed child")
+        wait_for(lambda: waiting_after(watcher, 4 + 2 * planned), "waiting after the failed child")
         action = _write(
             tmp_path,
             '{"category": "perform_action", "description": {"category": "clean", "description": {}}}',
@@ -256,12 +267,15 @@ def test_send_drives_every_flow_of_a_run_in_both_modes(tmp_path: Path, watcher: 
             str(_write(tmp_path, '{"category": "slow", "description": {}}', "slow.json")),
             timeout=30,
         )
-        wait_for(lambda: watcher.state.phase == 2 and watcher.state.current_id == 6, "child 6 running")
+        slow_child = 6 + 2 * planned
+        wait_for(
+            lambda: watcher.state.phase == 2 and watcher.state.current_id == slow_child, "the slow child"
+        )
         cancel = send("--cancel")
         assert cancel.returncode == 0, cancel.stdout + cancel.stderr
         output = finish(slow, 30).stdout
         assert slow.returncode == 1 and "outcome: canceled" in output, output
-        wait_for(lambda: waiting_after(watcher, 6), "waiting after the cancel")
+        wait_for(lambda: waiting_after(watcher, slow_child), "waiting after the cancel")
         ended = send("--end")
         assert ended.returncode == 0, ended.stdout + ended.stderr
         wait_for(lambda: watcher.state.phase == 0, "INACTIVE")

@@ -38,7 +38,7 @@ from dynevent.server import outputs as outs
 from dynevent.server.adapter import ChildExecution
 from dynevent.server.holder import RobotServer
 from dynevent.server.machine import ServerConfig
-from dynevent.sim.children import SimulatedChild
+from dynevent.sim.children import SimulatedChild, Whereabouts
 from dynevent.sim.config import DEFAULT_DESCRIPTION, ServeConfig, machine_config
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.names import description_service
@@ -75,7 +75,7 @@ class _Child:
     def __init__(self, link: InProcessLink, start: outs.StartChild) -> None:
         self.execution = ChildExecution(link, start, lambda: link.now)
         self.began = link.now
-        self.simulation = SimulatedChild(start.category, start.parsed, link.config)
+        self.simulation = SimulatedChild(start.category, start.parsed, link.config, link.whereabouts)
 
 
 class InProcessLink(Link):
@@ -102,6 +102,7 @@ class InProcessLink(Link):
         self._outbox: collections.deque[outs.Output] = collections.deque()
         self._exchanges: dict[str, Exchange] = {}
         self._children: dict[int, _Child] = {}
+        self.whereabouts = Whereabouts()  # where the robot stands, as its children leave it
         self._latest: DynamicEventStatus | None = None
         self.step(ins.Begin(description=DEFAULT_DESCRIPTION, event_id=1, now=self.now))
         self._drain()

@@ -29,7 +29,7 @@ from dynevent.server import outputs as outs
 from dynevent.server.adapter import ChildExecution
 from dynevent.server.machine import ServerConfig, State
 from dynevent.server.store import StateStore
-from dynevent.sim.children import SimulatedChild
+from dynevent.sim.children import SimulatedChild, Whereabouts
 from dynevent.sim.config import DEFAULT_DESCRIPTION, ServeConfig
 from dynevent.wire.messages import Goal
 
@@ -50,17 +50,18 @@ CLOSE_PER_ROBOT = 0.1
 
 
 class SimulatedChildren:
-    """Children that run on the node's timers, doing what their descriptions say (a
+    """One robot's children, run on the node's timers, doing what their descriptions say (a
     :class:`~dynevent.server.adapter.ChildEvents`)."""
 
     def __init__(self, node: Any, config: ServeConfig) -> None:
         self._node = node
         self._config = config
+        self._robot = Whereabouts()
         self._timers: dict[ChildExecution, Any] = {}  # by execution: the robots share child ids
         self._lock = threading.Lock()
 
     def start(self, execution: ChildExecution) -> None:
-        child = SimulatedChild(execution.category, execution.parsed, self._config)
+        child = SimulatedChild(execution.category, execution.parsed, self._config, self._robot)
         began = time.monotonic()
 
         def report() -> None:
@@ -119,12 +120,11 @@ _REQUEST_RECEIVED = 1
 
 
 class _Lane(Session):
-    """A node, its own single-threaded executor and thread, and the simulated children of its robots."""
+    """A node of the fleet's robots, with its own single-threaded executor and thread."""
 
-    def __init__(self, name: str, config: ServeConfig) -> None:
+    def __init__(self, name: str) -> None:
         super().__init__(name)  # its thread: the name, dashed
         self.node.get_logger().set_level(LoggingSeverity.WARN)  # the live log says the rest
-        self.children = SimulatedChildren(self.node, config)
 
 
 class Fleet:
@@ -148,7 +148,7 @@ class Fleet:
         base = "dynevent_serve" if count == 1 else f"dynevent_serve_{index}_of_{count}"
         robots = config.served()
         self.lanes = [
-            _Lane(base if start == 0 else f"{base}_lane_{start // LANE}", config)
+            _Lane(base if start == 0 else f"{base}_lane_{start // LANE}")
             for start in range(0, max(len(robots), 1), LANE)
         ]
         self.lane_of = {robot: self.lanes[position // LANE] for position, robot in enumerate(robots)}
@@ -189,7 +189,7 @@ class Fleet:
             on_step(event, outputs)
 
         server = DynamicEventServer(
-            lane.node, fleet, robot, self.machine_config, lane.children,
+            lane.node, fleet, robot, self.machine_config, SimulatedChildren(lane.node, self.config),
             begin_publisher=self.begins, description_service=self.description_service,
             state=restored or self.config.first_state(robot),
             on_state=store.save if store is not None else None,

@@ -80,6 +80,7 @@ class ChildExecution:
     """
 
     def __init__(self, server: Stepper, start: outs.StartChild, clock: Callable[[], int]) -> None:
+        self._server = server
         self._clock = clock
         self._execution = Execution(server, start.id, automatic_cancel=False)
         #: The child's id, its category, its description (JSON text) and the parsed description.
@@ -121,6 +122,12 @@ class ChildExecution:
     def finished(self, status: Status | str = Status.COMPLETED) -> None:
         """The child ended with ``status`` (``completed`` unless it was stopped early)."""
         self._execution.finished(now=self._clock(), status=Status(status))
+
+    def draw_id(self) -> None:
+        """The child drew an id for work of its own from the counter children are numbered with
+        (under id policy ``adapter``: a go_to_place's plan, R17.8); nothing after its end."""
+        if not self.done:
+            self._server.step(ins.IdDrawn(now=self._clock()))
 
     def stop(self, kill: bool) -> None:
         """Carry out the machine's ``KillChild`` (``kill``) or ``CancelChild``: :attr:`stopping` says

@@ -3,7 +3,10 @@ the probe's in-process server on simulated time (:mod:`dynevent.conformance.in_p
 
 A :class:`SimulatedChild` is the plan of one child (:func:`~dynevent.sim.config.plan`) and where it
 has got to; :meth:`SimulatedChild.report` is one report, made ``elapsed`` seconds after the child
-started, through the adapter's handle on the child (:class:`ChildHandle`)."""
+started, through the adapter's handle on the child (:class:`ChildHandle`).  A :class:`Whereabouts`
+is where one robot stands, as its go_to_place children leave it: in ``rmf_ros2`` mode a go_to_place
+child that has to move draws a second id from the adapter's counter for its plan at its first report
+(R17.8), as rmf_ros2's does, and one sent where the robot stands draws none."""
 
 from __future__ import annotations
 
@@ -11,10 +14,18 @@ import bisect
 import itertools
 from typing import Any, Protocol
 
+from dynevent import descriptions
 from dynevent.sim.config import CategorySpec, ServeConfig, Step, plan
-from dynevent.wire.vocab import Status
+from dynevent.wire.vocab import Compatibility, Status
 
-__all__ = ["ChildHandle", "SimulatedChild"]
+__all__ = ["ChildHandle", "SimulatedChild", "Whereabouts"]
+
+
+class Whereabouts:
+    """Where one robot stands: the place its last go_to_place child reached (None: not known)."""
+
+    def __init__(self) -> None:
+        self.place: str | None = None
 
 
 class ChildHandle(Protocol):
@@ -32,13 +43,17 @@ class ChildHandle(Protocol):
 
     def finished(self, status: Status = Status.COMPLETED) -> Any: ...
 
+    def draw_id(self) -> Any: ...
+
 
 class SimulatedChild:
     """One child's steps, each told of by a log line as it begins; a report every :attr:`period`
     seconds (the category's, or the whole child's duration when shorter: a sequence's brief
     activities are each told of at the next report, not by reporting as often as the briefest)."""
 
-    def __init__(self, category: str, parsed: Any, config: ServeConfig) -> None:
+    def __init__(
+        self, category: str, parsed: Any, config: ServeConfig, robot: Whereabouts | None = None
+    ) -> None:
         spec = config.categories.get(category, CategorySpec())
         try:
             steps = plan(category, parsed, config)
@@ -48,6 +63,12 @@ class SimulatedChild:
         self._ends = list(itertools.accumulate(step.duration for step in steps))
         self.period = max(min(spec.report_every, self._ends[-1]), 0.001)
         self._told = 0  # the last step told of (the first is told by the progress lines)
+        self._robot = robot if robot is not None else Whereabouts()
+        self._goes_to = (
+            _destination(category, parsed) if config.compatibility is Compatibility.RMF_ROS2 else None
+        )
+        # no plan, no id: another category, the robot already there, or a place it cannot reach
+        self._planned = self._goes_to in (None, self._robot.place) or steps[0].failure is not None
 
     def report(self, child: ChildHandle, elapsed: float) -> bool:
         """Report ``elapsed`` seconds after the start: progress, or the end (a child told to stop
@@ -58,6 +79,9 @@ class SimulatedChild:
         if child.stopping is not None:
             child.finished()
             return True
+        if not self._planned:  # the plan found, at the first report: its id drawn (R17.8)
+            self._planned = True
+            child.draw_id()
         steps, ends = self.steps, self._ends
         current = min(bisect.bisect_right(ends, elapsed), len(steps) - 1)
         while self._told < current and steps[self._told].failure is None:  # every step is told of
@@ -69,7 +93,23 @@ class SimulatedChild:
             child.finished(Status.FAILED)
         elif elapsed >= ends[-1]:
             child.finished()
+            if self._goes_to is not None:
+                self._robot.place = self._goes_to
         else:
             into = elapsed - (ends[self._told] - step.duration)
             child.underway(f"{step.label}: {into:.0f} of {step.duration:g} s")
         return child.done
+
+
+def _destination(category: str, parsed: Any) -> str | None:
+    """Where a go_to_place child goes (the first of its places, as :func:`plan` takes it); None for
+    another category, or a description the simulation cannot read."""
+    if category != "go_to_place":
+        return None
+    try:
+        reading = descriptions.read(category, parsed)
+    except Exception:  # a defect here must end this child's plan id, never whatever carries it
+        return None
+    if not isinstance(reading, descriptions.GoToPlace) or not reading.one_of:
+        return None
+    return str(reading.one_of[0])
