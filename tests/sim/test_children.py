@@ -74,3 +74,22 @@ def test_no_plan_id_is_drawn_where_none_is_made(
     robot = Whereabouts()
     assert "draw_id" not in _run(SimulatedChild(category, description, config, robot), handle)
     assert robot.place is None
+
+
+@pytest.mark.spec("R17.8")
+def test_the_place_is_the_one_the_robot_goes_to_and_unknown_once_it_stopped_on_its_way() -> None:
+    robot = Whereabouts()
+    robot.place = "pantry"
+    # the simulation goes to the first place it can reach: pantry, where the robot stands
+    said = _run(SimulatedChild("go_to_place", {"one_of": ["nowhere", "pantry"]}, RMF_ROS2, robot), Handle())
+    assert "draw_id" not in said and robot.place == "pantry"
+    moving, handle = SimulatedChild("go_to_place", "lounge", RMF_ROS2, robot), Handle()
+    assert not moving.report(handle, 0.0)  # on its way: its plan's id drawn
+    handle.stopping = "canceled"
+    assert moving.report(handle, moving.period)
+    assert handle.said[0] == "draw_id" and robot.place is None  # stopped somewhere between
+    onward = _run(
+        SimulatedChild("go_to_place", {"one_of": ["hall"], "followed_by": ["lobby"]}, RMF_ROS2, robot),
+        Handle(),
+    )
+    assert onward.count("draw_id") == 1 and robot.place == "lobby"

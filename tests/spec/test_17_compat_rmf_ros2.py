@@ -214,3 +214,29 @@ def test_a_state_whose_adapter_drew_ids_under_the_running_child_restores() -> No
     run.id_drawn()
     restored = snapshot.loads(snapshot.dumps(run.state))
     assert restored == run.state and restored.last_id == 2 and restored.current_id == 1
+
+
+@pytest.mark.spec("R17.8", "R14.5")
+def test_an_id_drawn_under_a_deferred_child_keeps_its_id_and_the_model_agrees() -> None:
+    """A child deferred by an interruption has its id when it is deferred; an id the adapter draws
+    meanwhile does not change it, and the next child comes above the drawn id.  The reference model
+    once lowered its highest id to the deferred child's at the resume."""
+    from dynevent.server import inputs as ins
+    from dynevent.testing import Observer
+
+    run = waiting(event_id=0, config=RMF_ROS2)
+    observer = Observer(run.state.fleet, run.state.robot, RMF_ROS2)
+    steps = [
+        ins.Interrupt(now=run.now),
+        ins.GoalRequested(goal_uuid=u(1), goal=next_goal(run.seq, 0), now=run.now),
+        ins.GoalStarted(goal_uuid=u(1), now=run.now),
+        ins.IdDrawn(now=run.now),
+        ins.Resume(now=run.now),
+        ins.ChildFinished(status="completed", now=run.now),
+        ins.GoalRequested(goal_uuid=u(2), goal=next_goal(run.seq, 0), now=run.now),
+        ins.GoalStarted(goal_uuid=u(2), now=run.now),
+    ]
+    fresh = Run(RMF_ROS2, now=run.now)
+    for event in [ins.Begin(description="{}", event_id=0, now=run.now), *steps]:
+        observer.observe(event, fresh.step(event))
+    assert fresh.state.running is not None and fresh.state.running.child_id == 3

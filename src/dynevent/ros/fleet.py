@@ -57,7 +57,7 @@ class SimulatedChildren:
         self._node = node
         self._config = config
         self._robot = Whereabouts()
-        self._timers: dict[ChildExecution, Any] = {}  # by execution: the robots share child ids
+        self._timers: dict[ChildExecution, Any] = {}  # by execution: each run numbers its children anew
         self._lock = threading.Lock()
 
     def start(self, execution: ChildExecution) -> None:

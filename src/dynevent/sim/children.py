@@ -14,8 +14,7 @@ import bisect
 import itertools
 from typing import Any, Protocol
 
-from dynevent import descriptions
-from dynevent.sim.config import CategorySpec, ServeConfig, Step, plan
+from dynevent.sim.config import CategorySpec, ServeConfig, Step, destination, plan
 from dynevent.wire.vocab import Compatibility, Status
 
 __all__ = ["ChildHandle", "SimulatedChild", "Whereabouts"]
@@ -63,12 +62,14 @@ class SimulatedChild:
         self._ends = list(itertools.accumulate(step.duration for step in steps))
         self.period = max(min(spec.report_every, self._ends[-1]), 0.001)
         self._told = 0  # the last step told of (the first is told by the progress lines)
+        self._reported = False  # a report has been made (the child is on its way)
         self._robot = robot if robot is not None else Whereabouts()
-        self._goes_to = (
-            _destination(category, parsed) if config.compatibility is Compatibility.RMF_ROS2 else None
-        )
+        rmf_ros2 = config.compatibility is Compatibility.RMF_ROS2
+        self._goes_to = destination(category, parsed, config) if rmf_ros2 else None
         # no plan, no id: another category, the robot already there, or a place it cannot reach
         self._planned = self._goes_to in (None, self._robot.place) or steps[0].failure is not None
+        #: a child that moves the robot other than to a known place leaves it somewhere unknown
+        self._moves = rmf_ros2 and (self._goes_to is not None or category == "sequence")
 
     def report(self, child: ChildHandle, elapsed: float) -> bool:
         """Report ``elapsed`` seconds after the start: progress, or the end (a child told to stop
@@ -77,8 +78,11 @@ class SimulatedChild:
             return True
         elapsed += 1e-3
         if child.stopping is not None:
+            if self._moves and self._reported:  # stopped on its way: somewhere between
+                self._robot.place = None
             child.finished()
             return True
+        self._reported = True
         if not self._planned:  # the plan found, at the first report: its id drawn (R17.8)
             self._planned = True
             child.draw_id()
@@ -91,25 +95,13 @@ class SimulatedChild:
         if step.failure is not None:
             child.error(step.failure)
             child.finished(Status.FAILED)
+            if self._moves and self._told > 0:  # failed on its way
+                self._robot.place = None
         elif elapsed >= ends[-1]:
             child.finished()
-            if self._goes_to is not None:
-                self._robot.place = self._goes_to
+            if self._moves:
+                self._robot.place = self._goes_to  # None after a sequence: not tracked
         else:
             into = elapsed - (ends[self._told] - step.duration)
             child.underway(f"{step.label}: {into:.0f} of {step.duration:g} s")
         return child.done
-
-
-def _destination(category: str, parsed: Any) -> str | None:
-    """Where a go_to_place child goes (the first of its places, as :func:`plan` takes it); None for
-    another category, or a description the simulation cannot read."""
-    if category != "go_to_place":
-        return None
-    try:
-        reading = descriptions.read(category, parsed)
-    except Exception:  # a defect here must end this child's plan id, never whatever carries it
-        return None
-    if not isinstance(reading, descriptions.GoToPlace) or not reading.one_of:
-        return None
-    return str(reading.one_of[0])

@@ -206,7 +206,7 @@ def plan(category: str, description: Any, config: ServeConfig) -> list[Step]:
         return [Step(category, spec.duration)]
     reading = descriptions.read(category, description)
     if isinstance(reading, descriptions.GoToPlace):
-        reachable = [place for place in reading.one_of if str(place.waypoint) not in spec.fail_on]
+        reachable = _reachable(reading, spec)
         target = (reachable or list(reading.one_of))[0]
         after = (
             f", then {', '.join(str(place) for place in reading.followed_by)}" if reading.followed_by else ""
@@ -230,6 +230,29 @@ def plan(category: str, description: Any, config: ServeConfig) -> list[Step]:
     failure = f"{reading.place}: no such place" if str(reading.place.waypoint) in spec.fail_on else None
     label = f"{category} at {reading.place} ({items} item{'s' if items != 1 else ''})"
     return [Step(label, spec.duration, failure)]
+
+
+def _reachable(reading: descriptions.GoToPlace, spec: CategorySpec) -> list[Any]:
+    """The places of a go_to_place the simulated robot can reach, in order: it goes to the first."""
+    return [place for place in reading.one_of if str(place.waypoint) not in spec.fail_on]
+
+
+def destination(category: str, description: Any, config: ServeConfig) -> str | None:
+    """Where a simulated go_to_place child leaves the robot (the first place it can reach, then its
+    last ``followed_by``), as :func:`plan` runs it; None for another category or a place it cannot
+    reach.  A description that is not a go_to_place the simulation can read is None too."""
+    if category != "go_to_place":
+        return None
+    try:
+        reading = descriptions.read(category, description)
+    except Exception:  # a defect here must only leave the robot's place unknown
+        return None
+    if not isinstance(reading, descriptions.GoToPlace):
+        return None
+    reachable = _reachable(reading, config.categories.get(category, CategorySpec()))
+    if not reachable:
+        return None
+    return str(reading.followed_by[-1] if reading.followed_by else reachable[0])
 
 
 def _seq(value: Any, what: str) -> int:

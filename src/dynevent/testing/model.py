@@ -21,6 +21,7 @@ from dynevent.wire.vocab import (
     DynamicState,
     EventType,
     GoalStatus,
+    IdPolicy,
     Status,
     Violation,
 )
@@ -340,7 +341,7 @@ class _Children(_Model):
                     f"StartChild({output.id}) for goal id {record.goal.id}, expected {expected}",
                 )
             self.running = _Running(event.goal_uuid, output.id, started=True)
-        self.last_id = output.id
+            self.last_id = output.id  # a deferred child's id was the highest when it was deferred
         self.status = Status.UNDERWAY.value
 
     def _begin(self, output: outs.PublishBegin, event: ins.Input) -> None:
@@ -380,8 +381,10 @@ class _Children(_Model):
             self.interrupted = True
         elif isinstance(event, ins.Resume):
             self.interrupted = False
-        elif isinstance(event, ins.IdDrawn) and self.active:  # R17.8: the adapter's counter moved on
-            fresh = machine.fresh_id(self.last_id)
+        elif (
+            isinstance(event, ins.IdDrawn) and self.active and self.config.id_policy is IdPolicy.ADAPTER
+        ):  # R17.8
+            fresh = machine.fresh_id(self.last_id)  # R17.8: the adapter's counter moved on
             self.last_id = 0 if fresh is None else fresh
         elif isinstance(event, ins.Shutdown):
             self.shut_down = True

@@ -882,16 +882,21 @@ class _Feedback(_Part):
             return
         self.unexplained_feedback(record, seen)
 
+    def _drawn_unseen(self, event: ins.Input, expected: int, got: int) -> bool:
+        """R17.8: under id policy ``adapter`` a child just started (not a deferred one resuming, whose id
+        was fixed when it was deferred) with an id above the next one took it after ids the adapter
+        drew for work of its own, which no wire shows.  (That id may be the NEXT goal's too: the
+        deployed adapter's count met a NEXT's id by chance in the lab's re-measure.)"""
+        if self.replica.config.id_policy is not IdPolicy.ADAPTER or not isinstance(event, ins.GoalStarted):
+            return False
+        return id_not_after(expected, got)
+
     def compare_feedback(self, owed: Owed, feedback: Feedback, events: list[ins.Input]) -> None:
         assert isinstance(owed.output, outs.PublishFeedback)
         expected = owed.output.feedback
         if expected.id != feedback.id:
             started = isinstance(events[-1], (ins.GoalStarted, ins.Resume))
-            if (
-                started
-                and self.replica.config.id_policy is IdPolicy.ADAPTER
-                and id_not_after(expected.id, feedback.id)
-            ):  # R17.8: the adapter drew ids for work of its own since its last child; no wire shows them
+            if self._drawn_unseen(events[-1], expected.id, feedback.id):
                 self.replica.learn_child_id(feedback.id)
             elif started:
                 policy = (
