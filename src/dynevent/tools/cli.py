@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.util
 import io
 import os
 import sys
@@ -280,6 +281,8 @@ def _ros_module(command: str) -> Any:
         return importlib.import_module(f"dynevent.tools.live.{command}")
     except ImportError as exc:
         missing = (exc.name or "rclpy").split(".")[0]  # the package to install, not its submodule
+        if missing != "rclpy" and importlib.util.find_spec("rclpy") is None:
+            missing = "rclpy"  # the root of what is missing, whichever ROS package was imported first
         script = Path(__file__).resolve().parent.parent / "ros" / "setup" / "setup-ros-env.sh"
         print(
             f"dynevent {command}: needs ROS 2 (rclpy, rmf_task_msgs); {missing} is not importable",
