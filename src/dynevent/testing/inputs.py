@@ -68,6 +68,23 @@ def _same(event: ins.Input) -> ins.Input:
     return event
 
 
+#: The inputs :func:`server_inputs` draws with a time and nothing else (shutdown aside).
+_TIMED_ONLY: tuple[type[ins.Input], ...] = (ins.Interrupt, ins.Resume, ins.DescriptionQuery, ins.IdDrawn)
+
+
+def _goals(categories: Sequence[str], seq: int) -> st.SearchStrategy[Goal]:
+    """Goals from small pools: seqs mostly ``seq``, the common event types, valid and hostile fields."""
+    return st.builds(
+        Goal,
+        dynamic_event_seq=st.sampled_from((*(seq,) * 8, (seq + 1) & U32_MAX, (seq - 1) & U32_MAX, 0)),
+        event_type=st.sampled_from((1, 1, 1, 1, 2, 2, 3, 0, 4)),
+        category=st.sampled_from((*categories, *categories, "unknown")),
+        description=st.sampled_from((DESCRIPTIONS[0],) * 4 + DESCRIPTIONS + NOT_JSON[:4]),
+        id=st.one_of(st.integers(1, 8), st.sampled_from((0, U64_MAX))),
+        stubborn_period=st.sampled_from(STUBBORN_PERIODS + NON_FINITE),
+    )
+
+
 def server_inputs(
     categories: Sequence[str] = ("go_to_place", "perform_action"),
     *,
@@ -87,15 +104,7 @@ def server_inputs(
     """
     times = now if now is not None else st.integers(0, 20 * SECOND)
     uuid = st.sampled_from([f"{index:032x}" for index in range(1, uuids + 1)])
-    goal = st.builds(
-        Goal,
-        dynamic_event_seq=st.sampled_from((*(seq,) * 8, (seq + 1) & U32_MAX, (seq - 1) & U32_MAX, 0)),
-        event_type=st.sampled_from((1, 1, 1, 1, 2, 2, 3, 0, 4)),
-        category=st.sampled_from((*categories, *categories, "unknown")),
-        description=st.sampled_from((DESCRIPTIONS[0],) * 4 + DESCRIPTIONS + NOT_JSON[:4]),
-        id=st.one_of(st.integers(1, 8), st.sampled_from((0, U64_MAX))),
-        stubborn_period=st.sampled_from(STUBBORN_PERIODS + NON_FINITE),
-    )
+    goal = _goals(categories, seq)
     status = st.sampled_from(STATUSES)
     request = st.builds(ins.GoalRequested, goal_uuid=uuid, goal=goal, now=times)
     start = st.builds(ins.GoalStarted, goal_uuid=uuid, now=times)
@@ -130,11 +139,9 @@ def server_inputs(
                 y=st.just(0.0),
             ),
         ),
-        "interrupt": (1, st.builds(ins.Interrupt, now=times)),
-        "resume": (1, st.builds(ins.Resume, now=times)),
         "signal": (1, st.one_of(st.builds(ins.TaskCancel, now=times), st.builds(ins.TaskKill, now=times))),
-        "describe": (1, st.builds(ins.DescriptionQuery, now=times)),
-        "id_drawn": (1, st.builds(ins.IdDrawn, now=times)),
+        # the inputs that carry a time alone: interrupt, resume, describe, an id the adapter draws
+        **{kind.KIND: (1, st.builds(kind, now=times)) for kind in _TIMED_ONLY},
     }
     # one_of draws its branches alike (and merges equal ones): a weight is that many distinct copies
     common: st.SearchStrategy[ins.Input] = st.one_of(
