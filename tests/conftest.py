@@ -9,8 +9,11 @@ from __future__ import annotations
 
 import os
 import sys
+import tempfile
 from pathlib import Path
+from typing import Any
 
+import pytest
 from hypothesis import HealthCheck, settings
 
 settings.register_profile(
@@ -47,3 +50,29 @@ def pytest_report_header() -> str:
     import rclpy
 
     return f"ros: the ROS 2 tests run over DDS on loopback (rclpy from {Path(rclpy.__file__).parent})"
+
+
+#: The environment variable naming the folder where a test process ended at its deadline leaves every
+#: thread's stack (tests/ros/conftest.py): faulthandler cannot write them to standard error, which
+#: pytest captures, and which is lost with a worker that ends.
+STACKS = "DYNEVENT_TEST_STACKS"
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """The run's stacks folder, chosen once: pytest-xdist's workers inherit it."""
+    if not os.environ.get(STACKS):
+        os.environ[STACKS] = tempfile.mkdtemp(prefix="dynevent-stacks-")
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_handlecrashitem(crashitem: str, report: pytest.TestReport, sched: Any) -> None:
+    """A pytest-xdist worker ended under a test: its report says where every thread was, if the
+    deadline ended it (rather than only that the worker went down)."""
+    worker = getattr(getattr(getattr(report, "node", None), "gateway", None), "id", "")
+    stacks = Path(os.environ.get(STACKS, "")) / f"{worker}.txt"
+    try:
+        text = stacks.read_text("utf-8", errors="replace").strip()
+    except OSError:
+        return
+    if text:
+        report.longrepr = f"{report.longrepr}\n\nthe worker's stacks when it ended ({stacks}):\n{text}"

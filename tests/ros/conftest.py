@@ -13,6 +13,8 @@ from __future__ import annotations
 import faulthandler
 import os
 from collections.abc import Iterator
+from pathlib import Path
+from typing import IO
 
 import pytest
 from ros_support import ROS, TEST_DEADLINE, WHY, Graph, keep_dds_local
@@ -29,12 +31,26 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
         raise pytest.UsageError(f"CI=true and the ROS tests cannot run: {WHY}")
 
 
+_stacks: list[IO[str]] = []  # this process's stacks file, opened once (faulthandler keeps its descriptor)
+
+
+def _stacks_file() -> IO[str]:
+    """Where this process writes every thread's stack if a test passes its deadline: a file of the run's
+    stacks folder (tests/conftest.py reports it when a pytest-xdist worker ends)."""
+    if not _stacks:
+        folder = Path(os.environ.get("DYNEVENT_TEST_STACKS") or ".")
+        name = os.environ.get("PYTEST_XDIST_WORKER", "main")
+        _stacks.append(open(folder / f"{name}.txt", "w", encoding="utf-8"))  # noqa: SIM115
+    return _stacks[0]
+
+
 @pytest.fixture(autouse=True)
 def _deadline(request: pytest.FixtureRequest) -> Iterator[None]:
     # a test that builds an environment (the newcomer's path) is bounded by its steps' own bounds,
     # not by the deadline of a test that only talks to a server
     marker = request.node.get_closest_marker("deadline")
-    faulthandler.dump_traceback_later(marker.args[0] if marker else TEST_DEADLINE, exit=True)
+    seconds = marker.args[0] if marker else TEST_DEADLINE
+    faulthandler.dump_traceback_later(seconds, exit=True, file=_stacks_file())
     yield
     faulthandler.cancel_dump_traceback_later()
 
