@@ -14,6 +14,9 @@ from pathlib import Path
 import pytest
 from ros_support import Child, child_env, finish, wait_for
 
+from dynevent.ros.spinning import CLOSE_BOUND
+from dynevent.tools.live import send as send_module
+
 ROBOT = "sendRobot"
 
 
@@ -71,16 +74,15 @@ def test_an_interrupted_send_cancels_its_child_and_reports_the_answer(
         sender = _send("--place", "pantry")
         lines = Lines(sender)
         lines.wait("underway")
-        started = time.monotonic()
         sender.send_signal(signum)
-        assert sender.wait(timeout=15) == 128 + signum, "\n".join(lines.lines)
-        took = time.monotonic() - started
+        # within send's own bounds: the answer's wait after the signal, then the close-down
+        code = sender.wait(timeout=send_module.STOP_BOUND + CLOSE_BOUND)
+        assert code == 128 + signum, "\n".join(lines.lines)
         time.sleep(0.2)
         text = "\n".join(lines.lines)
         name = signal.Signals(signum).name
         assert f"{name}: cancelling the child" in text, text
-        assert "outcome: canceled" in text, text
-        assert took < 10, f"{took:.1f} s"
+        assert "outcome: canceled" in text, text  # the 30 s child cancelled, not waited out
         assert sender.stderr is not None and "Traceback" not in sender.stderr.read()
         after = finish(_send("--end"), 60)  # the robot waits: the run can be ended
         assert after.returncode == 0, after.stdout + after.stderr
@@ -109,19 +111,17 @@ def test_ros_args_are_taken_and_given_to_rclpy(tmp_path: Path) -> None:
 def test_a_robot_with_no_server_is_said_at_once_with_the_servers_seen(tmp_path: Path) -> None:
     serve = _serve(tmp_path)
     try:
-        started = time.monotonic()
         done = _run(["send", "--robot", "nobody", "--end"])
-        took = time.monotonic() - started
     finally:
         serve.stop()
     assert done.returncode == 2, done.stdout + done.stderr
     line = done.stdout.strip().splitlines()[-1]
-    # once the graph has settled: no "within N s", which varied with discovery for one command
+    # once the graph has settled, not at the end of the 60 s --timeout (which says "within 60 s"); no
+    # "within N s" either, which varied with discovery for one command
     assert line.startswith(
         "no Dynamic Event server for tinyRobot/nobody once the graph settled; the graph has "
     ), line
     assert f"fleet tinyRobot: 1 robot(s) ({ROBOT})" in line, line
-    assert took < 15, f"{took:.1f} s (the default --timeout is 60 s: send no longer waits it out)"
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
@@ -143,8 +143,6 @@ def test_send_waits_on_while_discovery_still_shows_new_servers(monkeypatch: pyte
     conclude that the robot has none while that goes on (in CI it once said so of the 66th robot of a
     fleet whose servers it had seen 28 of)."""
     import argparse
-
-    from dynevent.tools.live import send as send_module
 
     monkeypatch.setattr(send_module, "WAKE", 0.02)
     monkeypatch.setattr(send_module, "LOOK", 0.1)

@@ -70,7 +70,9 @@ def run(
             if not link.wait_for_server(options.server_wait):
                 say(no_server_text(session.node, options.fleet, options.robot, options.server_wait))
                 return None
+            began = link.clock()
             probing.run_cases(link, options, cases, say, progress, findings)
+            say(f"the run took {link.clock() - began:.1f} s (--deadline {options.deadline:g} s)")
         return findings
     except Interrupted as stop:
         raise ProbeInterrupted(stop.signal, findings) from None
