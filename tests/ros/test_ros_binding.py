@@ -646,3 +646,47 @@ def test_a_restarted_server_holds_its_restart_answers_before_it_first_spins(grap
     (answer,) = held
     assert answer is not None, "the restart's answer is not held for a client that asks now"
     assert (answer.status, answer.result.execution_failure) == (GoalStatus.ABORTED, Failure.RESTART.value)
+
+
+class _CountedWake:
+    """A server's wake-up guard condition, counted where the server triggers it."""
+
+    def __init__(self, wake: Any) -> None:
+        self.wake = wake
+        self.triggers = 0
+
+    def trigger(self) -> None:
+        self.triggers += 1
+        self.wake.trigger()
+
+
+class _AtOnce(Adapter):
+    """Finishes each child inside its start callback, as an adapter whose child has nothing to do."""
+
+    def start(self, execution: ChildExecution) -> None:
+        super().start(execution)
+        execution.finished()
+
+
+def test_a_step_inside_the_drain_wakes_no_executor_and_one_from_another_thread_does(graph: Graph) -> None:
+    """An adapter that steps the server from a callback of the drain (a child finished in its start) adds
+    to the outbox that drain is carrying out: the executor is not woken for a drain of its own (one
+    wake-up less on a goal's round trip, docs/performance.md).  A step from any other thread wakes it."""
+    adapter = _AtOnce()
+    server: DynamicEventServer = graph.node(
+        "at_once", lambda node: DynamicEventServer(node, FLEET, ROBOT, CONFIG, adapter)
+    )
+    server.begin('{"category": "patrol"}', 7)
+    client = _client(graph)
+    wait_for(lambda: client.state.phase == 1, "the run's WAITING status")
+    counted = _CountedWake(server._ros.wake)
+    server._ros.wake = counted
+    try:
+        outcome = _outcome(client.next("go_to_place", '"pantry"'))
+        assert (outcome.kind, outcome.id) == (cl.OutcomeKind.COMPLETED, 8)
+        assert counted.triggers == 0
+        server.update_position("L1", 1.0, 2.0)  # the adapter's thread: a step the executor must carry out
+        assert counted.triggers == 1
+    finally:
+        server._ros.wake = counted.wake
+        server.shutdown()

@@ -7,6 +7,7 @@ threads.
 
 from __future__ import annotations
 
+import asyncio
 import threading
 from collections.abc import Callable
 from typing import Any
@@ -14,7 +15,7 @@ from typing import Any
 from dynevent.client import outputs as cl
 from dynevent.errors import GoalWaitTimeout, LocalError
 
-__all__ = ["GoalRun"]
+__all__ = ["GoalRun", "loop_future", "on_loop"]
 
 
 class GoalRun:
@@ -81,3 +82,33 @@ class GoalRun:
             self._future.set_result(result)
         for callback in callbacks:
             callback(result)
+
+
+def loop_future(loop: asyncio.AbstractEventLoop, run: GoalRun) -> asyncio.Future[cl.Outcome | cl.Refused]:
+    """A future of ``loop`` that gets ``run``'s result, handed over to the loop's thread from whichever
+    thread ends the run (an asyncio caller's view of a goal)."""
+    future: asyncio.Future[cl.Outcome | cl.Refused] = loop.create_future()
+
+    def done(result: cl.Outcome | cl.Refused) -> None:
+        if not future.done():  # (a caller may have cancelled its future)
+            future.set_result(result)
+
+    def hand_over(result: cl.Outcome | cl.Refused) -> None:
+        loop.call_soon_threadsafe(done, result)
+
+    run.add_done_callback(hand_over)
+    return future
+
+
+def on_loop(
+    loop: asyncio.AbstractEventLoop, callback: Callable[[cl.Progress], None] | None
+) -> Callable[[cl.Progress], None] | None:
+    """``callback``, called on ``loop``'s thread with each progress report, whichever thread reports."""
+    if callback is None:
+        return None
+    report = callback
+
+    def hand_over(progress: cl.Progress) -> None:
+        loop.call_soon_threadsafe(report, progress)
+
+    return hand_over

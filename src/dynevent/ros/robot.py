@@ -29,6 +29,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from dynevent import client as cl
+from dynevent.client.run import loop_future, on_loop
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.errors import LocalError, RobotNotReady
 from dynevent.ros.client import DynamicEventClient, GoalRun
@@ -237,33 +238,17 @@ class AsyncRobotClient:
         await asyncio.to_thread(self._robot.ready, timeout)
 
     def _awaitable(self, run: GoalRun) -> asyncio.Future[Result]:
-        loop = self._loop
-        if loop is None:
-            raise LocalError("use `async with AsyncRobotClient(...)` first")
-        future: asyncio.Future[Result] = loop.create_future()
-
-        def done(result: Result) -> None:
-            if not future.done():
-                future.set_result(result)
-
-        def hand_over(result: Result) -> None:
-            loop.call_soon_threadsafe(done, result)
-
-        run.add_done_callback(hand_over)
-        return future
+        return loop_future(self._running_loop(), run)
 
     def _on_loop(
         self, callback: Callable[[cl.Progress], None] | None
     ) -> Callable[[cl.Progress], None] | None:
-        loop = self._loop
-        if callback is None or loop is None:
-            return callback
-        report = callback
+        return on_loop(self._running_loop(), callback)
 
-        def hand_over(progress: cl.Progress) -> None:
-            loop.call_soon_threadsafe(report, progress)
-
-        return hand_over
+    def _running_loop(self) -> asyncio.AbstractEventLoop:
+        if self._loop is None:
+            raise LocalError("use `async with AsyncRobotClient(...)` first")
+        return self._loop
 
     def next(
         self,

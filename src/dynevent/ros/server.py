@@ -253,6 +253,7 @@ class DynamicEventServer(AdapterInputs):
         self._handles: dict[str, Any] = {}
         self._position: tuple[str, float, float] | None = None
         self._converted: tuple[Any, Any] = (None, None)  # the goal callback's (request, goal)
+        self._draining: int | None = None  # the thread that drains the outbox, while it does
         self._log = node.get_logger().get_child(f"{fleet}.{robot}")
         self._ros = _Entities(self, node, fleet, robot, begin_publisher, description_service)
         self._ros.refresh(self._state.stubborn is not None)
@@ -286,7 +287,8 @@ class DynamicEventServer(AdapterInputs):
         """Apply ``event`` under the lock; its outputs are carried out in order, on the executor."""
         with self._lock:
             outputs = self._step(event)
-        self._ros.wake.trigger()
+        if self._draining != threading.get_ident():  # a drain on this thread carries them out itself
+            self._ros.wake.trigger()
         return outputs
 
     def _step(self, event: ins.Input) -> tuple[outs.Output, ...]:
@@ -438,32 +440,32 @@ class DynamicEventServer(AdapterInputs):
         uuid = convert.uuid_from_ros(goal_handle.goal_id)
         answer: outs.AnswerGoal = await self._answers[uuid]
         del self._answers[uuid]
-        if answer.status is GoalStatus.SUCCEEDED:
-            goal_handle.succeed()
-        elif answer.status is GoalStatus.CANCELED:
-            goal_handle.canceled()
-        else:
-            goal_handle.abort()
+        getattr(goal_handle, _TERMINAL_CALLS.get(answer.status, "abort"))()  # to the answer's status
         return convert.result_to_ros(answer.result)
 
     # ---------------------------------------------------------------- carrying out the outputs
 
     def _drain(self) -> None:
         # one drain at a time: the guard condition's group is mutually exclusive; outputs of steps
-        # that the adapter takes from inside a callback join the outbox and are carried out here too
-        while True:
-            with self._lock:
-                if self._announce:
-                    # the current status at start (the topic keeps it for late joiners); a server begun
-                    # before it spins says WAITING first, never a passing INACTIVE a client would act on
-                    self._announce = False
-                    if not any(isinstance(output, outs.PublishStatus) for output in self._outbox):
-                        status = machine.status_message(self._state, self.now())
-                        self._outbox.appendleft(outs.PublishStatus(message=status))
-                if not self._outbox:
-                    return
-                output = self._outbox.popleft()
-            self._carry_out(output)
+        # that the adapter takes from inside a callback join the outbox and are carried out here too,
+        # without waking the executor for another drain
+        self._draining = threading.get_ident()
+        try:
+            while (output := self._next_output()) is not None:
+                self._carry_out(output)
+        finally:
+            self._draining = None
+
+    def _next_output(self) -> outs.Output | None:
+        with self._lock:
+            if self._announce:
+                # the current status at start (the topic keeps it for late joiners); a server begun
+                # before it spins says WAITING first, never a passing INACTIVE a client would act on
+                self._announce = False
+                if not any(isinstance(output, outs.PublishStatus) for output in self._outbox):
+                    status = machine.status_message(self._state, self.now())
+                    self._outbox.appendleft(outs.PublishStatus(message=status))
+            return self._outbox.popleft() if self._outbox else None
 
     def _carry_out(self, output: outs.Output) -> None:
         if self._observer is not None:
@@ -523,6 +525,8 @@ def _abort_at_once(why: str) -> Callable[[Any], Any]:
     return execute
 
 
+#: The goal handle's method that moves a goal to each terminal status but aborted (``abort``).
+_TERMINAL_CALLS = {GoalStatus.SUCCEEDED: "succeed", GoalStatus.CANCELED: "canceled"}
 _LOG_CALLS: dict[str, Callable[[Any, str], Any]] = {
     Tier.UNINITIALIZED.value: lambda log, text: log.info(text),
     Tier.INFO.value: lambda log, text: log.info(text),
