@@ -440,7 +440,7 @@ class DynamicEventServer(AdapterInputs):
         uuid = convert.uuid_from_ros(goal_handle.goal_id)
         answer: outs.AnswerGoal = await self._answers[uuid]
         del self._answers[uuid]
-        getattr(goal_handle, _TERMINAL_CALLS.get(answer.status, "abort"))()  # to the answer's status
+        _TERMINAL_CALLS.get(answer.status, _TERMINAL_CALLS[GoalStatus.ABORTED])(goal_handle)
         return convert.result_to_ros(answer.result)
 
     # ---------------------------------------------------------------- carrying out the outputs
@@ -525,8 +525,12 @@ def _abort_at_once(why: str) -> Callable[[Any], Any]:
     return execute
 
 
-#: The goal handle's method that moves a goal to each terminal status but aborted (``abort``).
-_TERMINAL_CALLS = {GoalStatus.SUCCEEDED: "succeed", GoalStatus.CANCELED: "canceled"}
+#: How a goal handle moves its goal to each terminal status an answer may have.
+_TERMINAL_CALLS: dict[GoalStatus, Callable[[Any], Any]] = {
+    GoalStatus.SUCCEEDED: lambda handle: handle.succeed(),
+    GoalStatus.CANCELED: lambda handle: handle.canceled(),
+    GoalStatus.ABORTED: lambda handle: handle.abort(),
+}
 _LOG_CALLS: dict[str, Callable[[Any, str], Any]] = {
     Tier.UNINITIALIZED.value: lambda log, text: log.info(text),
     Tier.INFO.value: lambda log, text: log.info(text),
