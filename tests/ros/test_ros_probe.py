@@ -151,7 +151,8 @@ def test_the_standard_mode_of_serve_passes_every_case(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stdout + done.stderr
     assert _verdicts(done.stdout) == {case.id: "pass" for case in CASES}, done.stdout
     assert _check_agrees(tmp_path / "t", tmp_path / "probe.xml") == set()
-    assert done.stdout.rstrip().endswith(f"{len(CASES)} pass")
+    assert done.stdout.splitlines()[-2:-1] == [f"{len(CASES)} pass"], done.stdout  # then the run's time
+    run_took(done.stdout)
     suite = ET.parse(tmp_path / "probe.xml").getroot().find("testsuite")
     assert suite is not None and suite.get("tests") == str(len(CASES)) and suite.get("failures") == "0"
     assert code == 0, serve.output
@@ -328,8 +329,8 @@ def silent_bound(timeout: float) -> float:
 
 def run_took(stdout: str) -> float:
     """The seconds the probe says its run took."""
-    match = re.search(r"^the run took ([0-9.]+) s \(--deadline [0-9.]+ s\)$", stdout, re.MULTILINE)
-    assert match is not None, stdout
+    match = re.fullmatch(r"the run took ([0-9.]+) s \(--deadline [0-9.]+ s\)", stdout.splitlines()[-1])
+    assert match is not None, stdout  # the run's last line
     return float(match.group(1))
 
 

@@ -26,7 +26,7 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
     say = progress.above(say)
     trace = _open_trace(options)  # kept in memory too: the judge reads every record of the exchange
     try:
-        findings = run(cases, options, say, progress.show, trace=trace)
+        ran = run(cases, options, say, progress.show, trace=trace)
     except ProbeInterrupted as stop:
         progress.close()
         if stop.findings:
@@ -36,9 +36,12 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
     finally:
         trace.close()
     progress.close()
-    if findings is None:
+    if ran is None:
         return probe_cases.EXIT_USAGE
-    return probing.conclude(findings, trace.text(), options, say)[0]
+    findings, took = ran
+    status = probing.conclude(findings, trace.text(), options, say)[0]
+    say(f"the run took {took:.1f} s (--deadline {options.deadline:g} s)")  # its bound, checkable
+    return status
 
 
 class ProbeInterrupted(Interrupted):
@@ -56,9 +59,10 @@ def run(
     progress: Callable[[str], None] | None = None,
     *,
     trace: TraceWriter | None = None,
-) -> list[probe_cases.Finding] | None:
+) -> tuple[list[probe_cases.Finding], float] | None:
     """Carry out ``cases`` against the robot over DDS, writing every record of the exchange to
-    ``trace``; the findings, or None when no server was found."""
+    ``trace``; the findings and the seconds the run took on the link's clock, from the server found
+    to the last case's end, or None when no server was found."""
     session = Session("dynevent_probe", options.ros_args)
     link = RosLink(session.node, options.fleet, options.robot, trace)
     if options.introspection:
@@ -72,8 +76,7 @@ def run(
                 return None
             began = link.clock()
             probing.run_cases(link, options, cases, say, progress, findings)
-            say(f"the run took {link.clock() - began:.1f} s (--deadline {options.deadline:g} s)")
-        return findings
+        return findings, link.clock() - began
     except Interrupted as stop:
         raise ProbeInterrupted(stop.signal, findings) from None
     finally:
