@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import importlib.util
 import os
 import random
@@ -10,6 +11,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import threading
 import zlib
 from collections.abc import Callable, Mapping, Sequence
@@ -85,8 +87,9 @@ DOMAINS = 100
 
 
 def domain_of(environ: Mapping[str, str]) -> int:
-    """The DDS domain of this test process: one per test run, so that parallel runs never meet, and under
-    pytest-xdist one per worker, so that two ROS tests running at once never meet either.
+    """The DDS domain this test process prefers: one per test run, and under pytest-xdist one per
+    worker, so that two ROS tests running at once never meet (:func:`keep_dds_local` then skips a
+    domain another test process on this machine holds, so that parallel runs never meet either).
 
     The run's domain is ``ROS_DOMAIN_ID`` when set (worker ``gwN`` then takes the Nth domain after
     it), else one of 1 to :data:`DOMAINS` drawn at random (under xdist from the run's id, which every
@@ -104,10 +107,39 @@ def domain_of(environ: Mapping[str, str]) -> int:
     return 1 + (drawn + index) % DOMAINS
 
 
+#: The lock files of the domains this process holds, kept open for its lifetime (:func:`claim_domain`).
+_HELD: list[int] = []
+
+
+def claim_domain(preferred: int, directory: str | None = None) -> int:
+    """The first domain from ``preferred`` on (counting round :data:`DOMAINS`) that no other test
+    process on this machine holds, held by this one until it ends: an exclusive ``flock`` on a file
+    per domain in the temporary directory, which the kernel releases when the process ends, however
+    it ends.  Two test runs on one machine (or a run and the ROS tests of another clone) thus never
+    share a domain, where a domain drawn at random would be shared by 3 pairs of runs in 100."""
+    folder = directory if directory is not None else tempfile.gettempdir()
+    for step in range(DOMAINS):
+        domain = 1 + (preferred - 1 + step) % DOMAINS
+        handle = os.open(
+            os.path.join(folder, f"dynevent-tests-dds-domain-{domain}.lock"), os.O_RDWR | os.O_CREAT
+        )
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(handle)
+            continue
+        _HELD.append(handle)
+        return domain
+    raise RuntimeError(f"every DDS domain from 1 to {DOMAINS} is held by another test process")
+
+
 def keep_dds_local() -> None:
-    """A DDS domain of this process's own (:func:`domain_of`), which the processes it starts inherit;
-    discovery stays on this machine."""
-    os.environ["ROS_DOMAIN_ID"] = str(domain_of(os.environ))
+    """A DDS domain of this process's own, which the processes it starts inherit; discovery stays
+    on this machine.  The domain is ``ROS_DOMAIN_ID``'s when given (:func:`domain_of`), else the
+    first one from :func:`domain_of`'s that no other test process here holds (:func:`claim_domain`)."""
+    given = os.environ.get("ROS_DOMAIN_ID", "").isdigit()
+    domain = domain_of(os.environ)
+    os.environ["ROS_DOMAIN_ID"] = str(domain if given else claim_domain(domain))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     os.environ.pop("ROS_STATIC_PEERS", None)
     os.environ.pop("ROS_LOCALHOST_ONLY", None)

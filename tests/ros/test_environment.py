@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 
 def test_no_core_module_imports_rclpy() -> None:
     """Importing every dynevent module but the binding leaves rclpy unimported."""
@@ -39,3 +41,36 @@ def test_each_xdist_worker_takes_a_dds_domain_of_its_own() -> None:
     assert [domain_of({**given, "PYTEST_XDIST_WORKER": f"gw{n}"}) for n in range(3)] == [42, 43, 44]
     assert domain_of(given) == 42
     assert 1 <= domain_of({}) <= DOMAINS
+
+
+def test_a_domain_another_test_process_holds_is_never_taken(tmp_path: Path) -> None:
+    """Two test runs on one machine draw their domains at random and may draw the same: each worker
+    claims its domain with a lock that another process's claim skips, and that is free again once its
+    holder has ended, however it ended."""
+    import os
+    import subprocess
+    import sys
+
+    from ros_support import _HELD, DOMAINS, claim_domain
+
+    held = len(_HELD)
+    holder = subprocess.Popen(
+        [sys.executable, "-c", f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r})\n"
+         f"from ros_support import claim_domain; print(claim_domain(7, {str(tmp_path)!r}), flush=True)\n"
+         "sys.stdin.read()"],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert holder.stdout is not None
+        assert holder.stdout.readline().strip() == "7"
+        assert claim_domain(7, str(tmp_path)) == 8  # held by the other process: the next one
+        assert claim_domain(7, str(tmp_path)) == 9  # and by this one now
+        assert claim_domain(DOMAINS, str(tmp_path)) == DOMAINS
+        assert claim_domain(DOMAINS, str(tmp_path)) == 1  # counting round
+    finally:
+        holder.kill()
+        holder.wait(30)
+    assert claim_domain(7, str(tmp_path)) == 7  # its holder ended (killed): free again
+    for handle in _HELD[held:]:
+        os.close(handle)
+    del _HELD[held:]
