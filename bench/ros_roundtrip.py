@@ -119,6 +119,10 @@ stop.wait(600)
 """
 
 
+#: The parts of a goal's exchange the client times, from the send: the goal response, the first
+#: feedback and the result (medians in the table; the round trip ends at the later of the last two).
+PARTS = ("response", "feedback", "result")
+
 #: The servers measured: dynevent, the bare peer, and the peer that also publishes the two status
 #: messages the protocol requires of every goal (RUNNING at its start, WAITING at its end).
 KINDS = ("dynevent", "dynevent_rmf_ros2", "peer", "peer_status")
@@ -158,8 +162,10 @@ class Client:
             if not heard.wait(20):
                 raise SystemExit(f"no status from {fleet}/{robot}")
 
-    def round_trip(self, goal_id: int, timeout: float = 10.0) -> tuple[float, int, str]:
-        """Seconds from send until both the result and a feedback are in; the feedback count, the status.
+    def round_trip(self, goal_id: int, timeout: float = 10.0) -> tuple[float, int, str, dict[str, float]]:
+        """Seconds from send until both the result and a feedback are in; the feedback count, the
+        status, and when each part arrived (seconds after the send: ``response``, ``feedback``,
+        ``result``).
 
         Feedback and result travel on different topics, so either may arrive first.
         """
@@ -167,17 +173,21 @@ class Client:
         fed = threading.Event()
         feedback: list[Any] = []
         result: list[Any] = []
+        marks: dict[str, float] = {}
 
         def on_feedback(message: Any) -> None:
+            marks.setdefault("feedback", time.perf_counter() - started)
             feedback.append(message)
             fed.set()
 
         def on_result(future: Any) -> None:
+            marks["result"] = time.perf_counter() - started
             result.append(future.result())
             answered.set()
 
         def on_response(future: Any) -> None:
             handle = future.result()
+            marks["response"] = time.perf_counter() - started
             if not handle.accepted:
                 fed.set()
                 answered.set()
@@ -199,7 +209,7 @@ class Client:
             raise SystemExit(f"{self.name}: goal {goal_id}: {got} within {timeout} s")
         elapsed = time.perf_counter() - started
         status = result[0].result.status if result else "rejected"
-        return elapsed, len(feedback), status
+        return elapsed, len(feedback), status, marks
 
 
 def _cpu_seconds(pid: int) -> float:
@@ -258,6 +268,7 @@ def main(argv: list[str] | None = None) -> int:
             clients["rmf_ros2 adapter"] = Client(node, fleet, robot, description=place, live=True)
             pids["rmf_ros2 adapter"] = args.adapter_pid
         times: dict[str, list[float]] = {kind: [] for kind in clients}
+        arrived: dict[str, dict[str, list[float]]] = {kind: {part: [] for part in PARTS} for kind in clients}
         cpu: dict[str, float] = {kind: 0.0 for kind in clients}
         for client in clients.values():  # warm-up
             for index in range(10):
@@ -268,10 +279,12 @@ def main(argv: list[str] | None = None) -> int:
             for kind, client in clients.items():
                 before = _cpu_seconds(pids[kind])
                 for index in range(batch):
-                    elapsed, feedback, status = client.round_trip(sent + index)
+                    elapsed, feedback, status, marks = client.round_trip(sent + index)
                     if status != "completed" or feedback < 1:
                         raise SystemExit(f"{kind}: goal ended {status!r} with {feedback} feedback")
                     times[kind].append(elapsed)
+                    for part in PARTS:
+                        arrived[kind][part].append(marks[part])
                 cpu[kind] += _cpu_seconds(pids[kind]) - before
             sent += batch
     finally:
@@ -285,7 +298,9 @@ def main(argv: list[str] | None = None) -> int:
     extra_status = (medians["dynevent"] - medians["peer_status"]) / medians["peer_status"]
     rows = [
         f"| {kind} | {len(values)} | {medians[kind] * 1e3:.2f} ms | {_percentile(values, 0.9) * 1e3:.2f} ms "
-        f"| {cpu[kind] / len(values) * 1e3:.2f} ms |"
+        f"| {cpu[kind] / len(values) * 1e3:.2f} ms | "
+        + " | ".join(f"{statistics.median(arrived[kind][part]) * 1e3:.2f} ms" for part in PARTS)
+        + " |"
         for kind, values in times.items()
     ]
     lines = [
@@ -297,9 +312,11 @@ def main(argv: list[str] | None = None) -> int:
         "",
         *results.machine_description(("dynevent", "rclpy")),
         "",
-        "| server | goals | median | p90 | server CPU per goal |",
-        "|---|---|---|---|---|",
+        "| server | goals | median | p90 | server CPU per goal | response at | feedback at | result at |",
+        "|---|---|---|---|---|---|---|---|",
         *rows,
+        "",
+        "Response, feedback and result at: the medians of when each reached the client, after the send.",
         "",
         f"dynevent's cost on top of the bare round trip: **{extra:+.1%}** of it (target: within +5%);",
         f"on top of the peer that also publishes the two status messages: **{extra_status:+.1%}**.",
