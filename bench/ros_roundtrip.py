@@ -19,12 +19,17 @@ Two servers, each in a process of its own, serve the same action type
   place its robot stands at, so that each child ends at once (the adapter
   plans, finds the robot there, and completes).
 
-One client (a plain rclpy ``ActionClient``, the same for both) sends NEXT
+One client (a plain rclpy ``ActionClient``, the same for all) sends NEXT
 goals one after another and times each from the send to the result, with the
-feedback in between.  The two servers are measured in alternating batches in
-one run, so that they share the machine's noise.  Reported: the median and
-p90 of each, and dynevent's cost on top of rclpy's as a fraction of the bare
-round trip.  Needs a ROS 2 environment with ``rmf_task_msgs``.
+feedback in between.  The servers are measured in alternating batches in one
+run, so that they share the machine's noise, and replaced by fresh processes
+every ``--per-server`` goals, so that the goals rclpy's action servers keep
+(each for 10 s after its end, all of them in every status message) stay as few
+as a dynamic event's, whose goals come seconds apart.  Reported: the median
+and p90 of each, the medians of when the goal response, the first feedback and
+the result reached the client, and dynevent's cost on top of rclpy's as a
+fraction of the bare round trip.  Needs a ROS 2 environment with
+``rmf_task_msgs``.
 
     python bench/ros_roundtrip.py [--goals N] [--quick] [--write]
     python bench/ros_roundtrip.py --adapter tinyRobot/tinyRobot1 --adapter-pid PID --place hall
@@ -122,6 +127,16 @@ stop.wait(600)
 #: The parts of a goal's exchange the client times, from the send: the goal response, the first
 #: feedback and the result (medians in the table; the round trip ends at the later of the last two).
 PARTS = ("response", "feedback", "result")
+
+#: Goals each server process serves before fresh ones replace them.  rclpy's action server keeps
+#: every goal for 10 s after its end (``result_timeout``) and publishes all it keeps in each status
+#: message, which every client converts: at hundreds of goals a second, the goals kept would make
+#: rclpy's own work grow with the run's length and bury what each server adds.  A dynamic event's
+#: goals come seconds apart, so that a server keeps a few.
+PER_SERVER = 50
+
+#: Goals each client sends before its timed ones (after each start of fresh servers).
+WARM_UP = 10
 
 #: The servers measured: dynevent, the bare peer, and the peer that also publishes the two status
 #: messages the protocol requires of every goal (RUNNING at its start, WAITING at its end).
@@ -223,10 +238,59 @@ def _percentile(values: list[float], fraction: float) -> float:
     return ordered[min(len(ordered) - 1, int(fraction * len(ordered)))]
 
 
+def _start_servers(suffix: str) -> dict[str, subprocess.Popen[str]]:
+    """One process per server kind, started at once, each serving robot ``<kind>_<suffix>``."""
+    servers = {
+        kind: subprocess.Popen(
+            [sys.executable, "-c", SERVER, kind, "bench", f"{kind}_{suffix}"],
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        for kind in KINDS
+    }
+    for kind, process in servers.items():
+        assert process.stdout is not None
+        if process.stdout.readline().strip() != "ready":
+            _stop_servers(servers)
+            raise SystemExit(f"the {kind} server did not start")
+    return servers
+
+
+def _stop_servers(servers: dict[str, subprocess.Popen[str]]) -> None:
+    for process in servers.values():
+        process.terminate()
+    for process in servers.values():
+        process.wait(timeout=10)
+
+
+def _warm_up(clients: dict[str, Client]) -> None:
+    """:data:`WARM_UP` whole exchanges with each server.  A client's feedback topic may match the
+    server's a moment after ``wait_for_server`` (which waits for the action's services only), so that
+    the first goals' feedback may be lost: those goals are sent again."""
+    for client in clients.values():
+        whole = 0
+        for index in range(10 * WARM_UP):
+            try:
+                client.round_trip(index, timeout=2.0)
+            except SystemExit:
+                continue
+            whole += 1
+            if whole == WARM_UP:
+                break
+        else:
+            raise SystemExit(f"{client.name}: fewer than {WARM_UP} whole exchanges in {10 * WARM_UP} goals")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--goals", type=int, default=400, help="goals per server (default 400)")
-    parser.add_argument("--batch", type=int, default=50, help="goals per batch, alternating servers")
+    parser.add_argument("--batch", type=int, default=10, help="goals per batch, alternating servers")
+    parser.add_argument(
+        "--per-server",
+        type=int,
+        default=PER_SERVER,
+        help=f"goals each server process serves before a fresh one replaces it (default {PER_SERVER})",
+    )
     parser.add_argument("--quick", action="store_true", help="40 goals each: a smoke run")
     parser.add_argument("--write", action="store_true", help="record the result in bench/results.md")
     parser.add_argument(
@@ -245,52 +309,51 @@ def main(argv: list[str] | None = None) -> int:
     import rclpy
     from rclpy.executors import MultiThreadedExecutor
 
-    servers = {}
-    for kind in KINDS:
-        process = subprocess.Popen(
-            [sys.executable, "-c", SERVER, kind, "bench", kind], stdout=subprocess.PIPE, text=True
-        )
-        assert process.stdout is not None
-        if process.stdout.readline().strip() != "ready":
-            raise SystemExit(f"the {kind} server did not start")
-        servers[kind] = process
     rclpy.init()
     node = rclpy.create_node("bench_client")
     executor = MultiThreadedExecutor(num_threads=2)
     executor.add_node(node)
     threading.Thread(target=executor.spin, daemon=True).start()
+    names = [*KINDS, *(["rmf_ros2 adapter"] if args.adapter else [])]
+    times: dict[str, list[float]] = {kind: [] for kind in names}
+    arrived: dict[str, dict[str, list[float]]] = {kind: {part: [] for part in PARTS} for kind in names}
+    cpu: dict[str, float] = {kind: 0.0 for kind in names}
+    live: dict[str, Client] = {}
+    pids: dict[str, int] = {}
     try:
-        clients = {kind: Client(node, "bench", kind) for kind in servers}
-        pids = {kind: process.pid for kind, process in servers.items()}
         if args.adapter:
             fleet, robot = args.adapter.split("/", 1)
             place = json.dumps({"one_of": [args.place]})
-            clients["rmf_ros2 adapter"] = Client(node, fleet, robot, description=place, live=True)
+            live["rmf_ros2 adapter"] = Client(node, fleet, robot, description=place, live=True)
             pids["rmf_ros2 adapter"] = args.adapter_pid
-        times: dict[str, list[float]] = {kind: [] for kind in clients}
-        arrived: dict[str, dict[str, list[float]]] = {kind: {part: [] for part in PARTS} for kind in clients}
-        cpu: dict[str, float] = {kind: 0.0 for kind in clients}
-        for client in clients.values():  # warm-up
-            for index in range(10):
-                client.round_trip(index)
+            _warm_up(live)
         sent = 0
-        while sent < goals:
-            batch = min(args.batch, goals - sent)
-            for kind, client in clients.items():
-                before = _cpu_seconds(pids[kind])
-                for index in range(batch):
-                    elapsed, feedback, status, marks = client.round_trip(sent + index)
-                    if status != "completed" or feedback < 1:
-                        raise SystemExit(f"{kind}: goal ended {status!r} with {feedback} feedback")
-                    times[kind].append(elapsed)
-                    for part in PARTS:
-                        arrived[kind][part].append(marks[part])
-                cpu[kind] += _cpu_seconds(pids[kind]) - before
-            sent += batch
+        while sent < goals:  # a round: fresh servers, each serving --per-server goals
+            servers = _start_servers(f"round{sent}")
+            clients = {kind: Client(node, "bench", f"{kind}_round{sent}") for kind in servers}
+            try:
+                pids.update({kind: process.pid for kind, process in servers.items()})
+                _warm_up(clients)
+                clients.update(live)
+                end = min(goals, sent + args.per_server)
+                while sent < end:
+                    batch = min(args.batch, end - sent)
+                    for kind, client in clients.items():
+                        before = _cpu_seconds(pids[kind])
+                        for index in range(batch):
+                            elapsed, feedback, status, marks = client.round_trip(sent + index)
+                            if status != "completed" or feedback < 1:
+                                raise SystemExit(f"{kind}: goal ended {status!r} with {feedback} feedback")
+                            times[kind].append(elapsed)
+                            for part in PARTS:
+                                arrived[kind][part].append(marks[part])
+                        cpu[kind] += _cpu_seconds(pids[kind]) - before
+                    sent += batch
+            finally:
+                for kind in servers:
+                    clients[kind].action.destroy()
+                _stop_servers(servers)
     finally:
-        for process in servers.values():
-            process.terminate()
-            process.wait(timeout=10)
         executor.shutdown(timeout_sec=2)
         rclpy.try_shutdown()
     medians = {kind: statistics.median(values) for kind, values in times.items()}
@@ -308,7 +371,8 @@ def main(argv: list[str] | None = None) -> int:
         "",
         "NEXT sent -> accepted -> one feedback -> result, one goal at a time, through dynevent's",
         "ROS binding and through a bare rclpy action server doing the same exchange, in alternating",
-        f"batches of {args.batch} in one run{' (quick mode)' if args.quick else ''}.",
+        f"batches of {args.batch} in one run{' (quick mode)' if args.quick else ''}, each server process",
+        f"replaced by a fresh one every {args.per_server} goals (after {WARM_UP} untimed ones).",
         "",
         *results.machine_description(("dynevent", "rclpy")),
         "",
