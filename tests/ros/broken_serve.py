@@ -13,6 +13,7 @@ from typing import Any
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from dynevent.ros import qos as ros_qos
 from dynevent.ros import server as ros_server
 from dynevent.server import machine
 from dynevent.server import outputs as outs
@@ -31,7 +32,7 @@ def _volatile_topics() -> None:
             durability=DurabilityPolicy.VOLATILE,
         )  # fmt: skip
 
-    ros_server.latched = volatile
+    ros_qos.latched = volatile  # what the server's publishers are made with
 
 
 def _rewrite(change: Rewrite) -> None:

@@ -369,6 +369,28 @@ def test_a_robot_has_a_timer_only_while_a_stubbornness_holds(graph: Graph, robot
     _outcome(second)
 
 
+def test_a_robot_adds_to_every_executor_pass_its_action_server_and_wake_up_only(graph: Graph) -> None:
+    """Each waitable of a node is visited at every pass of the executor.  A robot's server adds its
+    action server and the guard condition that wakes its drain, and nothing else: its publishers
+    (status, begin, the fleet's begin) have none of rclpy's default QoS-event handlers, which had
+    added two waitables each (docs/performance.md)."""
+
+    def counts(node: Any) -> tuple[int, int, int]:
+        return len(list(node.waitables)), len(list(node.guards)), len(list(node.timers))
+
+    before: dict[str, tuple[int, int, int]] = {}
+
+    def make(node: Any) -> DynamicEventServer:
+        before["node"] = counts(node)
+        return DynamicEventServer(node, FLEET, ROBOT, CONFIG, Adapter())
+
+    server: DynamicEventServer = graph.node("entities", make)
+    server.begin('{"category": "patrol"}', 7)
+    waitables, guards, timers = before["node"]
+    assert counts(server._node) == (waitables + 1, guards + 1, timers)
+    server.shutdown()
+
+
 @pytest.mark.spec("R15.1", "R19.1")
 def test_shutdown_answers_open_goals(graph: Graph) -> None:
     robot = Robot(graph)

@@ -8,7 +8,7 @@ from typing import Any
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-__all__ = ["EVENTS_KEPT", "introspect", "latched"]
+__all__ = ["EVENTS_KEPT", "introspect", "latched", "latched_publisher"]
 
 
 def latched(depth: int) -> QoSProfile:
@@ -19,6 +19,17 @@ def latched(depth: int) -> QoSProfile:
         reliability=ReliabilityPolicy.RELIABLE,
         durability=DurabilityPolicy.TRANSIENT_LOCAL,
     )
+
+
+def latched_publisher(node: Any, message_type: Any, topic: str, depth: int) -> Any:
+    """A publisher of a Dynamic Event topic (:func:`latched`) without rclpy's default QoS-event
+    handlers: two waitables per publisher that every pass of the executor visits, a cost on every
+    goal's round trip.  Offering the strongest QoS, it can be incompatible with a subscription only
+    in a deadline or a liveliness lease asked for, which that subscription's handlers report."""
+    from rclpy.event_handler import PublisherEventCallbacks
+
+    quiet = PublisherEventCallbacks(use_default_callbacks=False)
+    return node.create_publisher(message_type, topic, latched(depth), event_callbacks=quiet)
 
 
 #: How many of its latest service events a server keeps for a follower that joins late (its judge

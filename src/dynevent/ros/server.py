@@ -46,7 +46,7 @@ from rclpy.task import Future
 from dynevent.errors import InvalidMessage, InvalidValue
 from dynevent.ros import convert
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
-from dynevent.ros.qos import EVENTS_KEPT, introspect, latched
+from dynevent.ros.qos import EVENTS_KEPT, introspect, latched, latched_publisher
 from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
@@ -132,11 +132,9 @@ class _Entities:
     ) -> None:
         group = MutuallyExclusiveCallbackGroup()
         self.node, self.group, self.server = node, group, server
-        self.status = node.create_publisher(
-            RosStatus, status_topic(fleet, robot), latched(STATUS_TOPIC_DEPTH)
-        )
-        self.begin = node.create_publisher(
-            RosDescription, begin_topic(fleet, robot), latched(ROBOT_BEGIN_TOPIC_DEPTH)
+        self.status = latched_publisher(node, RosStatus, status_topic(fleet, robot), STATUS_TOPIC_DEPTH)
+        self.begin = latched_publisher(
+            node, RosDescription, begin_topic(fleet, robot), ROBOT_BEGIN_TOPIC_DEPTH
         )
         self.fleet_begin = (
             begin_publisher if begin_publisher is not None else server.fleet_begin_publisher(node)
@@ -265,7 +263,7 @@ class DynamicEventServer(AdapterInputs):
     @staticmethod
     def fleet_begin_publisher(node: Any) -> Any:
         """A publisher of the fleet-wide begin topic, to share between the robots of ``node``."""
-        return node.create_publisher(RosDescription, BEGIN_TOPIC, latched(BEGIN_TOPIC_DEPTH))
+        return latched_publisher(node, RosDescription, BEGIN_TOPIC, BEGIN_TOPIC_DEPTH)
 
     @property
     def state(self) -> State:
