@@ -172,6 +172,17 @@ def _client(graph: Graph, name: str = "client") -> DynamicEventClient:
     return made
 
 
+def _begun(graph: Graph, name: str, adapter: Adapter) -> tuple[DynamicEventServer, DynamicEventClient]:
+    """A server for ``adapter`` on a node of its own, its run begun, and a client that sees it waiting."""
+    server: DynamicEventServer = graph.node(
+        name, lambda node: DynamicEventServer(node, FLEET, ROBOT, CONFIG, adapter)
+    )
+    server.begin('{"category": "patrol"}', 7)
+    client = _client(graph)
+    wait_for(lambda: client.state.phase == 1, "the run's WAITING status")
+    return server, client
+
+
 def _feedback_matched(robot: Robot) -> None:
     """Feedback is a volatile topic: wait until a client's feedback subscription is there."""
     topic = action_name(FLEET, ROBOT) + "/_action/feedback"
@@ -388,6 +399,32 @@ def test_a_robot_adds_to_every_executor_pass_its_action_server_and_wake_up_only(
     server.begin('{"category": "patrol"}', 7)
     waitables, guards, timers = before["node"]
     assert counts(server._node) == (waitables + 1, guards + 1, timers)
+    server.shutdown()
+
+
+def test_a_goals_uuid_formats_as_hex_in_rclpys_debug_messages_and_travels_whole(graph: Graph) -> None:
+    """rclpy's action server formats each goal's UUID into its debug messages whether or not they are
+    logged, where numpy formats the array slowly: the server's goal handles hold the UUID in an
+    array that formats as 32 hex digits, is a numpy array to the generated C conversion (the name its
+    debug build asserts), and travels whole (docs/performance.md)."""
+    from action_msgs.msg import GoalInfo
+    from rclpy.serialization import deserialize_message, serialize_message
+    from unique_identifier_msgs.msg import UUID
+
+    from dynevent.ros import convert
+
+    adapter = Adapter()
+    server, client = _begun(graph, "uuids", adapter)
+    run = client.next("go_to_place", '"pantry"')
+    adapter.child()
+    ((uuid, handle),) = server._handles.items()
+    array = handle.goal_id.uuid
+    assert f"{array}" == uuid and type(array).__name__ == "numpy.ndarray"
+    info = GoalInfo(goal_id=handle.goal_id)
+    assert bytes(deserialize_message(serialize_message(info), GoalInfo).goal_id.uuid).hex() == uuid
+    assert f"{convert.quiet_uuid(UUID(uuid=list(range(16)))).uuid}" == bytes(range(16)).hex()
+    adapter.child().finished()
+    assert _outcome(run).kind is cl.OutcomeKind.COMPLETED
     server.shutdown()
 
 
@@ -694,13 +731,7 @@ def test_a_step_inside_the_drain_wakes_no_executor_and_one_from_another_thread_d
     """An adapter that steps the server from a callback of the drain (a child finished in its start) adds
     to the outbox that drain is carrying out: the executor is not woken for a drain of its own (one
     wake-up less on a goal's round trip, docs/performance.md).  A step from any other thread wakes it."""
-    adapter = _AtOnce()
-    server: DynamicEventServer = graph.node(
-        "at_once", lambda node: DynamicEventServer(node, FLEET, ROBOT, CONFIG, adapter)
-    )
-    server.begin('{"category": "patrol"}', 7)
-    client = _client(graph)
-    wait_for(lambda: client.state.phase == 1, "the run's WAITING status")
+    server, client = _begun(graph, "at_once", _AtOnce())
     counted = _CountedWake(server._ros.wake)
     server._ros.wake = counted
     try:

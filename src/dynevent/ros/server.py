@@ -95,7 +95,7 @@ class _RecoveringActionServer(ActionServer):  # type: ignore[misc]  # rclpy is u
         self.requested_uuid: str | None = None
 
     async def _execute_goal_request(self, request_header_and_message: Any) -> None:
-        self.requested_uuid = convert.uuid_from_ros(request_header_and_message[1].goal_id)
+        self.requested_uuid = convert.uuid_from_ros(convert.quiet_uuid(request_header_and_message[1].goal_id))
         try:
             await super()._execute_goal_request(request_header_and_message)
         finally:
@@ -103,7 +103,7 @@ class _RecoveringActionServer(ActionServer):  # type: ignore[misc]  # rclpy is u
 
     async def _execute_get_result_request(self, request_header_and_message: Any) -> None:
         request_header, request = request_header_and_message
-        uuid = bytes(request.goal_id.uuid)
+        uuid = bytes(convert.quiet_uuid(request.goal_id).uuid)
         answer = None if uuid in self._goal_handles else self._owed(uuid.hex())
         if answer is None:
             await super()._execute_get_result_request(request_header_and_message)
