@@ -19,6 +19,8 @@ error of the wire mirrors, comes as :class:`InvalidValue` (built here) or
 
 from __future__ import annotations
 
+import math
+
 __all__ = [
     "BagError",
     "DuplicateRobot",
@@ -69,10 +71,27 @@ def shown_path(path: str) -> str:
     return text
 
 
+#: Integers of more bits than this (about 4,200 digits) are named by their length, not written out:
+#: Python refuses to write one of more than 4,300 digits by default, and none would fit a line.
+_LONGEST_INTEGER_BITS = 14_000
+
+
+def integer_text(value: int) -> str:
+    """An integer as decimal text, or, past what Python writes, ``<an integer of about N digits>``:
+    how every message of dynevent shows an integer it was given."""
+    if value.bit_length() <= _LONGEST_INTEGER_BITS:
+        try:
+            return int.__repr__(value)
+        except ValueError:  # the interpreter's limit on digits set lower than its default
+            pass
+    return f"<an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits>"
+
+
 def short_repr(value: object) -> str:
-    """Return ``repr(value)`` cut to a readable length for error messages."""
+    """Return ``repr(value)`` cut to a readable length for error messages (an integer too long to
+    write is named by its length, :func:`integer_text`)."""
     try:
-        text = repr(value)
+        text = integer_text(value) if type(value) is int else repr(value)
     except Exception:  # a hostile __repr__ must not hide the real error
         text = f"<unrepresentable {type(value).__name__}>"
     if len(text) > _VALUE_REPR_LIMIT:

@@ -23,10 +23,18 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from dynevent import descriptions
 from dynevent.conformance.driver import Driver
 from dynevent.conformance.records import InvalidRecord, config_from_json, input_from_json, output_from_json
 from dynevent.conformance.vectors import InvalidVector, parse_vector_file
-from dynevent.errors import DyneventError, InvalidDescription, InvalidMessage, InvalidSnapshot
+from dynevent.errors import (
+    DyneventError,
+    InvalidDescription,
+    InvalidMessage,
+    InvalidSnapshot,
+    UnknownCategory,
+    short_repr,
+)
 from dynevent.server import inputs as ins
 from dynevent.server import machine, snapshot
 from dynevent.server.fleet import Fleet
@@ -306,3 +314,81 @@ def test_an_annotation_in_a_snapshot_is_an_unknown_field() -> None:
     data["state"]["queued"][0]["checked"] = []
     with pytest.raises(InvalidSnapshot, match=r"\$\.state\.queued\[0\]\.checked"):
         snapshot.restore(data)
+
+
+# ------------------------------------------------------------------ the descriptions API, at any size
+
+#: An integer of 5,001 digits: Python will not write it (more than 4,300 digits), as a message would.
+LONG = 10**5_000
+LONG_TEXT = "<an integer of about 5001 digits>"
+
+
+@pytest.mark.parametrize("category", [{}, [], None, 0, LONG, b"clean", "patrol"], ids=short_repr)
+def test_the_descriptions_api_refuses_what_is_not_a_category_with_its_own_error(category: Any) -> None:
+    for call in (
+        lambda: descriptions.read(category, 0),
+        lambda: descriptions.shape_errors(category, 0),
+        lambda: descriptions.conforms(category, 0),
+        lambda: descriptions.schema(category),
+        lambda: descriptions.shapes.form(category, 0),
+    ):
+        with pytest.raises(UnknownCategory, match=r"^no description schema for category "):
+            call()
+    assert descriptions.Robot().check(category, 0)[0].startswith("/: ")
+
+
+@pytest.mark.parametrize(
+    ("check", "line"),
+    [
+        (lambda: descriptions.shape_errors("clean", LONG), f"/: {LONG_TEXT} is not an object"),
+        (lambda: descriptions.shape_errors("clean", {"zone": LONG}), f"/zone: {LONG_TEXT} is not a string"),
+        (lambda: descriptions.shape_errors("sequence", [LONG]), f"/0: {LONG_TEXT} is not an object"),
+        (  # not JSON (a tuple is no array), and still explained
+            lambda: descriptions.shape_errors("sequence", ({"category": LONG, "description": (LONG,)},)),
+            '/: [{"category": <an integer',
+        ),
+        (
+            lambda: descriptions.shape_errors(
+                "pickup", {"place": "a", "payload": {"sku": "b", "quantity": -LONG}}
+            ),
+            f"/payload/quantity: {LONG_TEXT} is less than 0",
+        ),
+        (lambda: descriptions.Robot().check("go_to_place", -LONG), f"/: {LONG_TEXT} is less than 0"),
+        (
+            lambda: descriptions.shape_validators()["sequence"](
+                "sequence", [{"category": "clean", "description": LONG}]
+            ),
+            f"/0/description: {LONG_TEXT} is not an object",
+        ),
+    ],
+)
+def test_an_integer_too_long_to_write_is_named_by_its_length_in_an_explanation(
+    check: Callable[[], tuple[str, ...]], line: str
+) -> None:
+    lines = check()
+    assert lines[0].startswith(line), lines
+
+
+@pytest.mark.parametrize(
+    ("request_", "error"),
+    [
+        ({"op": LONG}, f"$.op: expected 'hello', 'reset' or 'apply', got {LONG_TEXT}"),
+        (
+            {"op": "reset", "fleet": "f", "robot": "r", "config": {"categories": {"x": {"accept": LONG}}}},
+            f"$.config.categories.x.accept: expected one of ['any', 'string', 'number', 'array', 'object'], "
+            f"got {LONG_TEXT}",
+        ),
+        (
+            {"op": "reset", "fleet": "f", "robot": "r", "config": {"max_description_length": LONG}},
+            f"$.config: ServerConfig.max_description_length: expected a positive integer of at most 1000000 "
+            f"(bytes) (got {LONG_TEXT})",
+        ),
+    ],
+    ids=["op", "accept", "max_description_length"],
+)
+def test_the_driver_names_an_integer_too_long_to_write_by_its_length(request_: Any, error: str) -> None:
+    assert Driver().handle(request_) == {"ok": False, "error": error}
+    driver = Driver()
+    driver.handle({"op": "reset", "fleet": "f", "robot": "r"})
+    answer = driver.handle({"op": "apply", "input": {"type": LONG}})
+    assert answer["error"].endswith(f"got {LONG_TEXT}")

@@ -24,7 +24,7 @@ from typing import IO, Any
 
 from dynevent import __version__
 from dynevent.conformance.records import InvalidRecord, config_from_json, input_from_json, output_to_json
-from dynevent.errors import DyneventError, InvalidSnapshot
+from dynevent.errors import DyneventError, InvalidSnapshot, short_repr
 from dynevent.server import machine
 from dynevent.server.machine import ServerConfig, State
 from dynevent.server.snapshot import check_state
@@ -101,7 +101,7 @@ class Driver:
                 "outputs": [output_to_json(output) for output in transition.outputs],
                 "view": view(self._state),
             }
-        raise InvalidRecord("$.op", f"expected 'hello', 'reset' or 'apply', got {op!r}")
+        raise InvalidRecord("$.op", f"expected 'hello', 'reset' or 'apply', got {short_repr(op)}")
 
     def snapshot(self) -> Any:
         """The current state as JSON values (for debugging)."""

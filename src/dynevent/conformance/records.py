@@ -37,6 +37,7 @@ from dynevent import descriptions
 from dynevent.errors import (
     InvalidConfig,
     InvalidRecord,  # defined there with every error; importable here too
+    short_repr,
 )
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
@@ -76,7 +77,8 @@ def _from_json(kinds: Mapping[str, type[Any]], what: str, data: object, path: st
     kind = data.get("type")
     cls = kinds.get(kind) if isinstance(kind, str) else None
     if cls is None:
-        raise InvalidRecord(f"{path}.type", f"expected one of the {what} types {sorted(kinds)}, got {kind!r}")
+        expected = f"expected one of the {what} types {sorted(kinds)}"
+        raise InvalidRecord(f"{path}.type", f"{expected}, got {short_repr(kind)}")
     fields = {key: value for key, value in data.items() if key != "type"}
     try:
         return decode(cls, fields, path)
@@ -133,7 +135,8 @@ def _check_rule(rule: object, path: str) -> None:
         raise InvalidRecord(path, "expected a description rule object or a list of them")
     accept = rule.get("accept")
     if not isinstance(accept, str) or (accept != "any" and accept not in _JSON_TYPES):
-        raise InvalidRecord(f"{path}.accept", f"expected one of {['any', *_JSON_TYPES]}, got {accept!r}")
+        expected = f"expected one of {['any', *_JSON_TYPES]}"
+        raise InvalidRecord(f"{path}.accept", f"{expected}, got {short_repr(accept)}")
     required = rule.get("required", [])
     if not isinstance(required, list) or not all(isinstance(key, str) for key in required):
         raise InvalidRecord(f"{path}.required", "expected a list of strings")

@@ -18,7 +18,9 @@ from typing import Any
 
 import attrs
 
-__all__ = ["explain", "integer_text", "pointer", "prefixed", "render", "under"]
+from dynevent.errors import integer_text
+
+__all__ = ["explain", "pointer", "prefixed", "render", "under", "writable"]
 
 #: Values longer than this are shortened in an error line.
 _LONGEST_VALUE = 48
@@ -88,19 +90,40 @@ def _first(items: Iterable[Any]) -> list[Any]:
     return list(itertools.islice(items, _LONGEST_VALUE))
 
 
-#: Integers of more bits than this (about 4,200 digits) are named by their length, not written out:
-#: Python refuses to write one of more than 4,300 digits by default, and none would fit a line.
-_LONGEST_INTEGER_BITS = 14_000
+class _LongInteger(int):
+    """An integer too long to write, that names its length where a message would write it."""
+
+    def __repr__(self) -> str:
+        return integer_text(self)
+
+    __str__ = __repr__
 
 
-def integer_text(value: int) -> str:
-    """An integer as decimal text, or, past what Python writes, ``<an integer of about N digits>``."""
-    if value.bit_length() <= _LONGEST_INTEGER_BITS:
-        try:
-            return int.__repr__(value)
-        except ValueError:  # the interpreter's limit on digits set lower than its default
-            pass
-    return f"<an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits>"
+def writable(value: Any) -> Any:
+    """``value`` (parsed JSON) with each integer too long to write standing in for itself as one that
+    names its length (:func:`~dynevent.errors.integer_text`): what the ``jsonschema`` package, which
+    writes the values at fault into its messages, is given.  ``value`` itself when it holds none.
+    Nesting of any depth is walked without recursion; a tuple stays a tuple."""
+    top: list[Any] = [value]
+    pending: list[tuple[Any, Any]] = [(top, 0)]
+    tuples: list[tuple[Any, Any]] = []
+    changed = False
+    while pending:
+        holder, key = pending.pop()
+        item = holder[key]
+        if type(item) is int and integer_text(item).startswith("<"):
+            holder[key], changed = _LongInteger(item), True
+        elif isinstance(item, dict):
+            holder[key] = dict(item)
+            pending.extend((holder[key], name) for name in item)
+        elif isinstance(item, (list, tuple)):
+            holder[key] = list(item)
+            pending.extend((holder[key], index) for index in range(len(item)))
+            if isinstance(item, tuple):
+                tuples.append((holder, key))
+    for holder, key in reversed(tuples):  # the inner ones first
+        holder[key] = tuple(holder[key])
+    return top[0] if changed else value
 
 
 def _scalar(value: Any) -> str:

@@ -16,8 +16,7 @@ from typing import Any
 import attrs
 
 from dynevent.descriptions import shapes
-from dynevent.descriptions._explain import integer_text
-from dynevent.errors import InvalidEventDescription
+from dynevent.errors import InvalidEventDescription, integer_text
 
 __all__ = [
     "Activity",

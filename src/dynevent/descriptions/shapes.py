@@ -54,10 +54,16 @@ def schema(category: str) -> dict[str, Any]:
     return copy.deepcopy(dict(_schemas()[_document(category)]))
 
 
-def _document(category: str) -> str:
-    if category not in CATEGORIES:
+def _document(category: object) -> str:
+    return f"{_category(category)}.json"
+
+
+def _category(category: object) -> str:
+    """``category``, one of :data:`CATEGORIES`; anything else (of any type) is
+    :class:`~dynevent.errors.UnknownCategory`, before a cache that would hash it."""
+    if not isinstance(category, str) or category not in CATEGORIES:
         raise UnknownCategory(category, CATEGORIES)
-    return f"{category}.json"
+    return category
 
 
 @functools.cache
@@ -82,12 +88,13 @@ def form(category: str, description: Any, *, conforming: bool = False) -> int | 
     ``conforming=True`` says the caller has just seen it conform (it is not judged twice)."""
     if not conforming and not conforms(category, description):
         return None
-    return next((number for number, fits in enumerate(_forms(category)) if fits(description)), None)
+    forms = _forms(_category(category))
+    return next((number for number, fits in enumerate(forms) if fits(description)), None)
 
 
 def conforms(category: str, description: Any) -> bool:
     """Whether ``description`` (parsed JSON) has a shape ``category``'s schema accepts."""
-    return _predicate(category)(description)
+    return _predicate(_category(category))(description)
 
 
 @functools.cache
@@ -158,7 +165,13 @@ def shape_errors(category: str, description: Any) -> tuple[str, ...]:
     if validator is None:
         hint = "pip install 'dynevent[descriptions]' to be told where"
         return (f"/: {_explain.render(description)} is not {title} ({hint})",)
-    lines = _explain.explain(validator.iter_errors(description))
+    try:
+        lines = _explain.explain(validator.iter_errors(description))
+    except ValueError:  # the package wrote an integer too long to write into a message
+        writable = _explain.writable(description)
+        if writable is description:
+            raise
+        lines = _explain.explain(validator.iter_errors(writable))
     # The compiled verdict and the package agree on every instance (tests/descriptions); were
     # they ever to differ, the refusal still says so rather than refusing without a reason.
     return listed_errors(lines) or (f"/: {_explain.render(description)} is not {title}",)

@@ -17,7 +17,7 @@ from typing import Any
 
 import attrs
 
-from dynevent.errors import DyneventError, InvalidSnapshot
+from dynevent.errors import DyneventError, InvalidSnapshot, short_repr
 from dynevent.server.inputs import LOWER_HEX, NOW_RANGE
 from dynevent.server.machine import SECONDS_RANGE, State
 from dynevent.wire import _json
@@ -111,11 +111,11 @@ def restore(data: object) -> State:
     if not isinstance(data, dict):
         raise InvalidSnapshot("$", f"expected a JSON object, got {type(data).__name__}")
     if data.get("format") != FORMAT:
-        raise InvalidSnapshot("$.format", f"expected {FORMAT!r}, got {data.get('format')!r}")
+        raise InvalidSnapshot("$.format", f"expected {FORMAT!r}, got {short_repr(data.get('format'))}")
     version = data.get("version")
     if version != VERSION or type(version) is not int:
         raise InvalidSnapshot(
-            "$.version", f"unsupported snapshot version {version!r}; this release reads {VERSION}"
+            "$.version", f"unsupported snapshot version {short_repr(version)}; this release reads {VERSION}"
         )
     extra = set(data) - {"format", "version", "state"}
     if extra:
