@@ -806,7 +806,18 @@ def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the ``dynevent`` command; return its exit code."""
+    """Run the ``dynevent`` command; return its exit code.  A reader of standard output that goes away
+    (``| head``) ends any command quietly with 141, whether its output is buffered or not."""
+    try:
+        try:
+            return _command(argv)
+        finally:  # what is still buffered goes now, where a reader gone is answered quietly, not at exit
+            sys.stdout.flush()
+    except BrokenPipeError:
+        return quiet_broken_pipe()
+
+
+def _command(argv: Sequence[str] | None) -> int:
     parser = argparse.ArgumentParser(prog="dynevent", description=_DESCRIPTION, epilog=_EPILOG)
     parser.add_argument("--version", action="version", version=f"dynevent {__version__}")
     commands = parser.add_subparsers(dest="command")
@@ -844,8 +855,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     except DyneventError as exc:  # what a command did not name itself is still one line, never a traceback
         print(f"dynevent {args.command}: {exc}", file=sys.stderr)
         return 2
-    except BrokenPipeError:
-        return quiet_broken_pipe()
     return result
 
 
