@@ -5,15 +5,21 @@ Every file dynevent reads for a user goes through :func:`read_bytes` (or :func:`
 block or never end, and is named in one line instead), its size is bounded before it is read,
 standard input is ``-`` where the caller allows it, and every failure, a path too long, a file
 not there or not readable, text that is not UTF-8, JSON too deep, is one :class:`FileError`
-naming the file.  :func:`write_text` writes a report whatever text it holds (a lone surrogate is
-escaped, not an error) and names a path it cannot write.
+naming the file.
+
+Every file a command writes goes the same way: :func:`check_writable` tries its path before the
+command's work starts (a path too long, a directory, a folder that does not exist, no permission:
+one :class:`FileError`, the same as the write would give), and :func:`create_text` or
+:func:`write_text` write it, whatever text it holds (a lone surrogate is escaped, not an error).
 """
 
 from __future__ import annotations
 
+import errno
 import os
 import stat
 import sys
+import tempfile
 from typing import Any, BinaryIO, TextIO
 
 from dynevent.errors import FileError
@@ -21,6 +27,8 @@ from dynevent.wire import _json
 
 __all__ = [
     "MAX_FILE_BYTES",
+    "check_writable",
+    "create_directory",
     "create_text",
     "kind",
     "open_regular",
@@ -116,13 +124,71 @@ def _shown(path: str, stdin: bool) -> str:
     return "standard input" if stdin and path == "-" else path
 
 
+def _unwritable(what: str, path: str, error: Exception) -> FileError:
+    return FileError(what, path, f"cannot be written: {_reason(error)}")
+
+
+def check_writable(path: str, what: str, *, directory: bool = False) -> None:
+    """Raise :class:`FileError` naming ``what`` unless a command can write ``path`` (a file; with
+    ``directory``, a directory that holds its files, made if it is not there): tried, before the
+    command's work starts, as the write would try it, and nothing left behind.  An existing file is
+    not changed; a FIFO or a device (``/dev/stdout``) is written as it comes."""
+    try:
+        if directory:
+            _try_directory(path)
+            return
+        try:
+            os.close(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0)))
+        except FileExistsError:
+            pass
+        else:
+            os.unlink(path)
+            return
+        # what is there, opened to write without truncating it; a FIFO without a reader yet is fine
+        os.close(os.open(path, os.O_WRONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0)))
+    except OSError as error:
+        if error.errno != errno.ENXIO:
+            raise _unwritable(what, path, error) from None
+    except ValueError as error:  # a NUL in the path
+        raise _unwritable(what, path, error) from None
+
+
+def _try_directory(path: str) -> None:
+    if _make_directory(path):
+        os.rmdir(path)
+        return
+    descriptor, made = tempfile.mkstemp(dir=path, prefix=".dynevent-")  # a file can be made in it
+    os.close(descriptor)
+    os.unlink(made)
+
+
+def _make_directory(path: str) -> bool:
+    """Make the directory ``path``: True, or False when one is there already (OSError otherwise)."""
+    try:
+        os.mkdir(path)
+    except FileExistsError:
+        if not os.path.isdir(path):
+            raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR)) from None
+        return False
+    return True
+
+
+def create_directory(path: str, what: str) -> None:
+    """Make the directory ``path`` (one there already is used); raises :class:`FileError` naming
+    ``what`` when it cannot be made."""
+    try:
+        _make_directory(path)
+    except (OSError, ValueError) as error:
+        raise _unwritable(what, path, error) from None
+
+
 def create_text(path: str, what: str) -> TextIO:
     """``path`` opened to write UTF-8 text (a lone surrogate escaped as ``\\udXXX``, never an
     error); raises :class:`FileError` naming ``what`` when the path cannot be written."""
     try:
         return open(path, "w", encoding="utf-8", errors="backslashreplace")  # the caller's
     except (OSError, ValueError) as error:
-        raise FileError(what, path, f"cannot be written: {_reason(error)}") from None
+        raise _unwritable(what, path, error) from None
 
 
 def write_text(path: str, text: str, what: str) -> None:
@@ -132,4 +198,4 @@ def write_text(path: str, text: str, what: str) -> None:
         try:
             stream.write(text)
         except OSError as error:  # a full disk
-            raise FileError(what, path, f"cannot be written: {_reason(error)}") from None
+            raise _unwritable(what, path, error) from None

@@ -342,7 +342,7 @@ def test_the_ros_package_imports_without_ros_and_its_names_say_what_is_missing()
         (["probe", "--timeout", "0"], "dynevent probe: --timeout: expected positive seconds"),
         (
             ["probe", "--junit", "no/such/dir/probe.xml"],
-            "dynevent probe: --junit no/such/dir/probe.xml: its directory",
+            "dynevent probe: --junit 'no/such/dir/probe.xml': cannot be written: No such file or directory",
         ),
         (["serve", "--robot", "bad name"], "dynevent serve:"),
         (["serve", "--first-seq", "-1"], "dynevent serve: --first-seq: expected a seq from 0 to 4294967295"),
@@ -353,10 +353,13 @@ def test_the_ros_package_imports_without_ros_and_its_names_say_what_is_missing()
         (["record", "--seconds", "0"], "dynevent record: --seconds: expected positive seconds"),
         (["record", "-o", "."], "dynevent record: --output .: exists already"),
         (["record", "--all", "--robot", "r1"], "dynevent record: --all: records every robot of every fleet"),
-        (["record", "-o", "no/such/dir/bag"], "dynevent record: --output no/such/dir/bag: its directory"),
+        (
+            ["record", "-o", "no/such/dir/bag"],
+            "dynevent record: --output 'no/such/dir/bag': cannot be written: No such file or directory",
+        ),
         (
             ["send", "--end", "--trace", "no/such/dir/t"],
-            "dynevent send: --trace no/such/dir/t: its directory",
+            "dynevent send: --trace 'no/such/dir/t': cannot be written: No such file or directory",
         ),
     ],
 )

@@ -3,7 +3,8 @@ or a traceback.
 
 Every flag that reads a file is given a FIFO (which would block a plain ``open`` for ever), a
 directory, a device, a path too long for the system, a missing file, a file too deep to parse, and
-one that is not UTF-8; every flag that writes one is given a path too long and a directory.  Each
+one that is not UTF-8; every flag that writes one is given a path too long, a directory, a path in
+no such folder and one it has no permission to write.  Each
 command is a real subprocess, bounded by a deadline far above what a refusal takes: a hang fails it.
 """
 
@@ -19,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from dynevent import files
-from dynevent.errors import FileError
+from dynevent.errors import FileError, shown_path
 
 ROOT = Path(__file__).resolve().parents[2]
 LONG = "x" * 5_000  # past every file system's name limit (255) and PATH_MAX (4,096)
@@ -105,22 +106,92 @@ def test_check_names_a_trace_it_cannot_read_in_one_line(kind: str, hostile: dict
     assert SAID[kind] in line, line
 
 
+#: The commands that write a file: (the command, its flag, its arguments with the path given); each
+#: refuses a path before its work starts, the ROS commands without ROS.
+WRITERS: dict[str, tuple[str, str, Callable[[str], list[str]]]] = {
+    "vectors --junit": ("vectors", "--junit", lambda path: ["vectors", "--junit", path]),
+    "probe --junit": ("probe", "--junit", lambda path: ["probe", "--junit", path]),
+    "probe --report": ("probe", "--report", lambda path: ["probe", "--report", path]),
+    "probe --trace": ("probe", "--trace", lambda path: ["probe", "--trace", path]),
+    "probe --list --junit": ("probe", "--junit", lambda path: ["probe", "--list", "--junit", path]),
+    "probe --loopback --report": (
+        "probe", "--report", lambda path: ["probe", "--loopback", "--report", path]
+    ),
+    "send --trace": ("send", "--trace", lambda path: ["send", "--place", "A", "--trace", path]),
+    "serve --report": ("serve", "--report", lambda path: ["serve", "--report", path]),
+    "serve --trace": ("serve", "--trace", lambda path: ["serve", "--trace", path]),
+    "serve --trace, a directory for two robots": (
+        "serve", "--trace", lambda path: ["serve", "--robot", "a", "--robot", "b", "--trace", path]
+    ),
+    "record --output": ("record", "--output", lambda path: ["record", "--output", path]),
+}  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def unwritable(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
+    """Output paths a command cannot write, by what they are."""
+    folder = tmp_path_factory.mktemp("unwritable")
+    if os.geteuid() == 0:  # root writes through a folder's permissions, not into /sys
+        forbidden = "/sys/dynevent-output"
+    else:
+        closed = folder / "closed"
+        closed.mkdir(mode=0o500)
+        forbidden = str(closed / "output")
+    return {
+        "too long": LONG,
+        "a directory": str(folder),
+        "in no such folder": str(folder / "missing" / "output"),
+        "without permission": forbidden,
+    }
+
+
+#: What each kind of output path is said to be (after "cannot be written: ").
+UNWRITABLE = {
+    "too long": ("File name too long",),
+    "a directory": ("Is a directory",),
+    "in no such folder": ("No such file or directory",),
+    "without permission": ("Permission denied", "Operation not permitted"),
+}
+
+
 @pytest.mark.parametrize(
-    ("args", "flag"),
+    ("writer", "kind"),
     [
-        (
-            ["vectors", "--filter", "request-refused-while-shutting-down", "--junit", LONG + "/x.xml"],
-            "--junit",
-        ),
+        (writer, kind)
+        for writer in WRITERS
+        for kind in UNWRITABLE
+        if not (writer.endswith("two robots") and kind == "a directory")  # where their traces go
     ],
 )
-def test_an_output_path_that_cannot_be_written_is_one_line(
-    args: list[str], flag: str, tmp_path: Path
+def test_an_output_path_that_cannot_be_written_is_one_line_before_the_work(
+    writer: str, kind: str, unwritable: dict[str, str]
 ) -> None:
-    line = _one_line(dynevent(*args))
-    assert flag in line and "cannot be written" in line, line
-    done = dynevent(*[str(tmp_path) if arg.startswith(LONG) else arg for arg in args])
-    assert flag in _one_line(done) and "Is a directory" in done.stderr
+    command, flag, argv = WRITERS[writer]
+    path = unwritable[kind]
+    done = dynevent(*argv(path))
+    line = _one_line(done)
+    assert done.stdout == "", done.stdout[-2_000:]  # refused before the command's work
+    if command == "record" and kind == "a directory":
+        assert line.endswith(": exists already (a bag is a new directory)"), line
+        return
+    assert line.startswith(f"dynevent {command}: {flag} {shown_path(path)}: cannot be written: "), line
+    assert line.endswith(UNWRITABLE[kind]), line
+
+
+def test_a_writable_output_path_is_tried_and_left_as_it_was(tmp_path: Path) -> None:
+    kept = tmp_path / "kept.txt"
+    kept.write_text("before", encoding="utf-8")
+    files.check_writable(str(kept), "--report")
+    files.check_writable(str(tmp_path / "new.xml"), "--junit")
+    files.check_writable(str(tmp_path / "bag"), "--output", directory=True)
+    files.check_writable(str(tmp_path), "--trace", directory=True)
+    files.check_writable(os.devnull, "--trace")
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["kept.txt"]
+    assert kept.read_text(encoding="utf-8") == "before"
+    with pytest.raises(FileError, match=r"'.*kept.txt': cannot be written: Not a directory$"):
+        files.check_writable(str(kept), "--trace", directory=True)
+    with pytest.raises(FileError, match=r"cannot be written: a path cannot hold a NUL character$"):
+        files.check_writable("a\0b", "--junit")
 
 
 def test_a_shard_of_unicode_digits_is_refused_by_name() -> None:

@@ -153,11 +153,12 @@ def _vectors(args: argparse.Namespace) -> int:
         return 2
     implementation: vectors.InProcessImplementation | vectors.ExternalImplementation
     try:
+        _check_writable("junit", args.junit)
         if args.impl is None:
             implementation = vectors.InProcessImplementation()
         else:
             implementation = vectors.ExternalImplementation(args.impl, timeout=args.timeout)
-    except vectors.ImplementationError as exc:
+    except (vectors.ImplementationError, FileError) as exc:
         print(f"dynevent vectors: {exc}", file=sys.stderr)
         return 2
     progress = Progress("dynevent vectors", len(chosen))
@@ -324,12 +325,13 @@ def _serve(args: argparse.Namespace) -> int:
     def check() -> Any:
         if not 0 <= args.grace <= 3600:
             raise ServeError(f"--grace: expected seconds from 0 to 3600 (got {args.grace})")
-        for flag in ("report", "trace"):
-            _check_directory(flag, getattr(args, flag), ServeError)
-        return load_config(
+        _check_writable("report", args.report)
+        config = load_config(
             args.config, fleet=args.fleet, robots=args.robots or (), rebegin=args.rebegin,
             first_seq=args.first_seq, compatibility=args.compatibility, shard=args.shard,
         )  # fmt: skip
+        _check_writable("trace", args.trace, directory=len(config.served()) > 1)  # a file a robot
+        return config
 
     def run(serve: Any, config: Any) -> int:
         watch = serve.Watch(judge=not args.no_judge, grace=args.grace, report=args.report, trace=args.trace,
@@ -345,12 +347,12 @@ def _record(args: argparse.Namespace) -> int:
     def check() -> None:
         if args.seconds is not None and not 0 < args.seconds < 1e9:
             raise RecordError(f"--seconds: expected positive seconds (got {args.seconds})")
-        if args.output and Path(args.output).exists():
+        if args.output and os.path.lexists(args.output):  # lexists: a path too long to stat is not there
             raise RecordError(f"--output {args.output}: exists already (a bag is a new directory)")
         if args.all and (args.fleet or args.robot):
             named = "--fleet" if args.fleet else "--robot"
             raise RecordError(f"--all: records every robot of every fleet, so {named} cannot narrow it")
-        _check_directory("output", args.output, RecordError)
+        _check_writable("output", args.output, directory=True)
 
     def run(record: Any, _: None) -> int:
         options = record.RecordOptions(
@@ -471,7 +473,7 @@ def _send(args: argparse.Namespace) -> int:
     def check() -> tuple[Any, str, str]:
         if not 0 < args.timeout < 1e6:
             raise SendError(f"--timeout: expected positive seconds (got {args.timeout})")
-        _check_directory("trace", args.trace, SendError)
+        _check_writable("trace", args.trace)
         return goal_request(args)
 
     def run(send: Any, goal: tuple[Any, str, str]) -> int:
@@ -486,15 +488,18 @@ def _send(args: argparse.Namespace) -> int:
     return _ros_command("send", check, run)
 
 
-def _check_directory(flag: str, path: str | None, error: type[Exception]) -> None:
-    """Refuse, before anything runs, an output file whose directory does not exist."""
-    if path and not Path(path).resolve().parent.is_dir():
-        raise error(f"--{flag} {path}: its directory does not exist")
+def _check_writable(flag: str, path: str | None, *, directory: bool = False) -> None:
+    """Refuse, before the command's work starts, an output ``--flag PATH`` it could not write
+    (:func:`dynevent.files.check_writable`)."""
+    from dynevent import files
+
+    if path is not None:
+        files.check_writable(path, f"--{flag}", directory=directory)
 
 
 def _probe(args: argparse.Namespace) -> int:
     from dynevent.conformance import probe_cases
-    from dynevent.errors import ProbeError
+    from dynevent.errors import DyneventError, ProbeError
 
     def check() -> list[probe_cases.Case]:
         cases = probe_cases.select(args.cases)
@@ -508,13 +513,13 @@ def _probe(args: argparse.Namespace) -> int:
         if not 0 <= args.stubborn_minimum < 1e6:
             raise ProbeError(f"--stubborn-minimum: expected seconds from 0 (got {args.stubborn_minimum})")
         for flag in ("junit", "report", "trace"):
-            _check_directory(flag, getattr(args, flag), ProbeError)
+            _check_writable(flag, getattr(args, flag))
         return cases
 
     if args.list:
         try:
             sys.stdout.write(probe_cases.format_list(check()))
-        except ProbeError as exc:
+        except DyneventError as exc:
             print(f"dynevent probe: {exc}", file=sys.stderr)
             return 2
         return 0

@@ -204,8 +204,10 @@ def run(
     # whose execute callback is a coroutine (docs/performance.md).
     watch = watch or Watch()
     if watch.trace is not None and len(config.served()) > 1:
-        with contextlib.suppress(FileExistsError):
-            os.mkdir(watch.trace)
+        try:
+            files.create_directory(watch.trace, "--trace")
+        except FileError as exc:
+            raise ServeError(str(exc)) from None
     fleet = Fleet(config, checking, store, follow=watch.judge, ros_args=ros_args)
     clients, judged = _Clients(), []
     for robot in config.served():
