@@ -764,6 +764,8 @@ BOOK_ITEMS = st.tuples(
         messages(DynamicEventStatus).map(lambda message: StatusReceived(message=message)),
         st.sampled_from((0, 1, 2, U32)).map(begin),
         st.integers(0, 10 * SECOND).map(lambda now: Tick(now=now)),
+        st.integers(0, 10 * SECOND).map(lambda now: client.ContactMade(now=now)),
+        st.integers(0, 10 * SECOND).map(lambda now: client.ContactLost(now=now)),
         st.tuples(st.just("response"), st.booleans()),
         st.tuples(
             st.just("feedback"), st.builds(Feedback, status=st.just("underway"), id=st.sampled_from((6, 7)))
@@ -795,7 +797,8 @@ def _book_step(state: ClientState, item: Any, uuid: str) -> client.ClientTransit
 
 @given(st.lists(BOOK_ITEMS, max_size=30))
 def test_any_input_sequence_keeps_the_books(items: list[tuple[int, Any]]) -> None:
-    """Total on any wire-valid input; one outcome per sent goal, none for others; UUIDs never repeat."""
+    """Total on any wire-valid input; one outcome per sent goal, none for others; UUIDs never repeat;
+    a result is asked for again only for an open goal (R21.4)."""
     state = ClientState.new(PREFIX)
     sent_uuids: list[str] = []
     outcomes: list[str] = []
@@ -810,6 +813,8 @@ def test_any_input_sequence_keeps_the_books(items: list[tuple[int, Any]]) -> Non
             elif isinstance(output, Outcome):
                 assert output.goal_uuid in sent_uuids and output.goal_uuid not in outcomes
                 outcomes.append(output.goal_uuid)
+            elif isinstance(output, client.AskResult):
+                assert state.goal(output.goal_uuid) is not None
         open_uuids = [goal.goal_uuid for goal in state.goals]
         assert sorted(open_uuids + outcomes) == sorted(sent_uuids)
         assert state.counter == len(sent_uuids)

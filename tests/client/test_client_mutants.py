@@ -34,17 +34,22 @@ from client_scenario import (
 from dynevent import client
 from dynevent.client import (
     SECOND,
+    AskResult,
+    BackInContact,
     BeginReceived,
     ClientInput,
     ClientOutput,
     ClientState,
     ClientTransition,
+    ContactLost,
+    ContactMade,
     FeedbackReceived,
     GoalResponse,
     Ignored,
     OpenGoal,
     Outcome,
     OutcomeKind,
+    OutOfContact,
     Progress,
     Refused,
     ResultReceived,
@@ -137,6 +142,11 @@ _KINDS: list[tuple[type[Any], str]] = [
     (ViewChanged, "view_changed"),
     (TimedOut, "timed_out"),
     (Ignored, "ignored"),
+    (ContactMade, "contact_made"),
+    (ContactLost, "contact_lost"),
+    (AskResult, "ask_result"),
+    (OutOfContact, "out_of_contact"),
+    (BackInContact, "back_in_contact"),
 ]
 
 
@@ -177,6 +187,11 @@ _PUBLIC_CLASSES = [
     ViewChanged,
     TimedOut,
     Ignored,
+    ContactMade,
+    ContactLost,
+    AskResult,
+    OutOfContact,
+    BackInContact,
     OpenGoal,
     ClientState,
     ClientTransition,
@@ -213,6 +228,8 @@ def test_input_and_output_unions() -> None:
         FeedbackReceived,
         ResultReceived,
         Tick,
+        ContactMade,
+        ContactLost,
     }
     assert set(typing.get_args(ClientOutput)) == {
         SendGoal,
@@ -223,6 +240,9 @@ def test_input_and_output_unions() -> None:
         ViewChanged,
         TimedOut,
         Ignored,
+        AskResult,
+        OutOfContact,
+        BackInContact,
     }
 
 
@@ -244,6 +264,11 @@ _POSITIONAL: list[Callable[[], object]] = [
     lambda: ViewChanged(WAITING, 1, 5, "standby"),  # type: ignore[call-arg]
     lambda: TimedOut(UUID, 6, 10),  # type: ignore[call-arg]
     lambda: Ignored("tick", "why"),  # type: ignore[call-arg]
+    lambda: ContactMade(0),  # type: ignore[call-arg]
+    lambda: ContactLost(0),  # type: ignore[call-arg]
+    lambda: AskResult(UUID),  # type: ignore[call-arg]
+    lambda: OutOfContact(0),  # type: ignore[call-arg]
+    lambda: BackInContact(0, 1),  # type: ignore[call-arg]
     lambda: OpenGoal(UUID, Goal()),  # type: ignore[call-arg]
     lambda: ClientState(PREFIX),  # type: ignore[call-arg]
 ]

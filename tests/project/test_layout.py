@@ -306,7 +306,8 @@ def test_the_observers_parts_change_what_the_rooms_keep_only_through_their_metho
 #: conversions, spinning, the participant, the probe's link over DDS, the recorder's subscriptions and
 #: the simulated fleet's hosting.  What the commands do with it (their terminal lines, their reports)
 #: is dynevent.tools.live's, and what needs no rclpy is below it (the adapter's side of a server, a
-#: goal run, the restart watch, the probe's cases).
+#: goal run, the probe's cases; the client machine asks again for the results a restart or a partition
+#: lost).
 ROS_LINES = 2_400
 
 

@@ -13,6 +13,8 @@ from __future__ import annotations
 from dynevent.client.inputs import (
     BeginReceived,
     ClientInput,
+    ContactLost,
+    ContactMade,
     FeedbackReceived,
     GoalResponse,
     ResultReceived,
@@ -20,6 +22,8 @@ from dynevent.client.inputs import (
     Tick,
 )
 from dynevent.client.machine import (
+    ASK_AGAIN_LONGEST,
+    ASK_AGAIN_PERIOD,
     SECOND,
     ClientState,
     ClientTransition,
@@ -32,10 +36,13 @@ from dynevent.client.machine import (
     step,
 )
 from dynevent.client.outputs import (
+    AskResult,
+    BackInContact,
     ClientOutput,
     Ignored,
     Outcome,
     OutcomeKind,
+    OutOfContact,
     Progress,
     Refused,
     RunBegan,
@@ -45,16 +52,23 @@ from dynevent.client.outputs import (
 )
 
 __all__ = [
+    "ASK_AGAIN_LONGEST",
+    "ASK_AGAIN_PERIOD",
     "SECOND",
+    "AskResult",
+    "BackInContact",
     "BeginReceived",
     "ClientInput",
     "ClientOutput",
     "ClientState",
     "ClientTransition",
+    "ContactLost",
+    "ContactMade",
     "FeedbackReceived",
     "GoalResponse",
     "Ignored",
     "OpenGoal",
+    "OutOfContact",
     "Outcome",
     "OutcomeKind",
     "Progress",

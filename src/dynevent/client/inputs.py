@@ -19,6 +19,8 @@ from dynevent.wire.vocab import GoalStatus
 __all__ = [
     "BeginReceived",
     "ClientInput",
+    "ContactLost",
+    "ContactMade",
     "FeedbackReceived",
     "GoalResponse",
     "ResultReceived",
@@ -158,7 +160,32 @@ class Tick(_ClientInput):
     now: int = _field(_now_converter)
 
 
+@attrs.frozen(kw_only=True)
+class ContactMade(_ClientInput):
+    """A publisher of the robot's status topic was matched at ``now``: a server process came into
+    contact, a new one (R21.4) or one the client had lost contact with (R21.5)."""
+
+    KIND: ClassVar[str] = "contact_made"
+    now: int = _field(_now_converter)
+
+
+@attrs.frozen(kw_only=True)
+class ContactLost(_ClientInput):
+    """At ``now`` no publisher of the robot's status topic is matched any longer: the server process
+    ended, or the network has cut it off for longer than the middleware's lease (R21.5)."""
+
+    KIND: ClassVar[str] = "contact_lost"
+    now: int = _field(_now_converter)
+
+
 #: Any input of the client machine.
 ClientInput: TypeAlias = (
-    BeginReceived | StatusReceived | GoalResponse | FeedbackReceived | ResultReceived | Tick
+    BeginReceived
+    | StatusReceived
+    | GoalResponse
+    | FeedbackReceived
+    | ResultReceived
+    | Tick
+    | ContactMade
+    | ContactLost
 )

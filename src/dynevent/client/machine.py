@@ -69,6 +69,8 @@ import attrs
 from dynevent.client.inputs import (
     BeginReceived,
     ClientInput,
+    ContactLost,
+    ContactMade,
     FeedbackReceived,
     GoalResponse,
     ResultReceived,
@@ -78,10 +80,13 @@ from dynevent.client.inputs import (
 )
 from dynevent.client.outputs import (
     OUTCOME_OF_STATUS,
+    AskResult,
+    BackInContact,
     ClientOutput,
     Ignored,
     Outcome,
     OutcomeKind,
+    OutOfContact,
     Progress,
     Refused,
     RunBegan,
@@ -108,6 +113,8 @@ from dynevent.wire.vocab import (
 )
 
 __all__ = [
+    "ASK_AGAIN_LONGEST",
+    "ASK_AGAIN_PERIOD",
     "SECOND",
     "ClientState",
     "ClientTransition",
@@ -123,6 +130,15 @@ __all__ = [
 #: One second in the unit of instants (integer nanoseconds), e.g. ``now + 30 * SECOND``
 #: (:mod:`dynevent.wire.units`: durations, such as ``timeout``, are seconds).
 SECOND = _SECOND_NS
+
+#: How long after asking a server again for a goal's result the client asks once more, at first
+#: (R21.4): the request may have gone before the server's result service was matched, and such a
+#: request is dropped unheard.  Each later wait is twice the one before, up to
+#: :data:`ASK_AGAIN_LONGEST`, so that a goal whose child runs for long costs the server a few pending
+#: requests, not one a second.  Integer nanoseconds.
+ASK_AGAIN_PERIOD = SECOND
+#: The longest wait between two requests for the same goal's result (integer nanoseconds).
+ASK_AGAIN_LONGEST = 30 * SECOND
 
 _HEX = frozenset("0123456789abcdefABCDEF")
 
@@ -144,7 +160,9 @@ class OpenGoal:
     ``child_status`` (NEXT) once feedback named the child; ``deadline`` the
     instant a NEXT with a timeout times out, ``timed_out`` once a tick
     reached it; ``withdrawn`` once the caller withdrew the NEXT
-    (:func:`request_withdraw`).
+    (:func:`request_withdraw`).  ``ask_at`` is the instant the client next asks
+    the server again for the goal's result (R21.4, R21.5; ``None``: the request
+    sent with the goal stands), ``asks`` how often it has asked again.
     """
 
     goal_uuid: str
@@ -155,6 +173,8 @@ class OpenGoal:
     deadline: int | None = None
     timed_out: bool = False
     withdrawn: bool = False
+    ask_at: int | None = None
+    asks: int = 0
 
     @property
     def cancel_owed(self) -> bool:
@@ -190,7 +210,9 @@ class ClientState:
     the newest run heard of (``None`` before any message), ``description``
     its begin description (``""`` until it arrives), ``last_id`` the highest
     id seen in it, ``ended_id`` the highest child id known to have ended in
-    it, ``finished`` whether this client's FINISHED ended it.  ``goals`` are
+    it, ``finished`` whether this client's FINISHED ended it.
+    ``contact_lost_at`` is the instant the client lost contact with every server
+    process of the robot, while it is out of contact (R21.5).  ``goals`` are
     the open goals, in the order they were sent; ``counter`` numbers the goal
     UUIDs (``uuid_prefix`` followed by the counter as 16 hex digits).
     ``categories``, when given, are the robot's supported categories;
@@ -215,6 +237,7 @@ class ClientState:
     last_id: int = 0
     ended_id: int | None = None
     finished: bool = False
+    contact_lost_at: int | None = None
     goals: tuple[OpenGoal, ...] = ()
 
     @classmethod
@@ -512,8 +535,10 @@ def request_withdraw(state: ClientState, goal_uuid: str, *, now: int) -> ClientT
 
 
 def next_deadline(state: ClientState) -> int | None:
-    """The earliest instant a tick would time a goal out (``None`` if none): when to tick next."""
+    """The earliest instant a tick would do something (``None`` if none): time a goal out, or ask a
+    server again for a goal's result.  When to tick next."""
     deadlines = [goal.deadline for goal in state.goals if goal.deadline is not None and not goal.cancel_owed]
+    deadlines += [goal.ask_at for goal in state.goals if goal.ask_at is not None]
     return min(deadlines) if deadlines else None
 
 
@@ -707,8 +732,45 @@ def _on_result(state: ClientState, event: ResultReceived) -> ClientTransition:
     return ClientTransition(state, (outcome,))
 
 
-def _on_tick(state: ClientState, event: Tick) -> ClientTransition:
+def _ask_due(state: ClientState, now: int) -> tuple[ClientState, tuple[ClientOutput, ...]]:
+    """Ask again for the result of every goal whose time to ask has come (R21.4, R21.5); the next
+    time is one wait on, each wait twice the last, up to :data:`ASK_AGAIN_LONGEST`."""
+    asked: list[ClientOutput] = []
+    for goal in state.goals:
+        if goal.ask_at is None or now < goal.ask_at:
+            continue
+        wait = min(ASK_AGAIN_PERIOD << min(goal.asks, 16), ASK_AGAIN_LONGEST)
+        state = _replace(state, attrs.evolve(goal, ask_at=min(now + wait, U64_MAX), asks=goal.asks + 1))
+        asked.append(AskResult(goal_uuid=goal.goal_uuid))
+    return state, tuple(asked)
+
+
+def _on_contact_made(state: ClientState, event: ContactMade) -> ClientTransition:
+    """R21.4, R21.5: a server process came into contact (a new one, or one out of contact until now):
+    whatever it answered while the client could not hear it is asked for again, for every open goal."""
     outputs: list[ClientOutput] = []
+    if state.contact_lost_at is not None:
+        outputs.append(BackInContact(since=state.contact_lost_at, now=event.now))
+        state = attrs.evolve(state, contact_lost_at=None)
+    state = attrs.evolve(
+        state, goals=tuple(attrs.evolve(goal, ask_at=event.now, asks=0) for goal in state.goals)
+    )
+    state, asked = _ask_due(state, event.now)
+    return ClientTransition(state, (*outputs, *asked))
+
+
+def _on_contact_lost(state: ClientState, event: ContactLost) -> ClientTransition:
+    """R21.5: no server process of the robot is in contact any longer."""
+    if state.contact_lost_at is not None:
+        why = f"out of contact since {state.contact_lost_at} already"
+        return ClientTransition(state, (Ignored(input=event.KIND, why=why),))
+    state = attrs.evolve(state, contact_lost_at=event.now)
+    return ClientTransition(state, (OutOfContact(since=event.now),))
+
+
+def _on_tick(state: ClientState, event: Tick) -> ClientTransition:
+    state, asked = _ask_due(state, event.now)
+    outputs: list[ClientOutput] = list(asked)
     for goal in state.goals:
         deadline = goal.deadline
         if deadline is None or goal.cancel_owed or event.now < deadline:  # a withdrawn goal times out no more
@@ -737,6 +799,10 @@ def step(state: ClientState, event: ClientInput) -> ClientTransition:
         return _on_result(state, event)
     if isinstance(event, Tick) and isinstance(state, ClientState):
         return _on_tick(state, event)
+    if isinstance(event, ContactMade) and isinstance(state, ClientState):
+        return _on_contact_made(state, event)
+    if isinstance(event, ContactLost) and isinstance(state, ClientState):
+        return _on_contact_lost(state, event)
     if not isinstance(state, ClientState):
         raise WrongInput("client.step(state, ...)", "a dynevent.client.ClientState", state)
     raise WrongInput(

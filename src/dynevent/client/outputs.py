@@ -16,8 +16,11 @@ from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReaso
 
 __all__ = [
     "OUTCOME_OF_STATUS",
+    "AskResult",
+    "BackInContact",
     "ClientOutput",
     "Ignored",
+    "OutOfContact",
     "Outcome",
     "OutcomeKind",
     "Progress",
@@ -195,7 +198,47 @@ class TimedOut(_ClientOutput):
     deadline: int
 
 
+@attrs.frozen(kw_only=True)
+class AskResult(_ClientOutput):
+    """Ask the server again for this goal's result (a result request under its goal UUID): a server
+    process came into contact that may hold the answer the last one could not deliver (R21.4, R21.5).
+    Whatever the server answers goes to the machine as a :class:`~dynevent.client.ResultReceived`; a
+    server that does not know the goal is answered as R21.4 says."""
+
+    KIND: ClassVar[str] = "ask_result"
+    goal_uuid: str
+
+
+@attrs.frozen(kw_only=True)
+class OutOfContact(_ClientOutput):
+    """No server process of the robot is in contact since ``since`` (R21.5): whoever waits for an
+    answer is told so, and a wait that ends at its bound names this cause."""
+
+    KIND: ClassVar[str] = "out_of_contact"
+    since: int
+
+
+@attrs.frozen(kw_only=True)
+class BackInContact(_ClientOutput):
+    """A server process of the robot is in contact again at ``now``, after none was since ``since``
+    (R21.5); the results of the open goals are asked for again (:class:`AskResult`)."""
+
+    KIND: ClassVar[str] = "back_in_contact"
+    since: int
+    now: int
+
+
 #: Any output of the client machine.
 ClientOutput: TypeAlias = (
-    SendGoal | Refused | Outcome | Progress | RunBegan | ViewChanged | TimedOut | Ignored
+    SendGoal
+    | Refused
+    | Outcome
+    | Progress
+    | RunBegan
+    | ViewChanged
+    | TimedOut
+    | Ignored
+    | AskResult
+    | OutOfContact
+    | BackInContact
 )

@@ -26,15 +26,23 @@ class GoalRun:
     ``result`` is the :class:`~dynevent.client.Outcome` once the goal is
     over, or the :class:`~dynevent.client.Refused` of a goal never sent.
     ``progress`` holds every :class:`~dynevent.client.Progress` so far.
+    ``why_open``, when given, says why a goal may still be open (the binding's contact with the
+    server, R21.5), for the message of a wait that ends at its bound.
     """
 
-    def __init__(self, on_progress: Callable[[cl.Progress], None] | None = None, future: Any = None) -> None:
+    def __init__(
+        self,
+        on_progress: Callable[[cl.Progress], None] | None = None,
+        future: Any = None,
+        why_open: Callable[[], str | None] | None = None,
+    ) -> None:
         self.goal_uuid: str | None = None
         self.progress: list[cl.Progress] = []
         self.result: cl.Outcome | cl.Refused | None = None
         self._on_progress = on_progress
         self._over = threading.Event()
         self._future = future
+        self._why_open = why_open
         self._callbacks: list[Callable[[cl.Outcome | cl.Refused], None]] = []
         self._callbacks_lock = threading.Lock()
 
@@ -45,7 +53,10 @@ class GoalRun:
     def wait(self, timeout: float) -> cl.Outcome | cl.Refused:
         """Block until the goal is over, at most ``timeout`` seconds (another thread spins the node)."""
         if not self._over.wait(timeout):
-            raise GoalWaitTimeout(f"goal {self.goal_uuid} still open after {timeout:g} s")
+            why = None if self._why_open is None else self._why_open()
+            raise GoalWaitTimeout(
+                f"goal {self.goal_uuid} still open after {timeout:g} s" + ("" if why is None else f": {why}")
+            )
         assert self.result is not None
         return self.result
 

@@ -12,12 +12,17 @@ would refuse the goal.  A run is awaitable inside the node's executor
 bound (:meth:`GoalRun.wait`).
 
 A server that restarts (R21) takes the pending requests of its goals with
-it.  While goals are open the client watches the robot's status publishers
-on the graph; when a new one appears (a new server process), it asks again
-for the result of every goal it sent before, once a second until each is
-answered (R21.4): a server that kept the answer gives it, one that does not
-know the goal ends it aborted with ``goal lost in a server restart``.  So a
-crash never leaves a goal waiting for an answer that cannot come.
+it, and a network that cuts the client off for longer than the middleware's
+lease (20 s with Fast DDS) loses what was in flight to it.  The client hears
+both from its status subscription: the robot's status publisher matched (a
+new server process, or the one it had lost) and no longer matched (contact
+lost).  It hands each to the client machine (:class:`~dynevent.client.ContactMade`,
+:class:`~dynevent.client.ContactLost`), which asks again for the result of
+every open goal (R21.4, R21.5): a server that kept the answer gives it, one
+that does not know the goal ends it aborted with ``goal lost: unknown to the
+server``.  So neither a crash nor a partition leaves a goal waiting for an
+answer that cannot come; while contact is lost, ``on_contact`` hears so, and
+a wait that ends at its bound names the cause.
 """
 
 from __future__ import annotations
@@ -36,7 +41,6 @@ from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.task import Future
 
 from dynevent import client as cl
-from dynevent.client.restart import RestartWatch
 from dynevent.client.run import GoalRun
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.errors import (
@@ -79,7 +83,9 @@ class DynamicEventClient:
     ``dynevent.descriptions.Robot().validators()``) let the client refuse, without
     sending it, a goal the server would refuse (:class:`dynevent.client.ClientState`).
     ``trace`` records every message the client sends and receives, as a tap at a client
-    (docs/trace-format.md), for ``dynevent check``.
+    (docs/trace-format.md), for ``dynevent check``.  ``on_contact`` is called (on the executor's
+    thread) with each :class:`~dynevent.client.OutOfContact` and
+    :class:`~dynevent.client.BackInContact` (R21.5).
     """
 
     def __init__(
@@ -92,22 +98,23 @@ class DynamicEventClient:
         validators: Any = None,
         uuid_prefix: str | None = None,
         trace: TraceWriter | None = None,
+        on_contact: Callable[[cl.OutOfContact | cl.BackInContact], None] | None = None,
     ) -> None:
         self._node = node
         self._trace = trace
+        self._on_contact = on_contact
+        self._name = f"{fleet}/{robot}"
         self._lock = threading.Lock()
         prefix = uuid_prefix if uuid_prefix is not None else os.urandom(8).hex()
         self._state = cl.ClientState.new(prefix, categories=categories, validators=validators)
         self._runs: dict[str, GoalRun] = {}
         self._views = threading.Condition(self._lock)
         self._status_seen = False
-        self._status_topic = status_topic(fleet, robot)
-        self._restarts = RestartWatch()  # the server processes (status publishers) and their goals
         # every attribute above, the timer and the action client before the subscriptions: an executor
         # that already spins the node (a shared one) may call back as soon as a subscription exists
         group = MutuallyExclusiveCallbackGroup()
         # one timer, armed only for the next moment something can be due (a NEXT's timeout, asking a
-        # new server again for a result): a client that waits costs nothing between (_arm)
+        # server again for a result): a client that waits costs nothing between (_arm)
         self._timer = node.create_timer(1.0, self._on_tick, callback_group=group)
         self._timer.cancel()
         self._action = ActionClient(node, DynamicEvent, action_name(fleet, robot), callback_group=group)
@@ -118,15 +125,15 @@ class DynamicEventClient:
             latched(ROBOT_BEGIN_TOPIC_DEPTH),
             callback_group=group,
         )
-        # a status publisher that matches is a server process (a new one replaces the old, R21.4):
-        # learned from the graph's event, not by asking the graph on a clock
+        # a status publisher matched is a server process in contact (a new one, R21.4, or one lost
+        # and found again, R21.5), and none matched is contact lost: the graph's events, no clock
         self._status = node.create_subscription(
             RosStatus,
             status_topic(fleet, robot),
             self._on_status,
             latched(STATUS_TOPIC_DEPTH),
             callback_group=group,
-            event_callbacks=SubscriptionEventCallbacks(matched=self._on_server_matched),
+            event_callbacks=SubscriptionEventCallbacks(matched=self._on_contact_event),
         )
 
     # ---------------------------------------------------------------- views
@@ -141,6 +148,15 @@ class DynamicEventClient:
         """The node's clock, in integer nanoseconds."""
         nanoseconds: int = self._node.get_clock().now().nanoseconds
         return min(max(nanoseconds, NOW_RANGE[0]), NOW_RANGE[1])
+
+    def contact_text(self) -> str | None:
+        """One line saying since when the client has been out of contact with the robot's server
+        (R21.5), or None while it is in contact."""
+        since = self.state.contact_lost_at
+        if since is None:
+            return None
+        clock = time.strftime("%H:%M:%S", time.localtime(since / SECOND))
+        return f"out of contact with {self._name} since {clock} ({(self.now() - since) / SECOND:.0f} s)"
 
     def wait_for_server(self, timeout: float) -> bool:
         """Wait (at most ``timeout`` seconds) until the robot's action server is there."""
@@ -223,7 +239,7 @@ class DynamicEventClient:
         command: Callable[[cl.ClientState, int], cl.ClientTransition],
         on_progress: Callable[[cl.Progress], None] | None,
     ) -> GoalRun:
-        run = GoalRun(on_progress, Future())
+        run = GoalRun(on_progress, Future(), why_open=self.contact_text)
         with self._lock:
             transition = command(self._state, self.now())
             self._state = transition.state
@@ -256,15 +272,14 @@ class DynamicEventClient:
                 ended = self._runs.pop(output.goal_uuid, None)
                 if ended is not None:
                     ended.end(output)
+            elif isinstance(output, cl.AskResult):
+                self._ask_result(output.goal_uuid)
+            elif isinstance(output, (cl.OutOfContact, cl.BackInContact)) and self._on_contact is not None:
+                self._on_contact(output)
         self._arm()
 
     def _send(self, send: cl.SendGoal) -> None:
         uuid = send.goal_uuid
-        with self._lock:  # the server processes this goal is sent to, to see a new one come
-            looking = self._restarts.looking
-        servers = self._server_processes() if looking else None  # the graph asked outside the lock
-        with self._lock:
-            self._restarts.sending(servers)
         if self._trace is not None:
             self._trace.observe("goal", goal_uuid=uuid, message=send.goal)
         response = self._action.send_goal_async(
@@ -283,8 +298,19 @@ class DynamicEventClient:
         if accepted:
             handle.get_result_async().add_done_callback(lambda done: self._on_result(uuid, done))
 
+    def _ask_result(self, uuid: str) -> None:
+        """Ask the server again for a goal's result (R21.4, R21.5); a request sent while the action
+        server is not matched would go nowhere, and the machine asks again later."""
+        if not self._action.server_is_ready():
+            return
+        response = DynamicEvent.Impl.SendGoalService.Response(accepted=True)
+        handle = ClientGoalHandle(self._action, convert.uuid_to_ros(uuid), response)
+        handle.get_result_async().add_done_callback(lambda done: self._on_result(uuid, done))
+
     def _on_result(self, uuid: str, future: Any) -> None:
         response = future.result()
+        if self.state.goal(uuid) is None:
+            return  # answered already: a goal asked for again hears its answer once per request
         if response.status == RosGoalStatus.STATUS_UNKNOWN:  # a server that does not know the goal (R21.4)
             status, result = GoalStatus.ABORTED, Result(execution_failure=Failure.LOST.value)
         else:
@@ -292,8 +318,6 @@ class DynamicEventClient:
             result = convert.result_from_ros(response.result)
             if self._trace is not None:
                 self._trace.observe("result", goal_uuid=uuid, status=status, message=result)
-        with self._lock:
-            self._restarts.answered(uuid)
         self._step(cl.ResultReceived(goal_uuid=uuid, status=status, result=result))
 
     def _heard(self, kind: str, read: Callable[[Any], Any], message: Any, **fields: Any) -> Any:
@@ -327,53 +351,28 @@ class DynamicEventClient:
             self._step(cl.BeginReceived(message=begin))
 
     def _on_tick(self) -> None:
-        goals = self.state.goals
-        if goals:
-            self._watch_server({goal.goal_uuid for goal in goals})
+        if self.state.goals:
             self._step(cl.Tick(now=self.now()))
         else:
             self._arm()
 
-    def _on_server_matched(self, info: Any) -> None:
-        """A status publisher came or went: with goals open, a new server process may have taken
-        them (R21.4)."""
-        goals = self.state.goals
-        if goals and info.current_count_change > 0:
-            self._watch_server({goal.goal_uuid for goal in goals})
-            self._arm()
+    def _on_contact_event(self, info: Any) -> None:
+        """A status publisher of the robot matched (a server process in contact: R21.4, R21.5), or
+        the last one is no longer matched (contact lost: R21.5)."""
+        if info.current_count_change > 0:
+            self._step(cl.ContactMade(now=self.now()))
+        elif info.current_count == 0 and info.current_count_change < 0:
+            self._step(cl.ContactLost(now=self.now()))
 
     def _arm(self) -> None:
-        """Set the timer for the next moment something can be due, or stop it when nothing can be:
-        the client machine's next deadline (:func:`dynevent.client.next_deadline`), and the next time
-        to ask a new server process again for the results of the goals it took."""
+        """Set the timer for the next moment something can be due (the client machine's next
+        deadline, :func:`dynevent.client.next_deadline`: a NEXT's timeout, asking a server again for
+        a result), or stop it when nothing can be."""
         with self._lock:
-            if not self._state.goals:
-                self._restarts.idle()
             deadline = cl.next_deadline(self._state)
-            again = self._restarts.wait(time.monotonic())
-            waits = [] if deadline is None else [(deadline - self.now()) / SECOND]
-            waits += [] if again is None else [again]
-        if not waits:
+        if deadline is None:
             self._timer.cancel()
             return
-        self._timer.timer_period_ns = round(max(min(waits), SHORTEST_WAIT) * SECOND)
+        wait = (deadline - self.now()) / SECOND
+        self._timer.timer_period_ns = round(max(wait, SHORTEST_WAIT) * SECOND)
         self._timer.reset()
-
-    def _server_processes(self) -> frozenset[bytes]:
-        """The GIDs of the robot's status publishers: one per server process on the graph."""
-        infos = self._node.get_publishers_info_by_topic(self._status_topic)
-        return frozenset(bytes(info.endpoint_gid) for info in infos)
-
-    def _watch_server(self, open_goals: set[str]) -> None:
-        """Ask again for the results of the goals a replaced server process took (R21.4)."""
-        servers = self._server_processes()
-        with self._lock:
-            orphans = self._restarts.seen(servers, open_goals, time.monotonic())
-        if not orphans or not self._action.server_is_ready():
-            return
-        with self._lock:
-            self._restarts.asked(time.monotonic())
-        for uuid in orphans:
-            response = DynamicEvent.Impl.SendGoalService.Response(accepted=True)
-            handle = ClientGoalHandle(self._action, convert.uuid_to_ros(uuid), response)
-            handle.get_result_async().add_done_callback(lambda done, uuid=uuid: self._on_result(uuid, done))

@@ -21,11 +21,10 @@ How rclpy's callbacks meet the machine (docs/ros.md has the whole story):
   rclpy has moved the goal to CANCELING, where ``canceled()`` is legal.
 - The execute callback of each goal awaits the machine's answer (an rclpy
   future completed by the outbox) and ends the goal with it.
-- A restarted server (R21) has no goal handle for the goals of the process
-  before it.  Their answers (``server restarted``, or the answer a goal got
-  just before the end, kept by ``on_answers``) are kept and given to a client
-  that asks for the goal's result again (R21.4): rclpy's action server would
-  answer such a request ``STATUS_UNKNOWN``.
+- Every goal's answer is kept 15 minutes (:mod:`dynevent.server.answers`) for a
+  client that asks after rclpy forgot the goal (it keeps a result 10 s), and
+  would answer ``STATUS_UNKNOWN``: one the network cut off (R21.5), or one of
+  the process before a restart (R21.4, answers kept by ``on_answers``).
 
 Time comes from the node's clock, so simulated time works.
 """
@@ -35,6 +34,7 @@ from __future__ import annotations
 import collections
 import contextlib
 import threading
+import time
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -58,6 +58,7 @@ from dynevent.server.adapter import (
     StubbornHolds,
     carry_out_stubbornness,
 )
+from dynevent.server.answers import KeptAnswers
 from dynevent.server.inputs import NOW_RANGE
 from dynevent.server.machine import ServerConfig, State
 from dynevent.wire import names
@@ -84,8 +85,9 @@ _ROS_GOAL_STATUS = {
 
 
 class _RecoveringActionServer(ActionServer):  # type: ignore[misc]  # rclpy is untyped here
-    """rclpy's action server, which also answers a result request for a goal of the process before a
-    restart with the answer kept for it (R21.4), where rclpy alone would answer ``STATUS_UNKNOWN``."""
+    """rclpy's action server, which also answers a result request for a goal it no longer knows with
+    the answer kept for it (R21.4, R21.5: a goal of the process before a restart, or one whose result
+    rclpy kept only 10 s), where rclpy alone would answer ``STATUS_UNKNOWN``."""
 
     def __init__(self, *args: Any, owed: Callable[[str], outs.AnswerGoal | None], **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
@@ -149,7 +151,7 @@ class _Entities:
             handle_accepted_callback=server._handle_accepted,
             cancel_callback=server._cancel_callback,
             callback_group=group,
-            owed=server._owed.get,
+            owed=lambda uuid: server._owed.get(uuid, time.monotonic()),
         )
         self.timer: Any = None
         self.service = None
@@ -238,8 +240,8 @@ class DynamicEventServer(AdapterInputs):
         self._on_interrupt_confirmed = on_interrupt_confirmed
         self._on_state = on_state
         self._on_answers = on_answers
-        #: answers of goals that have no handle here (a previous process's), by goal UUID (R21.4)
-        self._owed: dict[str, outs.AnswerGoal] = dict(answers or {})
+        #: every goal's answer, for a client that asks after rclpy forgot the goal or after a restart
+        self._owed = KeptAnswers(answers, now=time.monotonic())
         self._observer = observer
         self._state = state if state is not None else State.new(fleet, robot)
         if (self._state.fleet, self._state.robot) != (fleet, robot):
@@ -298,7 +300,7 @@ class DynamicEventServer(AdapterInputs):
             if isinstance(output, outs.AnswerGoal) and output.goal_uuid not in self._answers:
                 # its answer is given to a client that asks from now on (R21.4), not from the drain
                 # that carries the step out: a result request the executor takes first would find none
-                self._owed.setdefault(output.goal_uuid, output)
+                self._owed.keep(output, time.monotonic())
         self._outbox.extend(transition.outputs)
         return transition.outputs
 
@@ -478,11 +480,10 @@ class DynamicEventServer(AdapterInputs):
                 handle.publish_feedback(convert.feedback_to_ros(output.feedback))
         elif isinstance(output, outs.AnswerGoal):
             self._handles.pop(output.goal_uuid, None)
+            self._owed.keep(output, time.monotonic())  # for a client that asks after rclpy forgot it
             future = self._answers.get(output.goal_uuid)  # the goal's execute callback takes it
             if future is not None:
                 future.set_result(output)
-            else:  # a goal of the process before a restart (R21.1): kept for its client (R21.4)
-                self._owed.setdefault(output.goal_uuid, output)
         elif isinstance(output, outs.PublishBegin):
             message = convert.begin_to_ros(output.message)
             self._ros.begin.publish(message)

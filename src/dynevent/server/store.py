@@ -8,11 +8,12 @@ at any moment leaves the last committed state of every robot; restore it and
 step :class:`~dynevent.server.inputs.Restart` (R21).
 
 It also keeps each goal's answer (:meth:`~StateStore.keep_answers`), for
-:data:`ANSWER_RETENTION` seconds, as long as rclpy's action server keeps a
-result: a server restarted on the file gives a client that asks again the
-answer its goal got, even when the process died before the answer went out,
-and ``server restarted`` for a goal that was open when it died (R21.1).  A
-goal's first answer is the one kept.  A store of version 1 (no answers) is
+:data:`~dynevent.server.answers.ANSWER_RETENTION` seconds, as long as the
+binding keeps it in memory (:mod:`dynevent.server.answers`): a server
+restarted on the file gives a client that asks again the answer its goal
+got, even when the process died before the answer went out, and ``server
+restarted`` for a goal that was open when it died (R21.1).  A goal's first
+answer is the one kept.  A store of version 1 (no answers) is
 brought to version 2 when it is opened.
 
 A file that is not a SQLite database, a database of something else, a
@@ -36,6 +37,7 @@ from dynevent.errors import (
     InvalidStore,  # defined there with every error; importable here too
 )
 from dynevent.server import snapshot
+from dynevent.server.answers import ANSWER_RETENTION
 from dynevent.server.inputs import goal_uuid
 from dynevent.server.machine import State
 from dynevent.server.outputs import AnswerGoal
@@ -48,8 +50,6 @@ __all__ = ["ANSWER_RETENTION", "FORMAT", "VERSION", "InvalidStore", "StateStore"
 FORMAT = "dynevent.server.store"
 #: The store's layout version: 2 adds the answers table.
 VERSION = 2
-#: How long a goal's answer is kept, in seconds: rclpy's ``ActionServer`` keeps a result as long.
-ANSWER_RETENTION = 900.0
 
 _ANSWERS = (
     "CREATE TABLE answers (fleet TEXT NOT NULL, robot TEXT NOT NULL, goal_uuid TEXT NOT NULL, "

@@ -281,6 +281,12 @@ def _client_text(output: ClientOutput) -> str:
         return f"view {output.phase.name} seq={output.seq} id={output.current_id}"
     if isinstance(output, cl.TimedOut):
         return f"timed out {_short(output.goal_uuid)}"
+    if isinstance(output, cl.AskResult):
+        return f"ask again for {_short(output.goal_uuid)}'s result"
+    if isinstance(output, cl.OutOfContact):
+        return "out of contact"
+    if isinstance(output, cl.BackInContact):
+        return "back in contact"
     return f"ignored: {output.why}"
 
 

@@ -187,8 +187,9 @@ class Failure(str, enum.Enum):
     PARSE = "Description parsing failure"
     NOT_RUNNING = "cancelled while not running"
     RESTART = "server restarted"
-    #: Not a server's: a client's, for a goal whose server restarted without knowing it (R21.4).
-    LOST = "goal lost in a server restart"
+    #: Not a server's: a client's, for a goal whose result request the server answered as unknown: a
+    #: new process that never took it (R21.4), or a request the network lost (R21.5).
+    LOST = "goal lost: unknown to the server"
 
     def __str__(self) -> str:
         return self.value

@@ -31,6 +31,7 @@ from dynevent.ros.graph import graph_text, no_server_text, servers_seen
 from dynevent.ros.spinning import Interrupted, Session, interruptible
 from dynevent.server import outputs as outs
 from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.units import SECOND
 from dynevent.wire.vocab import EventType, GoalStatus
 
 __all__ = ["SendError", "SendOptions", "run"]
@@ -80,7 +81,12 @@ def run(args: SendOptions, say: Callable[[str], None]) -> int:
     # a description of the field's categories is checked here as every server checks its shape
     # (R4.18): one the robot would refuse is refused here, with the server's errors, and never sent
     client = DynamicEventClient(
-        node, args.fleet, args.robot, validators=descriptions.shape_validators(), trace=trace
+        node,
+        args.fleet,
+        args.robot,
+        validators=descriptions.shape_validators(),
+        trace=trace,
+        on_contact=lambda change: say(_contact_line(f"{args.fleet}/{args.robot}", change)),
     )
     if args.introspection:
         client.introspect()
@@ -116,7 +122,8 @@ def run(args: SendOptions, say: Callable[[str], None]) -> int:
             with interruptible():
                 result = goal_run.wait(left())
         except GoalWaitTimeout:
-            say(f"no answer within {timeout:g} s")
+            cut = client.contact_text()
+            say(f"no answer within {timeout:g} s" + ("" if cut is None else f": {cut}"))
             return 1
         except Interrupted as stop:
             return _stop_goal(client, goal_run, event_type, stop.signal, say)
@@ -177,6 +184,15 @@ def _found(
             return False
     say(no_server_text(node, args.fleet, args.robot, waited))
     return False
+
+
+def _contact_line(robot: str, change: cl.OutOfContact | cl.BackInContact) -> str:
+    """R21.5: a lost contact is said when it is lost, and again when it comes back."""
+    if isinstance(change, cl.OutOfContact):
+        clock = time.strftime("%H:%M:%S", time.localtime(change.since / SECOND))
+        return f"lost contact with {robot} at {clock}; waiting for it to come back"
+    lost = (change.now - change.since) / SECOND
+    return f"back in contact with {robot} after {lost:.0f} s; asking again for the answer"
 
 
 def _stop_goal(

@@ -1,0 +1,134 @@
+"""The client's contact with the robot's server processes, without ROS: a new process (R21.4) and a
+process lost and found again (R21.5) each make the client ask again for every open goal's result."""
+
+from __future__ import annotations
+
+import itertools
+
+import pytest
+
+from client_scenario import RUNNING, answer, feed, status, waiting
+from dynevent import client
+from dynevent.client import (
+    ASK_AGAIN_LONGEST,
+    ASK_AGAIN_PERIOD,
+    SECOND,
+    AskResult,
+    BackInContact,
+    ContactLost,
+    ContactMade,
+    GoalResponse,
+    Ignored,
+    Outcome,
+    OutOfContact,
+    SendGoal,
+    Tick,
+)
+from dynevent.wire.vocab import GoalStatus
+
+
+def _sent(state: client.ClientState) -> tuple[client.ClientState, str]:
+    transition = client.request_next(state, "go_to_place", '"a"', now=0)
+    (send,) = transition.outputs
+    assert isinstance(send, SendGoal)
+    return transition.state, send.goal_uuid
+
+
+def _asked(outputs: list[client.ClientOutput]) -> list[str]:
+    return [output.goal_uuid for output in outputs if isinstance(output, AskResult)]
+
+
+@pytest.mark.spec("R21.4")
+def test_a_server_process_that_comes_into_contact_is_asked_for_every_open_goals_result() -> None:
+    state, first = _sent(waiting())
+    state, _ = feed(state, GoalResponse(goal_uuid=first, accepted=True))
+    state, outputs = feed(state, ContactMade(now=5 * SECOND))
+    assert outputs == [AskResult(goal_uuid=first)]  # no contact was lost: nothing more to say
+    (goal,) = state.goals
+    assert goal.ask_at == 5 * SECOND + ASK_AGAIN_PERIOD and goal.asks == 1
+    assert client.next_deadline(state) == 5 * SECOND + ASK_AGAIN_PERIOD
+
+
+@pytest.mark.spec("R21.4")
+def test_results_are_asked_for_again_each_wait_twice_the_last_until_answered() -> None:
+    state, uuid = _sent(waiting())
+    state, _ = feed(state, ContactMade(now=0))
+    asked_at = [0]
+    now = 0
+    while len(asked_at) < 10:
+        deadline = client.next_deadline(state)
+        assert deadline is not None
+        state, outputs = feed(state, Tick(now=deadline - 1))
+        assert _asked(outputs) == []  # not due yet
+        state, outputs = feed(state, Tick(now=deadline))
+        assert _asked(outputs) == [uuid]
+        asked_at.append(deadline)
+        now = deadline
+    waits = [later - earlier for earlier, later in itertools.pairwise(asked_at)]
+    assert waits[:5] == [ASK_AGAIN_PERIOD * 2**n for n in range(5)]
+    assert max(waits) == ASK_AGAIN_LONGEST and waits[-1] == ASK_AGAIN_LONGEST
+    state, outputs = feed(state, answer(uuid, GoalStatus.SUCCEEDED, "completed", id=2))
+    assert [type(output) for output in outputs] == [Outcome]
+    assert client.next_deadline(state) is None  # answered: nothing more to ask
+    state, outputs = feed(state, Tick(now=now + ASK_AGAIN_LONGEST))
+    assert outputs == []
+    # a second answer (one per request) is ignored: the goal has its one outcome
+    state, outputs = feed(state, answer(uuid, GoalStatus.SUCCEEDED, "completed", id=2))
+    assert [type(output) for output in outputs] == [Ignored]
+
+
+@pytest.mark.spec("R21.5")
+def test_lost_contact_is_said_once_and_its_return_asks_for_the_answers_given_meanwhile() -> None:
+    state, first = _sent(waiting())
+    state, _ = feed(state, GoalResponse(goal_uuid=first, accepted=True), status(1, RUNNING, 7))
+    (second_goal,) = client.request_cancel(state, now=0).outputs  # a CANCEL of the child, unanswered
+    assert isinstance(second_goal, SendGoal)
+    state, second = client.request_cancel(state, now=0).state, second_goal.goal_uuid
+    state, outputs = feed(state, ContactLost(now=10 * SECOND))
+    assert outputs == [OutOfContact(since=10 * SECOND)]
+    assert state.contact_lost_at == 10 * SECOND
+    assert client.next_deadline(state) is None  # nothing to ask while no server can hear it
+    state, outputs = feed(state, ContactLost(now=11 * SECOND))
+    assert [type(output) for output in outputs] == [Ignored]  # said once
+    assert state.contact_lost_at == 10 * SECOND
+    state, outputs = feed(state, ContactMade(now=40 * SECOND))
+    assert outputs == [
+        BackInContact(since=10 * SECOND, now=40 * SECOND),
+        AskResult(goal_uuid=first),
+        AskResult(goal_uuid=second),  # accepted or not: its request or its response may be lost
+    ]
+    assert state.contact_lost_at is None
+    state, outputs = feed(state, answer(first, GoalStatus.SUCCEEDED, "completed", id=2))
+    assert [output.goal_uuid for output in outputs if isinstance(output, Outcome)] == [first]
+    state, outputs = feed(state, Tick(now=40 * SECOND + ASK_AGAIN_PERIOD))
+    assert _asked(outputs) == [second]  # the answered one is asked for no more
+
+
+@pytest.mark.spec("R21.5")
+def test_goals_sent_after_contact_came_back_are_not_asked_for_again() -> None:
+    state, first = _sent(waiting())
+    state, _ = feed(state, GoalResponse(goal_uuid=first, accepted=True), status(1, RUNNING, 7))
+    state, _ = feed(state, ContactLost(now=1), ContactMade(now=2))
+    transition = client.request_cancel(state, now=3)
+    state, (send,) = transition
+    assert isinstance(send, SendGoal)
+    (older, newer) = state.goals
+    assert older.ask_at is not None and newer.goal_uuid == send.goal_uuid and newer.ask_at is None
+    state, _ = feed(state, answer(first, GoalStatus.SUCCEEDED, "completed", id=7))
+    assert client.next_deadline(state) is None
+
+
+@pytest.mark.spec("R21.5")
+def test_contact_with_no_goal_open_asks_for_nothing() -> None:
+    state, outputs = feed(waiting(), ContactLost(now=1), ContactMade(now=2), ContactMade(now=3))
+    assert outputs == [OutOfContact(since=1), BackInContact(since=1, now=2)]
+    assert client.next_deadline(state) is None
+
+
+@pytest.mark.spec("R21.4")
+def test_asking_again_runs_beside_a_timeout_and_ticks_at_the_earlier() -> None:
+    transition = client.request_next(waiting(), "go_to_place", '"a"', timeout=5.0, now=0)
+    state = transition.state
+    assert client.next_deadline(state) == 5 * SECOND
+    state, _ = feed(state, ContactMade(now=SECOND))
+    assert client.next_deadline(state) == SECOND + ASK_AGAIN_PERIOD
