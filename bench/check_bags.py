@@ -135,12 +135,13 @@ def write_bag(path: Path, lines: Iterable[str], storage: str) -> None:
                 writer.write(connections[topic_kind], now, store.serialize_cdr(message, msgtype))
 
 
-def _check(path: Path) -> tuple[float, int, str, int]:
-    """``dynevent check`` on ``path`` in a child process: wall seconds, records, the summary, peak KB."""
+def run_check(path: Path) -> tuple[float, subprocess.CompletedProcess[str], int]:
+    """``dynevent check`` on ``path`` in a child process: wall seconds, what it printed (its exit
+    status is in the last line of its output, after ``status``), its peak resident KB."""
     code = (
         "import resource, runpy, sys; sys.argv = ['dynevent', 'check', sys.argv[1]]\n"
         "try:\n    runpy.run_module('dynevent', run_name='__main__')\n"
-        "except SystemExit:\n    pass\n"
+        "except SystemExit as exit:\n    print('status', exit.code)\n"
         "print('peak', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)"
     )
     started = time.perf_counter()
@@ -148,9 +149,14 @@ def _check(path: Path) -> tuple[float, int, str, int]:
         [sys.executable, "-c", code, str(path)], capture_output=True, text=True, check=False
     )
     wall = time.perf_counter() - started
-    lines = done.stdout.strip().splitlines()
-    peak = int(lines[-1].split()[1])
-    summary = lines[-2]
+    return wall, done, int(done.stdout.strip().splitlines()[-1].split()[1])
+
+
+def _check(path: Path) -> tuple[float, int, str, int]:
+    """``dynevent check`` on ``path`` in a child process: wall seconds, records, the summary, peak KB."""
+    wall, done, peak = run_check(path)
+    lines = [line for line in done.stdout.strip().splitlines()[:-1] if not line.startswith("status ")]
+    summary = lines[-1]
     if "no violations" not in summary:
         raise SystemExit(f"dynevent check did not find {path} clean:\n{done.stdout}{done.stderr}")
     words = summary.replace(",", "").split()

@@ -43,6 +43,7 @@ from typing import Any, NamedTuple
 import attrs
 
 from dynevent import files
+from dynevent.bags import unpack
 from dynevent.conformance.judge.observer import AnswerEvidence, Checker
 from dynevent.conformance.judge.partial import GOAL_STATUSES, PartialJudge
 from dynevent.conformance.judge.trace import Record, Report, TraceHeader
@@ -217,13 +218,24 @@ def _read(
     path: str | Path, compatibility: Compatibility, *, keep: bool
 ) -> tuple[BagReport, dict[tuple[str, str], _Robot]]:
     source = str(path)
-    rosbags = _rosbags()
-    reader_type, reader_errors = rosbags
-    _vet(source, Path(path))
+    reader_errors = _rosbags()[1]
+    metadata = _vet(source, Path(path))
+    with contextlib.ExitStack() as unpacked:
+        with _storage(source, reader_errors):  # every chunk the library will unpack, vetted first
+            bag, budget = unpacked.enter_context(unpack.readable(source, Path(path), metadata))
+        return _judge(source, bag, budget, compatibility, keep)
+
+
+def _judge(
+    source: str, bag: Path, budget: unpack.Budget | None, compatibility: Compatibility, keep: bool
+) -> tuple[BagReport, dict[tuple[str, str], _Robot]]:
+    """Judge the bag the storage library reads at ``bag``; each message unpacked within ``budget``
+    when the bag's messages are compressed."""
+    reader_type, reader_errors = _rosbags()
     robots: dict[tuple[str, str], _Robot] = {}
     messages = other = 0
     with _storage(source, reader_errors):
-        reader = reader_type(Path(path))
+        reader = reader_type(bag)
         reader.open()
     try:
         with _storage(source, reader_errors):
@@ -238,7 +250,7 @@ def _read(
             if channel == SEND_GOAL and isinstance(robot, _Robot) and connection.msgcount:
                 with _storage(source, reader_errors):
                     first = next(iter(reader.messages(connections=[connection])))
-                event = _decode(store, first, decode_as[connection.id], source)
+                event = _decode(store, _unpacked(first, budget, source), decode_as[connection.id], source)
                 robot.contents = bool(len(event.request) or len(event.response))
         stream = iter(reader.messages(connections=wanted) if wanted else ())
         while True:
@@ -253,7 +265,7 @@ def _read(
                 )
             end = max(end, time)
             robot, channel = routes[connection.id]
-            message = _decode(store, item, decode_as[connection.id], source)
+            message = _decode(store, _unpacked(item, budget, source), decode_as[connection.id], source)
             messages += 1
             robot.take(channel, time, message)
         reports = tuple(robot.finish(source, end) for _, robot in sorted(robots.items()))
@@ -265,21 +277,31 @@ def _read(
     return BagReport(source=source, robots=reports, messages=messages, other=other), robots
 
 
+def _unpacked(
+    item: tuple[Any, int, bytes], budget: unpack.Budget | None, source: str
+) -> tuple[Any, int, bytes]:
+    """A message as the bag holds it, unpacked within ``budget`` where the bag compresses its messages."""
+    if budget is None:
+        return item
+    connection, time, raw = item
+    return connection, time, unpack.unpack_message(source, raw, f"{connection.topic} at {time}", budget)
+
+
 #: The largest metadata.yaml read (a recording's is a few KB per topic) and its deepest nesting.
 MAX_METADATA_BYTES = 4_000_000
 _METADATA_DEPTH = 64
 
 
-def _vet(source: str, path: Path) -> None:
+def _vet(source: str, path: Path) -> Any:
     """What a bag is made of, checked before the storage library opens any of it: every file it
     would read is a regular file (a FIFO would block the read for ever), and metadata.yaml is
     bounded YAML without aliases (a "billion laughs" would take the machine's memory; no rosbag2
-    writer uses an alias)."""
+    writer uses an alias).  Its metadata.yaml, parsed (None for a storage file alone)."""
     mode = _mode(source, path)
     if not stat.S_ISDIR(mode):
         if not stat.S_ISREG(mode):
             raise BagError(source, f"not a rosbag2 recording: {files.kind(mode)}, not a bag's file")
-        return
+        return None
     metadata = path / "metadata.yaml"
     if not metadata.exists():
         raise BagError(source, "not a rosbag2 recording: a bag directory holds a metadata.yaml")
@@ -287,12 +309,14 @@ def _vet(source: str, path: Path) -> None:
         text = files.read_text(str(metadata), "metadata.yaml", limit=MAX_METADATA_BYTES)
     except FileError as exc:
         raise BagError(source, f"not a readable rosbag2 recording: {exc}") from None
-    for name in _storage_files(source, text):
+    document = _metadata(source, text)
+    for name in _storage_files(document):
         storage = path / PurePath(name).name  # as the reader finds it: beside metadata.yaml
         if storage.name and os.path.lexists(storage):
             kind = _mode(source, storage)
             if not stat.S_ISREG(kind):
                 raise BagError(source, f"{storage.name}: {files.kind(kind)}, not a bag's storage file")
+    return document
 
 
 def _mode(source: str, path: Path) -> int:
@@ -303,9 +327,9 @@ def _mode(source: str, path: Path) -> int:
         raise BagError(source, f"cannot read: {reason}") from None
 
 
-def _storage_files(source: str, text: str) -> list[str]:
-    """The storage files metadata.yaml names, read after its events are vetted (no alias, nesting
-    bounded), so that composing it costs no more than its size."""
+def _metadata(source: str, text: str) -> Any:
+    """metadata.yaml, parsed after its events are vetted (no alias, nesting bounded), so that
+    composing it costs no more than its size."""
     from ruamel.yaml import YAML
     from ruamel.yaml.error import YAMLError
     from ruamel.yaml.events import AliasEvent, CollectionEndEvent, CollectionStartEvent
@@ -319,9 +343,13 @@ def _storage_files(source: str, text: str) -> list[str]:
             depth += isinstance(event, CollectionStartEvent) - isinstance(event, CollectionEndEvent)
             if depth > _METADATA_DEPTH:
                 raise BagError(source, f"metadata.yaml is nested deeper than {_METADATA_DEPTH} levels")
-        document = yaml.load(text)
+        return yaml.load(text)
     except YAMLError as exc:
         raise BagError(source, f"not a readable rosbag2 recording: metadata.yaml: {_one_line(exc)}") from None
+
+
+def _storage_files(document: Any) -> list[str]:
+    """The storage files metadata.yaml names."""
     information = document.get("rosbag2_bagfile_information") if isinstance(document, dict) else None
     names = information.get("relative_file_paths") if isinstance(information, dict) else None
     return [name for name in names if isinstance(name, str)] if isinstance(names, list) else []
@@ -333,12 +361,12 @@ def _storage(source: str, reader_errors: tuple[type[BaseException], ...]) -> Ite
     (its own errors, and apsw's or zstandard's on a corrupt file) becomes one :class:`BagError` line."""
     try:
         yield
+    except DyneventError:  # a ValueError too: before the library's
+        raise
     except (FileNotFoundError, IsADirectoryError, PermissionError) as exc:
         raise BagError(source, f"cannot read: {exc.strerror or exc}") from None
     except reader_errors as exc:
         raise BagError(source, f"not a readable rosbag2 recording: {_one_line(exc)}") from None
-    except DyneventError:
-        raise
     except Exception as exc:  # the storage library's own (apsw, zstandard) on a corrupt file
         raise BagError(
             source, f"not a readable rosbag2 recording: {type(exc).__name__}: {_one_line(exc)}"
