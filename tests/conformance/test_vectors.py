@@ -614,3 +614,59 @@ def test_json_output_of_a_failure_carries_each_difference() -> None:
         "expected": None,
         "got": failing["got"][2],
     }
+
+
+# --------------------------------------------------------------------------- the runner's memory
+
+#: A driver that answers every ``apply`` with one line of 60,000 ``publish_status`` records (the
+#: runner's limits hold: 16 MiB, a million values), as in #52.
+STATUSES_DRIVER = """
+import json, sys
+status = {"type": "publish_status", "message": {"dynamic_event_seq": 1, "dynamic_state": 1,
+          "status": "standby", "id": 1, "time": {"sec": 1, "nanosec": 0}}}
+answer = json.dumps({"ok": True, "outputs": [status] * 60_000, "view": None})
+for line in sys.stdin:
+    op = json.loads(line)["op"]
+    if op == "hello":
+        print(json.dumps({"ok": True, "implementation": "statuses", "protocol": 1}), flush=True)
+    else:
+        print(answer if op == "apply" else '{"ok": true}', flush=True)
+"""
+
+
+def test_the_runners_memory_is_within_ten_times_the_largest_line_it_reads(
+    tmp_path: Path, shipped: list[vectors.Vector]
+) -> None:
+    """Two vectors each answered by a line of 8.9 MB, run and reported every way the command line
+    reports (the text, JUnit, a JSON record at a time): the peak of traced memory stays within ten
+    times the line (it was 18 times for one vector, before the failures kept bounded values and the
+    first differences only)."""
+    import tracemalloc
+
+    from dynevent.wire import _json
+
+    driver = tmp_path / "statuses.py"
+    driver.write_text(STATUSES_DRIVER, encoding="utf-8")
+    status = {"type": "publish_status", "message": {"dynamic_event_seq": 1, "dynamic_state": 1,
+              "status": "standby", "id": 1, "time": {"sec": 1, "nanosec": 0}}}  # fmt: skip
+    line = len(json.dumps({"ok": True, "outputs": [status] * 60_000, "view": None})) + 1
+    implementation = vectors.ExternalImplementation(f"{PYTHON} {driver}", timeout=NOT_A_WAIT)
+    tracemalloc.start()
+    try:
+        outcomes = list(vectors.run_vectors(shipped[:2], implementation))
+        report = vectors.format_report(outcomes, implementation.name)
+        vectors.junit_xml(outcomes, implementation.name)
+        records = [len(_json.dumps(vectors.outcome_record(outcome))) for outcome in outcomes]
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+        implementation.close()
+    assert all(outcome.failure is not None for outcome in outcomes)
+    assert peak < 10 * line, f"{peak:,} bytes at the peak for a line of {line:,}"
+    failure = outcomes[0].failure
+    assert failure is not None and len(failure.differences) == vectors.MAX_DIFFERENCES
+    found = vectors.differences(list(shipped[0].steps[0].expect), [status] * 60_000, "outputs")
+    assert failure.more_differences == len(found) - vectors.MAX_DIFFERENCES
+    assert f"... and {failure.more_differences:,} more differences" in report
+    assert failure.got == f"<a value of more than {vectors.MAX_KEPT_VALUE:,} characters of JSON, not kept>"
+    assert max(records) < 4 * vectors.MAX_KEPT_VALUE  # each value kept, within the bound

@@ -10,6 +10,7 @@ output after it.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
 from typing import Any, Literal
 
@@ -17,7 +18,18 @@ import attrs
 
 from dynevent.wire import _json
 
-__all__ = ["VALUE_LINES", "WILDCARD", "Difference", "align", "differences", "labelled", "matches"]
+__all__ = [
+    "MAX_DIFFERENCES",
+    "MAX_KEPT_VALUE",
+    "VALUE_LINES",
+    "WILDCARD",
+    "Difference",
+    "align",
+    "differences",
+    "kept",
+    "labelled",
+    "matches",
+]
 
 #: In an expected output, matches any string.
 WILDCARD = "*"
@@ -82,6 +94,27 @@ class Difference:
 
 #: The most lines one value takes in a text account (the JSON records keep every value whole).
 VALUE_LINES = 6
+#: The most differences a failure lists (its text account and its JSON record alike); the rest are
+#: counted: an answer of 60,000 outputs where one was expected is one failure, not 60,000 accounts.
+MAX_DIFFERENCES = 16
+#: The most JSON text of one value a failure keeps (the answer, a difference's two sides): a larger
+#: value is named by its size, so that a run of many failures holds no more than a few of these.
+MAX_KEPT_VALUE = 64 * 1024
+
+
+def kept(value: Any) -> Any:
+    """``value`` as a failure keeps it: itself, or, when its JSON text is longer than
+    :data:`MAX_KEPT_VALUE` characters, a string that says so (written only up to that length)."""
+    written = 0
+    for piece in _ENCODER.iterencode(value):
+        written += len(piece)
+        if written > MAX_KEPT_VALUE:
+            return f"<a value of more than {MAX_KEPT_VALUE:,} characters of JSON, not kept>"
+    return value
+
+
+#: Writes as :func:`dynevent.wire._json.dumps` does, a piece at a time.
+_ENCODER = json.JSONEncoder(separators=(",", ":"), ensure_ascii=False)
 
 
 def labelled(label: str, value: Any, width: int) -> list[str]:

@@ -125,6 +125,7 @@ def outcome_record(outcome: Outcome) -> dict[str, Any]:
             "expected": failure.expected,
             "got": failure.got,
             "differences": [difference.record() for difference in failure.differences],
+            "more_differences": failure.more_differences,
             "diff": failure.diff(WIDTH),
         },
     }

@@ -29,7 +29,7 @@ from typing import IO, Any, Protocol
 import attrs
 
 from dynevent import __version__
-from dynevent.conformance.diff import Difference, differences, labelled, matches
+from dynevent.conformance.diff import MAX_DIFFERENCES, Difference, differences, kept, labelled, matches
 from dynevent.conformance.driver import Driver
 from dynevent.conformance.files import Vector
 from dynevent.errors import (  # defined there with every error; importable here too
@@ -227,21 +227,23 @@ class ExternalImplementation:
             self._process.stdin.flush()
         except OSError:
             raise self._break(f"the driver closed its input (exit code {self._process.poll()})") from None
-        raw = self._read_line(self.timeout if timeout is None else timeout)
+        line = self._text(self._read_line(self.timeout if timeout is None else timeout))
         try:
-            line = raw.decode("utf-8")
-        except UnicodeDecodeError as exc:
-            raise self._break(
-                f"the driver answered with bytes that are not UTF-8 ({exc.reason} "
-                f"at byte {exc.start}): {raw[:200]!r}"
-            ) from None
-        try:
-            answer = _json.parse(line)
+            answer = _json.parse(line)  # the line's bytes let go: a parsed line costs its text and its values
         except _json.JsonProblem as exc:
             raise self._break(f"the driver answered with {exc}: {line[:200]!r}") from None
         if not isinstance(answer, dict):
             raise self._break(f"the driver answered with a JSON value that is not an object: {line[:200]!r}")
         return answer
+
+    def _text(self, raw: bytes) -> str:
+        try:
+            return raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise self._break(
+                f"the driver answered with bytes that are not UTF-8 ({exc.reason} "
+                f"at byte {exc.start}): {raw[:200]!r}"
+            ) from None
 
     def _read_line(self, timeout: float) -> bytes:
         """One answer line, within ``timeout`` however the program writes it (a half line and a stall too)."""
@@ -339,6 +341,22 @@ class Failure:
     got: Any
     problem: str
     differences: tuple[Difference, ...] = ()
+    #: the differences past the :data:`~dynevent.conformance.diff.MAX_DIFFERENCES` listed
+    more_differences: int = 0
+
+    @classmethod
+    def of(
+        cls, step: int, input: Any, expected: Any, got: Any, problem: str, found: Sequence[Difference] = ()
+    ) -> Failure:
+        """A failure as a run keeps it, within bounds whatever the implementation answered: the first
+        :data:`~dynevent.conformance.diff.MAX_DIFFERENCES` differences, and each value
+        :func:`~dynevent.conformance.diff.kept`."""
+        listed = tuple(
+            attrs.evolve(difference, expected=kept(difference.expected), got=kept(difference.got))
+            for difference in found[:MAX_DIFFERENCES]
+        )
+        more = max(len(found) - MAX_DIFFERENCES, 0)
+        return cls(step, input, kept(expected), kept(got), problem, listed, more)
 
     def diff(self, width: int = 96) -> str:
         """A readable account within ``width`` columns: the step and its problem, its input, then each
@@ -348,6 +366,8 @@ class Failure:
             lines.extend(labelled("  input", self.input, width))
         for difference in self.differences:
             lines.extend("  " + line for line in difference.describe(width - 2))
+        if self.more_differences:
+            lines.append(f"  ... and {self.more_differences:,} more differences")
         return "\n".join(lines)
 
 
@@ -378,13 +398,13 @@ def run_vector(vector: Vector, implementation: Implementation) -> Outcome:
         try:
             outputs, view = implementation.apply(step.input)
         except DyneventError as exc:
-            return Outcome(vector, Failure(index, step.input, expected, None, f"apply failed: {exc}"))
+            return Outcome(vector, Failure.of(index, step.input, expected, None, f"apply failed: {exc}"))
         if not matches(expected, outputs):
-            found = tuple(differences(expected, outputs, "outputs"))
-            return Outcome(vector, Failure(index, step.input, expected, outputs, "outputs differ", found))
+            found = differences(expected, outputs, "outputs")
+            return Outcome(vector, Failure.of(index, step.input, expected, outputs, "outputs differ", found))
         if step.view is not None and not matches(step.view, view):
-            found = tuple(differences(step.view, view, "view"))
-            return Outcome(vector, Failure(index, step.input, step.view, view, "view differs", found))
+            found = differences(step.view, view, "view")
+            return Outcome(vector, Failure.of(index, step.input, step.view, view, "view differs", found))
     return Outcome(vector, None)
 
 

@@ -20,7 +20,15 @@ matches any string (for sentences whose wording the spec leaves open).
 
 from __future__ import annotations
 
-from dynevent.conformance.diff import WILDCARD, Difference, align, differences, matches
+from dynevent.conformance.diff import (
+    MAX_DIFFERENCES,
+    MAX_KEPT_VALUE,
+    WILDCARD,
+    Difference,
+    align,
+    differences,
+    matches,
+)
 from dynevent.conformance.files import (
     SCHEMA_FILE,
     Step,
@@ -59,6 +67,8 @@ from dynevent.errors import ImplementationError, ImplementationGone, InvalidVect
 __all__ = [
     "MAX_ANSWER_BYTES",
     "MAX_BROKEN",
+    "MAX_DIFFERENCES",
+    "MAX_KEPT_VALUE",
     "MAX_STALLS",
     "MAX_TIMEOUT",
     "SCHEMA_FILE",
