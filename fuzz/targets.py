@@ -17,6 +17,7 @@ import functools
 import io
 import os
 import shlex
+import shutil
 import sqlite3
 import tempfile
 from collections.abc import Callable
@@ -29,6 +30,7 @@ from dynevent import client as cl
 from dynevent.conformance import driver, vectors
 from dynevent.conformance.judge import check_trace
 from dynevent.conformance.records import config_from_json, input_from_json, output_from_json, rule_validator
+from dynevent.errors import DyneventError, FileError
 from dynevent.server import inputs as ins
 from dynevent.server import machine, snapshot
 from dynevent.server.fleet import Fleet
@@ -434,18 +436,173 @@ def _bag_storage(value: Any) -> object:
     return _bag((_BAG / "metadata.yaml").read_bytes(), data)
 
 
-def _bag(metadata: bytes, storage: bytes) -> object:
+def _bag(metadata: bytes, storage: bytes, stored_as: str = "demos.mcap") -> object:
     from dynevent.bags.reader import check_bag
 
     folder = tempfile.mkdtemp(prefix="dynevent-fuzz-bag-")
     try:
         Path(folder, "metadata.yaml").write_bytes(metadata)
-        Path(folder, "demos.mcap").write_bytes(storage)
+        Path(folder, stored_as).write_bytes(storage)
         return check_bag(folder)
     finally:
         for name in os.listdir(folder):
             os.unlink(os.path.join(folder, name))
         os.rmdir(folder)
+
+
+#: A robot's status topic and type, as the compressed bags' seeds record them.
+_STATUS = ("/rmf/dynamic_event/status/tinyRobot/r1", "rmf_task_msgs/msg/DynamicEventStatus")
+
+
+def _statuses(count: int) -> list[bytes]:
+    """``count`` status messages of a robot, serialized as a bag holds them."""
+    from dynevent.bags.reader import typestore
+
+    store = typestore()
+    kinds = store.types
+    return [
+        store.serialize_cdr(
+            kinds[_STATUS[1]](
+                dynamic_event_seq=1, dynamic_state=1, status="standby", id=number,
+                time=kinds["builtin_interfaces/msg/Time"](sec=number, nanosec=0),
+            ),
+            _STATUS[1],
+        )
+        for number in range(count)
+    ]  # fmt: skip
+
+
+@functools.cache
+def _compressed_bags() -> dict[str, tuple[bytes, bytes]]:
+    """Bags compressed in each of rosbag2's ways by rosbags' writer, as (metadata.yaml, storage file):
+    the storage file zstd (``file``), each message zstd (``message``), MCAP's chunks zstd (``chunks``)."""
+    from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
+
+    from dynevent.bags.reader import message_definition
+
+    made = {}
+    for name, mode in (
+        ("file", CompressionMode.FILE),
+        ("message", CompressionMode.MESSAGE),
+        ("chunks", CompressionMode.STORAGE),
+    ):
+        with tempfile.TemporaryDirectory(prefix="dynevent-fuzz-seed-") as folder:
+            path = Path(folder, "bag")
+            writer = Writer(path, version=9, storage_plugin=StoragePlugin.MCAP)
+            writer.set_compression(mode, CompressionFormat.ZSTD)
+            with writer:
+                topic = writer.add_connection(
+                    *_STATUS, msgdef=message_definition(_STATUS[1]), rihs01="RIHS01_" + "0" * 64
+                )
+                for number, data in enumerate(_statuses(4)):
+                    writer.write(topic, (1_700_000_000 + number) * 10**9, data)
+            (storage,) = (file for file in path.iterdir() if file.name != "metadata.yaml")
+            made[name] = ((path / "metadata.yaml").read_bytes(), storage.read_bytes())
+    return made
+
+
+def _lz4_chunks() -> bytes:
+    """An MCAP file (profile ros2) of statuses, its chunks lz4 (Foxglove's writer: rosbags writes zstd)."""
+    from mcap.writer import CompressionType, Writer
+
+    stream = io.BytesIO()
+    writer = Writer(stream, compression=CompressionType.LZ4)
+    writer.start(profile="ros2", library="dynevent fuzz")
+    schema = writer.register_schema(_STATUS[1], "ros2msg", b"")
+    channel = writer.register_channel(_STATUS[0], "cdr", schema)
+    for number, data in enumerate(_statuses(4)):
+        time = (1_700_000_000 + number) * 10**9
+        writer.add_message(channel, log_time=time, data=data, publish_time=time)
+    writer.finish()
+    return stream.getvalue()
+
+
+def _compressed_storage(mode: str) -> Callable[[Any], object]:
+    """A bag compressed in ``mode`` whose storage file is the mutated bytes, its metadata whole."""
+
+    def call(value: Any) -> object:
+        data = value if isinstance(value, bytes) else str(value).encode("utf-8", "surrogatepass")
+        metadata = _compressed_bags()[mode][0]
+        name = "bag.mcap.zstd" if mode == "file" else "bag.mcap"
+        return _bag(metadata, data, name)
+
+    return call
+
+
+def _mcap_file(value: Any) -> object:
+    """An MCAP file alone, its chunks compressed: the mutated bytes."""
+    from dynevent.bags.reader import check_bag
+
+    data = value if isinstance(value, bytes) else str(value).encode("utf-8", "surrogatepass")
+    folder = tempfile.mkdtemp(prefix="dynevent-fuzz-bag-")
+    try:
+        Path(folder, "bag.mcap").write_bytes(data)
+        return check_bag(os.path.join(folder, "bag.mcap"))
+    finally:
+        for name in os.listdir(folder):
+            os.unlink(os.path.join(folder, name))
+        os.rmdir(folder)
+
+
+def _output_path(value: Any) -> object:
+    """An output path of any text, under a folder of the fuzzer's own (never above it): tried as a
+    file and as a directory, refused with a FileError or written, and nothing left behind."""
+    from dynevent import files
+
+    folder = tempfile.mkdtemp(prefix="dynevent-fuzz-out-")
+    try:
+        Path(folder, "there").write_text("kept", encoding="utf-8")
+        os.mkdir(os.path.join(folder, "folder"))
+        # a command line's argument: bytes that are not UTF-8 as the interpreter reads them (surrogates)
+        text = os.fsdecode(value) if isinstance(value, bytes) else value
+        text = text if isinstance(text, str) else mutate.dumps(value)
+        path = os.path.join(folder, text.replace("..", "__").lstrip("/"))
+        for directory in (False, True):
+            with contextlib.suppress(FileError):
+                files.check_writable(path, "--out", directory=directory)
+        left = sorted(os.listdir(folder))
+        if left != ["folder", "there"] or os.listdir(os.path.join(folder, "folder")):
+            raise AssertionError(f"the check left {left} behind")
+        if Path(folder, "there").read_text(encoding="utf-8") != "kept":
+            raise AssertionError("the check changed a file that was there")
+        return path
+    finally:
+        shutil.rmtree(folder)
+
+
+def _longer(value: Any) -> Any:
+    """``value`` with each integer of 300 digits or more made longer than Python writes (4,300)."""
+    if isinstance(value, bool) or not isinstance(value, (int, list, dict)):
+        return value
+    if isinstance(value, int):
+        return value * 10**4_700 if abs(value) >= 10**300 else value
+    if isinstance(value, list):
+        return [_longer(item) for item in value]
+    return {key: _longer(item) for key, item in value.items()}
+
+
+def _descriptions_api(value: Any) -> object:
+    """The descriptions API given a category and a description of any type and size: a value, or
+    dynevent's own error (an unknown category is :class:`~dynevent.errors.UnknownCategory`)."""
+    from dynevent import descriptions
+
+    category, description = ([*value, None, None])[:2] if isinstance(value, list) else (value, value)
+    sequence = descriptions.shape_validators()["sequence"]
+    calls: tuple[Callable[[Any, Any], object], ...] = (
+        descriptions.conforms,
+        descriptions.shape_errors,
+        descriptions.read,
+        descriptions.shapes.form,
+        lambda category, _: descriptions.schema(category),
+        _robot().check,
+        sequence,
+    )
+    found: list[object] = []
+    for given in (description, _longer(description)):
+        for call in calls:
+            with contextlib.suppress(DyneventError):
+                found.append(call(category, given))
+    return found
 
 
 def _runner_answer(value: Any) -> object:
@@ -670,6 +827,38 @@ def targets() -> list[Target]:
             _runner_answer,
         ),
         Target("report writers", ("a name\u0007 with \udc80", {"rule": "R4.\x00"}), _reports),
+        Target(
+            "bags: compressed storage (compression_mode file)",
+            (_compressed_bags()["file"][1],),
+            _compressed_storage("file"),
+        ),
+        Target(
+            "bags: compressed messages (compression_mode message)",
+            (_compressed_bags()["message"][1],),
+            _compressed_storage("message"),
+        ),
+        Target(
+            "bags: an MCAP file's compressed chunks (zstd, lz4)",
+            (_compressed_bags()["chunks"][1], _lz4_chunks()),
+            _mcap_file,
+        ),
+        Target(
+            "files.check_writable (an output path)",
+            ("report.md", "/", "folder", "there", "missing/report.md", "x" * 300, "a\x00b", "./" * 3_000),
+            _output_path,
+            text=True,
+        ),
+        Target(
+            "descriptions API: a category and a description of any type",
+            (
+                ["go_to_place", {"one_of": ["place_001", 3]}],
+                ["sequence", [{"category": "clean", "description": 1}]],
+                [{}, 0],
+                [10**400, "place_001"],
+                ["pickup", {"place": 10**400, "payload": {"sku": "a", "quantity": -(10**400)}}],
+            ),
+            _descriptions_api,
+        ),
     ]
     assert by_type  # every input type has seeds from the vectors
     return made
