@@ -292,6 +292,7 @@ class HostProcess:
             stderr=subprocess.STDOUT,
             stdin=subprocess.DEVNULL,
             text=True,
+            start_new_session=True,  # its children too are ended with it (a tool that starts a server)
         )
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
@@ -342,17 +343,21 @@ class HostProcess:
         try:
             self.process.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
-            self.process.kill()
+            self._signal(signal.SIGKILL)
             self.process.wait(timeout=CLOSE_BOUND)
             self._reader.join(timeout=CLOSE_BOUND)
             raise AssertionError(f"{self!r} did not end within {timeout:g} s:\n{self.output}") from None
         self._reader.join(timeout=CLOSE_BOUND)
         return self.process.returncode
 
+    def _signal(self, signum: int) -> None:
+        """Send ``signum`` to the process and every process it started (its session's group)."""
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(self.process.pid, signum)
+
     def kill(self) -> None:
-        """``kill -9``: the process ends at once, saying nothing to anyone."""
-        if self.process.poll() is None:
-            self.process.kill()
+        """``kill -9``: the process ends at once, saying nothing to anyone (and whatever it started)."""
+        self._signal(signal.SIGKILL)
         self.process.wait(timeout=CLOSE_BOUND)
         self._reader.join(timeout=CLOSE_BOUND)
 
@@ -366,6 +371,7 @@ class HostProcess:
         except subprocess.TimeoutExpired:
             self.process.kill()
             self.process.wait(timeout=CLOSE_BOUND)
+        self._signal(signal.SIGKILL)  # whatever it started and left behind
         self._reader.join(timeout=CLOSE_BOUND)
         if self.process.stdout is not None:
             self.process.stdout.close()

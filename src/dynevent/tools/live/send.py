@@ -30,6 +30,7 @@ from dynevent.ros.client import DynamicEventClient, GoalRun, GoalWaitTimeout
 from dynevent.ros.graph import graph_text, no_server_text, servers_seen
 from dynevent.ros.spinning import Interrupted, Session, interruptible
 from dynevent.server import outputs as outs
+from dynevent.tools.live import see_the_whole_graph
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.units import SECOND
 from dynevent.wire.vocab import EventType, GoalStatus
@@ -76,6 +77,7 @@ def run(args: SendOptions, say: Callable[[str], None]) -> int:
         return max(timeout - (time.monotonic() - started), 0.0)
 
     trace = _open_trace(args)
+    see_the_whole_graph()
     session = Session("dynevent_send", args.ros_args)
     node = session.node
     # a description of the field's categories is checked here as every server checks its shape
