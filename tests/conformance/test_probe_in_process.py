@@ -457,3 +457,28 @@ def test_the_race_names_d10_when_the_server_numbers_the_child_as_the_other_next(
     assert ran.verdict is Verdict.PASS, ran  # child 2, as its NEXT asked; its plan then drew id 3
     assert race.verdict is Verdict.FAIL and race.divergence == "D10" and race.known, race
     assert "feedback ids [4]" in race.seen and any("id=3" in message for message in race.messages), race
+
+
+@pytest.mark.spec("R19.1")
+def test_a_wait_the_deadline_cut_short_is_no_failure_of_the_server() -> None:
+    """A server that never answers the goals it accepts fails R19.1, but only where the probe waited
+    --timeout for the answer: the case whose wait the --deadline cut short is not run, saying so and
+    which bound to raise, never failed for what it had no time to see."""
+
+    def run(deadline: float) -> dict[str, Finding]:
+        first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
+        server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG), first)
+
+        def unanswering(event: ins.Input) -> tuple[outs.Output, ...]:
+            return tuple(output for output in server.step(event) if not isinstance(output, outs.AnswerGoal))
+
+        link = InProcessLink(CONFIG, stepper=unanswering)
+        options = attrs.evolve(OPTIONS, timeout=3, deadline=deadline)
+        findings = probing.run_cases(link, options, list(CASES), lambda _: None)
+        return {finding.case.id: finding for finding in findings}
+
+    cut = run(5)["next.runs_a_child"]  # its wait for the answer began with 2 s of the deadline left
+    assert cut.verdict is Verdict.MISSING and not cut.absent, cut
+    assert cut.seen.startswith(probing.CUT_SHORT.format(deadline=5)) and "no answer within 2 s" in cut.seen
+    whole = run(60)["next.runs_a_child"]  # waited --timeout: the server's failure
+    assert whole.verdict is Verdict.FAIL and whole.absent and "within 3 s (R19.1)" in " ".join(whole.messages)

@@ -354,11 +354,17 @@ class Probe:
         #: the kinds of wait that have timed out once (``"status"``), and why: the cases that need one
         #: are not run to wait it out again (the cause is said instead)
         self.dead: dict[str, str] = {}
+        #: a wait of the case running had less than ``--timeout``: what the deadline left
+        self.cut_short = False
 
     @property
     def timeout(self) -> float:
-        """The bound on the next wait: ``--timeout``, or what is left of ``--deadline`` when less."""
-        return max(_LEAST_WAIT, min(self.options.timeout, self.ends_at - self.link.clock()))
+        """The bound on the next wait: ``--timeout``, or what is left of ``--deadline`` when less (the
+        case's waits are then cut short: :meth:`run` says so)."""
+        left = self.ends_at - self.link.clock()
+        if left < self.options.timeout:
+            self.cut_short = True
+        return max(_LEAST_WAIT, min(self.options.timeout, left))
 
     @property
     def past_deadline(self) -> bool:
@@ -378,6 +384,7 @@ class Probe:
     def run(self, case: Case) -> Finding:
         self.messages = []
         self.exchanges = []
+        self.cut_short = False
         self.link.mark(f"case {case.id}")
         started = self.link.clock()
         heard = self.link.heard
@@ -390,6 +397,9 @@ class Probe:
             finding = Finding(case, Verdict.MISSING, seen=str(exc))
             timed_out = isinstance(exc, _TimedOut)
         finding = self._answered_once(finding)
+        if finding.absent and self.cut_short:  # the server had less than --timeout: not its failure
+            why = f"{CUT_SHORT.format(deadline=self.options.deadline)} ({finding.seen})"
+            finding = Finding(case, Verdict.MISSING, seen=why)
         # silent: the case waited out the timeout and the server sent nothing at all meanwhile
         silent = (timed_out or finding.absent) and self.link.heard == heard
         self.timeouts_in_a_row = self.timeouts_in_a_row + 1 if silent else 0
@@ -610,6 +620,9 @@ class Probe:
 
 #: The shortest wait the deadline leaves (seconds): a message already on its way is still read.
 _LEAST_WAIT = 0.05
+#: Why a case whose wait the deadline cut short is not run: what it waited for might have come
+#: within ``--timeout``, so the case is no verdict on the server.
+CUT_SHORT = "not run to its end: the run's --deadline of {deadline:g} s cut its wait short; raise --deadline"
 #: Which cases a kind of wait that timed out stops: no status heard stops every case that needs an
 #: active run (the begin command each would run cannot make a status heard that none was).
 _NEEDS_OF_WAIT = {"status": ("run", "place", "child")}
