@@ -8,7 +8,8 @@ makes its site, runs commands on its hosts (:meth:`Host.start`, :meth:`Host.run`
 :class:`HostProcess`, its output read live, every wait bounded) and puts faults on them:
 
 - :meth:`Host.cut` and :meth:`Host.heal`: a partition, the host's link down on the bridge's side
-  (the host keeps its address and sees its link up, as a host behind a failed switch does), then up;
+  (the host keeps its address and sees its link lose its carrier), then up; :meth:`Host.block` and
+  :meth:`Host.unblock`: a partition past the link, which stays up (everything on it dropped);
 - :meth:`Host.loss`: the host drops a share of what it sends and what it receives (nftables,
   ``numgen random``), on its site link only (its own loopback is spared);
 - :meth:`Host.rate`: the host's sending bandwidth (a ``tbf`` qdisc).
@@ -166,10 +167,12 @@ class Host:
     def _argv(self, argv: Sequence[str]) -> list[str]:
         return ["ip", "netns", "exec", self.netns, *argv]
 
-    def start(self, argv: Sequence[str], env: Mapping[str, str] | None = None) -> HostProcess:
-        """Start ``argv`` on this host, its output (standard error with it) read live; the site ends it
-        at its close if it still runs."""
-        process = HostProcess(self, self._argv(argv), env)
+    def start(
+        self, argv: Sequence[str], env: Mapping[str, str] | None = None, *, stdin: bool = False
+    ) -> HostProcess:
+        """Start ``argv`` on this host, its output (standard error with it) read live, its input a pipe
+        (:meth:`HostProcess.write`) when ``stdin``; the site ends it at its close if it still runs."""
+        process = HostProcess(self, self._argv(argv), env, stdin=stdin)
         self.processes.append(process)
         return process
 
@@ -183,12 +186,28 @@ class Host:
     # ------------------------------------------------------------- faults
 
     def cut(self) -> None:
-        """A partition: the host's link goes down on the bridge's side (the host sees nothing of it)."""
+        """A partition: the host's link goes down on the bridge's side (the host sees its link lose its
+        carrier, as when a cable is pulled or Wi-Fi drops)."""
         _ip("-n", self.site.bridge_netns, "link", "set", self.port, "down")
 
     def heal(self) -> None:
         """The partition ends: the link is up again."""
         _ip("-n", self.site.bridge_netns, "link", "set", self.port, "up")
+
+    def block(self) -> None:
+        """A partition past the host's link (a failed switch or router): the link stays up, and
+        everything the host sends or receives on it is dropped."""
+        rules = (
+            "table inet dvblock {\n"
+            '  chain incoming { type filter hook input priority 0; iifname "eth0" drop; }\n'
+            '  chain outgoing { type filter hook output priority 0; oifname "eth0" drop; }\n'
+            "}\n"
+        )
+        _command(["ip", "netns", "exec", self.netns, "nft", "-f", "-"], stdin=rules)
+
+    def unblock(self) -> None:
+        """The partition past the link ends."""
+        _command(["ip", "netns", "exec", self.netns, "nft", "delete", "table", "inet", "dvblock"])
 
     @contextlib.contextmanager
     def partition(self) -> Iterator[None]:
@@ -281,7 +300,9 @@ class HostProcess:
     Every wait is bounded and fails with the process's output, so that a failed run says what the
     process saw."""
 
-    def __init__(self, host: Host, argv: list[str], env: Mapping[str, str] | None) -> None:
+    def __init__(
+        self, host: Host, argv: list[str], env: Mapping[str, str] | None, *, stdin: bool = False
+    ) -> None:
         self.host = host
         self.argv = argv
         self.lines: list[str] = []
@@ -290,7 +311,7 @@ class HostProcess:
             env=dict(env) if env is not None else None,
             stdout=subprocess.PIPE,
             stderr=subprocess.STDOUT,
-            stdin=subprocess.DEVNULL,
+            stdin=subprocess.PIPE if stdin else subprocess.DEVNULL,
             text=True,
             start_new_session=True,  # its children too are ended with it (a tool that starts a server)
         )
@@ -304,6 +325,12 @@ class HostProcess:
 
     def __repr__(self) -> str:
         return f"<{' '.join(self.argv[4:])} on {self.host.name}>"
+
+    def write(self, text: str) -> None:
+        """Write ``text`` to the process's input (started with ``stdin``)."""
+        assert self.process.stdin is not None, f"{self!r} was started without an input pipe"
+        self.process.stdin.write(text)
+        self.process.stdin.flush()
 
     @property
     def output(self) -> str:

@@ -68,9 +68,11 @@ class RosSite:
         """``dynevent ARGS`` started on ``host``, in the site's environment (and ``env``)."""
         return self.site[host].start([sys.executable, "-m", "dynevent", *args], {**self.env, **(env or {})})
 
-    def python(self, host: str, *args: str, env: Mapping[str, str] | None = None) -> HostProcess:
+    def python(
+        self, host: str, *args: str, env: Mapping[str, str] | None = None, stdin: bool = False
+    ) -> HostProcess:
         """``python ARGS`` started on ``host``, in the site's environment (and ``env``)."""
-        return self.site[host].start([sys.executable, *args], {**self.env, **(env or {})})
+        return self.site[host].start([sys.executable, *args], {**self.env, **(env or {})}, stdin=stdin)
 
     def file(self, name: str, content: Any) -> Path:
         """A file of the site's folder holding ``content`` (JSON unless it is text)."""

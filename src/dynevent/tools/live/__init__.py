@@ -7,8 +7,35 @@ needs ROS 2 to import; the command line checks a command's own input before it i
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
+from pathlib import Path
 
-__all__ = ["see_the_whole_graph"]
+__all__ = ["OFFLINE", "offline", "see_the_whole_graph"]
+
+#: What a command says when it starts with no network but loopback while DDS may look beyond the host.
+OFFLINE = (
+    "no network interface but loopback is up: DDS (Fast DDS) takes the interfaces that are up when a "
+    "process starts, so this one will not reach other hosts when the network comes up; start it once "
+    "the network is up"
+)
+
+
+def offline(say: Callable[[str], None], interfaces: Path = Path("/sys/class/net")) -> bool:
+    """Before a command's ROS 2 session: say :data:`OFFLINE` (and True) when DDS may look beyond this
+    host (``ROS_AUTOMATIC_DISCOVERY_RANGE`` is not ``LOCALHOST``) and no interface but loopback is
+    up (Linux's ``/sys/class/net``; elsewhere nothing is said).  A robot's server started before its
+    Wi-Fi came up is never found from another host (tests/net)."""
+    if os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "").strip().upper() == "LOCALHOST":
+        return False
+    try:
+        names = [path.name for path in interfaces.iterdir() if path.name != "lo"]
+        states = [(interfaces / name / "operstate").read_text(encoding="ascii").strip() for name in names]
+    except OSError:
+        return False
+    if any(state in ("up", "unknown") for state in states):  # "unknown": a link without carrier sense
+        return False
+    say(OFFLINE)
+    return True
 
 
 def see_the_whole_graph() -> None:

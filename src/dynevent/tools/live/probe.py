@@ -16,7 +16,7 @@ from dynevent.ros.graph import no_server_text
 from dynevent.ros.probe import RosLink
 from dynevent.ros.spinning import Interrupted, Session, interruptible
 from dynevent.tools._progress import Progress
-from dynevent.tools.live import see_the_whole_graph
+from dynevent.tools.live import offline, see_the_whole_graph
 
 __all__ = ["ProbeInterrupted", "main", "run"]
 
@@ -65,6 +65,7 @@ def run(
     ``trace``; the findings and the seconds the run took on the link's clock, from the server found
     to the last case's end, or None when no server was found."""
     see_the_whole_graph()
+    offline(say)
     session = Session("dynevent_probe", options.ros_args)
     link = RosLink(session.node, options.fleet, options.robot, trace)
     if options.introspection:

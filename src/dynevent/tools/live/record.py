@@ -22,7 +22,7 @@ from dynevent.errors import MissingExtra, RecordError
 from dynevent.ros.record import Recorder
 from dynevent.ros.spinning import Session
 from dynevent.tools._progress import Progress
-from dynevent.tools.live import see_the_whole_graph
+from dynevent.tools.live import offline, see_the_whole_graph
 
 __all__ = ["RecordOptions", "run"]
 
@@ -58,6 +58,7 @@ def run(args: RecordOptions, say: Callable[[str], None]) -> int:
     except (OSError, WriterError) as exc:
         raise RecordError(f"--output {output}: cannot write: {exc}") from None
     see_the_whole_graph()  # the topics to record are found on the graph
+    offline(say)
     session = Session("dynevent_record", args.ros_args)
     progress = Progress(f"recording {output}", interval=0.0)
     say = progress.above(say)  # every line the progress line is erased for

@@ -30,7 +30,7 @@ from dynevent.ros.client import DynamicEventClient, GoalRun, GoalWaitTimeout
 from dynevent.ros.graph import graph_text, no_server_text, servers_seen
 from dynevent.ros.spinning import Interrupted, Session, interruptible
 from dynevent.server import outputs as outs
-from dynevent.tools.live import see_the_whole_graph
+from dynevent.tools.live import offline, see_the_whole_graph
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.units import SECOND
 from dynevent.wire.vocab import EventType, GoalStatus
@@ -78,6 +78,7 @@ def run(args: SendOptions, say: Callable[[str], None]) -> int:
 
     trace = _open_trace(args)
     see_the_whole_graph()
+    offline(say)
     session = Session("dynevent_send", args.ros_args)
     node = session.node
     # a description of the field's categories is checked here as every server checks its shape

@@ -44,6 +44,7 @@ from dynevent.server import outputs as outs
 from dynevent.server.machine import ServerConfig
 from dynevent.server.store import StateStore
 from dynevent.sim.config import ServeConfig, machine_config
+from dynevent.tools.live import offline
 from dynevent.wire._text import status_text
 from dynevent.wire.vocab import Compatibility
 
@@ -194,6 +195,7 @@ def run(
     except InvalidConfig as exc:
         raise ServeError(str(exc)) from None
     log = LiveLog(say)
+    offline(log)
     why_slow = participant.ignore_own_endpoints()  # before the first participant: a fast start
     if why_slow and len(config.served()) > LANE:
         log(why_slow)
