@@ -482,3 +482,52 @@ def test_a_wait_the_deadline_cut_short_is_no_failure_of_the_server() -> None:
     assert cut.seen.startswith(probing.CUT_SHORT.format(deadline=5)) and "no answer within 2 s" in cut.seen
     whole = run(60)["next.runs_a_child"]  # waited --timeout: the server's failure
     assert whole.verdict is Verdict.FAIL and whole.absent and "within 3 s (R19.1)" in " ".join(whole.messages)
+
+
+class _LaggingLink(InProcessLink):
+    """The in-process link whose channels lag: each answer, feedback, status or goal response reaches
+    the probe ``lag[kind]`` seconds after the server gave it, as channels of a lossy network do (a
+    reliable DDS topic sends a lost message again, late, and the channels are not in order with one
+    another)."""
+
+    def __init__(self, config: ServeConfig, **lags: float) -> None:
+        self.lags = lags
+        super().__init__(config)
+
+    def _later(self, kind: str, action: Any) -> None:
+        lag = self.lags.get(kind, 0.0)
+        if lag <= 0:
+            action()
+            return
+        self._at(self.now + round(lag * 1_000_000_000), action)
+
+    def hear_answer(self, exchange: probing.Exchange, status: Any, result: Any) -> None:
+        self._later("answer", lambda: InProcessLink.hear_answer(self, exchange, status, result))
+
+    def hear_feedback(self, exchange: probing.Exchange, feedback: Any) -> None:
+        self._later("feedback", lambda: InProcessLink.hear_feedback(self, exchange, feedback))
+
+
+def _lagging_verdicts(**lags: float) -> dict[str, Finding]:
+    link = _LaggingLink(CONFIG, **lags)
+    findings = probing.run_cases(link, attrs.evolve(OPTIONS, deadline=1000), list(CASES), lambda _: None)
+    return {finding.case.id: finding for finding in findings}
+
+
+@pytest.mark.spec("R6.4")
+def test_feedback_that_arrives_after_its_answer_is_waited_for() -> None:
+    """A NEXT answered with its child's end started that child, and its start fed back (R6.4): the
+    case waits for that feedback when the answer came first, on another channel, instead of reading
+    its absence as the server's."""
+    verdicts = _lagging_verdicts(feedback=0.5)
+    for case in ("next.runs_a_child", "next.id_zero", "next.id_chosen", "next.race"):
+        assert verdicts[case].verdict is Verdict.PASS, verdicts[case]
+
+
+@pytest.mark.spec("R19.1")
+def test_an_answer_that_comes_after_the_timeout_is_no_failure_of_the_server() -> None:
+    """The answer came, after --timeout: the case is not run, saying which bound to raise; it is
+    not the server's failure (a wait of the whole --timeout that hears nothing at all still is)."""
+    late = _lagging_verdicts(answer=4.0)["next.runs_a_child"]
+    assert late.verdict is Verdict.MISSING and not late.absent, late
+    assert late.seen.startswith(probing.LATE.format(timeout=OPTIONS.timeout)), late.seen

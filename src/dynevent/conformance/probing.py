@@ -322,6 +322,22 @@ class _TimedOut(_Unreachable):
     """A case cannot be carried out because the server did not show what it waited for in time."""
 
 
+def _complete(exchange: Exchange) -> bool:
+    """The goal has its response and, accepted, its answer."""
+    return exchange.accepted is False or (exchange.accepted is True and bool(exchange.answers))
+
+
+def _ran_a_child(exchange: Exchange) -> bool:
+    """A NEXT answered with its child's end (not a failure to begin): its start fed back (R6.4)."""
+    answer = exchange.answer
+    return (
+        exchange.goal.event_type == EventType.NEXT.value
+        and answer is not None
+        and not answer[1].execution_failure
+        and answer[0] is not GoalStatus.CANCELED
+    )
+
+
 def _describe_goal(goal: Goal) -> str:
     return f"sent {goal_text(goal)}"
 
@@ -356,6 +372,9 @@ class Probe:
         self.dead: dict[str, str] = {}
         #: a wait of the case running had less than ``--timeout``: what the deadline left
         self.cut_short = False
+        #: each case's goals left without their response or answer when it ended, by case id: the run's
+        #: end sees whether it came late
+        self.unanswered: dict[str, list[Exchange]] = {}
 
     @property
     def timeout(self) -> float:
@@ -396,6 +415,8 @@ class Probe:
         except _Unreachable as exc:
             finding = Finding(case, Verdict.MISSING, seen=str(exc))
             timed_out = isinstance(exc, _TimedOut)
+        # what the case's verdict lacked, before the waits below: the run's end sees whether it came late
+        self.unanswered[case.id] = [exchange for exchange in self.exchanges if not _complete(exchange)]
         finding = self._answered_once(finding)
         if finding.absent and self.cut_short:  # the server had less than --timeout: not its failure
             why = f"{CUT_SHORT.format(deadline=self.options.deadline)} ({finding.seen})"
@@ -426,6 +447,19 @@ class Probe:
         """Has the server stopped answering: :data:`SILENT_AFTER` cases in a row waited out the timeout
         with no message from it?"""
         return self.timeouts_in_a_row >= SILENT_AFTER
+
+    def late(self, finding: Finding) -> Finding:
+        """A failure for a goal's response or answer that did not come within ``--timeout``
+        (``absent``), seen again at the run's end: when every goal the case left unanswered has had
+        its response and, accepted, its answer since, they came late (a slow or lossy link), and the
+        case is not run, with which bound to raise, rather than failed.  A status or feedback that
+        never came stays the server's failure."""
+        unanswered = self.unanswered.get(finding.case.id, [])
+        came_late = bool(unanswered) and all(_complete(exchange) for exchange in unanswered)
+        if not (finding.absent and finding.verdict is Verdict.FAIL and came_late):
+            return finding
+        why = f"{LATE.format(timeout=self.options.timeout)} ({finding.seen})"
+        return attrs.evolve(finding, verdict=Verdict.MISSING, seen=why, absent=False)
 
     def not_run(self, case: Case, why: str) -> Finding:
         """The finding of a case the probe did not carry out."""
@@ -501,6 +535,8 @@ class Probe:
             return exchange
         if answer and exchange.accepted:
             exchange.answered(self.timeout)
+            if _ran_a_child(exchange):  # R6.4: its start fed back, on a topic that may lag the answer
+                exchange.wait(lambda: bool(exchange.feedback), self.timeout)
         self.note(_describe_answer(exchange))
         return exchange
 
@@ -597,11 +633,12 @@ class Probe:
                 break
             if not exchange.answers:
                 raise _TimedOut(f"the child of NEXT {goal.id} never showed RUNNING within {self.timeout:g} s")
-            # it ended before it was seen running: the robot stood where it was sent
-            self.note(f"the child of NEXT {goal.id} ended at once ({_describe_answer(exchange)}): "
-                      "the robot stood there")  # fmt: skip
+            # answered before a status showed it running: the robot stood where it was sent, or the
+            # link delivered the answer before the status (a lossy link: a longer child lets it run)
+            self.note(f"the child of NEXT {goal.id} was answered before a status showed it running "
+                      f"({_describe_answer(exchange)})")  # fmt: skip
             if tried == places:
-                raise _Unreachable(f"every child ended at once, at each of the {places} place(s) given")
+                raise _Unreachable(ENDED_UNSEEN.format(places=places))
             self.link.wait_status(_waits_or_ended, self.timeout)
         assert running is not None  # every way out of the loop but its break raised
         if running.id != goal.id:
@@ -623,6 +660,13 @@ _LEAST_WAIT = 0.05
 #: Why a case whose wait the deadline cut short is not run: what it waited for might have come
 #: within ``--timeout``, so the case is no verdict on the server.
 CUT_SHORT = "not run to its end: the run's --deadline of {deadline:g} s cut its wait short; raise --deadline"
+#: Why a case that needs a running child is not run when no child was seen running before its answer.
+ENDED_UNSEEN = (
+    "at each of the {places} place(s) given, the child was answered before a status showed it running: "
+    "the robot stood there, or the link was slower than the child (children that take longer let it run)"
+)
+#: Why a case whose awaited message came after ``--timeout`` is not run: the link, not the server.
+LATE = "not run to its end: what it waited for came after --timeout's {timeout:g} s; raise --timeout"
 #: Which cases a kind of wait that timed out stops: no status heard stops every case that needs an
 #: active run (the begin command each would run cannot make a status heard that none was).
 _NEEDS_OF_WAIT = {"status": ("run", "place", "child")}
@@ -1273,6 +1317,7 @@ def run_cases(
         if progress is not None:
             progress(f"{case.id} ...")
         findings.append(probe.run(case))
+    findings[:] = [probe.late(finding) for finding in findings]
     return findings
 
 
