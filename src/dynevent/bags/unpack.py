@@ -94,13 +94,13 @@ def _unpacking(stream: BinaryIO, compression: str) -> BinaryIO:
     frames as the storage library reads it; the decompressors come with rosbags."""
     reader: BinaryIO
     if compression == "lz4":
-        import lz4.frame  # type: ignore[import-untyped,unused-ignore]
+        import lz4.frame
 
         reader = lz4.frame.open(stream, "rb")
     elif (zstd := _zstd()) is not None:
         reader = zstd.open(stream, "rb")
     else:
-        import zstandard  # type: ignore[import-not-found,unused-ignore]
+        import zstandard
 
         reader = zstandard.ZstdDecompressor().stream_reader(stream, read_across_frames=True)
     return reader
