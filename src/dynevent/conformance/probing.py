@@ -37,7 +37,7 @@ from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.conformance.probe_cases import Case, Finding, Verdict
 from dynevent.errors import FileError, ProbeError
 from dynevent.server import machine
-from dynevent.wire._fields import U32_MAX, U64_MAX
+from dynevent.wire._fields import U32_MAX, U64_MAX, id_not_after
 from dynevent.wire._text import goal_text, status_text
 from dynevent.wire.messages import (
     DynamicEventDescription,
@@ -95,6 +95,7 @@ class Exchange:
         self.answers: list[tuple[GoalStatus, Result]] = []
         self.handle: Any = None  # the transport's handle on the goal, once accepted
         self._link = link
+        link.made.append(self)
 
     def wait(self, condition: Callable[[], bool], timeout: float) -> bool:
         """Wait, at most ``timeout`` seconds of the link's clock, until ``condition()`` holds."""
@@ -129,6 +130,7 @@ class Link:
         self._trace = trace
         self.statuses: list[DynamicEventStatus] = []
         self.begins: list[DynamicEventDescription] = []
+        self.made: list[Exchange] = []  # every goal sent, in order
         self._changed = threading.Condition()
         #: how many messages the server has sent the probe (statuses, begins, responses, feedback, answers)
         self.heard = 0
@@ -493,13 +495,39 @@ class Probe:
         and the robot is not waiting; else the case is missing.  Waiting is WAITING, or RUNNING with
         a child's final status (R20.2: what rmf_ros2 keeps publishing after a child ends)."""
         timeout = self.timeout
-        status = self.link.wait_status(machine.robot_waits, 0.5)
+
+        def waits(status: DynamicEventStatus) -> bool:  # and not older than what the answers told
+            return machine.robot_waits(status) and not self._behind(status)
+
+        status = self.link.wait_status(waits, 0.5)
         if status is None and self.options.begin_command:
             self._run_begin_command()
-        status = status or self.link.wait_status(machine.robot_waits, timeout)
+        status = status or self.link.wait_status(waits, timeout)
         if status is None:
             raise _TimedOut(f"no active run (a WAITING status) within {timeout:g} s")
         return status
+
+    def _behind(self, status: DynamicEventStatus) -> bool:
+        """A status of a run the probe's FINISHED ended, or one that names an id below a child whose
+        answer the probe has: it was published before those answers, which another channel brought
+        first (a lagging link), and a goal built from it would name an ended run or a stale id."""
+        seq = status.dynamic_event_seq
+        if any(  # the run ended: the probe's FINISHED of it succeeded
+            exchange.goal.event_type == EventType.FINISHED.value
+            and exchange.goal.dynamic_event_seq == seq
+            and exchange.answer is not None
+            and exchange.answer[0] is GoalStatus.SUCCEEDED
+            for exchange in self.link.made
+        ):
+            return True
+        ids = [  # the children the answers name (a feedback's id is the server's word less firmly)
+            answer[1].id
+            for exchange in self._nexts
+            if exchange.goal.dynamic_event_seq == seq
+            for answer in exchange.answers[:1]
+            if not answer[1].execution_failure
+        ]
+        return bool(ids) and not id_not_after(max(ids), status.id)
 
     def _run_begin_command(self) -> None:
         """Run ``--begin-command`` (bounded by the timeout); a command that cannot run makes the case
@@ -534,11 +562,18 @@ class Probe:
             self.note("no response")
             return exchange
         if answer and exchange.accepted:
-            exchange.answered(self.timeout)
-            if _ran_a_child(exchange):  # R6.4: its start fed back, on a topic that may lag the answer
-                exchange.wait(lambda: bool(exchange.feedback), self.timeout)
+            self.answered(exchange)
         self.note(_describe_answer(exchange))
         return exchange
+
+    def answered(self, exchange: Exchange) -> bool:
+        """Wait for the goal's answer and, when it says a child ran, for the feedback of its start
+        (R6.4), which another channel may bring after the answer; whether the answer came."""
+        if not exchange.answered(self.timeout):
+            return False
+        if _ran_a_child(exchange):
+            exchange.wait(lambda: bool(exchange.feedback), self.timeout)
+        return True
 
     def cancel(self, exchange: Exchange) -> bool | None:
         """An action-level cancel of ``exchange``'s goal: accepted, refused, or None (no response)."""
@@ -664,6 +699,11 @@ CUT_SHORT = "not run to its end: the run's --deadline of {deadline:g} s cut its 
 ENDED_UNSEEN = (
     "at each of the {places} place(s) given, the child was answered before a status showed it running: "
     "the robot stood there, or the link was slower than the child (children that take longer let it run)"
+)
+#: Why a case whose goal was sent while a late status showed a child running is not run.
+ENDED_FIRST = (
+    "child {child} had ended when the goal reached the server (its statuses say so): the status the "
+    "probe went by came late (a lagging link; children that take longer let the case run)"
 )
 #: Why a case whose awaited message came after ``--timeout`` is not run: the link, not the server.
 LATE = "not run to its end: what it waited for came after --timeout's {timeout:g} s; raise --timeout"
@@ -825,16 +865,54 @@ def _status_after_child(probe: Probe, case: Case) -> Finding:
 def _busy(probe: Probe, case: Case) -> Finding:
     with probe.child() as (_, child_id):
         status = probe.link.status or probe.any_status()
-        return probe.refused(case, probe.next_goal(status, goal_id=_fresh(child_id)))
+        goal = probe.next_goal(status, goal_id=_fresh(child_id))
+        finding = probe.refused(case, goal)
+        return _unless_ended_first(
+            probe, finding, child_id, lambda s: machine.runs_a_child(s) and s.id != child_id
+        )
 
 
 def _busy_finished(probe: Probe, case: Case) -> Finding:
-    with probe.child():
+    with probe.child() as (_, child_id):
         status = probe.link.status or probe.any_status()
         finding = probe.refused(case, _goal(status, EventType.FINISHED))
         if finding.verdict is Verdict.FAIL and "succeeded" in finding.seen:
             finding = attrs.evolve(finding, divergence="D30")  # the run ended under the running child
+        ended = status.dynamic_event_seq
+        return _unless_ended_first(
+            probe,
+            finding,
+            child_id,
+            lambda s: s.dynamic_event_seq == ended and s.dynamic_state == DynamicState.INACTIVE,
+        )
+
+
+def _unless_ended_first(
+    probe: Probe, finding: Finding, child_id: int, took_effect: Callable[[DynamicEventStatus], bool]
+) -> Finding:
+    """A goal sent while a status showed ``child_id`` running, and accepted where the spec refuses it:
+    when the server's own stamps show the child's end before the goal took effect (the status whose
+    ``time`` says the child ended, before the one that shows the goal's effect), the status the probe
+    went by was late (a lagging link) and the case is not run, with why, rather than failed."""
+    if finding.verdict is not Verdict.FAIL or not probe.exchanges or not probe.exchanges[-1].accepted:
         return finding
+    probe.link.wait(lambda: any(took_effect(s) for s in probe.link.history()), probe.timeout)
+    history = probe.link.history()
+    running = next((n for n, s in enumerate(history) if machine.runs_a_child(s) and s.id == child_id), None)
+    if running is None:
+        return finding
+    end = next((s for s in history[running:] if not (machine.runs_a_child(s) and s.id == child_id)), None)
+    effect = next((s for s in history[running:] if took_effect(s)), None)
+    if end is None or effect is None or _instant(effect) < _instant(end):
+        return finding
+    probe.note(f"the server's statuses: child {child_id} ended at {_instant(end)}, the goal took effect "
+               f"at {_instant(effect)}")  # fmt: skip
+    return Finding(finding.case, Verdict.MISSING, seen=ENDED_FIRST.format(child=child_id))
+
+
+def _instant(status: DynamicEventStatus) -> int:
+    """When the server stamped ``status``, in nanoseconds."""
+    return status.time.sec * 1_000_000_000 + status.time.nanosec
 
 
 def _cancel_wrong_id(probe: Probe, case: Case) -> Finding:
@@ -1042,7 +1120,7 @@ def _race(probe: Probe, case: Case) -> Finding:
     for goal, exchange in zip(goals, exchanges, strict=True):
         exchange.responded(probe.timeout)
         if exchange.accepted:
-            exchange.answered(probe.timeout)
+            probe.answered(exchange)
         probe.note(f"{_describe_goal(goal)}: {_describe_answer(exchange)}, {len(exchange.feedback)} feedback")
     expected = (
         "one child runs and completes; the other NEXT rejected, or accepted and aborted without a child"

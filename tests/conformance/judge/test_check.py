@@ -14,6 +14,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from dynevent.conformance.judge import Report, TraceError, check_trace, read_trace, step_records
+from dynevent.conformance.judge.trace import TAPS, TraceWriter
 from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.wire import _json
@@ -659,6 +660,50 @@ def test_a_config_record_comes_first() -> None:
     text = _json.dumps({"type": "status", "time": 1, "message": {}}) + "\n" + _json.dumps(CONFIG) + "\n"
     with pytest.raises(TraceError, match=r"<trace>:2: type: a 'config' record"):
         check_trace(text)
+
+
+def test_a_trace_says_where_it_was_seen() -> None:
+    """The config record's ``tap``: ``client`` (channels that may lag one another) or ``server``."""
+    for tap in TAPS:
+        header, _ = read_trace([_json.dumps({"type": "config", "tap": tap})])
+        assert header.tap == tap
+    header, _ = read_trace([_json.dumps({"type": "config"})])
+    assert header.tap is None
+    refusal = r"<trace>:1: tap: expected one of \['client', 'server'\], got \"robot\""
+    with pytest.raises(TraceError, match=refusal):
+        check_trace(_json.dumps({"type": "config", "tap": "robot"}) + "\n")
+    writer = TraceWriter(None, fleet="f", robot="r", tap="client")
+    assert read_trace(writer.text().splitlines())[0].tap == "client"
+
+
+#: What a probe heard of a FINISHED on a loaded machine: the robot's status, then its run's begin read
+#: latched, then the FINISHED, its response, the run's INACTIVE status and, last, its answer.
+_FINISHED_AT_A_CLIENT = [
+    {"type": "config", "fleet": "tinyRobot", "robot": "r1", "tap": "client"},
+    {"type": "status", "time": 8.49, "message": {"dynamic_event_seq": 4294967295, "dynamic_state": 1,
+                                                  "status": "standby", "id": 1, "time": {"sec": 1}}},
+    {"type": "begin", "time": 8.491, "message": {"fleet": "tinyRobot", "robot": "r1",
+                                                  "dynamic_event_seq": 4294967295, "description": "{}",
+                                                  "start_time": {"sec": 1}}},
+    {"type": "goal", "time": 8.495, "goal_uuid": "d" * 32, "goal": {"dynamic_event_seq": 4294967295,
+                                                                      "event_type": 3}},
+    {"type": "goal_response", "time": 8.497, "goal_uuid": "d" * 32, "accepted": True},
+    {"type": "status", "time": 8.504, "message": {"dynamic_event_seq": 4294967295, "dynamic_state": 0,
+                                                   "status": "uninitialized", "id": 0, "time": {"sec": 8}}},
+    {"type": "result", "time": 8.505, "goal_uuid": "d" * 32, "status": "succeeded",
+     "result": {"status": "completed", "id": 1}},
+]  # fmt: skip
+
+
+@pytest.mark.spec("R2.3", "R3.4", "R11.1")
+def test_a_client_reads_a_finished_s_answer_after_the_inactive_status_of_its_step() -> None:
+    """At a client the run's INACTIVE status may come before the answer of the FINISHED that ended it
+    (R2.3 orders them the other way at the server), and the latched begin of the run the trace starts
+    in after its status: neither is a finding.  (The latched begin is the current run's, not a next
+    run's whose predecessor's INACTIVE status would go before it: read so, it once ended the run
+    before the FINISHED was accepted.)"""
+    lines = [_json.dumps(row) for row in _FINISHED_AT_A_CLIENT]
+    assert check_trace(lines).findings == ()
 
 
 def test_read_trace_skips_comments_and_parses_times_in_seconds() -> None:

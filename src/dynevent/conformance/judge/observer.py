@@ -1202,6 +1202,11 @@ CLOSED_GOALS = 4096
 #: How many records after the one being judged the observer looks at: a trace is checked in one pass
 #: with this many records held, whatever its length.
 LOOKAHEAD = 2
+#: The same for a trace seen at a client (``tap`` ``"client"``): its channels may lag one another by
+#: many records (a lossy link sends a lost message again, seconds later), and a goal's response,
+#: feedback and answer, or a status, are looked for that far ahead to put them back in the server's
+#: order.
+CLIENT_LOOKAHEAD = 64
 
 
 def _response_ahead(rooms: _Rooms, record: Record, window: Iterable[Record]) -> Record | None:
@@ -1249,6 +1254,34 @@ def _late_feedback(state: State | None, status: DynamicEventStatus, ahead: list[
     return None
 
 
+def _lagged_ahead(rooms: _Rooms, record: Record, window: Iterable[Record]) -> Record | None:
+    """At a client, whose channels lag one another (a lossy link): the record among those ahead that
+    the server sent before ``record``, on another channel.  A goal's feedback before its answer (R19.1:
+    nothing follows an answer); the INACTIVE status that ended a run before the next run's begin
+    (R3.4: a run begins once the last has ended)."""
+    if record.kind == "result":
+        uuid = record.goal_uuid
+        return next((ahead for ahead in window if ahead.kind == "feedback" and ahead.goal_uuid == uuid), None)
+    state = rooms.replica.state
+    if (
+        record.kind == "begin"
+        and state is not None
+        and state.active
+        and record.message.dynamic_event_seq != state.seq  # the next run's, not the current's read latched
+    ):
+        return next(
+            (
+                ahead
+                for ahead in window
+                if ahead.kind == "status"
+                and ahead.message.dynamic_event_seq == state.seq
+                and ahead.message.dynamic_state == DynamicState.INACTIVE
+            ),
+            None,
+        )
+    return None
+
+
 class Checker:
     """The observer fed one record at a time (:meth:`push`), for a reader that interleaves the
     records of several robots (a bag); :meth:`finish` gives the report.  It holds
@@ -1259,11 +1292,14 @@ class Checker:
         self._observer = _Observer(header)
         self._window: collections.deque[Record] = collections.deque()
         self._count = 0
+        self._client = header.tap == "client"
+        self._lookahead = CLIENT_LOOKAHEAD if self._client else LOOKAHEAD
 
     def push(self, record: Record) -> None:
-        """Take the next record; the one :data:`LOOKAHEAD` records before it is judged."""
+        """Take the next record; the one :data:`LOOKAHEAD` records before it (:data:`CLIENT_LOOKAHEAD`
+        at a client) is judged."""
         self._window.append(record)
-        if len(self._window) > LOOKAHEAD:
+        if len(self._window) > self._lookahead:
             self._judge_first()
 
     def finish(self, evidence: AnswerEvidence | None = None) -> Report:
@@ -1286,7 +1322,9 @@ class Checker:
     def _judge_first(self) -> None:
         window, rooms = self._window, self._observer.rooms
         record = window.popleft()
-        response = _response_ahead(rooms, record, window)
+        response = _response_ahead(rooms, record, window) or (
+            _lagged_ahead(rooms, record, window) if self._client else None
+        )
         if response is not None:  # a tap at a client: the goal's feedback or answer came first
             window.remove(response)
             window.appendleft(record)
@@ -1297,6 +1335,27 @@ class Checker:
         except Unreadable as exc:
             raise TraceError(self.source, record.line, exc.field, exc.problem) from None
         self._count += 1
+        if self._client and record.kind == "goal":
+            _response_next(rooms, record, window)
+
+
+def _response_next(rooms: _Rooms, goal: Record, window: collections.deque[Record]) -> None:
+    """At a client: the response to ``goal``, among the records ahead, goes next when the machine
+    decides as it says in the state the goal's request found.  At the server a response follows its
+    request at once; a client hears it late over a lagging link, after statuses the server published
+    since (a child's end, a new run's begin), and read there it would look decided on a state the
+    server had not reached.  A response the state at its request does not explain stays where it
+    came (the request itself may have reached the server late)."""
+    uuid = goal.goal_uuid
+    responses = (ahead for ahead in window if ahead.kind == "goal_response" and ahead.goal_uuid == uuid)
+    response = next(responses, None)
+    if response is None or response is (window[0] if window else None):
+        return
+    replica = rooms.replica
+    decision = machine.accept(replica.st, goal.message, replica.config_for(goal.message))
+    if isinstance(decision, outs.Accepted) == bool(response.accepted):
+        window.remove(response)
+        window.appendleft(response)
 
 
 def check_records(header: TraceHeader, records: Iterable[Record], source: str = "<trace>") -> Report:

@@ -36,7 +36,7 @@ from dynevent.wire.vocab import (
 
 #: The record types of a trace, and the fields each may hold besides ``type`` and ``time``.
 RECORD_TYPES: dict[str, frozenset[str]] = {
-    "config": frozenset({"fleet", "robot", "config"}),
+    "config": frozenset({"fleet", "robot", "config", "tap"}),
     "begin": frozenset({"message"}),
     "status": frozenset({"message"}),
     "goal": frozenset({"goal_uuid", "goal"}),
@@ -237,6 +237,13 @@ class TraceHeader:
     config: ServerConfig | None = None
     #: how the server is judged where no config record says: as the spec says, or as rmf_ros2 behaves
     compatibility: Compatibility = Compatibility.STANDARD
+    #: where the records were seen: ``"client"`` (each channel in order, not the channels with one
+    #: another, any of them late: :data:`TAPS`), ``"server"``, or None (unsaid: read as the server's)
+    tap: str | None = None
+
+
+#: Where a trace's records may be seen (its config record's ``tap``).
+TAPS = ("client", "server")
 
 
 def _header(data: dict[str, Any], source: str, line: int) -> TraceHeader:
@@ -247,13 +254,16 @@ def _header(data: dict[str, Any], source: str, line: int) -> TraceHeader:
             raise TraceError(source, line, key, f"expected a string, got {_json.dumps(value)}")
         if value is not None:
             names[key] = value
+    tap = data.get("tap")
+    if tap is not None and tap not in TAPS:
+        raise TraceError(source, line, "tap", f"expected one of {list(TAPS)}, got {_json.dumps(tap)}")
     config = None
     if "config" in data:
         try:
             config = config_from_json(data["config"], "config")
         except InvalidRecord as exc:
             raise TraceError(source, line, exc.path, exc.problem) from None
-    return TraceHeader(fleet=names.get("fleet"), robot=names.get("robot"), config=config)
+    return TraceHeader(fleet=names.get("fleet"), robot=names.get("robot"), config=config, tap=tap)
 
 
 def read_trace(lines: Iterable[str], source: str = "<trace>") -> tuple[TraceHeader, list[Record]]:
@@ -365,7 +375,8 @@ class TraceWriter:
     """Writes a trace file as things happen, one record per line, each line flushed as written (a
     process that dies keeps every record before its end).  Threads may share one writer.
 
-    ``fleet`` and ``robot`` (and the server's ``config`` as JSON, when known) make the config record.
+    ``fleet`` and ``robot`` (and the server's ``config`` as JSON, when known) make the config record,
+    with ``tap``, where the records are seen (:data:`TAPS`: a client's writer says ``"client"``).
     Raises :class:`~dynevent.errors.FileError` when the file cannot be opened.
     """
 
@@ -377,6 +388,7 @@ class TraceWriter:
         robot: str | None = None,
         config: Any = None,
         keep: bool = False,
+        tap: str | None = None,
     ) -> None:
         self.path = path
         self._lock = threading.Lock()
@@ -388,6 +400,8 @@ class TraceWriter:
         header.update({key: value for key, value in (("fleet", fleet), ("robot", robot)) if value})
         if config is not None:
             header["config"] = config
+        if tap is not None:
+            header["tap"] = tap
         self.write(header)
 
     def write(self, row: dict[str, Any]) -> None:

@@ -89,6 +89,6 @@ def run(
 def _open_trace(options: Options) -> TraceWriter:
     """The trace of the run: kept in memory for the judge, and written to ``--trace`` when given."""
     try:
-        return TraceWriter(options.trace, fleet=options.fleet, robot=options.robot, keep=True)
+        return TraceWriter(options.trace, fleet=options.fleet, robot=options.robot, keep=True, tap="client")
     except FileError as exc:
         raise ProbeError(str(exc)) from None

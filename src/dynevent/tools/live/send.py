@@ -238,7 +238,7 @@ def _open_trace(args: SendOptions) -> TraceWriter | None:
     if args.trace is None:
         return None
     try:
-        return TraceWriter(args.trace, fleet=args.fleet, robot=args.robot)
+        return TraceWriter(args.trace, fleet=args.fleet, robot=args.robot, tap="client")
     except FileError as exc:
         raise SendError(str(exc)) from None
 
