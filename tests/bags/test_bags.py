@@ -316,6 +316,47 @@ def test_a_goal_whose_request_the_bag_lost_begins_the_judgement_anew(tmp_path: P
     assert [(f.line, f.rule) for f in robot.report.findings] == [(at, "R2.2")], robot.report.findings
 
 
+def test_a_goal_whose_response_the_bag_lost_is_read_as_accepted_from_its_feedback(tmp_path: Path) -> None:
+    """A recorder on a lossy link lost a goal's response event (a writer's short history let it go
+    before it was sent again), but holds the goal's request and its feedback and answer: a server
+    feeds back and answers only a goal it accepted, so the goal is read as accepted there (said in
+    ``unheard``), and nothing is found that the loss caused; a rejected goal's feedback still is."""
+
+    def run(response: bool = True) -> Conversation:
+        talk = Conversation().begin().status(1, 1, "standby", 0)
+        if response:
+            talk.goal(1, goal_id=1)
+        else:  # the request event alone
+            request = _type("rmf_task_msgs/action/DynamicEvent_SendGoal_Request")(
+                goal_id=_uuid(1),
+                goal=_type("rmf_task_msgs/action/DynamicEvent_Goal")(
+                    dynamic_event_seq=1,
+                    event_type=1,
+                    category="go_to_place",
+                    description='"pantry"',
+                    id=1,
+                    stubborn_period=0.0,
+                ),
+            )
+            talk._event("send_goal", 1, 1, request=request)
+        talk.ask(1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
+        return talk.result(1, SUCCEEDED, "completed", 1).status(1, 1, "standby", 1)
+
+    lossy = run(response=False)
+    feedback = next(time for topic, _, time, _ in lossy.messages if topic.endswith("feedback"))
+    robot = _robot(check_bag(lossy.write(tmp_path / "lossy", StoragePlugin.MCAP)))
+    assert robot.report.clean, robot.report.findings
+    assert robot.unheard == ((feedback, "01" * 16),) and robot.lost == ()
+    assert _robot(check_bag(run().write(tmp_path / "whole", StoragePlugin.MCAP))).unheard == ()
+    done = _check(str(tmp_path / "lossy"))
+    assert done.returncode == 0 and f"the bag lacks the response to goal {'01' * 16}" in done.stdout
+    refused = Conversation().begin().status(1, 1, "standby", 0).goal(1, accepted=False, goal_id=1)
+    robot = _robot(
+        check_bag(refused.feedback(1, "underway", 1).write(tmp_path / "refused", StoragePlugin.MCAP))
+    )
+    assert [finding.code for finding in robot.report.findings] == ["feedback_not_running"]
+
+
 def test_a_second_different_answer_is_found_and_the_same_answer_twice_is_not(tmp_path: Path) -> None:
     """A client that asks twice for a result gets the same answer twice: one answer.  A different
     second answer to the same goal is a double answer."""

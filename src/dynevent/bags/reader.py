@@ -173,6 +173,9 @@ class RobotReport:
     refused: int = 0
     #: where the bag lacked a goal's request: (the bag time of the first record naming the goal, its UUID)
     lost: tuple[tuple[int, str], ...] = ()
+    #: where the bag held a goal's request but lacked its response, and its feedback or answer came:
+    #: (the bag time of that record, the goal's UUID); the goal is read as accepted from there
+    unheard: tuple[tuple[int, str], ...] = ()
 
     @property
     def name(self) -> str:
@@ -467,6 +470,7 @@ class _Robot:
         self._last_status: Record | None = None
         self._before: list[Report] = []  # the judgements cut where the bag lost a goal's request
         self.lost: list[tuple[int, str]] = []
+        self.unheard: list[tuple[int, str]] = []
         self._arrived = 0
         self.keep = keep  # keep every record passed on, in ``kept`` (bag_records)
         self.kept: list[Record] = []
@@ -575,6 +579,8 @@ class _Robot:
             return
         if record.kind in ("feedback", "result") and record.goal_uuid not in self._requested:
             self.lost_request(record)
+        elif record.kind in ("feedback", "result") and record.goal_uuid in self._goals:
+            self.unheard_response(record)
         elif record.kind == "status":
             self._last_status = record
         if record.kind == "goal":
@@ -632,6 +638,19 @@ class _Robot:
             self._judge.push(item)
         _remember(self._requested, record.goal_uuid, None)  # what follows of it is the new judgement's
 
+    def unheard_response(self, record: Record) -> None:
+        """``record`` is the feedback or answer of a goal whose request the bag holds and whose response
+        it lacks: a server feeds back and answers only a goal it accepted, so the response was accepted,
+        and lost on its way to the recorder (a lossy link: a service event a writer's short history let
+        go before it was sent again).  It is read as accepted, here, and said."""
+        self._goals.pop(record.goal_uuid)
+        self.unheard.append((record.time, record.goal_uuid))
+        response = Record(line=record.line, kind="goal_response", time=record.time, goal_uuid=record.goal_uuid,
+                          accepted=True)  # fmt: skip
+        if self.keep:
+            self.kept.append(response)
+        self.judge.push(response)
+
     @property
     def judged(self) -> bool:
         """Whether the bag recorded this robot's goals (its send_goal introspection): without them,
@@ -657,8 +676,9 @@ class _Robot:
             records = before.records + report.records
             report = attrs.evolve(report, records=records, findings=before.findings + report.findings)
         return RobotReport(
-            self.fleet, self.robot, channels, absent, report, not self.judged, self.refused, tuple(self.lost)
-        )
+            self.fleet, self.robot, channels, absent, report, not self.judged, self.refused, tuple(self.lost),
+            tuple(self.unheard),
+        )  # fmt: skip
 
 
 def _remember(books: collections.OrderedDict[str, Any], key: str, value: Any) -> None:

@@ -107,6 +107,9 @@ def format_bag(bag: Any) -> str:
         for time, uuid in robot.lost:
             lines.append(f"{where} @ {_bag_time(time)}: the bag lacks the request of goal {uuid}: "
                          "judged anew from the status before it")  # fmt: skip
+        for time, uuid in robot.unheard:
+            lines.append(f"{where} @ {_bag_time(time)}: the bag lacks the response to goal {uuid}: "
+                         "read as accepted from its feedback or answer")  # fmt: skip
         if robot.refused:
             lines.append(f"{where}: {robot.refused} message(s) the mirrors refuse, not judged")
         count = len(robot.report.findings)
@@ -142,6 +145,9 @@ def bag_records(bag: Any) -> list[dict[str, Any]]:
                          "absent": list(robot.absent), "full": not robot.partial})  # fmt: skip
         for time, uuid in robot.lost:
             rows.append({"type": "lost_request", "file": bag.source, "robot": robot.name,
+                         "time": _bag_time(time), "goal_uuid": uuid})  # fmt: skip
+        for time, uuid in robot.unheard:
+            rows.append({"type": "lost_response", "file": bag.source, "robot": robot.name,
                          "time": _bag_time(time), "goal_uuid": uuid})  # fmt: skip
         if robot.refused:
             rows.append(
