@@ -491,8 +491,12 @@ class _LaggingLink(InProcessLink):
     reliable DDS topic sends a lost message again, late, and the channels are not in order with one
     another)."""
 
-    def __init__(self, config: ServeConfig, trace: TraceWriter | None = None, **lags: float) -> None:
+    def __init__(
+        self, config: ServeConfig, trace: TraceWriter | None = None, *, keep_last: bool = False, **lags: float
+    ) -> None:
         self.lags = lags
+        self.keep_last = keep_last  # the status topic keeps one message: one superseded on its way is lost
+        self.published: list[Any] = []
         super().__init__(config, trace=trace)
 
     def _later(self, kind: str, action: Any) -> None:
@@ -509,7 +513,15 @@ class _LaggingLink(InProcessLink):
         self._later("feedback", lambda: InProcessLink.hear_feedback(self, exchange, feedback))
 
     def hear_status(self, status: Any) -> None:
-        self._later("status", lambda: InProcessLink.hear_status(self, status))
+        self.published.append(status)
+
+        def deliver() -> None:
+            if not self.keep_last or self.published[-1] is status:
+                InProcessLink.hear_status(self, status)
+            else:  # the transport knows (DDS: a gap in the writer's sequence numbers)
+                self.statuses_missed += 1
+
+        self._later("status", deliver)
 
     def hear_response(self, exchange: probing.Exchange, accepted: bool) -> None:
         self._later("response", lambda: InProcessLink.hear_response(self, exchange, accepted))
@@ -573,3 +585,21 @@ def test_over_a_link_whose_channels_lag_every_case_passes_and_the_judge_finds_no
     as_server = trace.text().replace(',"tap":"client"', "", 1)
     assert as_server != trace.text()
     assert check_trace(as_server).findings, "read in the server's order, the lagged trace is not clean"
+
+
+@pytest.mark.spec("R11.2", "R1.4")
+def test_a_runs_inactive_status_the_next_run_overwrote_on_its_way_is_not_the_servers_failure() -> None:
+    """The status topic keeps one message: on a lossy link the INACTIVE that ended a run can be taken
+    over by the next run's status before it is delivered again, and the probe never hears it.  Its
+    case is not run, saying so, rather than failed, and the cases after it go by the run the probe's
+    FINISHED ended."""
+    children = {"go_to_place": CategorySpec(duration=3.0, report_every=0.25)}
+    config = attrs.evolve(CONFIG, categories=children)  # a new run 0.3 s after each end
+    link = _LaggingLink(config, keep_last=True, status=1.0)
+    findings = probing.run_cases(link, attrs.evolve(OPTIONS, timeout=10, deadline=5000), list(CASES), print)
+    verdicts = {finding.case.id: finding for finding in findings}
+    ended = verdicts["finished.ends_the_run"]
+    assert ended.verdict is Verdict.MISSING and "the status topic keeps one message" in ended.seen, ended
+    for case in ("finished.next_after", "finished.cancel_after", "finished.finished_after"):
+        assert verdicts[case].verdict is Verdict.PASS, verdicts[case]
+    assert not [finding for finding in findings if finding.verdict is Verdict.FAIL]

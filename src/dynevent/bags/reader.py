@@ -645,8 +645,8 @@ class _Robot:
         go before it was sent again).  It is read as accepted, here, and said."""
         self._goals.pop(record.goal_uuid)
         self.unheard.append((record.time, record.goal_uuid))
-        response = Record(line=record.line, kind="goal_response", time=record.time, goal_uuid=record.goal_uuid,
-                          accepted=True)  # fmt: skip
+        time, uuid = record.time, record.goal_uuid
+        response = Record(line=record.line, kind="goal_response", time=time, goal_uuid=uuid, accepted=True)
         if self.keep:
             self.kept.append(response)
         self.judge.push(response)

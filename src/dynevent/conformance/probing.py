@@ -37,7 +37,7 @@ from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.conformance.probe_cases import Case, Finding, Verdict
 from dynevent.errors import FileError, ProbeError
 from dynevent.server import machine
-from dynevent.wire._fields import U32_MAX, U64_MAX, id_not_after
+from dynevent.wire._fields import U32_MAX, U64_MAX, id_not_after, seq_after
 from dynevent.wire._text import goal_text, status_text
 from dynevent.wire.messages import (
     DynamicEventDescription,
@@ -134,6 +134,8 @@ class Link:
         self._changed = threading.Condition()
         #: how many messages the server has sent the probe (statuses, begins, responses, feedback, answers)
         self.heard = 0
+        #: statuses the transport knows were published and not delivered (a gap in the writer's numbers)
+        self.statuses_missed = 0
         #: what the transport found wrong in how a topic (``"status"``, ``"begin"``) is offered, which
         #: no trace carries (DDS: a durability that a transient-local reader cannot match)
         self.offered: dict[str, str] = {}
@@ -700,6 +702,13 @@ ENDED_UNSEEN = (
     "at each of the {places} place(s) given, the child was answered before a status showed it running: "
     "the robot stood there, or the link was slower than the child (children that take longer let it run)"
 )
+#: Why ``finished.ends_the_run`` is not run when the next run's status came, the INACTIVE did not, and
+#: the transport knows a status was published and not delivered meanwhile.
+OVERWRITTEN = (
+    "run {later}'s status came and run {seq}'s INACTIVE did not, and a status was published that never "
+    "came: the status topic keeps one message, and the next run's took its place before this link "
+    "delivered it (a lossy link)"
+)
 #: Why a case whose goal was sent while a late status showed a child running is not run.
 ENDED_FIRST = (
     "child {child} had ended when the goal reached the server (its statuses say so): the status the "
@@ -973,23 +982,41 @@ def _finished(probe: Probe, case: Case) -> Finding:
     if answer is None or (answer[0], answer[1].status) != (GoalStatus.SUCCEEDED, _COMPLETED):
         return Finding(case, Verdict.FAIL, expected=expected, seen=_describe_answer(exchange))
     seq = status.dynamic_event_seq
+    missed = probe.link.statuses_missed
     if not probe.link.wait_seen(
         lambda s: s.dynamic_state == DynamicState.INACTIVE and s.dynamic_event_seq == seq,
         since,
         probe.timeout,
     ):
+        later = [s for s in probe.link.history()[since:] if seq_after(s.dynamic_event_seq, seq)]
+        if later and probe.link.statuses_missed > missed:  # the next run's took the INACTIVE's place
+            return Finding(
+                case, Verdict.MISSING, seen=OVERWRITTEN.format(seq=seq, later=later[0].dynamic_event_seq)
+            )
         return Finding(case, Verdict.FAIL, expected=expected, seen="no INACTIVE status", absent=True)
     return Finding(case, Verdict.PASS, expected=expected, seen="so")
 
 
 def _ended(probe: Probe) -> DynamicEventStatus:
-    """The status of a run that has ended: the latest, or the last INACTIVE one seen."""
+    """The status of a run that has ended: the latest, or the last INACTIVE one seen, or the run the
+    probe's FINISHED ended when its INACTIVE status never reached the probe (the status topic keeps
+    one message, and the next run's may take its place first)."""
     status = probe.any_status()
     if status.dynamic_state != DynamicState.INACTIVE:
         ended = [s for s in probe.link.statuses if s.dynamic_state == DynamicState.INACTIVE]
-        if not ended:
+        finished = [
+            exchange.goal.dynamic_event_seq
+            for exchange in probe.link.made
+            if exchange.goal.event_type == EventType.FINISHED.value
+            and exchange.answer is not None
+            and exchange.answer[0] is GoalStatus.SUCCEEDED
+        ]
+        if ended:
+            status = ended[-1]
+        elif finished:
+            status = DynamicEventStatus(dynamic_event_seq=finished[-1], dynamic_state=DynamicState.INACTIVE)
+        else:
             raise _Unreachable("no run has ended (no INACTIVE status seen)")
-        status = ended[-1]
     return status
 
 

@@ -11,18 +11,12 @@ would refuse the goal.  A run is awaitable inside the node's executor
 (``outcome = await run``) and can be waited on from another thread with a
 bound (:meth:`GoalRun.wait`).
 
-A server that restarts (R21) takes the pending requests of its goals with
-it, and a network that cuts the client off for longer than the middleware's
-lease (20 s with Fast DDS) loses what was in flight to it.  The client hears
-both from its status subscription: the robot's status publisher matched (a
-new server process, or the one it had lost) and no longer matched (contact
-lost).  It hands each to the client machine (:class:`~dynevent.client.ContactMade`,
-:class:`~dynevent.client.ContactLost`), which asks again for the result of
-every open goal (R21.4, R21.5): a server that kept the answer gives it, one
-that does not know the goal ends it aborted with ``goal lost: unknown to the
-server``.  So neither a crash nor a partition leaves a goal waiting for an
-answer that cannot come; while contact is lost, ``on_contact`` hears so, and
-a wait that ends at its bound names the cause.
+A server's restart (R21), or a partition longer than DDS's lease, loses what was in flight to the
+client.  The client hands the robot's status publisher matched and no longer matched to the
+client machine (:class:`~dynevent.client.ContactMade`, :class:`~dynevent.client.ContactLost`), which
+asks again for the result of every open goal (R21.4, R21.5): a server that kept the answer gives it,
+one that does not know the goal ends it ``goal lost: unknown to the server``; ``on_contact`` hears
+of contact lost and found, and a wait that ends at its bound names the cause.
 """
 
 from __future__ import annotations

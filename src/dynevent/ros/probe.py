@@ -53,6 +53,7 @@ class RosLink(Link):
     def __init__(self, node: Any, fleet: str, robot: str, trace: TraceWriter | None = None) -> None:
         super().__init__(fleet, robot, trace)
         self._node = node
+        self._last_number = 0  # the status writer's last publication sequence number heard
         # a deep reader history: the writer keeps the last message for late subscribers (R1.4), and
         # the probe, subscribed all along, must miss none of those that follow (an INACTIVE status
         # followed at once by the next run's)
@@ -92,7 +93,12 @@ class RosLink(Link):
         with self._changed:
             return self._changed.wait_for(condition, timeout)
 
-    def _on_status(self, message: Any) -> None:
+    def _on_status(self, message: Any, info: Any) -> None:
+        # a gap in the writer's numbers is a status published and never delivered (its topic keeps one)
+        number = int(info.get("publication_sequence_number") or 0)
+        if number and self._last_number and number > self._last_number + 1:
+            self.statuses_missed += number - self._last_number - 1
+        self._last_number = max(number, self._last_number)
         try:
             status = convert.status_from_ros(message)
         except InvalidMessage:
