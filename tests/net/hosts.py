@@ -157,7 +157,6 @@ class Host:
         self.address = str(SUBNET.network_address + FIRST_HOST + index)
         self.port = f"p{index}"  # the link's end on the bridge
         self.processes: list[HostProcess] = []
-        self._loss = 0
 
     def __repr__(self) -> str:
         return f"Host({self.name!r}, {self.address})"
@@ -194,20 +193,27 @@ class Host:
         """The partition ends: the link is up again."""
         _ip("-n", self.site.bridge_netns, "link", "set", self.port, "up")
 
-    def block(self) -> None:
-        """A partition past the host's link (a failed switch or router): the link stays up, and
-        everything the host sends or receives on it is dropped."""
+    def _drop(self, table: str, incoming: str, outgoing: str) -> None:
+        """An nftables table of the host's that drops what its rules match, received and sent."""
         rules = (
-            "table inet dvblock {\n"
-            '  chain incoming { type filter hook input priority 0; iifname "eth0" drop; }\n'
-            '  chain outgoing { type filter hook output priority 0; oifname "eth0" drop; }\n'
+            f"table inet {table} {{\n"
+            f"  chain incoming {{ type filter hook input priority 0; {incoming} drop; }}\n"
+            f"  chain outgoing {{ type filter hook output priority 0; {outgoing} drop; }}\n"
             "}\n"
         )
         _command(["ip", "netns", "exec", self.netns, "nft", "-f", "-"], stdin=rules)
 
+    def _undrop(self, table: str) -> None:
+        _command(["ip", "netns", "exec", self.netns, "nft", "delete", "table", "inet", table], check=False)
+
+    def block(self) -> None:
+        """A partition past the host's link (a failed switch or router): the link stays up, and
+        everything the host sends or receives on it is dropped."""
+        self._drop("dvblock", 'iifname "eth0"', 'oifname "eth0"')
+
     def unblock(self) -> None:
         """The partition past the link ends."""
-        _command(["ip", "netns", "exec", self.netns, "nft", "delete", "table", "inet", "dvblock"])
+        self._undrop("dvblock")
 
     @contextlib.contextmanager
     def partition(self) -> Iterator[None]:
@@ -223,29 +229,15 @@ class Host:
         each drawn at random (0 ends the loss)."""
         if not 0 <= percent <= 100:
             raise ValueError(f"loss: a percentage from 0 to 100 (got {percent})")
-        exec_nft = ["ip", "netns", "exec", self.netns, "nft"]
-        _command([*exec_nft, "delete", "table", "inet", "dvloss"], check=False)
-        self._loss = percent
-        if percent == 0:
-            return
-        chains = "".join(
-            f"  chain {chain} {{ type filter hook {hook} priority 0; "
-            f'{way}name "eth0" numgen random mod 100 < {percent} drop; }}\n'
-            for chain, hook, way in (("incoming", "input", "iif"), ("outgoing", "output", "oif"))
-        )
-        rules = f"table inet dvloss {{\n{chains}}}\n"
-        _command([*exec_nft, "-f", "-"], stdin=rules)
+        self._undrop("dvloss")
+        if percent:
+            share = f"numgen random mod 100 < {percent}"
+            self._drop("dvloss", f'iifname "eth0" {share}', f'oifname "eth0" {share}')
 
     def block_multicast(self) -> None:
         """The host neither sends nor receives multicast: discovery must find the other hosts by name
         (static peers, a discovery server)."""
-        rules = (
-            "table inet dvmulticast {\n"
-            "  chain incoming { type filter hook input priority 0; ip daddr 224.0.0.0/4 drop; }\n"
-            "  chain outgoing { type filter hook output priority 0; ip daddr 224.0.0.0/4 drop; }\n"
-            "}\n"
-        )
-        _command(["ip", "netns", "exec", self.netns, "nft", "-f", "-"], stdin=rules)
+        self._drop("dvmulticast", "ip daddr 224.0.0.0/4", "ip daddr 224.0.0.0/4")
 
     def rate(self, kbit: int | None) -> None:
         """The host sends at most ``kbit`` kilobits a second (a token bucket), or as fast as it can
