@@ -57,6 +57,14 @@ whose :class:`OutcomeKind` says what became of it, in the spirit of
 A NEXT goal with a ``timeout`` that is still open when a tick reaches its
 deadline is cancelled by the client (a CANCEL goal, sent as soon as the child
 is known to run) and reported ``timeout`` when it ends.
+
+*Contact.*  The binding says when a server process of the robot comes into
+contact (:class:`ContactMade`: a status publisher matched, a new process or
+one lost before) and when none is any longer (:class:`ContactLost`).  Coming
+into contact with goals open, the client asks again for each one's result
+(:class:`AskResult`, R21.4, R21.5), at once and then after waits that double
+up to :data:`ASK_AGAIN_LONGEST`, until it is answered; lost and found contact
+are said (:class:`OutOfContact`, :class:`BackInContact`).
 """
 
 from __future__ import annotations
