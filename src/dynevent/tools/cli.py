@@ -822,8 +822,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         return quiet_broken_pipe()
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser, whose help and usage written to a reader that went away stop the command as
+    any other output does (141): Python 3.11's argparse ignores a write that fails, 3.10's does not."""
+
+    def _print_message(self, message: str, file: Any = None) -> None:
+        if message:
+            (file or sys.stderr).write(message)
+
+
 def _command(argv: Sequence[str] | None) -> int:
-    parser = argparse.ArgumentParser(prog="dynevent", description=_DESCRIPTION, epilog=_EPILOG)
+    parser: argparse.ArgumentParser = _Parser(prog="dynevent", description=_DESCRIPTION, epilog=_EPILOG)
     parser.add_argument("--version", action="version", version=f"dynevent {__version__}")
     commands = parser.add_subparsers(dest="command")
     _add_demo_command(commands)
