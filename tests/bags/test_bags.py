@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 
-from dynevent.bags.reader import BagReport, _definitions, _stored_name, check_bag, typestore
+from dynevent.bags.reader import HOLD, BagReport, _definitions, _stored_name, check_bag, typestore
 from dynevent.errors import BagError
 
 STORE = typestore()
@@ -106,7 +106,12 @@ class Conversation:
 
     def feedback(self, n: int, status: str, event_id: int, logs: tuple[int, ...] = ()) -> Conversation:
         entries = [
-            _type("rmf_task_msgs/msg/LogEntry")(seq=seq, tier="info", unix_millis_time=0, text="a log line")
+            _type("rmf_task_msgs/msg/LogEntry")(
+                seq=seq,
+                tier="info",
+                unix_millis_time=(self.now + SECOND // 10) // 1_000_000,
+                text="a log line",
+            )  # stamped when the message is, as the server stamps it
             for seq in logs
         ]
         feedback = _type("rmf_task_msgs/action/DynamicEvent_Feedback")(
@@ -847,13 +852,37 @@ def test_feedback_received_between_its_childs_end_and_its_answer_is_read_as_sent
 
 def test_feedback_received_after_its_goals_answer_is_read_as_sent_before_it(tmp_path: Path) -> None:
     """The feedback topic and the result service are two channels: a recorder may receive a goal's
-    last feedback after its answer, and cannot tell that from late sending; within ``SKEW`` it is
-    read as sent before the answer.  Long after the answer it is a finding (R19.1)."""
+    last feedback after its answer, and cannot tell that from late sending; within ``HOLD`` (a lossy
+    link sends a lost message again seconds later) it is read as sent before the answer.  Longer
+    after the answer it is a finding (R19.1)."""
     late = _clean(lambda run: run.feedback(1, "underway", 1))
     assert check_bag(late.write(tmp_path / "late", StoragePlugin.MCAP)).clean
-    later = _clean(lambda run: (setattr(run, "now", run.now + 2 * SECOND), run.feedback(1, "underway", 1)))
+    lossy = _clean(lambda run: (setattr(run, "now", run.now + 3 * SECOND), run.feedback(1, "underway", 1)))
+    assert check_bag(lossy.write(tmp_path / "lossy", StoragePlugin.MCAP)).clean
+    later = _clean(
+        lambda run: (setattr(run, "now", run.now + HOLD + 2 * SECOND), run.feedback(1, "underway", 1))
+    )
     findings = _robot(check_bag(later.write(tmp_path / "later", StoragePlugin.MCAP))).report.findings
     assert [(finding.rule, finding.code) for finding in findings][:1] == [("R19.1", "after_answer")], findings
+
+
+def test_feedback_a_lossy_link_delivered_out_of_order_goes_by_its_logs_time(tmp_path: Path) -> None:
+    """A recorder on a lossy link received a child's feedback out of the order it was sent (one lost,
+    then sent again seconds later, after the next): the time of its log entries, the server's, puts it
+    back, and the robot's log seqs go up as they did."""
+
+    def run() -> Conversation:
+        talk = Conversation().begin().status(1, 1, "standby", 0)
+        talk.goal(1, goal_id=1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
+        talk.feedback(1, "underway", 1, logs=(1,)).feedback(1, "underway", 1, logs=(2,))
+        talk.feedback(1, "underway", 1, logs=(3,))
+        talk.result(1, SUCCEEDED, "completed", 1).status(1, 1, "standby", 1)
+        return talk
+
+    assert check_bag(run().write(tmp_path / "clean", StoragePlugin.MCAP)).clean
+    lossy = run()
+    _received(lossy, [*range(6), 7, 8, 6, *range(9, len(lossy.messages))])  # log 1 came after log 3
+    assert check_bag(lossy.write(tmp_path / "lossy", StoragePlugin.MCAP)).clean
 
 
 def test_a_robot_without_goals_in_an_introspected_recording_is_said_to_have_had_none(tmp_path: Path) -> None:

@@ -472,6 +472,7 @@ class _Robot:
         self.lost: list[tuple[int, str]] = []
         self.unheard: list[tuple[int, str]] = []
         self._arrived = 0
+        self._logged_last = 0  # the latest time a feedback's logs carried so far
         self.keep = keep  # keep every record passed on, in ``kept`` (bag_records)
         self.kept: list[Record] = []
 
@@ -504,6 +505,15 @@ class _Robot:
         except InvalidMessage:
             self.refused += 1
 
+    def _logged_after(self, stamp: int) -> tuple[int, float, int, Record] | None:
+        """The first waiting feedback whose logs the server stamped after ``stamp``, if any (looked for
+        only when feedback came out of its order: in order, nothing is)."""
+        if stamp >= self._logged_last:
+            self._logged_last = stamp
+            return None
+        later = [item for item in self._waiting if item[3].kind == "feedback" and _logged(item[3]) > stamp]
+        return min(later) if later else None
+
     def _order(self, record: Record, stamp: int) -> None:
         """Pass records on in the server's order: a recorder receives each topic in order, but not
         the topics in order with one another (a goal's request event may come after the status its
@@ -513,11 +523,17 @@ class _Robot:
         keep their own order: its answer goes after the feedback received before it, and feedback
         received while its answer waits is read as sent before it (the feedback topic and the
         result service are two channels: a recorder cannot tell late delivery from late sending)."""
-        while self._waiting and self._waiting[0][0] <= record.time - SKEW:  # what is due goes first
+        while self._waiting and self._waiting[0][0] <= record.time - HOLD:  # what is due goes first
             self._release()
         answer = self._waiting_answers.get(record.goal_uuid) if record.kind == "feedback" else None
-        if answer is not None:
-            key: tuple[int, float] = (answer[0], answer[1] - 0.5)
+        logged = _logged(record) if record.kind == "feedback" else 0
+        overtaken = self._logged_after(logged) if logged else None
+        if overtaken is not None:
+            # feedback received after feedback the server logged later (a lossy link sent it again,
+            # after those): it goes before them, by its logs' time
+            key: tuple[int, float] = (overtaken[0], overtaken[1] - 0.5)
+        elif answer is not None:
+            key = (answer[0], answer[1] - 0.5)
         elif record.goal_uuid and record.kind not in _OPENING:
             key = (max(stamp, self._last.get(record.goal_uuid, stamp)), float(self._arrived))
         else:  # a goal's request and response go by their own stamps: what names it goes after them
@@ -535,7 +551,7 @@ class _Robot:
             self._waiting_responses[record.goal_uuid] = entry
         elif record.kind == "result":
             self._waiting_answers[record.goal_uuid] = entry
-        while self._waiting and self._waiting[0][0] <= record.time - SKEW:
+        while self._waiting and self._waiting[0][0] <= record.time - HOLD:
             self._release()
 
     def _release(self) -> None:
@@ -694,10 +710,17 @@ def _remember(books: collections.OrderedDict[str, Any], key: str, value: Any) ->
 SKEW = 1_000_000_000
 
 
+#: How long a record waits (bag time) for those the server sent before it, on other channels or,
+#: for feedback, on its own: a recorder on a lossy link receives a lost message when it is sent again,
+#: seconds later (Fast DDS repairs at its writers' heartbeat, every 3 s by default).
+HOLD = 10_000_000_000
+
+
 def _stamp(channel: str, message: Any, time: int) -> int:
     """The time the server stamped on a message, when it is within :data:`SKEW` of the bag time.  A
     service event a client published (its request sent, its response received) has the client's
-    clock, which may be another host's: its bag time is used."""
+    clock, which may be another host's: its bag time is used.  (A feedback's logs' time orders it among
+    feedback alone: :func:`_logged`.)"""
     if channel in _SERVICES and int(message.info.event_type) in (_REQUEST_SENT, _RESPONSE_RECEIVED):
         return time
     source = {"status": "time", "begin": "start_time"}.get(channel)
@@ -708,6 +731,12 @@ def _stamp(channel: str, message: Any, time: int) -> int:
         return time
     nanoseconds = int(stamped.sec) * 1_000_000_000 + int(stamped.nanosec)
     return nanoseconds if abs(nanoseconds - time) <= SKEW else time
+
+
+def _logged(record: Record) -> int:
+    """The time the server logged a feedback record's last entry, in nanoseconds (0: no entry)."""
+    logs = record.message.logs
+    return int(logs[-1].unix_millis_time) * 1_000_000 if logs else 0
 
 
 #: The channels of service events, and how many calls without a response (and records taken lately)
