@@ -9,6 +9,7 @@ too (``. build/ros/env.sh``).  Elsewhere they are skipped with a one-line reason
 from __future__ import annotations
 
 import faulthandler
+import itertools
 import os
 import sys
 from collections.abc import Callable, Iterator, Sequence
@@ -67,10 +68,12 @@ def ros_site(tmp_path: Path) -> Iterator[Callable[..., RosSite]]:
     """Make a ROS 2 site (:class:`sites.RosSite`): hosts by their names, DDS discovery in a mode of
     :data:`sites.MODES`; removed after the test."""
     made: list[RosSite] = []
+    numbers = itertools.count()  # a folder each, whichever thread makes the site
 
     def make(names: Sequence[str], mode: str = "multicast") -> RosSite:
-        made.append(RosSite(Site(names), mode, tmp_path / f"site{len(made)}"))
-        return made[-1]
+        site = RosSite(Site(names), mode, tmp_path / f"site{next(numbers)}")
+        made.append(site)
+        return site
 
     yield make
     for each in made:

@@ -5,6 +5,7 @@ bound of its own, the discovery server's partial view included."""
 
 from __future__ import annotations
 
+import concurrent.futures
 import sys
 import time
 from collections.abc import Callable
@@ -37,10 +38,15 @@ def _shards(site: RosSite) -> list[list[str]]:
 
 
 @pytest.mark.spec("R20.1", "R21.5")
-@pytest.mark.parametrize("mode", MODES)
-def test_a_sharded_fleet_is_found_and_driven_from_other_hosts(
-    ros_site: Callable[..., RosSite], mode: str
-) -> None:
+def test_a_sharded_fleet_is_found_and_driven_from_other_hosts(ros_site: Callable[..., RosSite]) -> None:
+    """Each way of finding the processes on a site of its own, all at once."""
+    with concurrent.futures.ThreadPoolExecutor(len(MODES)) as pool:
+        runs = {mode: pool.submit(_in_mode, ros_site, mode) for mode in MODES}
+    failed = {mode: run.exception() for mode, run in runs.items() if run.exception() is not None}
+    assert not failed, "\n\n".join(f"{mode}: {error}" for mode, error in failed.items())
+
+
+def _in_mode(ros_site: Callable[..., RosSite], mode: str) -> None:
     site = ros_site(["shard1", "shard2", "client", "prober"], mode)
     first, second = _shards(site)
     bag = site.folder / "bag"
