@@ -45,6 +45,7 @@ from dynevent.errors import (
 from dynevent.ros import convert
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.qos import introspect, latched
+from dynevent.ros.sending import GoalSender
 from dynevent.server.inputs import NOW_RANGE
 from dynevent.wire.messages import Result
 from dynevent.wire.names import (
@@ -112,6 +113,7 @@ class DynamicEventClient:
         self._timer = node.create_timer(1.0, self._on_tick, callback_group=group)
         self._timer.cancel()
         self._action = ActionClient(node, DynamicEvent, action_name(fleet, robot), callback_group=group)
+        self._sender = GoalSender(node, self._action)
         self._begin = node.create_subscription(
             RosDescription,
             begin_topic(fleet, robot),
@@ -221,6 +223,7 @@ class DynamicEventClient:
 
     def destroy(self) -> None:
         """Release the action client, subscriptions and timer."""
+        self._sender.destroy()
         self._action.destroy()
         self._node.destroy_subscription(self._status)
         self._node.destroy_subscription(self._begin)
@@ -276,12 +279,10 @@ class DynamicEventClient:
         uuid = send.goal_uuid
         if self._trace is not None:
             self._trace.observe("goal", goal_uuid=uuid, message=send.goal)
-        response = self._action.send_goal_async(
-            convert.goal_to_ros(send.goal),
-            feedback_callback=lambda message: self._on_feedback(uuid, message),
-            goal_uuid=convert.uuid_to_ros(uuid),
-        )
-        response.add_done_callback(lambda future: self._on_response(uuid, future))
+        self._sender.send(
+            convert.goal_to_ros(send.goal), convert.uuid_to_ros(uuid),
+            lambda message: self._on_feedback(uuid, message), lambda future: self._on_response(uuid, future),
+        )  # fmt: skip
 
     def _on_response(self, uuid: str, future: Any) -> None:
         handle = future.result()

@@ -21,6 +21,7 @@ from dynevent.ros import convert
 from dynevent.ros.client import introspect
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
 from dynevent.ros.qos import latched
+from dynevent.ros.sending import GoalSender
 from dynevent.wire.messages import Goal
 from dynevent.wire.names import (
     STATUS_TOPIC_DEPTH,
@@ -63,6 +64,7 @@ class RosLink(Link):
         }
         self._subscriptions = [self._subscribe(name, latched(_READER_DEPTH)) for name in self._topics]
         self._action = ActionClient(node, DynamicEvent, action_name(fleet, robot))
+        self._sender = GoalSender(node, self._action)
 
     def _subscribe(self, name: str, qos: QoSProfile) -> Any:
         kind, topic, callback = self._topics[name]
@@ -131,12 +133,12 @@ class RosLink(Link):
     def send(self, goal: Goal) -> Exchange:
         exchange = Exchange(goal, self)
         self.sent("goal", goal_uuid=exchange.uuid, message=goal)
-        future = self._action.send_goal_async(
+        self._sender.send(
             convert.goal_to_ros(goal),
-            feedback_callback=lambda message: self._on_feedback(exchange, message),
-            goal_uuid=convert.uuid_to_ros(exchange.uuid),
+            convert.uuid_to_ros(exchange.uuid),
+            lambda message: self._on_feedback(exchange, message),
+            lambda done: self._on_response(exchange, done),
         )
-        future.add_done_callback(lambda done: self._on_response(exchange, done))
         return exchange
 
     def _on_response(self, exchange: Exchange, future: Any) -> None:
@@ -199,4 +201,5 @@ class RosLink(Link):
         return introspect(self._action, self._node)
 
     def destroy(self) -> None:
+        self._sender.destroy()
         self._action.destroy()

@@ -350,6 +350,28 @@ def test_feedback_for_a_goal_not_running() -> None:
     assert found(trace.check()) == [(trace.line, "R7.1", "feedback_not_running")]
 
 
+def test_feedback_for_a_rejected_goal_says_so() -> None:
+    trace = Trace().started().next(2, 7, accepted=False).feedback(2, "underway", 7)
+    report = trace.check()
+    assert found(report) == [(trace.line, "R7.1", "feedback_not_running")]
+    assert report.findings[0].message.endswith(", rejected")
+
+
+def test_feedback_for_a_goal_whose_response_was_not_heard_says_so() -> None:
+    goal = {
+        "dynamic_event_seq": 1,
+        "event_type": 1,
+        "category": "go_to_place",
+        "description": '"pantry"',
+        "id": 7,
+    }
+    trace = Trace().started().add("goal", goal_uuid=uuid(2), goal=goal)  # its response: not in the trace
+    trace.feedback(2, "underway", 7)
+    report = trace.check()
+    assert found(report) == [(trace.line, "R7.1", "feedback_not_running")]
+    assert report.findings[0].message.endswith(", no response to it heard")
+
+
 def test_feedback_after_the_terminal_answer() -> None:
     trace = Trace().started().result(1, "succeeded", "completed", 6).feedback(1, "underway", 6)
     assert found(trace.check()) == [(trace.line, "R19.1", "after_answer")]

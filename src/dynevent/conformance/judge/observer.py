@@ -404,6 +404,12 @@ class _Goals:
             return f"never requested in this trace, or closed before the latest {CLOSED_GOALS} closed goals"
         return "never requested in this trace"
 
+    def not_accepted(self, seen: GoalSeen | None) -> str:
+        """What a goal that was not seen accepted is: unknown, rejected, or not answered yet."""
+        if seen is None:
+            return self.unknown_goal
+        return "rejected" if seen.responded else "no response to it heard"
+
 
 @attrs.frozen
 class AnswerEvidence:
@@ -842,7 +848,7 @@ class _Feedback(_Part):
         seen = self.goals.bind_unknown(uuid)
         label = f"feedback {feedback.status} id={feedback.id} for goal {uuid}"
         if seen is None or not seen.accepted:
-            what = self.goals.unknown_goal if seen is None else "rejected"
+            what = self.goals.not_accepted(seen)
             self.findings.flag(
                 Violation.FEEDBACK_NOT_RUNNING, f"{label}, {what}", "no feedback: no goal of it runs"
             )
@@ -1019,7 +1025,7 @@ class _Answers(_Part):
         seen = self.goals.bind_unknown(uuid, failure in ("", Failure.SHUTDOWN.value))
         label = f"answer {answer_text(record.status, result, first_line=True)} for goal {uuid}"
         if seen is None or not seen.accepted:
-            what = self.goals.unknown_goal if seen is None else "rejected"
+            what = self.goals.not_accepted(seen)
             self.findings.flag(
                 Violation.ANSWER_NOT_ACCEPTED, f"{label}, {what}", "no answer: the goal was never accepted"
             )
