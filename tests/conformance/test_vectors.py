@@ -25,6 +25,7 @@ import jsonschema
 import pytest
 
 from dynevent.conformance import vectors
+from dynevent.server.config import MORE_ERRORS
 
 ROOT = Path(__file__).resolve().parents[2]
 SPEC = (ROOT / "docs" / "spec.md").read_text(encoding="utf-8")
@@ -149,6 +150,77 @@ def test_wildcards_only_stand_for_open_wording(shipped: list[vectors.Vector]) ->
         for index, step in enumerate(vector.steps, start=1):
             for output in step.expect:
                 walk(output, "", f"{vector.name} step {index}")
+
+
+def _open_wording(output: dict[str, Any], clamped: bool) -> list[tuple[str, Any]]:
+    """The values of ``output`` whose wording docs/conformance.md section 6 leaves open, by path.
+
+    ``clamped``: the step reports a clamp (R12.2), so its warning entry's text is open."""
+    kind = output["type"]
+    found: list[tuple[str, Any]] = []
+    if kind == "goal_rejected":
+        rejection = output["rejection"]
+        if rejection["reason"] != "seq_mismatch":
+            found.append(("rejection.text", rejection["text"]))
+        # the ninth error of R4.19 stands for the errors not listed: the spec fixes its wording
+        errors = [error for error in rejection["errors"] if error != MORE_ERRORS]
+        found += [(f"rejection.errors[{index}]", error) for index, error in enumerate(errors)]
+        if rejection["errors"]:
+            found.append(("rejection.execution_failure", rejection["execution_failure"]))
+    if kind in ("goal_rejected", "answer_goal"):
+        failure = (output.get("rejection") or output.get("result"))["execution_failure"]
+        if " -- " in failure:  # a fixed string followed by open sentences (R4.8 to R4.10, R5.3, R6.1)
+            found.append(("execution_failure", failure))
+    if kind == "ignored":
+        found.append(("why", output["why"]))
+    if clamped and kind == "log" and output["entry"]["tier"] == "warning":
+        found.append(("entry.text", output["entry"]["text"]))
+    if clamped and kind == "publish_feedback":
+        found += [("feedback.logs[].text", log["text"]) for log in output["feedback"]["logs"]]
+    return found
+
+
+def test_open_wording_is_always_a_wildcard(shipped: list[vectors.Vector]) -> None:
+    """Where docs/conformance.md section 6 leaves the wording open, every vector expects "*": a vector
+    that expects dynevent's own sentence there fails an implementation that keeps to the spec."""
+    exact = []
+    for vector in shipped:
+        for index, step in enumerate(vector.steps, start=1):
+            clamped = any(output["type"] == "stubborn_clamped" for output in step.expect)
+            for output in step.expect:
+                for path, value in _open_wording(output, clamped):
+                    if value != vectors.WILDCARD:
+                        exact.append(f"{vector.name} step {index}: {output['type']}.{path} = {value!r}")
+    assert not exact, "\n".join(exact)
+
+
+def test_open_wording_finds_what_it_must() -> None:
+    """The check above reads each open place: a dynevent sentence in each is found."""
+    rejection = {
+        "reason": "description_invalid",
+        "text": "t",
+        "errors": ["e", MORE_ERRORS],
+        "execution_failure": "Description parsing failure\n -- e",
+    }
+    found = _open_wording({"type": "goal_rejected", "goal_uuid": "", "rejection": rejection}, False)
+    assert [path for path, _ in found] == [
+        "rejection.text",
+        "rejection.errors[0]",
+        "rejection.execution_failure",
+        "execution_failure",
+    ]
+    seq = {**rejection, "reason": "seq_mismatch", "errors": [], "execution_failure": ""}
+    assert _open_wording({"type": "goal_rejected", "rejection": seq}, False) == []
+    race = {"type": "answer_goal", "result": {"execution_failure": "race condition\n -- no"}}
+    assert _open_wording(race, False) == [("execution_failure", "race condition\n -- no")]
+    fixed = {"type": "answer_goal", "result": {"execution_failure": "race condition"}}
+    assert _open_wording(fixed, True) == []
+    assert _open_wording({"type": "ignored", "input": "tick", "why": "w"}, False) == [("why", "w")]
+    log = {"type": "log", "entry": {"seq": 0, "tier": "warning", "unix_millis_time": 0, "text": "w"}}
+    assert _open_wording(log, True) == [("entry.text", "w")]
+    assert _open_wording(log, False) == []
+    feedback = {"type": "publish_feedback", "feedback": {"logs": [log["entry"]]}}
+    assert _open_wording(feedback, True) == [("feedback.logs[].text", "w")]
 
 
 def test_vectors_are_short_and_summarised(shipped: list[vectors.Vector]) -> None:
