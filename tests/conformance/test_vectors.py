@@ -26,6 +26,9 @@ import pytest
 
 from dynevent.conformance import vectors
 from dynevent.server.config import MORE_ERRORS
+from dynevent.server.inputs import INPUT_TYPES
+from dynevent.server.outputs import OUTPUT_TYPES
+from dynevent.wire import _codec
 
 ROOT = Path(__file__).resolve().parents[2]
 SPEC = (ROOT / "docs" / "spec.md").read_text(encoding="utf-8")
@@ -150,6 +153,36 @@ def test_wildcards_only_stand_for_open_wording(shipped: list[vectors.Vector]) ->
         for index, step in enumerate(vector.steps, start=1):
             for output in step.expect:
                 walk(output, "", f"{vector.name} step {index}")
+
+
+def _documented_records(heading: str) -> dict[str, set[str]]:
+    """The record types of a table of docs/conformance.md, each with the fields it lists."""
+    text = (ROOT / "docs" / "conformance.md").read_text(encoding="utf-8")
+    section = text.split(f"\n### {heading}", 1)[1]
+    first_table = re.search(r"^\| `type` \|.*\n\|[-|]*\n((?:\|.*\n)*)", section, re.MULTILINE)
+    assert first_table, heading
+    table: dict[str, set[str]] = {}
+    for row in first_table[1].splitlines():
+        kinds, fields = row.split(" | ")[:2]
+        while re.search(r"\([^()]*\)", fields):  # what a bracket says of a field is not a field
+            fields = re.sub(r"\([^()]*\)", "", fields)
+        names = {name for name in re.findall(r"`([^`]*)`", fields) if re.fullmatch(r"[a-z_]+", name)}
+        for kind in re.findall(r"`([a-z_]+)`", kinds):
+            table[kind] = names
+    return table
+
+
+def test_every_input_a_driver_receives_is_documented_with_its_fields() -> None:
+    """docs/conformance.md section 3.2 lists every input type the driver decodes, with all its fields."""
+    documented = _documented_records("3.2 Inputs")
+    machine = {kind: set(_codec._encoded(cls)) for kind, cls in INPUT_TYPES.items()}
+    assert documented == machine
+
+
+def test_every_output_is_documented_with_its_fields() -> None:
+    documented = _documented_records("3.3 Outputs")
+    machine = {kind: set(_codec._encoded(cls)) for kind, cls in OUTPUT_TYPES.items()}
+    assert documented == machine
 
 
 def _open_wording(output: dict[str, Any], clamped: bool) -> list[tuple[str, Any]]:
