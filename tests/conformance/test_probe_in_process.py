@@ -216,6 +216,58 @@ def test_an_implementation_behind_the_driver_protocol_is_probed_without_ros() ->
     assert "cancel.both_answered (R9.3, R8.3, R19.1): fail" in broken.stdout, broken.stdout
 
 
+class _Stateless:
+    """A driver that takes no state object (docs/conformance.md section 5 lets it refuse one), dynevent's
+    own machine behind it; it keeps the state of every reset it was sent."""
+
+    name = "stateless"
+
+    def __init__(self) -> None:
+        from dynevent.conformance.runner import InProcessImplementation
+
+        self.inner = InProcessImplementation()
+        self.states: list[Any] = []
+
+    def reset(self, fleet: str, robot: str, config: Any, state: Any) -> None:
+        from dynevent.errors import ImplementationError
+
+        self.states.append(state)
+        if state is not None:
+            raise ImplementationError("the implementation refused the request: no state objects here")
+        self.inner.reset(fleet, robot, config, state)
+
+    def apply(self, event: Any) -> tuple[list[Any], Any]:
+        return self.inner.apply(event)
+
+    def close(self) -> None:
+        self.inner.close()
+
+
+def test_a_driver_that_takes_no_state_object_is_probed_from_seq_0() -> None:
+    """The probe sends a driver a state object only to start the robot at a seq other than 0, and
+    then one holding only its seq (the one a driver must take); a driver that refuses it is told so,
+    with the way round: ``--first-seq 1``, which sends none, and every case but the wrap runs."""
+    from dynevent.conformance.in_process import DriverServer
+    from dynevent.errors import ImplementationError
+
+    refusing = _Stateless()
+    with pytest.raises(ImplementationError, match=r"--first-seq 1 sends none") as refused:
+        DriverServer(refusing, "tinyRobot", "tinyRobot1", CONFIG)
+    assert refusing.states == [{"seq": LAST_SEQ - 1}]
+    assert "docs/conformance.md section 5" in str(refused.value)
+    stateless = _Stateless()
+    config = attrs.evolve(CONFIG, first_seq=1)
+    server = DriverServer(stateless, "tinyRobot", "tinyRobot1", config)
+    assert stateless.states == [None]
+    said: list[str] = []
+    _, findings = probe_in_process(OPTIONS, list(CASES), said.append, config, stepper=server)
+    verdicts = _verdicts(findings)
+    assert server.broken is None
+    assert {case: verdict for case, verdict in verdicts.items() if verdict != "pass"} == {
+        "begin.seq_wrap": "missing"
+    }, "\n".join(said)
+
+
 @pytest.mark.parametrize("mode", ["hang", "exit", "garbage"])
 def test_an_implementation_that_breaks_the_protocol_ends_the_run_within_its_bound(mode: str) -> None:
     """A driver that stops answering, dies or answers garbage mid-run: the run ends (each request

@@ -246,15 +246,29 @@ class DriverServer:
     """An implementation behind the driver protocol (``dynevent vectors --impl``'s), as the in-process
     link's server: reset once for the robot, at the seq before ``config``'s first run, then each input
     applied.  Once it breaks the protocol (dies, stalls, answers what is not a record) it says
-    nothing more, and :attr:`broken` says why."""
+    nothing more, and :attr:`broken` says why.
+
+    The reset holds no state object (``"state": null``) when the robot starts at seq 0, else one
+    whose only field is ``seq``: the one state object docs/conformance.md section 5 says a driver
+    must take."""
 
     def __init__(
         self, implementation: runner.Implementation, fleet: str, robot: str, config: ServeConfig
     ) -> None:
         self.implementation = implementation
         self.broken: str | None = None
-        state = {"seq": config.first_state(robot).seq}
-        implementation.reset(fleet, robot, config_record(config), state)
+        seq = config.first_state(robot).seq
+        state = {"seq": seq} if seq else None
+        try:
+            implementation.reset(fleet, robot, config_record(config), state)
+        except ImplementationError as exc:
+            if state is None:
+                raise
+            raise ImplementationError(
+                f'{exc} (the reset held the state {{"seq": {seq}}}, so that the first begin gives seq '
+                f"{config.first_seq}: a driver must take a state object holding only a seq, "
+                "docs/conformance.md section 5; --first-seq 1 sends none)"
+            ) from None
 
     def __call__(self, event: ins.Input) -> tuple[outs.Output, ...]:
         if self.broken is not None:
