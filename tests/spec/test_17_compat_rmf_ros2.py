@@ -10,6 +10,8 @@ import math
 import attrs
 import pytest
 
+from dynevent.errors import InvalidValue
+from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.server.machine import (
@@ -240,3 +242,39 @@ def test_an_id_drawn_under_a_deferred_child_keeps_its_id_and_the_model_agrees() 
     for event in [ins.Begin(description="{}", event_id=0, now=run.now), *steps]:
         observer.observe(event, fresh.step(event))
     assert fresh.state.running is not None and fresh.state.running.child_id == 3
+
+
+def _published(description: str) -> str:
+    begin = Run(RMF_ROS2).begin(event_id=1, description=description)[0]
+    assert isinstance(begin, outs.PublishBegin)
+    return begin.message.description
+
+
+@pytest.mark.spec("R17.6")
+def test_the_re_serialised_text_is_utf8_with_only_the_escapes_json_needs() -> None:
+    given = (
+        r'{"z": 1, "é": {"b": 2, "a": 1}, "E": "caf\u00e9 \ud83d\ude00 \u2028 \/ \u007f",'
+        r' "e": "\"q\" \\ \u0001 \u001F \t \n \r \b \f"}'
+    )
+    assert _published(given) == (
+        '{"E":"café 😀 \u2028 / \u007f","e":"\\"q\\" \\\\ \\u0001 \\u001f \\t \\n \\r \\b \\f",'
+        '"z":1,"é":{"a":1,"b":2}}'
+    )
+
+
+@pytest.mark.spec("R17.6", "R1.5", "R1.3")
+def test_the_re_serialised_text_nests_as_deep_as_the_given_and_no_deeper_than_64_levels() -> None:
+    deepest = '{"parameters": ' + "[" * 63 + "{}" + "]" * 63 + "}"  # the object, 63 arrays, {}: 65
+    with pytest.raises(InvalidValue, match="nested deeper than 64 levels"):
+        ins.Begin(description=deepest, event_id=1, now=0)
+    deepest = '{"parameters": ' + "[" * 62 + "{}" + "]" * 62 + "}"  # 64 levels
+    assert _published(deepest) == '{"parameters":' + "[" * 62 + "{}" + "]" * 62 + "}"
+    scalars = '{"parameters": ' + "[" * 63 + '"x", 1' + "]" * 63 + "}"  # a scalar adds no level
+    assert _published(scalars) == '{"parameters":' + "[" * 63 + '"x",1' + "]" * 63 + "}"
+
+
+@pytest.mark.spec("R17.6")
+def test_integers_are_written_in_decimal_whatever_their_size() -> None:
+    assert _published('{"a": 10000000000000000000000, "b": -0, "c": 7}') == (
+        '{"a":10000000000000000000000,"b":0,"c":7}'
+    )
