@@ -408,6 +408,100 @@ def test_the_server_refuses_with_the_lines_as_errors() -> None:
     assert isinstance(machine.accept(state, fine, config), outs.Accepted)
 
 
+# --------------------------------------------------------------------------- what every category allows
+# docs/descriptions.md: extra keys, whole numbers as integers, an optional orientation, empty arrays.
+
+
+def _server_verdict(category: str, text: str) -> outs.Accepted | outs.Rejected:
+    """What a server configured with the field's validators says of a NEXT carrying ``text``."""
+    config = ServerConfig(categories=descriptions.Robot(places=["pantry", "hall", "lounge"]).validators())
+    state, _ = machine.step(
+        machine.State.new("fleet", "robot"), inputs.Begin(description="{}", event_id=1, now=1), config
+    )
+    goal = Goal(dynamic_event_seq=1, event_type=EventType.NEXT, category=category, description=text, id=2)
+    return machine.accept(state, goal, config)
+
+
+@pytest.mark.spec("R4.18")
+@pytest.mark.parametrize(
+    ("category", "description"),
+    [("go_to_place", {"waypoint": "A", "speed": 1}), ("go_to_place", {"place": "A", "why": "lunch"}),
+     ("go_to_place", {"one_of": [{"waypoint": 0, "x": []}], "constraints": [{"category": "c", "y": 1}]}),
+     ("perform_action", {"category": "wave", "description": None, "priority": "high"}),
+     ("sequence", {"activities": [{"category": "clean", "description": {"zone": "z"}, "note": 1}], "x": 2}),
+     ("clean", {"zone": "z", "robots": 2}),
+     ("pickup", {"place": "A", "payload": {"sku": "s", "quantity": 1, "colour": "red"}, "dock": 3})],
+)  # fmt: skip
+def test_extra_keys_are_accepted_and_not_checked_at_every_level(category: str, description: Any) -> None:
+    assert field_valid(category, description)
+    assert descriptions.Robot().check(category, description) == ()
+    assert descriptions.read(category, description) is not None
+
+
+@pytest.mark.spec("R4.18")
+def test_extra_keys_are_left_out_of_what_read_gives() -> None:
+    plain = descriptions.read("go_to_place", {"waypoint": "A", "orientation": 1})
+    assert descriptions.read("go_to_place", {"waypoint": "A", "orientation": 1, "speed": 1}) == plain
+
+
+@pytest.mark.spec("R4.18", "R4.10")
+def test_a_whole_number_is_an_integer_and_so_an_index() -> None:
+    robot = descriptions.Robot(places=["pantry", "hall", "lounge"])
+    for index in (2.0, -0.0, 1e0):
+        assert field_valid("go_to_place", index) and robot.check("go_to_place", index) == ()
+        assert field_valid("go_to_place", {"waypoint": index})
+        assert descriptions.read("go_to_place", index) == descriptions.GoToPlace(
+            (descriptions.Place(int(index)),)
+        )
+    assert robot.check("go_to_place", 3.0) == (
+        "/: waypoint 3 is not on this robot's map (its waypoints are 0 to 2)",
+    )
+    assert not field_valid("go_to_place", 2.5) and robot.check("go_to_place", 2.5) != ()
+    item = {"sku": "s", "quantity": 2.0}
+    assert robot.check("pickup", {"place": 0, "payload": item}) == ()
+    assert descriptions.read("pickup", {"place": 0, "payload": item}).payload == (
+        descriptions.PayloadItem("s", 2),
+    )
+    action = {"category": "wave", "description": None, "unix_millis_action_duration_estimate": 1500.0}
+    assert robot.check("perform_action", action) == ()
+    # a server reads the goal's JSON text: 2, 2.0 and 2e0 are one verdict, 2.5 another
+    for text in ("2", "2.0", "2e0", '{"waypoint": 2.0, "orientation": 0}'):
+        assert isinstance(_server_verdict("go_to_place", text), outs.Accepted), text
+    refused = _server_verdict("go_to_place", "2.5")
+    assert isinstance(refused, outs.Rejected) and refused.reason is RejectReason.DESCRIPTION_INVALID
+
+
+@pytest.mark.spec("R4.18")
+def test_orientation_is_optional_and_a_number_when_given() -> None:
+    robot = descriptions.Robot()
+    alone = {"waypoint": "A"}
+    assert field_valid("go_to_place", alone) and robot.check("go_to_place", alone) == ()
+    assert descriptions.read("go_to_place", alone).one_of == (descriptions.Place("A", None),)
+    for orientation, shown in ((None, "null"), ("x", '"x"'), ([1], "[1]")):
+        place = {"waypoint": "A", "orientation": orientation}
+        assert not field_valid("go_to_place", place)
+        assert robot.check("go_to_place", place) == (f"/orientation: {shown} is not a number",)
+
+
+@pytest.mark.spec("R4.18")
+def test_arrays_may_be_empty_but_one_of() -> None:
+    robot = descriptions.Robot()
+    empty = [
+        ("sequence", []),
+        ("sequence", {"activities": []}),
+        ("go_to_place", {"place": "A", "followed_by": []}),
+        ("go_to_place", {"one_of": ["A"], "constraints": []}),
+        ("pickup", {"place": "A", "payload": []}),
+    ]
+    for category, description in empty:
+        assert field_valid(category, description), description
+        assert robot.check(category, description) == (), description
+    assert descriptions.read("sequence", []) == descriptions.Sequence(())
+    assert not field_valid("go_to_place", {"one_of": []})
+    assert robot.check("go_to_place", {"one_of": []}) == ("/one_of: [] has fewer than 1 item",)
+    assert isinstance(_server_verdict("sequence", "[]"), outs.Accepted)
+
+
 # --------------------------------------------------------------------------- reading and errors
 
 
