@@ -104,6 +104,26 @@ def test_the_rmf_ros2_mode_fails_exactly_at_its_recorded_divergences() -> None:
     assert _verdicts(findings) == expected, text
 
 
+def test_the_rmf_ros2_mode_fails_alike_on_both_in_process_links_as_probe_md_counts() -> None:
+    """``--loopback`` and ``--impl`` (dynevent's driver) against serve's rmf_ros2 mode: the same
+    verdicts, and the count docs/probe.md gives for them."""
+    from dynevent.conformance.in_process import DriverServer
+    from dynevent.conformance.runner import InProcessImplementation
+
+    _, loopback, text = _probe("rmf_ros2")
+    config = attrs.evolve(CONFIG, compatibility="rmf_ros2")
+    server = DriverServer(InProcessImplementation(), "tinyRobot", "tinyRobot1", config)
+    said: list[str] = []
+    _, driven = probe_in_process(OPTIONS, list(CASES), said.append, config, stepper=server)
+    assert server.broken is None
+    assert _verdicts(driven) == _verdicts(loopback), "\n".join(said)
+    summary = text.rstrip().splitlines()[-1]
+    assert summary == f"{len(CASES) - len(RMF_ROS2_FAILS) - 1} pass, {len(RMF_ROS2_FAILS)} fail, 1 info"
+    assert "\n".join(said).rstrip().splitlines()[-1] == summary
+    page = (Path(__file__).resolve().parents[2] / "docs" / "probe.md").read_text(encoding="utf-8")
+    assert f"`{summary}`" in " ".join(page.split()), "docs/probe.md gives another count"
+
+
 @pytest.mark.parametrize("defect", list(BROKEN))
 def test_a_broken_server_is_caught_by_the_case_of_the_rule_it_breaks(defect: str) -> None:
     """Every other case passes: no false failure (a case that cannot be reached is missing, and only
