@@ -14,7 +14,9 @@ counts the requests it reads (``hello`` is request 1) and, at request ``AT``:
 - ``closed``: closes its standard output and goes on running (an hour), its input still open;
 - ``values``: answers one line of 3 million outputs (6 MB, under the byte limit);
 - ``endless``: writes 50 MB to standard error as one line with no end, then answers;
-- ``surrogate``: answers hello with a name holding a lone surrogate and a control character.
+- ``surrogate``: answers hello with a name holding a lone surrogate and a control character;
+- ``next``: from request ``AT`` on, answers everything but a NEXT's goal request, which it never
+  answers (a driver hung in its NEXT: every vector before a NEXT runs well).
 
 With ``--once FILE`` it misbehaves only while FILE does not exist, and
 creates it: the restarted driver then serves well, as a driver with a rare
@@ -41,7 +43,10 @@ def main() -> int:
     driver = Driver()
     out = sys.stdout
     for count, line in enumerate(sys.stdin, start=1):
-        answer = _json.dumps(driver.handle(_json.parse(line))) + "\n"
+        request = _json.parse(line)
+        if misbehave and mode == "next" and count >= at and _is_next(request):
+            time.sleep(3600)
+        answer = _json.dumps(driver.handle(request)) + "\n"
         if misbehave and count == at:
             if mode == "exit":
                 sys.stderr.write("misbehaving_driver: giving up here\n")
@@ -77,6 +82,13 @@ def main() -> int:
         out.write(answer)
         out.flush()
     return 0
+
+
+def _is_next(request: object) -> bool:
+    """The request applies a goal request of event type NEXT (1)."""
+    event = request.get("input") if isinstance(request, dict) else None
+    goal = event.get("goal") if isinstance(event, dict) and event.get("type") == "goal_requested" else None
+    return isinstance(goal, dict) and goal.get("event_type") == 1
 
 
 if __name__ == "__main__":

@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import json
 import re
+import select
 import shlex
+import signal
 import subprocess
 import sys
 import time
@@ -45,6 +47,8 @@ VECTOR_FILES = sorted(
 PYTHON = sys.executable
 BROKEN_DRIVER = ROOT / "tests" / "broken_driver.py"
 SUMMARY_LINE = re.compile(r"^(\d+) passed, (\d+) failed$", re.MULTILINE)
+#: The last line of a run: what it took.
+TOOK = re.compile(r"the run took \d+\.\d s")
 
 
 def _rule_key(rule: str) -> tuple[int, ...]:
@@ -623,13 +627,64 @@ def test_a_driver_that_always_hangs_costs_three_timeouts_and_the_rest_are_not_ru
     assert took < 40  # three 1 s timeouts, not one per vector
 
 
+def test_a_driver_that_never_answers_a_next_stops_the_run_at_three_timeouts_in_a_row(
+    tmp_path: Path, shipped: list[vectors.Vector]
+) -> None:
+    """A driver that answers every step before a NEXT and hangs in it: each vector it hangs in counts
+    towards the three in a row, though its first steps were answered (once 88 vectors timed out, one
+    after the other, the count starting again at every answered step).  The run stops at the third,
+    the rest not run, each vector's line printed as it ends, the last record what the run took."""
+    result, took = _misbehaving(tmp_path, "next", 1, "--json", once=False)
+    assert result.returncode == 1, result.stdout + result.stderr
+    records = [json.loads(line) for line in result.stdout.splitlines()]
+    *ran, summary = records
+    timed_out = [
+        record["failure"] is not None and "did not answer within 1 s" in record["failure"]["problem"]
+        for record in ran
+        if not record["not_run"]
+    ]
+    assert timed_out[-vectors.MAX_STALLS :] == [True] * vectors.MAX_STALLS, timed_out
+    in_a_row = max(len(run) for run in "".join("x" if out else " " for out in timed_out).split(" "))
+    assert in_a_row == vectors.MAX_STALLS, timed_out
+    assert summary["not_run"] == len(shipped) - len(timed_out) > 0
+    assert all(
+        record["not_run"] == f"the run stopped: the driver stopped answering: {vectors.MAX_STALLS} vectors "
+        "in a row timed out"
+        for record in ran[len(timed_out) :]
+    )
+    assert 0 < summary["seconds"] <= took < 60  # three 1 s timeouts and their restarts, not one per vector
+
+
+def test_json_prints_each_vector_as_it_ends_so_that_a_run_cut_short_keeps_them(tmp_path: Path) -> None:
+    """A driver that hangs at its 30th request, under --timeout 60: the vectors before it are printed
+    as they end, long before the run would; the run stopped then (Ctrl-C: the driver is ended too),
+    what it printed stays."""
+    command = f"{PYTHON} {MISBEHAVING} hang 30"
+    process = subprocess.Popen(
+        [PYTHON, "-m", "dynevent", "vectors", "--json", "--timeout", "60", "--impl", command],
+        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, cwd=ROOT,
+    )  # fmt: skip
+    assert process.stdout is not None
+    try:
+        ready, _, _ = select.select([process.stdout], [], [], 30)
+        assert ready and process.poll() is None, "no line within 30 s: the records wait for the run's end"
+        first = json.loads(process.stdout.readline())
+    finally:
+        process.send_signal(signal.SIGINT)
+        rest = process.communicate(timeout=30)[0]
+    assert process.returncode == 130
+    assert first["type"] == "vector" and first["passed"] is True, first
+    assert all(json.loads(line)["type"] == "vector" for line in rest.splitlines())
+
+
 def test_a_driver_slow_to_start_is_given_its_start_whatever_the_timeout(tmp_path: Path) -> None:
     """A program's start (an interpreter on a busy machine) is no answer of the protocol's: a driver
     whose hello comes after 1.5 s serves a run whose --timeout is 1 s (START_TIMEOUT), and a
     restarted one likewise (the hanging driver's three timeouts above depended on it)."""
     result, _ = _misbehaving(tmp_path, "late", 1, once=False)
     assert result.returncode == 0, result.stdout + result.stderr
-    assert result.stdout.rstrip().endswith("passed, 0 failed"), result.stdout[-300:]
+    body, _, last = result.stdout.rstrip().rpartition("\n")
+    assert body.endswith("passed, 0 failed") and TOOK.fullmatch(last), result.stdout[-300:]
     assert vectors.START_TIMEOUT >= 10
 
 

@@ -26,6 +26,7 @@ __all__ = [
     "outcome_record",
     "rule_table",
     "summary_record",
+    "took_line",
 ]
 
 #: The widest line of the text report.
@@ -131,10 +132,13 @@ def outcome_record(outcome: Outcome) -> dict[str, Any]:
     }
 
 
-def summary_record(outcomes: Sequence[Outcome], implementation: str = "") -> dict[str, Any]:
-    """The closing JSON object of ``dynevent vectors --json``."""
+def summary_record(
+    outcomes: Sequence[Outcome], implementation: str = "", *, seconds: float | None = None
+) -> dict[str, Any]:
+    """The closing JSON object of ``dynevent vectors --json`` (``seconds``: what the run took, when
+    given)."""
     passed, failed, not_run = _counts(outcomes)
-    return {
+    record: dict[str, Any] = {
         "type": "summary",
         "implementation": implementation,
         "vectors": len(outcomes),
@@ -151,6 +155,15 @@ def summary_record(outcomes: Sequence[Outcome], implementation: str = "") -> dic
             for tally in rule_table(outcomes)
         },
     }
+    if seconds is not None:
+        record["seconds"] = round(seconds, 3)
+    return record
+
+
+def took_line(seconds: float, bound: str = "") -> str:
+    """The last line of a run of the vectors or of the probe: what it took in real time, and the
+    bound it ran within when it has one (``bound``: ``"--deadline 120 s"``)."""
+    return f"the run took {seconds:.1f} s" + (f" ({bound})" if bound else "")
 
 
 def junit_xml(outcomes: Sequence[Outcome], implementation: str = "") -> str:

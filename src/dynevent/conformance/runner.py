@@ -66,10 +66,14 @@ MAX_ANSWER_BYTES = 16 * 1024 * 1024
 MAX_ANSWER_VALUES = 1_000_000
 #: How long a driver that closed its output is given to exit before it is ended, at least.
 _LAST_WAIT = 0.5
+#: The longest a driver is given to exit once its input is closed (seconds, or ``--timeout`` when less):
+#: then it is killed, so that closing one never holds a run longer than this.
+CLOSE_WAIT = 2.0
 #: The most of a standard error line read at once.
 _STDERR_PIECE = 4_096
 #: Vectors in a row that may end in a timeout before the run stops: a driver that hangs on everything
-#: costs this many timeouts, not one per vector.
+#: costs this many timeouts, not one per vector (a vector whose first steps were answered and whose
+#: next one was not is one of them).
 MAX_STALLS = 3
 #: Vectors in a row that may break the protocol in any way (die, garbage, stall) before the run stops.
 MAX_BROKEN = 10
@@ -200,7 +204,7 @@ class ExternalImplementation:
             with contextlib.suppress(OSError):  # a dead program's pipe: nothing left to tell it
                 process.stdin.close()
         try:
-            process.wait(timeout=self.timeout if self._broken is None else 0.5)
+            process.wait(timeout=min(self.timeout, CLOSE_WAIT) if self._broken is None else _LAST_WAIT)
         except subprocess.TimeoutExpired:
             process.kill()
             process.wait()
@@ -279,8 +283,12 @@ class ExternalImplementation:
     # ------------------------------------------------------------------ the protocol
 
     def reset(self, fleet: str, robot: str, config: Any, state: Any) -> None:
-        """Start a new server, first restarting the program if it broke the protocol."""
-        if self._broken is not None:
+        """Start a new server, first restarting the program if it broke the protocol.  A vector
+        counts as a timeout (or a break) in a row only when it ended in one: the counts start again
+        at a vector that did not."""
+        if self._broken is None:
+            self._stalls = self._breaks = 0
+        else:
             self._stalls = self._stalls + 1 if self._broken.stalled else 0
             self._breaks += 1
             if self._stalls >= MAX_STALLS:
@@ -308,7 +316,6 @@ class ExternalImplementation:
             raise _refused(answer)
         if not isinstance(answer.get("outputs"), list):
             raise self._break(f"the driver answered without an outputs list: {_json.dumps(answer)[:200]}")
-        self._stalls = self._breaks = 0
         return answer["outputs"], answer.get("view")
 
     def close(self) -> None:

@@ -47,6 +47,7 @@ from dynevent.conformance.report import (
     outcome_record,
     rule_table,
     summary_record,
+    took_line,
 )
 from dynevent.conformance.runner import (
     MAX_ANSWER_BYTES,
@@ -102,4 +103,5 @@ __all__ = [
     "schema_validation_available",
     "select_vectors",
     "summary_record",
+    "took_line",
 ]

@@ -8,6 +8,7 @@ import importlib.util
 import io
 import os
 import sys
+import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -163,13 +164,18 @@ def _vectors(args: argparse.Namespace) -> int:
         return 2
     progress = Progress("dynevent vectors", len(chosen))
     outcomes: list[vectors.Outcome] = []
+    began = time.monotonic()
     try:
         for outcome in vectors.run_vectors(chosen, implementation, max_failures=args.max_failures):
             outcomes.append(outcome)
+            if args.json:  # as it is known: a run cut short keeps a line for each vector it ran
+                progress.close()
+                print(_json.dumps(vectors.outcome_record(outcome)), flush=True)
             progress.update(len(outcomes), f"({len(outcomes)} of {len(chosen)}: {outcome.vector.name})")
     finally:
         progress.close()
         implementation.close()
+    took = time.monotonic() - began
     if args.junit is not None:
         try:
             files.write_text(args.junit, vectors.junit_xml(outcomes, implementation.name), "--junit")
@@ -177,11 +183,10 @@ def _vectors(args: argparse.Namespace) -> int:
             print(f"dynevent vectors: {exc}", file=sys.stderr)
             return 2
     if args.json:
-        for outcome in outcomes:
-            print(_json.dumps(vectors.outcome_record(outcome)))
-        print(_json.dumps(vectors.summary_record(outcomes, implementation.name)))
+        print(_json.dumps(vectors.summary_record(outcomes, implementation.name, seconds=took)))
     else:
         print(vectors.format_report(outcomes, implementation.name))
+        print(vectors.took_line(took))
     return 0 if all(outcome.passed for outcome in outcomes) else 1
 
 
@@ -230,7 +235,9 @@ def _add_vectors_command(commands: argparse._SubParsersAction[argparse.ArgumentP
         "repeatable",
     )
     parser.add_argument(
-        "--json", action="store_true", help="one JSON object per vector, then a summary object"
+        "--json",
+        action="store_true",
+        help="one JSON object per vector, printed as it ends, then a summary object",
     )
     parser.add_argument(
         "--timeout",
