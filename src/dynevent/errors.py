@@ -23,6 +23,7 @@ import math
 
 __all__ = [
     "BagError",
+    "DeadlinePassed",
     "DuplicateRobot",
     "DyneventError",
     "FileError",
@@ -270,6 +271,11 @@ class InvalidVector(RemoteError):
 
 class ImplementationError(RemoteError):
     """The implementation under test broke the driver protocol (crashed, timed out, answered garbage)."""
+
+
+class DeadlinePassed(ImplementationError):
+    """A request to the implementation under test was not sent, or its answer not waited for to the
+    end, because the run's deadline passed: the bound's doing, not a fault of the implementation's."""
 
 
 class ImplementationGone(ImplementationError):

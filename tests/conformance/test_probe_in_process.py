@@ -9,6 +9,7 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
+import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
@@ -63,6 +64,18 @@ def _verdicts(findings: list[Finding]) -> dict[str, str]:
     return {finding.case.id: shown(finding) for finding in findings}
 
 
+#: The last line of every run: what it took in real time, and in simulated time, within --deadline.
+TOOK = re.compile(r"the run took (\d+\.\d) s \((\d+\.\d) s simulated; --deadline (\S+) s\)")
+
+
+def _took(text: str) -> tuple[str, re.Match[str]]:
+    """The run's output before its last line, and that line, which says what the run took."""
+    body, _, last = text.rstrip("\n").rpartition("\n")
+    said = TOOK.fullmatch(last)
+    assert said is not None, text[-300:]
+    return body, said
+
+
 def _judge_section(text: str) -> str:
     """The judge's own section of the terminal report ("" when it found nothing beside the cases)."""
     parts = text.split("the judge, over every record of the exchange: ", 1)
@@ -82,7 +95,7 @@ def test_the_standard_mode_passes_every_case_and_the_judge_finds_nothing(tmp_pat
     assert code == 0, text
     assert _verdicts(findings) == {case.id: "pass" for case in CASES}, text
     assert _judge_section(text) == "", text
-    assert text.rstrip().endswith(f"{len(CASES)} pass")
+    assert _took(text)[0].endswith(f"\n{len(CASES)} pass")
     suite = ET.parse(junit).getroot().find("testsuite")
     assert suite is not None and suite.get("tests") == str(len(CASES)) and suite.get("failures") == "0"
     assert (tmp_path / "trace.jsonl").read_text("utf-8").count("# case ") == len(CASES)
@@ -196,7 +209,7 @@ def test_the_command_line_probes_in_process(tmp_path: Path) -> None:
 
     done = probe()
     assert done.returncode == 0, done.stdout + done.stderr
-    assert done.stdout.rstrip().endswith(f"{len(CASES)} pass"), done.stdout
+    assert _took(done.stdout)[0].endswith(f"\n{len(CASES)} pass"), done.stdout
     known = probe("--compatibility", Compatibility.RMF_ROS2.value, "--known", "rmf_ros2")
     assert known.returncode == 0, known.stdout + known.stderr
     assert f"{len(RMF_ROS2_FAILS)} of the failures known" in known.stdout
@@ -230,7 +243,7 @@ def test_an_implementation_behind_the_driver_protocol_is_probed_without_ros() ->
     own = _probe_impl(f"{sys.executable} -m dynevent.conformance.driver")
     assert own.returncode == 0, own.stdout + own.stderr
     assert own.stdout.startswith("implementation: dynevent "), own.stdout
-    assert own.stdout.rstrip().endswith(f"{len(CASES)} pass"), own.stdout
+    assert _took(own.stdout)[0].endswith(f"\n{len(CASES)} pass"), own.stdout
     broken = _probe_impl(f"{sys.executable} {TESTS / 'broken_driver.py'}")
     assert broken.returncode == 1, broken.stdout + broken.stderr
     assert "cancel.both_answered (R9.3, R8.3, R19.1): fail" in broken.stdout, broken.stdout
@@ -297,6 +310,55 @@ def test_an_implementation_that_breaks_the_protocol_ends_the_run_within_its_boun
     assert done.returncode == 1, done.stdout + done.stderr
     assert "the implementation broke the driver protocol at " in done.stdout, done.stdout
     assert "Traceback" not in done.stderr
+
+
+def test_a_hung_implementation_is_left_at_the_deadline_not_at_its_timeout() -> None:
+    """A driver that stops answering mid-run, under --timeout 100 and --deadline 3: the request it
+    hangs in waits what the deadline leaves, the run ends within a few seconds of it (it once took the
+    whole timeout), the driver is ended, and the deadline's cut is no break of the protocol."""
+    started = time.monotonic()
+    done = _probe_impl(f"{sys.executable} {TESTS / 'misbehaving_driver.py'} hang 12", "--timeout", "100",
+                       "--deadline", "3")  # fmt: skip
+    took = time.monotonic() - started
+    assert done.returncode == probe_cases.EXIT_NOT_RUN, done.stdout + done.stderr
+    assert "broke the driver protocol" not in done.stdout, done.stdout
+    assert "the run's --deadline of 3 s passed" in done.stdout, done.stdout
+    said = _took(done.stdout)[1]
+    # the driver hung before 3 s of simulated time: real time is what the deadline ended
+    assert float(said[1]) >= 3 > float(said[2]), done.stdout
+    assert "Traceback" not in done.stderr
+    assert took < 40  # the deadline, the driver's start and its end: far from --timeout's 100 s
+
+
+def test_a_slow_server_is_left_when_the_deadline_passes_in_real_time() -> None:
+    """A server that answers each input in 5 s of real time (a clock of the test's, which each answer
+    moves on), under --deadline 10: it is asked nothing once 10 s have passed, so the run ends within
+    one answer of its deadline, where simulated time alone once let it run 145 s.  The case the
+    deadline cut is not run, saying so; none fails, and the last line says what the run took."""
+    first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
+    server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG), first)
+    now = [0.0]
+    asked: list[float] = []
+
+    def slow(event: ins.Input) -> tuple[outs.Output, ...]:
+        asked.append(now[0])
+        now[0] += 5
+        return tuple(server.step(event))
+
+    said: list[str] = []
+    code, findings = probe_in_process(
+        attrs.evolve(OPTIONS, deadline=10), list(CASES), said.append, CONFIG, stepper=slow,
+        wall=lambda: now[0],
+    )  # fmt: skip
+    assert all(when < 10 for when in asked) and now[0] <= 10 + 5, asked
+    verdicts = _verdicts(findings)
+    assert "fail" not in verdicts.values() and "pass" in verdicts.values(), verdicts
+    cut = [finding for finding in findings if finding.seen.startswith(probing.CUT_SHORT.format(deadline=10))]
+    passed = [finding for finding in findings if finding.seen == "the run's --deadline of 10 s passed"]
+    assert len(cut) == 1 and len(passed) == len(CASES) - 1 - list(verdicts.values()).count("pass"), findings
+    assert code == probe_cases.EXIT_NOT_RUN
+    took = _took("\n".join(said))[1]
+    assert float(took[1]) <= 15 and took[3] == "10", said[-1]
 
 
 # --------------------------------------------------------------------------- generated servers
@@ -484,7 +546,7 @@ def test_the_command_line_in_process_takes_the_servers_own_settings(tmp_path: Pa
     assert "this run is 7" in configured.stdout, configured.stdout  # the file's first run
     assert re.search(r"^next.runs_a_child +missing", configured.stdout, re.M), configured.stdout  # no place
     clamp = probe("--loopback", "--stubborn-minimum", "10", "--cases", "stubborn.clamp_notice")
-    assert clamp.returncode == 0 and clamp.stdout.rstrip().endswith("1 pass"), clamp.stdout
+    assert clamp.returncode == 0 and _took(clamp.stdout)[0].endswith("\n1 pass"), clamp.stdout
     for args, said in [
         (("--loopback", "--impl", "true"), "--impl: not with --loopback"),
         (("--loopback", "--introspection"), "--introspection: not with --loopback"),

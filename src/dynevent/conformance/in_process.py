@@ -9,7 +9,9 @@ answers delivered to the goal's :class:`~dynevent.conformance.probing.Exchange`,
 told to stop); children are :class:`~dynevent.sim.children.SimulatedChild`, reporting on serve's
 periods; a run that ends begins again after serve's ``rebegin``.  Time is simulated: a wait runs
 what is due up to its end and takes no time at all, so every case runs in well under a second, and
-the same cases give the same findings every run.
+the same cases give the same findings every run.  Real time is kept apart (``wall``): the run's
+``--deadline`` bounds it as it bounds the simulated time, so that a server that answers slowly, or
+not at all, is left when the deadline passes.
 
 The server can be replaced (``stepper``): any ``apply(input) -> outputs`` over the machine's inputs
 and outputs, so that a deliberately broken server (the test kit's) is probed the same way.
@@ -21,6 +23,7 @@ import collections
 import heapq
 import itertools
 import math
+import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -32,7 +35,7 @@ from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.conformance.probe_cases import Case, Finding
 from dynevent.conformance.probing import Exchange, Link, Options
 from dynevent.conformance.records import InvalidRecord, input_to_json, output_from_json
-from dynevent.errors import ImplementationError
+from dynevent.errors import DeadlinePassed, ImplementationError
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.adapter import ChildExecution
@@ -80,7 +83,9 @@ class _Child:
 
 class InProcessLink(Link):
     """The machine as ``dynevent serve`` runs ``robot`` of ``config`` (its first robot by default), on
-    simulated time, with a run begun; ``stepper`` replaces the machine (the server under test)."""
+    simulated time, with a run begun; ``stepper`` replaces the machine (the server under test);
+    ``wall`` is the real clock (seconds) the run's deadline is counted on too, and ``ends_at`` when
+    it passes, when it runs from before the link (the run's first begin is within it)."""
 
     def __init__(
         self,
@@ -89,10 +94,14 @@ class InProcessLink(Link):
         robot: str | None = None,
         trace: TraceWriter | None = None,
         stepper: Stepper | None = None,
+        wall: Callable[[], float] = time.monotonic,
+        ends_at: float = math.inf,
     ) -> None:
         self.config = ServeConfig() if config is None else config
+        self._wall = wall
         robot = self.config.robots[0] if robot is None else robot
         super().__init__(self.config.fleet, robot, trace)
+        self.ends_at = ends_at
         self.now = START
         first = self.config.first_state(robot)
         self._server = RobotServer(self.fleet, robot, machine_config(self.config), first)
@@ -112,8 +121,20 @@ class InProcessLink(Link):
     def step(self, event: ins.Input) -> tuple[outs.Output, ...]:
         """Apply ``event`` to the server; its outputs join those to carry out (the child handles step
         through here, as a binding's do)."""
-        outputs = tuple(self._apply(event))
+        outputs = self._ask(event)
         self._outbox.extend(outputs)
+        return outputs
+
+    def _ask(self, event: ins.Input) -> tuple[outs.Output, ...]:
+        """The server's outputs for ``event``; none once the run's deadline has passed in real time,
+        nor when it passed while the server was at it (:attr:`cut_off` says so)."""
+        if self.time_left() <= 0:
+            self.cut_off = True
+            return ()
+        outputs = tuple(self._apply(event))
+        if self.time_left() <= 0:
+            self.cut_off = True
+            return ()
         return outputs
 
     def _drain(self) -> None:
@@ -166,12 +187,18 @@ class InProcessLink(Link):
     def clock(self) -> float:
         return (self.now - START) / _SECOND
 
+    def real_time(self) -> float:
+        return self._wall()
+
     def wait(self, condition: Callable[[], bool], timeout: float) -> bool:
-        """Run what is due, in time order, until ``condition()`` holds or ``timeout`` seconds of
-        simulated time have passed."""
+        """Run what is due, in time order, until ``condition()`` holds, ``timeout`` seconds of
+        simulated time have passed, or the run's deadline in real time."""
         # rounded up: a wait of any positive length lets time pass, so a loop of short waits ends
         end = self.now + (max(math.ceil(timeout * _SECOND), 1) if timeout > 0 else 0)
         while not condition():
+            if self.time_left() <= 0:
+                self.cut_off = True
+                return condition()
             if not self._agenda or self._agenda[0][0] > end:
                 self.now = max(self.now, end)
                 return condition()
@@ -192,6 +219,8 @@ class InProcessLink(Link):
         self._exchanges[exchange.uuid] = exchange
         self.sent("goal", goal_uuid=exchange.uuid, message=goal)
         outputs = self.step(ins.GoalRequested(goal_uuid=exchange.uuid, goal=goal, now=self.now))
+        if self.cut_off:  # no response heard: the server was not asked, or not waited for
+            return exchange
         accepted = any(isinstance(output, outs.GoalAccepted) for output in outputs)
         self._drain()
         self.hear_response(exchange, accepted)
@@ -212,7 +241,7 @@ class InProcessLink(Link):
     def describe(self, timeout: float) -> tuple[Any, str]:
         if not self.config.offers_description:  # as serve: none in rmf_ros2 mode (D17)
             return None, f"no description service {description_service(self.fleet, self.robot)}"
-        outputs = self._apply(ins.DescriptionQuery(now=self.now))
+        outputs = self._ask(ins.DescriptionQuery(now=self.now))
         answer = next((output for output in outputs if isinstance(output, outs.DescriptionAnswer)), None)
         if answer is None:
             return None, "the description query gave no answer"
@@ -246,7 +275,8 @@ class DriverServer:
     """An implementation behind the driver protocol (``dynevent vectors --impl``'s), as the in-process
     link's server: reset once for the robot, at the seq before ``config``'s first run, then each input
     applied.  Once it breaks the protocol (dies, stalls, answers what is not a record) it says
-    nothing more, and :attr:`broken` says why.
+    nothing more, and :attr:`broken` says why; a request the run's deadline kept or cut short
+    (:class:`~dynevent.errors.DeadlinePassed`) gives nothing, and is no break.
 
     The reset holds no state object (``"state": null``) when the robot starts at seq 0, else one
     whose only field is ``seq``: the one state object docs/conformance.md section 5 says a driver
@@ -278,6 +308,8 @@ class DriverServer:
             return tuple(
                 output_from_json(output, f"$.outputs[{index}]") for index, output in enumerate(outputs)
             )
+        except DeadlinePassed:
+            return ()
         except (ImplementationError, InvalidRecord) as exc:
             self.broken = f"{type(event).__name__}: {exc}"
             return ()
@@ -290,13 +322,34 @@ def probe_in_process(
     config: ServeConfig | None = None,
     *,
     stepper: Stepper | None = None,
+    implementation: runner.Implementation | None = None,
+    wall: Callable[[], float] = time.monotonic,
 ) -> tuple[int, list[Finding]]:
-    """Run ``cases`` against the machine as serve runs ``config``'s robot, judge every record of the
-    exchange, write the reports ``options`` asks for; the exit status and the findings."""
+    """Run ``cases`` against the machine as serve runs ``config``'s robot (or ``stepper``, or
+    ``implementation`` behind the driver protocol), judge every record of the exchange, write the
+    reports ``options`` asks for, and say last what the run took (on ``wall``, and in simulated
+    time); the exit status and the findings."""
+    config = ServeConfig() if config is None else config
+    # the deadline runs from the server found: an implementation's reset and first begin are within it
+    began = wall()
+    ends_at = began + options.deadline
+    if isinstance(implementation, runner.ExternalImplementation):
+        implementation.time_left = lambda: ends_at - wall()  # no request waits past the deadline
+    server = None
+    if implementation is not None:
+        stepper = server = DriverServer(implementation, config.fleet, options.robot, config)
     trace = TraceWriter(options.trace, fleet=options.fleet, robot=options.robot, keep=True)
     try:
-        link = InProcessLink(config, robot=options.robot, trace=trace, stepper=stepper)
+        link = InProcessLink(
+            config, robot=options.robot, trace=trace, stepper=stepper, wall=wall, ends_at=ends_at
+        )
         findings = probing.run_cases(link, options, cases, say)
+        took = link.real_time() - began
     finally:
         trace.close()
-    return probing.conclude(findings, trace.text(), options, say)
+    code, findings = probing.conclude(findings, trace.text(), options, say)
+    if server is not None and server.broken is not None:
+        say(f"the implementation broke the driver protocol at {server.broken}")
+        code = max(code, 1)
+    say(probing.took(took, options, simulated=link.clock()))
+    return code, findings

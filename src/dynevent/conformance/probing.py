@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 import os
 import shlex
 import subprocess
@@ -35,6 +36,7 @@ from dynevent import files
 from dynevent.conformance import probe_cases
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.conformance.probe_cases import Case, Finding, Verdict
+from dynevent.conformance.report import took_line
 from dynevent.errors import FileError, ProbeError
 from dynevent.server import machine
 from dynevent.wire._fields import U32_MAX, U64_MAX, id_not_after, seq_after
@@ -58,6 +60,7 @@ __all__ = [
     "conclude",
     "implemented",
     "run_cases",
+    "took",
 ]
 
 _STANDBY, _UNDERWAY = Status.STANDBY.value, Status.UNDERWAY.value
@@ -139,12 +142,28 @@ class Link:
         #: what the transport found wrong in how a topic (``"status"``, ``"begin"``) is offered, which
         #: no trace carries (DDS: a durability that a transient-local reader cannot match)
         self.offered: dict[str, str] = {}
+        #: when the run's ``--deadline`` passes, on :meth:`real_time` (set by the probe as its run
+        #: begins, unless the link counts it from earlier): no wait of the link goes past it, and
+        #: nothing is asked of the server after it
+        self.ends_at = math.inf
+        #: the deadline cut the link's waiting on the server short, or kept a request from it: what
+        #: was heard since is no verdict on the server
+        self.cut_off = False
 
     # ---------------------------------------------------------------- the transport's part
 
     def clock(self) -> float:
         """The link's monotonic time, in seconds."""
         raise NotImplementedError
+
+    def real_time(self) -> float:
+        """Real (wall-clock) monotonic time, in seconds, on which ``--deadline`` is counted: the
+        link's own clock, where that is real (a link on simulated time keeps real time apart)."""
+        return self.clock()
+
+    def time_left(self) -> float:
+        """What is left of the run's ``--deadline`` in real time (seconds; below 0 once it passed)."""
+        return self.ends_at - self.real_time()
 
     def wait(self, condition: Callable[[], bool], timeout: float) -> bool:
         """Wait, at most ``timeout`` seconds, until ``condition()`` holds (it is asked under the
@@ -370,7 +389,10 @@ class Probe:
         self.timeouts_in_a_row = 0  # cases that waited out the timeout, one after the other
         self._places_sent = 0
         self._nexts: list[Exchange] = []  # every NEXT sent, across cases: where the robot went
+        # the deadline on the link's clock, and in real time (from here, or from where the link began
+        # counting it), where the link's clock is simulated
         self.ends_at = link.clock() + options.deadline
+        link.ends_at = min(link.ends_at, link.real_time() + options.deadline)
         #: the kinds of wait that have timed out once (``"status"``), and why: the cases that need one
         #: are not run to wait it out again (the cause is said instead)
         self.dead: dict[str, str] = {}
@@ -384,14 +406,14 @@ class Probe:
     def timeout(self) -> float:
         """The bound on the next wait: ``--timeout``, or what is left of ``--deadline`` when less (the
         case's waits are then cut short: :meth:`run` says so)."""
-        left = self.ends_at - self.link.clock()
+        left = min(self.ends_at - self.link.clock(), self.link.time_left())
         if left < self.options.timeout:
             self.cut_short = True
         return max(_LEAST_WAIT, min(self.options.timeout, left))
 
     @property
     def past_deadline(self) -> bool:
-        return self.link.clock() >= self.ends_at
+        return self.link.clock() >= self.ends_at or self.link.time_left() <= 0
 
     def blocked(self, case: Case) -> str | None:
         """Why ``case`` is not run: a kind of wait it needs has timed out already, or the deadline passed."""
@@ -422,7 +444,8 @@ class Probe:
         # what the case's verdict lacked, before the waits below: the run's end sees whether it came late
         self.unanswered[case.id] = [exchange for exchange in self.exchanges if not _complete(exchange)]
         finding = self._answered_once(finding)
-        if finding.absent and self.cut_short:  # the server had less than --timeout: not its failure
+        # the server had less than --timeout, or was not heard to the end: not its failure
+        if (finding.absent and self.cut_short) or self.link.cut_off:
             why = f"{CUT_SHORT.format(deadline=self.options.deadline)} ({finding.seen})"
             finding = Finding(case, Verdict.MISSING, seen=why)
         # silent: the case waited out the timeout and the server sent nothing at all meanwhile
@@ -1486,3 +1509,10 @@ def conclude(
             except FileError as exc:
                 raise ProbeError(str(exc)) from None
     return probe_cases.exit_status(findings, judged), findings
+
+
+def took(seconds: float, options: Options, *, simulated: float | None = None) -> str:
+    """The run's last line: what it took in real time, from the server found to the last case's end,
+    and its bound (with the simulated time it spanned, on a link that simulates it)."""
+    bound = f"--deadline {options.deadline:g} s"
+    return took_line(seconds, bound if simulated is None else f"{simulated:.1f} s simulated; {bound}")

@@ -23,7 +23,7 @@ import subprocess
 import textwrap
 import threading
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import IO, Any, Protocol
 
 import attrs
@@ -33,6 +33,7 @@ from dynevent.conformance.diff import MAX_DIFFERENCES, Difference, differences, 
 from dynevent.conformance.driver import Driver
 from dynevent.conformance.files import Vector
 from dynevent.errors import (  # defined there with every error; importable here too
+    DeadlinePassed,
     DyneventError,
     ImplementationError,
     ImplementationGone,
@@ -142,7 +143,9 @@ class ExternalImplementation:
 
     ``restarts`` counts the times the program was started again after it broke
     the protocol.  Its standard error is read beside it; the last
-    :data:`STDERR_LINES` lines are quoted when it dies or stalls.
+    :data:`STDERR_LINES` lines are quoted when it dies or stalls.  ``time_left``, when set, is what
+    is left of a bound on the whole run (seconds): no request waits longer, and none is sent once it
+    is spent (:class:`~dynevent.errors.DeadlinePassed`).
     """
 
     def __init__(self, command: str, timeout: float = 10.0) -> None:
@@ -165,6 +168,7 @@ class ExternalImplementation:
         self.restarts = 0
         self._stalls = 0  # vectors in a row that ended in a timeout
         self._breaks = 0  # vectors in a row that broke the protocol in any way
+        self.time_left: Callable[[], float] | None = None
         self._broken: _Broken | None = None
         self._process: subprocess.Popen[bytes] | None = None
         self._pending = b""
@@ -224,14 +228,27 @@ class ExternalImplementation:
     # ------------------------------------------------------------------ one exchange
 
     def _request(self, request: Any, timeout: float | None = None) -> dict[str, Any]:
-        """Send one request; its answer, within ``timeout`` seconds (the request timeout when None)."""
+        """Send one request; its answer, within ``timeout`` seconds (the request timeout when None) or
+        what :attr:`time_left` leaves, when less."""
         assert self._process is not None and self._process.stdin is not None
+        bound = self.timeout if timeout is None else timeout
+        left = bound if self.time_left is None else self.time_left()
+        if left <= 0:
+            raise DeadlinePassed("the run's deadline passed: the request was not sent")
         try:
             self._process.stdin.write((_json.dumps(request) + "\n").encode("utf-8"))
             self._process.stdin.flush()
         except OSError:
             raise self._break(f"the driver closed its input (exit code {self._process.poll()})") from None
-        line = self._text(self._read_line(self.timeout if timeout is None else timeout))
+        try:
+            raw = self._read_line(min(bound, left))
+        except _Broken as exc:  # broken all the same: a late answer is never read as a later one's
+            if exc.stalled and left < bound:
+                raise DeadlinePassed(
+                    f"the run's deadline passed after {left:.3g} s of waiting for the answer"
+                ) from None
+            raise
+        line = self._text(raw)
         try:
             answer = _json.parse(line)  # the line's bytes let go: a parsed line costs its text and its values
         except _json.JsonProblem as exc:

@@ -613,14 +613,9 @@ def _probe_implementation(args: argparse.Namespace, chosen: Any, cases: Any, con
     implementation = ExternalImplementation(args.impl, timeout=min(args.timeout, MAX_TIMEOUT))
     try:
         _say(f"implementation: {implementation.name}")
-        server = in_process.DriverServer(implementation, config.fleet, args.robot, config)
-        code, _ = in_process.probe_in_process(chosen, cases, _say, config, stepper=server)
+        return in_process.probe_in_process(chosen, cases, _say, config, implementation=implementation)[0]
     finally:
         implementation.close()
-    if server.broken is not None:
-        _say(f"the implementation broke the driver protocol at {server.broken}")
-        return max(code, 1)
-    return code
 
 
 def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -666,9 +661,10 @@ def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
     )  # fmt: skip
     parser.add_argument(
         "--deadline", type=float, default=120.0, metavar="SECONDS",
-        help="bound on the whole run, once the server is found (default: %(default)s, enough for every "
-        "case against the docs' serve): no wait goes past it, and the cases left are not run, with why; "
-        "the run ends within --server-wait, this, and a few seconds to close",
+        help="bound on the whole run in real time, once the server is found (default: %(default)s, enough "
+        "for every case against the docs' serve; with --loopback or --impl it bounds simulated time too): "
+        "no wait goes past it, nothing is asked of the server after it, and the cases left are not run, "
+        "with why; the run ends within --server-wait, this, and a few seconds to close",
     )  # fmt: skip
     parser.add_argument(
         "--server-wait", type=float, default=10.0, metavar="SECONDS",

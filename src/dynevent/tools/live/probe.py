@@ -41,7 +41,7 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
         return probe_cases.EXIT_USAGE
     findings, took = ran
     status = probing.conclude(findings, trace.text(), options, say)[0]
-    say(f"the run took {took:.1f} s (--deadline {options.deadline:g} s)")  # its bound, checkable
+    say(probing.took(took, options))  # its bound, checkable
     return status
 
 
