@@ -330,6 +330,20 @@ def test_a_hung_implementation_is_left_at_the_deadline_not_at_its_timeout() -> N
     assert took < 40  # the deadline, the driver's start and its end: far from --timeout's 100 s
 
 
+def test_a_driver_hung_in_its_reset_is_left_at_the_deadline_too() -> None:
+    """The deadline runs from the driver's hello: a driver that never answers its reset, under
+    --timeout 100 and --deadline 3, ends the command within a few seconds of it, in one line."""
+    started = time.monotonic()
+    done = _probe_impl(f"{sys.executable} {TESTS / 'misbehaving_driver.py'} hang 2", "--timeout", "100",
+                       "--deadline", "3")  # fmt: skip
+    took = time.monotonic() - started
+    assert done.returncode == probe_cases.EXIT_USAGE, done.stdout + done.stderr
+    assert (
+        done.stderr.startswith("dynevent probe: the run's deadline passed") and done.stderr.count("\n") == 1
+    )
+    assert took < 40, done.stderr  # the deadline, the driver's start and its end: far from 100 s
+
+
 def test_a_slow_server_is_left_when_the_deadline_passes_in_real_time() -> None:
     """A server that answers each input in 5 s of real time (a clock of the test's, which each answer
     moves on), under --deadline 10: it is asked nothing once 10 s have passed, so the run ends within
