@@ -6,12 +6,17 @@ compiled from it.  These tests hold the compiled walks to the table walked one c
 
 from __future__ import annotations
 
+import ast
 import itertools
+import re
+import typing
+from pathlib import Path
 from typing import Any
 
 import attrs
 import pytest
 
+from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.server.machine import RunningGoal, ServerConfig, State, any_description
@@ -87,3 +92,33 @@ def test_a_check_of_one_condition_passes_exactly_when_its_condition_holds() -> N
         problem = check.check(state, goal, STANDARD, [None])
         assert (problem is None) == bool(holds), (check.rule, state, goal)
         assert problem is None or (isinstance(problem, outs.Rejected) and problem.rule == check.rule)
+
+
+def test_the_table_names_a_handler_for_every_input_and_every_handler_is_in_it() -> None:
+    kinds = {cls.KIND for cls in typing.get_args(ins.Input)}
+    assert set(machine._HANDLER_NAMES) == kinds
+    for kind, name in machine._HANDLER_NAMES.items():
+        handler = machine.HANDLERS[kind]
+        assert handler.__name__ == name and handler.__module__ == machine.__name__, (kind, name)
+    handlers = {name for name, value in vars(machine).items() if name.startswith("_on_") and callable(value)}
+    assert handlers == set(machine._HANDLER_NAMES.values())
+
+
+def test_the_module_opens_with_its_table_and_its_handlers_follow_in_the_spec_s_order() -> None:
+    source = Path(machine.__file__).read_text(encoding="utf-8")
+    tree = ast.parse(source)
+    lines = {
+        node.name if isinstance(node, ast.FunctionDef) else ast.unparse(node.targets[0]): node.lineno
+        for node in tree.body
+        if isinstance(node, ast.FunctionDef) or (isinstance(node, ast.Assign) and len(node.targets) == 1)
+    }
+    annotated = {
+        ast.unparse(node.target): node.lineno for node in tree.body if isinstance(node, ast.AnnAssign)
+    }
+    first_rule = min(line for name, line in lines.items() if name.startswith("_on_"))
+    assert annotated["_HANDLER_NAMES"] < annotated["TRANSITIONS"] < lines["step"] < first_rule
+    sections = [int(number) for number in re.findall(r"^# -+ §(\d+) ", source, re.MULTILINE)]
+    assert sections == sorted(sections) and {3, 4, 5, 21} <= set(sections)
+    # the handlers appear in the order the table names them, the table's in the order of the spec
+    order = list(dict.fromkeys(machine._HANDLER_NAMES.values()))
+    assert sorted(order, key=lambda name: lines[name]) == order

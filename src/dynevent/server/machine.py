@@ -8,11 +8,20 @@ cited where it is carried out.  The machine never raises, never reads a clock
 and never does I/O: time arrives in the inputs, and every effect leaves as an
 output value (:mod:`dynevent.server.outputs`).
 
-The machine's phase (INACTIVE, WAITING, RUNNING) is a projection of the state,
-and :data:`TRANSITIONS` declares, per phase and input, which phases a step may
-lead to; it is the source of the diagram in docs/spec.md and is checked
-against the behaviour by the test suite.  The names of the configuration and the
-state are re-exported here.
+The module reads as the spec does, top down:
+
+- what a state is: :class:`State` and its parts (re-exported from :mod:`dynevent.server.state`,
+  with the configuration), and the :class:`Transition` a step gives;
+- the table: each input's handler (``_HANDLER_NAMES``) and :data:`TRANSITIONS`, the phases a step
+  may lead to from each phase (the source of the diagram in docs/spec.md, checked against the
+  behaviour by the tests), with :func:`step`, which dispatches on it;
+- the rules, section by section in the order of docs/spec.md (§2 phase and status to §21 restart),
+  each section's checks and handlers together;
+- the handlers resolved, and the shortcuts for speed: they state no rule, each is derived from
+  the tables above it and names the benchmark that justifies it.
+
+The table names its handlers rather than holding them, so that it stands above the functions it
+names; :data:`HANDLERS` resolves the names once, at import, at the bottom of the module.
 
 Where each rule is carried out (the functions, classes and tables that cite it; those of
 :mod:`dynevent.server.config` and :mod:`dynevent.server.state` named with their module).
@@ -20,10 +29,10 @@ Where each rule is carried out (the functions, classes and tables that cite it; 
 citations, and that test fails while it is stale::
 
     R2.1   state.State, state.phase_of
-    R2.2   status_message, status_of, runs_a_child, state_from_status, state.State,
+    R2.2   status_message, status_of, state_from_status, runs_a_child, state.State,
            state.reported_id
     R2.3   _finish, _start_goal, _on_child_progress, _on_child_finished
-    R3.1   next_seq, _on_begin, TRANSITIONS
+    R3.1   TRANSITIONS, next_seq, _on_begin
     R3.2   next_seq, _on_begin
     R3.3   begin_description, _on_begin
     R3.4   _on_begin
@@ -40,7 +49,7 @@ citations, and that test fails while it is stale::
            config.any_description
     R4.10  _description_invalid, REQUEST_CHECKS, _DESCRIPTION_CHECKS, _check_description
     R4.11  _non_finite_stubborn, REQUEST_CHECKS
-    R4.12  fresh_id, next_child_id, _stale_id, REQUEST_CHECKS, _stale
+    R4.12  _stale_id, _stale, fresh_id, REQUEST_CHECKS, next_child_id
     R4.13  _cancel_idle, _cancel_id_mismatch, REQUEST_CHECKS
     R4.14  _cancel_id_mismatch, REQUEST_CHECKS
     R4.15  _on_goal_requested
@@ -49,39 +58,39 @@ citations, and that test fails while it is stale::
     R4.19  _description_invalid, config.listed_errors
     R5.1   _start_goal
     R5.2   race_lost, _start_goal
-    R5.3   _on_goal_submitted, TRANSITIONS
-    R6.1   _start_child, _start_goal, _start_next, state.QueuedGoal
+    R5.3   TRANSITIONS, _on_goal_submitted
+    R6.1   _start_goal, _start_next, _start_child, state.QueuedGoal
     R6.2   fresh_id, next_child_id
-    R6.3   DEFERRED_START_RULE, state_from_status, TRANSITIONS
-    R6.4   START_RULE, _start_child, TRANSITIONS
+    R6.3   TRANSITIONS, DEFERRED_START_RULE, state_from_status
+    R6.4   TRANSITIONS, START_RULE, _start_child
     R7.1   _on_child_progress
     R7.2   _on_child_progress
-    R7.3   _log_entry, _start_next, _on_child_progress
-    R7.4   child_ended, _on_child_progress
+    R7.3   _start_next, _log_entry, _on_child_progress
+    R7.4   _on_child_progress, child_ended
     R8.1   CHILD_RESULT_RULE, ends_a_child
     R8.2   CHILD_END_RULE, ends_early, _answers_at_child_end
     R8.3   WAITING_CANCEL_RULE, _answers_at_child_end
-    R8.4   state_from_status, _on_child_finished, TRANSITIONS
+    R8.4   TRANSITIONS, state_from_status, _on_child_finished
     R9.1   _start_cancel
     R9.2   _start_cancel
     R9.3   _start_cancel
-    R9.4   _answers_at_child_end, _start_cancel, TRANSITIONS
+    R9.4   TRANSITIONS, _answers_at_child_end, _start_cancel
     R10.1  _on_cancel_requested
     R10.2  _on_cancel_requested
     R10.3  _on_cancel_requested
-    R10.4  _answers_at_child_end, _on_cancel_requested, TRANSITIONS
+    R10.4  TRANSITIONS, _answers_at_child_end, _on_cancel_requested
     R10.5  _on_cancel_requested
-    R11.1  FINISHED_RULE, TRANSITIONS
+    R11.1  TRANSITIONS, FINISHED_RULE
     R11.2  _end_dynamic_event
     R12.1  _on_child_finished
     R12.2  _start_next
     R12.3  _on_tick
     R12.4  _on_tick
-    R12.5  _end_stubbornness, _start_child
+    R12.5  _start_child, _end_stubbornness
     R13.1  _on_task_signal
     R13.2  _on_task_signal
-    R13.3  _answers_at_child_end, _on_task_signal, TRANSITIONS
-    R13.4  _end_dynamic_event, _on_child_finished, TRANSITIONS
+    R13.3  TRANSITIONS, _answers_at_child_end, _on_task_signal
+    R13.4  TRANSITIONS, _on_child_finished, _end_dynamic_event
     R13.6  _end_dynamic_event
     R14.1  _on_interrupt
     R14.2  _on_interrupt
@@ -94,8 +103,8 @@ citations, and that test fails while it is stale::
     R16.2  _on_description_query
     R17.1  RequestCheck, _walk, _deferred, _decide
     R17.2  _start_goal
-    R17.4  _running_status, _on_child_finished
-    R17.5  _running_status, _on_child_progress
+    R17.4  _on_child_finished, _running_status
+    R17.5  _on_child_progress, _running_status
     R17.6  begin_description, _on_begin
     R17.7  _on_child_finished
     R17.8  _on_id_drawn
@@ -103,13 +112,13 @@ citations, and that test fails while it is stale::
     R18.2  _on_goal_requested, _on_goal_submitted
     R18.3  _on_goal_started
     R18.4  _on_child_progress, _on_child_finished
-    R18.5  _on_interrupt, _on_task_signal
+    R18.5  _on_task_signal, _on_interrupt
     R18.6  _on_interrupt, _on_resume
     R18.7  _on_task_signal
     R18.8  _on_id_drawn
-    R20.2  child_ended, runs_a_child, robot_waits, state_from_status
+    R20.2  state_from_status, child_ended, runs_a_child, robot_waits
     R21.1  _on_restart
-    R21.2  _end_stubbornness, _on_restart, TRANSITIONS
+    R21.2  TRANSITIONS, _end_stubbornness, _on_restart
     R21.3  _on_restart
     R22.7  RequestCheck
 """
@@ -218,13 +227,132 @@ __all__ = [
     "step",
 ]
 
+# ------------------------------------------------------------ what a state is
+#
+# A state (:class:`State`, of :mod:`dynevent.server.state`) is a frozen value: the run's seq, whether
+# a dynamic event is active, its status, the highest id used, the running goal and its child, the
+# goals accepted and not yet started, the waiting CANCEL goals, the stubbornness, the task signal,
+# the interruption and the shutdown.  Its phase (INACTIVE, WAITING, RUNNING) is a projection of it
+# (:func:`phase_of`).  A step takes a state and an input and gives a :class:`Transition`.
+
+
+@fast_init
+@attrs.frozen
+class Transition:
+    """What one step did: the new state and the outputs, in order.  A pair: ``state, outputs = step(...)``."""
+
+    state: State
+    outputs: tuple[outs.Output, ...]
+
+    def __iter__(self) -> Iterator[Any]:
+        """The state, then the outputs, so that a transition unpacks as the pair it is."""
+        return iter((self.state, self.outputs))
+
+
+# --------- the table: each input's handler, and the phases a step may lead to
+
+
+@attrs.frozen
+class Edge:
+    """One declared way a step may move the phase: ``source --input [guard]--> target`` (rule)."""
+
+    source: DynamicState
+    input: str
+    target: DynamicState
+    guard: str
+    rule: str
+
+
+_Handler: TypeAlias = Callable[[State, Any, ServerConfig], Transition]
+_I, _W, _R = DynamicState.INACTIVE, DynamicState.WAITING, DynamicState.RUNNING
+
+#: Input kind -> the name of its handler, in the order of docs/spec.md's sections.  The names are
+#: resolved once, at import, into :data:`HANDLERS` at the bottom of the module, below the handlers.
+#: One handler per input; the phases a step may lead to are :data:`TRANSITIONS`.
+_HANDLER_NAMES: Mapping[str, str] = {
+    ins.Begin.KIND: "_on_begin",  # §3
+    ins.GoalRequested.KIND: "_on_goal_requested",  # §4
+    ins.GoalSubmitted.KIND: "_on_goal_submitted",  # §5
+    ins.GoalStarted.KIND: "_on_goal_started",  # §5, §6, §9, §11
+    ins.ChildProgress.KIND: "_on_child_progress",  # §7
+    ins.ChildFinished.KIND: "_on_child_finished",  # §8
+    ins.CancelRequested.KIND: "_on_cancel_requested",  # §10
+    ins.Tick.KIND: "_on_tick",  # §12
+    ins.TaskCancel.KIND: "_on_task_signal",  # §13
+    ins.TaskKill.KIND: "_on_task_signal",  # §13
+    ins.Interrupt.KIND: "_on_interrupt",  # §14
+    ins.Resume.KIND: "_on_resume",  # §14
+    ins.Shutdown.KIND: "_on_shutdown",  # §15
+    ins.DescriptionQuery.KIND: "_on_description_query",  # §16
+    ins.IdDrawn.KIND: "_on_id_drawn",  # §17
+    ins.Restart.KIND: "_on_restart",  # §21
+}
+
+#: Every phase change the machine can make.  A step that is not listed here keeps the phase.
+TRANSITIONS: tuple[Edge, ...] = (
+    Edge(_I, "begin", _W, "not shut down", "R3.1"),
+    Edge(_W, "goal_started", _R, "NEXT", "R6.3, R6.4"),
+    Edge(_W, "goal_started", _I, "FINISHED", "R11.1"),
+    Edge(_W, "goal_submitted", _R, "NEXT", "R5.3, R6.3, R6.4"),
+    Edge(_W, "goal_submitted", _I, "FINISHED", "R5.3, R11.1"),
+    Edge(_W, "task_cancel", _I, "", "R13.3"),
+    Edge(_W, "task_kill", _I, "", "R13.3"),
+    Edge(_W, "shutdown", _I, "", "R15.2"),
+    Edge(_R, "child_finished", _W, "task not cancelled", "R8.4"),
+    Edge(_R, "child_finished", _I, "task cancelled or killed", "R13.4"),
+    Edge(_R, "goal_started", _W, "CANCEL of a deferred child", "R9.4"),
+    Edge(_R, "goal_submitted", _W, "CANCEL of a deferred child", "R5.3, R9.4"),
+    Edge(_R, "cancel_requested", _W, "of a deferred child", "R10.4"),
+    Edge(_R, "task_cancel", _I, "deferred child", "R13.3"),
+    Edge(_R, "task_kill", _I, "deferred child", "R13.3"),
+    Edge(_R, "shutdown", _I, "", "R15.2"),
+    Edge(_R, "restart", _W, "task not cancelled", "R21.2"),
+    Edge(_R, "restart", _I, "task cancelled or killed", "R21.2"),
+)
+
+
+def step(state: State, event: ins.Input, config: ServerConfig) -> Transition:
+    """Apply one input to the state: the new state and the outputs, in order.
+
+    Pure and total: any well-typed input in any state yields a transition.  A
+    value of another type than the three parameters name is refused with
+    :class:`~dynevent.errors.WrongInput` (a ``TypeError``).
+    """
+    handler = _BY_CLASS.get(event.__class__)
+    if handler is None or state.__class__ is not State or config.__class__ is not ServerConfig:
+        handler = _checked(state, event, config)
+    return handler(state, event, config)
+
+
+def _checked(state: object, event: object, config: object) -> _Handler:
+    """The handler of an input given as a subclass; :class:`WrongInput` for a value of a wrong type."""
+    if not isinstance(state, State):
+        raise WrongInput("step(state, ...)", "a dynevent.server.machine.State", state)
+    if not isinstance(config, ServerConfig):
+        raise WrongInput("step(..., config)", "a dynevent.server.machine.ServerConfig", config)
+    for cls, handler in _BY_CLASS.items():
+        if isinstance(event, cls):
+            return handler
+    raise WrongInput(
+        "step(state, event, ...)",
+        "a server input of dynevent.server.inputs (Begin, GoalRequested, ...)",
+        event,
+    )
+
+
+def allowed_targets(source: DynamicState, kind: str) -> frozenset[DynamicState]:
+    """The phases a step of input ``kind`` may lead to from ``source`` (the source itself included)."""
+    return frozenset(
+        {source} | {edge.target for edge in TRANSITIONS if edge.source is source and edge.input == kind}
+    )
+
+
+# ----------------------------------------------- the vocabulary the rules use
+
 
 #: rmf_ros2's execution-failure strings by a short name (``"race"``, ``"idle_cancel"``, ...): the
 #: values of :class:`~dynevent.wire.vocab.Failure`, kept for code written before it.
 EXECUTION_FAILURES: Mapping[str, str] = {failure.name.lower(): failure.value for failure in Failure}
-
-# Child statuses that end a child early: its goal is not answered as succeeded (R8.2).
-_EARLY_END = frozenset({Status.CANCELED.value, Status.KILLED.value, Status.SKIPPED.value})
 
 # The vocabulary the steps use most, as module constants: reading an enum member (and its value)
 # costs several times reading a global.
@@ -237,14 +365,6 @@ _STANDARD, _RMF_ROS2, _GOAL_IDS = Compatibility.STANDARD, Compatibility.RMF_ROS2
 _PARSE_FAILURE = Failure.PARSE.value
 #: "No description parsed yet" (a parsed description may be any JSON value, None included).
 _UNCHECKED: Any = object()
-
-
-# Messages built from checked state skip their converters; copies skip __init__ (attrs.evolve re-runs it).
-_make_status = maker(DynamicEventStatus)
-_make_feedback = maker(Feedback)
-_make_log_entry = maker(LogEntry)
-_make_result = maker(Result)
-_make_time = maker(Time)
 
 # The rules of outputs that others read back (``dynevent check``): each named once, here.
 #: A child's start (R6.4), and the report of a start deferred by an interruption (R6.3); a start's
@@ -259,27 +379,7 @@ CHILD_RESULT_RULE = "R8.1"
 #: A FINISHED goal's answer, which names the dynamic event's own id (R11.1).
 FINISHED_RULE = "R11.1"
 
-_replace_state = replacer(State)
-# the copies of the most frequent steps, each taking the fields it changes positionally
-_copy_queued = copier(State, "queued")
-_copy_at_start = copier(State, "queued", "last_id", "running", "status", "stubborn", "log_seq")
-_copy_at_progress = copier(State, "running", "status", "log_seq")
-_copy_at_child_end = copier(State, "running", "cancels", "status", "stubborn")
-_replace_running = replacer(RunningGoal)
-_replace_stubborn = replacer(Stubbornness)
-
-
-@fast_init
-@attrs.frozen
-class Transition:
-    """What one step did: the new state and the outputs, in order.  A pair: ``state, outputs = step(...)``."""
-
-    state: State
-    outputs: tuple[outs.Output, ...]
-
-    def __iter__(self) -> Iterator[Any]:
-        """The state, then the outputs, so that a transition unpacks as the pair it is."""
-        return iter((self.state, self.outputs))
+# -------------------------------------------------------- §2 phase and status
 
 
 def _time(now: int) -> Time:
@@ -310,20 +410,6 @@ def status_of(
     )
 
 
-def _running_status(
-    state: State, status: str, child_id: int, now: int, dynamic_state: int = _RUNNING
-) -> DynamicEventStatus:
-    """A status message naming a child, RUNNING unless told otherwise, whatever the state (rmf_ros2
-    mode, R17.4, R17.5)."""
-    return _make_status(
-        dynamic_event_seq=state.seq,
-        dynamic_state=dynamic_state,
-        status=status,
-        id=child_id,
-        time=_time(now),
-    )
-
-
 def _status_key(state: State) -> tuple[int, bool, bool, str, int]:
     return (
         state.seq,
@@ -334,69 +420,15 @@ def _status_key(state: State) -> tuple[int, bool, bool, str, int]:
     )
 
 
+def _finish(before: State, after: State, outputs: list[outs.Output], now: int) -> Transition:
+    """Close a step: append the status message when the status changed (R2.3)."""
+    if _status_key(before) != _status_key(after):
+        outputs.append(outs.PublishStatus(message=status_message(after, now), rule="R2.3"))
+    return Transition(after, tuple(outputs))
+
+
 #: The goal UUID of a running goal known only from a status message.
 UNKNOWN_GOAL = "0" * 32
-
-
-def child_ended(message: DynamicEventStatus) -> bool:
-    """R20.2: a RUNNING status carrying a child's final status (:data:`ENDED_CHILD_STATUSES`) names
-    a child that has ended (or is about to, R7.4): a client takes the robot as waiting."""
-    return message.dynamic_state == _RUNNING and message.status in ENDED_CHILD_STATUSES
-
-
-def ends_a_child(status: str) -> bool:
-    """Whether a child reporting ``status`` has ended: a final status (R8.1)."""
-    return status in ENDED_CHILD_STATUSES
-
-
-def ends_early(status: str) -> bool:
-    """Whether a child ending with ``status`` ended early, and its goal is not answered succeeded (R8.2)."""
-    return status in _EARLY_END
-
-
-def runs_a_child(message: DynamicEventStatus) -> bool:
-    """A status that shows a child running: RUNNING, and not a child's final status (R2.2, R20.2)."""
-    return message.dynamic_state == _RUNNING and message.status not in ENDED_CHILD_STATUSES
-
-
-def robot_waits(message: DynamicEventStatus) -> bool:
-    """A status that shows the robot waiting for its next goal: WAITING, or a child's end (R20.2)."""
-    return message.dynamic_state == _WAITING or child_ended(message)
-
-
-def next_seq(seq: int) -> int:
-    """The seq of the run that begins after run ``seq`` (R3.1), wrapping from 2**32 - 1 to 0 (R3.2)."""
-    return (seq + 1) & U32_MAX
-
-
-def fresh_id(last_id: int) -> int | None:
-    """The id above ``last_id``, the highest of a run (R4.12, R6.2): ``last_id + 1``, or ``None`` when
-    ``last_id`` is 2**64 - 1 and no id is left.  What every client, judge and tool that names a
-    NEXT's id asks (the client machine, ``explain``, the probe), so that none adds 1 itself."""
-    return None if last_id >= U64_MAX else last_id + 1
-
-
-def next_child_id(goal: Goal, last_id: int, config: ServerConfig) -> int:
-    """The id of the child a NEXT ``goal`` starts in a run whose highest id is ``last_id`` (R6.2): the
-    goal's own id, unless it is 0 or the adapter numbers children (id policy ``adapter``), then
-    :func:`fresh_id`, modulo 2**64 (under id policy ``goal`` R4.12 refuses id 0 when none is left;
-    the adapter's counter wraps to 0)."""
-    if config.id_policy is _GOAL_IDS and goal.id != 0:
-        return goal.id
-    fresh = fresh_id(last_id)
-    return 0 if fresh is None else fresh
-
-
-def begin_description(description: str, config: ServerConfig) -> str:
-    """The description a begin message carries for a run that begins with ``description`` (R3.3):
-    as given, or re-serialised compact with its keys sorted in rmf_ros2 mode (R17.6).  The text is
-    JSON (a :class:`~dynevent.server.inputs.Begin` checked it); anything else is kept as it is."""
-    if config.compatibility is not _RMF_ROS2:
-        return description
-    try:
-        return _json.dumps_sorted(_json.parse(description))
-    except (_json.JsonProblem, ValueError):  # unreachable from a Begin; the machine cannot raise
-        return description
 
 
 def state_from_status(
@@ -461,7 +493,63 @@ def state_from_status(
     raise ValueError(f"dynamic_state {phase} is none of INACTIVE (0), WAITING (1), RUNNING (2)")
 
 
-# --------------------------------------------------------------------------- accept
+# ------------------------------------------------------------------- §3 begin
+
+
+def next_seq(seq: int) -> int:
+    """The seq of the run that begins after run ``seq`` (R3.1), wrapping from 2**32 - 1 to 0 (R3.2)."""
+    return (seq + 1) & U32_MAX
+
+
+def begin_description(description: str, config: ServerConfig) -> str:
+    """The description a begin message carries for a run that begins with ``description`` (R3.3):
+    as given, or re-serialised compact with its keys sorted in rmf_ros2 mode (R17.6).  The text is
+    JSON (a :class:`~dynevent.server.inputs.Begin` checked it); anything else is kept as it is."""
+    if config.compatibility is not _RMF_ROS2:
+        return description
+    try:
+        return _json.dumps_sorted(_json.parse(description))
+    except (_json.JsonProblem, ValueError):  # unreachable from a Begin; the machine cannot raise
+        return description
+
+
+def _on_begin(state: State, event: ins.Begin, config: ServerConfig) -> Transition:
+    if state.shutdown:
+        return _ignored("R18.1", state, event.KIND, "the server is shutting down")
+    if state.active:
+        return _ignored("R3.4", state, event.KIND, "a dynamic event is already active")
+    outputs: list[outs.Output] = []
+    seq = next_seq(state.seq)  # R3.1
+    if seq == 0:
+        outputs.append(outs.SeqWrapped(previous=state.seq, seq=seq, rule="R3.2"))
+    description = begin_description(event.description, config)  # R3.3, R17.6
+    after = _replace_state(
+        state,
+        seq=seq,
+        active=True,
+        event_id=event.event_id,
+        description=description,
+        status=Status.STANDBY.value,
+        last_id=event.event_id,
+        task_signal="",
+        interrupted=event.interrupted,
+    )
+    outputs.append(
+        outs.PublishBegin(
+            message=DynamicEventDescription(
+                fleet=state.fleet,
+                robot=state.robot,
+                dynamic_event_seq=seq,
+                description=description,
+                start_time=_time(event.now),
+            ),
+            rule="R3.3",
+        )
+    )
+    return _finish(state, after, outputs, event.now)
+
+
+# ----------------------------------------------------------- §4 goal requests
 
 
 def _reject(rule: str, reason: RejectReason, text: str, failure: str = "", **values: Any) -> outs.Rejected:
@@ -472,8 +560,6 @@ def _reject(rule: str, reason: RejectReason, text: str, failure: str = "", **val
 # ``found`` is a one-item list where R4.9 leaves the parsed description for R4.10 and the start.  A
 # check that is one condition (R4.1, R4.2, R4.3, R4.6) has that condition written in REQUEST_CHECKS
 # (``passes``), and its function here builds the refusal alone.
-
-
 def _shutting_down(state: State, goal: Goal, config: ServerConfig, found: list[Any]) -> outs.Rejected:
     return _reject("R4.1", RejectReason.SHUTTING_DOWN, "the server is shutting down", Failure.SHUTDOWN.value)
 
@@ -616,6 +702,20 @@ def _stale_id(state: State, goal: Goal, config: ServerConfig, found: list[Any]) 
     return _reject("R4.12", RejectReason.STALE_ID, text, current_id=state.last_id, requested_id=goal.id)
 
 
+def _stale(state: State, goal: Goal, config: ServerConfig) -> bool:
+    """R4.12: under id policy ``goal`` a NEXT names a fresh id, or 0 while one is left to assign."""
+    if config.id_policy is not _GOAL_IDS:
+        return False
+    return fresh_id(state.last_id) is None if goal.id == 0 else goal.id <= state.last_id
+
+
+def fresh_id(last_id: int) -> int | None:
+    """The id above ``last_id``, the highest of a run (R4.12, R6.2): ``last_id + 1``, or ``None`` when
+    ``last_id`` is 2**64 - 1 and no id is left.  What every client, judge and tool that names a
+    NEXT's id asks (the client machine, ``explain``, the probe), so that none adds 1 itself."""
+    return None if last_id >= U64_MAX else last_id + 1
+
+
 def _cancel_idle(state: State, goal: Goal, config: ServerConfig, found: list[Any]) -> outs.Rejected | None:
     if state.running is not None:
         return None
@@ -751,12 +851,10 @@ REQUEST_CHECKS: tuple[RequestCheck, ...] = (
         "R4.14", RejectReason.CANCEL_ID_MISMATCH, _ONLY_CANCEL, _cancel_id_mismatch, standard_only=True
     ),
 )
-
 #: The refusals no state of any server turns into an acceptance: the goal itself is at fault (R22.7).
 REFUSED_IN_EVERY_STATE = frozenset(check.reason for check in REQUEST_CHECKS if check.goal_only)
 #: The refusals a server's configuration decides (its categories, their validators, its limit).
 CONFIGURED_REFUSALS = frozenset(check.reason for check in REQUEST_CHECKS if check.configured)
-
 _CHECK_INDEX = {check.rule: index for index, check in enumerate(REQUEST_CHECKS)}
 #: The description's checks, which a NEXT's start runs again (R6.1).
 _DESCRIPTION_CHECKS = tuple(
@@ -850,162 +948,6 @@ def _decide(state: State, goal: Goal, config: ServerConfig) -> tuple[outs.Decisi
 _ACCEPTANCES = {kind: outs.Accepted(event_type=kind, rule="R4.16") for kind in (_NEXT, _CANCEL, _FINISHED)}
 
 
-def _stale(state: State, goal: Goal, config: ServerConfig) -> bool:
-    """R4.12: under id policy ``goal`` a NEXT names a fresh id, or 0 while one is left to assign."""
-    if config.id_policy is not _GOAL_IDS:
-        return False
-    return fresh_id(state.last_id) is None if goal.id == 0 else goal.id <= state.last_id
-
-
-# --------------------------------------------------------------------------- step helpers
-
-
-def _log_entry(seq: int, text: str, tier: str, now: int) -> LogEntry:
-    """The log entry numbered ``seq`` (the robot's next LogEntry.seq, which wraps at 2**32, R7.3)."""
-    return _make_log_entry(seq=seq, tier=tier, unix_millis_time=now // 1_000_000, text=text)
-
-
-def _result(failure: str, status: str, event_id: int) -> Result:
-    return _make_result(execution_failure=failure, status=status, id=event_id)
-
-
-def _failure(rule: str, goal_uuid: str, failure: Failure, detail: str = "") -> outs.AnswerGoal:
-    """The goal is aborted with ``failure``, and a `` -- detail`` line after it when there is one."""
-    text = f"{failure.value}\n -- {detail}" if detail else failure.value
-    return outs.AnswerGoal(
-        goal_uuid=goal_uuid, status=GoalStatus.ABORTED, result=_result(text, "", 0), rule=rule
-    )
-
-
-def _finish(before: State, after: State, outputs: list[outs.Output], now: int) -> Transition:
-    """Close a step: append the status message when the status changed (R2.3)."""
-    if _status_key(before) != _status_key(after):
-        outputs.append(outs.PublishStatus(message=status_message(after, now), rule="R2.3"))
-    return Transition(after, tuple(outputs))
-
-
-def _ignored(rule: str, state: State, kind: str, why: str) -> Transition:
-    return Transition(state, (outs.Ignored(input=kind, why=why, rule=rule),))
-
-
-def _end_stubbornness(state: State, outputs: list[outs.Output], rule: str = "R12.5") -> State:
-    """End an active stubbornness (R12.5; a restart's own rule is R21.2)."""
-    if state.stubborn is None:
-        return state
-    outputs.append(outs.StubbornEnd(rule=rule))
-    return _replace_state(state, stubborn=None)
-
-
-def _start_child(
-    rule: str,
-    state: State,
-    running: RunningGoal,
-    outputs: list[outs.Output],
-    logs: tuple[LogEntry, ...],
-    parsed: Any = _UNCHECKED,
-) -> RunningGoal:
-    """Start the running goal's child (R6.4): its outputs, and the goal as started.
-
-    The caller's new state holds the returned goal, status ``underway`` and no stubbornness (R12.5).
-    ``parsed`` is the description as R4.9 or R6.1 parsed it; a deferred start (R14.5) parses it again.
-    """
-    if state.stubborn is not None:  # R12.5
-        outputs.append(outs.StubbornEnd(rule="R12.5"))
-    goal = running.goal
-    if parsed is _UNCHECKED:
-        try:
-            parsed = _json.parse(goal.description)
-        except _json.JsonProblem:  # unreachable after R6.1; kept so the machine cannot raise
-            parsed = None
-    child_id = running.child_id
-    outputs.append(
-        outs.StartChild(
-            category=goal.category, description=goal.description, id=child_id, parsed=parsed, rule=rule
-        )
-    )
-    if not running.started or running.child_status != _UNDERWAY:
-        running = _replace_running(running, started=True, child_status=_UNDERWAY)
-    feedback = _make_feedback(status=_UNDERWAY, id=child_id, logs=logs)
-    outputs.append(outs.PublishFeedback(goal_uuid=running.goal_uuid, feedback=feedback, rule=rule))
-    return running
-
-
-def _answers_at_child_end(
-    state: State,
-    running: RunningGoal,
-    final: str,
-    rule: str = CHILD_END_RULE,
-    cancels_rule: str = WAITING_CANCEL_RULE,
-) -> list[outs.Output]:
-    """The running goal's and every waiting CANCEL goal's answers when the child ends (R8.2, R8.3).
-
-    ``rule`` and ``cancels_rule`` name the rules that end it, when not a child's end (R9.4, R10.4, R13.3).
-    """
-    result = _result("", final, running.child_id)
-    status = _SUCCEEDED
-    if final in _EARLY_END:
-        status = _CANCELED_GOAL if running.cancel_requested else _ABORTED
-    answers: list[outs.Output] = [
-        outs.AnswerGoal(goal_uuid=running.goal_uuid, status=status, result=result, rule=rule)
-    ]
-    for uuid in state.cancels:
-        answers.append(outs.AnswerGoal(goal_uuid=uuid, status=_SUCCEEDED, result=result, rule=cancels_rule))
-    return answers
-
-
-def _end_dynamic_event(
-    state: State, final: str, outputs: list[outs.Output], task_over: bool = False
-) -> State:
-    """The dynamic event is over (R11.2, R13.4): the task may move on.
-
-    When a task signal ends it, the task itself is over and its interruption with it (R13.6).
-    """
-    outputs.append(outs.DynamicEventFinished(status=final, rule="R11.2"))
-    interrupted = False if task_over else state.interrupted
-    return _replace_state(
-        state, active=False, status=final, running=None, cancels=(), interrupted=interrupted
-    )
-
-
-# --------------------------------------------------------------------------- step handlers
-
-
-def _on_begin(state: State, event: ins.Begin, config: ServerConfig) -> Transition:
-    if state.shutdown:
-        return _ignored("R18.1", state, event.KIND, "the server is shutting down")
-    if state.active:
-        return _ignored("R3.4", state, event.KIND, "a dynamic event is already active")
-    outputs: list[outs.Output] = []
-    seq = next_seq(state.seq)  # R3.1
-    if seq == 0:
-        outputs.append(outs.SeqWrapped(previous=state.seq, seq=seq, rule="R3.2"))
-    description = begin_description(event.description, config)  # R3.3, R17.6
-    after = _replace_state(
-        state,
-        seq=seq,
-        active=True,
-        event_id=event.event_id,
-        description=description,
-        status=Status.STANDBY.value,
-        last_id=event.event_id,
-        task_signal="",
-        interrupted=event.interrupted,
-    )
-    outputs.append(
-        outs.PublishBegin(
-            message=DynamicEventDescription(
-                fleet=state.fleet,
-                robot=state.robot,
-                dynamic_event_seq=seq,
-                description=description,
-                start_time=_time(event.now),
-            ),
-            rule="R3.3",
-        )
-    )
-    return _finish(state, after, outputs, event.now)
-
-
 def _queued(state: State, uuid: str) -> QueuedGoal | None:
     """The accepted goal ``uuid`` waiting to start, or None."""
     for queued in state.queued:
@@ -1034,6 +976,21 @@ def _on_goal_requested(state: State, event: ins.GoalRequested, config: ServerCon
     queued = (*state.queued, QueuedGoal(goal_uuid=event.goal_uuid, goal=event.goal, checked=checked))
     accepted = outs.GoalAccepted(goal_uuid=event.goal_uuid, rule="R4.16")
     return Transition(_copy_queued(state, queued), (accepted,))
+
+
+# -------------------------------------------------------------- §5 goal start
+
+
+def _result(failure: str, status: str, event_id: int) -> Result:
+    return _make_result(execution_failure=failure, status=status, id=event_id)
+
+
+def _failure(rule: str, goal_uuid: str, failure: Failure, detail: str = "") -> outs.AnswerGoal:
+    """The goal is aborted with ``failure``, and a `` -- detail`` line after it when there is one."""
+    text = f"{failure.value}\n -- {detail}" if detail else failure.value
+    return outs.AnswerGoal(
+        goal_uuid=goal_uuid, status=GoalStatus.ABORTED, result=_result(text, "", 0), rule=rule
+    )
 
 
 def _on_goal_submitted(state: State, event: ins.GoalSubmitted, config: ServerConfig) -> Transition:
@@ -1110,6 +1067,20 @@ def _start_goal(before: State, state: State, found: QueuedGoal, now: int, config
     return _finish(before, state, outputs, now)
 
 
+# -------------------------------------------------------------------- §6 NEXT
+
+
+def next_child_id(goal: Goal, last_id: int, config: ServerConfig) -> int:
+    """The id of the child a NEXT ``goal`` starts in a run whose highest id is ``last_id`` (R6.2): the
+    goal's own id, unless it is 0 or the adapter numbers children (id policy ``adapter``), then
+    :func:`fresh_id`, modulo 2**64 (under id policy ``goal`` R4.12 refuses id 0 when none is left;
+    the adapter's counter wraps to 0)."""
+    if config.id_policy is _GOAL_IDS and goal.id != 0:
+        return goal.id
+    fresh = fresh_id(last_id)
+    return 0 if fresh is None else fresh
+
+
 def _start_next(
     state: State,
     queued: tuple[QueuedGoal, ...],
@@ -1167,51 +1138,46 @@ def _start_next(
     return _copy_at_start(state, queued, child_id, running, _UNDERWAY, None, log_seq)
 
 
-def _start_cancel(state: State, uuid: str, goal: Goal, outputs: list[outs.Output], now: int) -> State:
-    running = state.running
-    if running is None:
-        outputs.append(_failure("R9.1", uuid, Failure.IDLE_CANCEL))
-        return state
-    if goal.id != running.child_id:
-        outputs.append(_failure("R9.2", uuid, Failure.CANCEL_ID))
-        return state
-    if not running.started:  # the child never started; it is cancelled at once
-        state = _replace_state(state, cancels=(*state.cancels, uuid))
-        outputs.extend(_answers_at_child_end(state, running, Status.CANCELED.value, "R9.4", "R9.4"))
-        return _replace_state(state, running=None, cancels=(), status=Status.STANDBY.value)
-    if not running.canceling:
-        outputs.append(outs.CancelChild(id=running.child_id, rule="R9.3"))
-        running = _replace_running(running, canceling=True)
-    return _replace_state(state, running=running, cancels=(*state.cancels, uuid))
+def _start_child(
+    rule: str,
+    state: State,
+    running: RunningGoal,
+    outputs: list[outs.Output],
+    logs: tuple[LogEntry, ...],
+    parsed: Any = _UNCHECKED,
+) -> RunningGoal:
+    """Start the running goal's child (R6.4): its outputs, and the goal as started.
 
-
-def _on_cancel_requested(state: State, event: ins.CancelRequested, config: ServerConfig) -> Transition:
-    uuid = event.goal_uuid
-    not_running = _result(Failure.NOT_RUNNING.value, "", 0)
-    if any(queued.goal_uuid == uuid for queued in state.queued):
-        after = _replace_state(
-            state, queued=tuple(queued for queued in state.queued if queued.goal_uuid != uuid)
+    The caller's new state holds the returned goal, status ``underway`` and no stubbornness (R12.5).
+    ``parsed`` is the description as R4.9 or R6.1 parsed it; a deferred start (R14.5) parses it again.
+    """
+    if state.stubborn is not None:  # R12.5
+        outputs.append(outs.StubbornEnd(rule="R12.5"))
+    goal = running.goal
+    if parsed is _UNCHECKED:
+        try:
+            parsed = _json.parse(goal.description)
+        except _json.JsonProblem:  # unreachable after R6.1; kept so the machine cannot raise
+            parsed = None
+    child_id = running.child_id
+    outputs.append(
+        outs.StartChild(
+            category=goal.category, description=goal.description, id=child_id, parsed=parsed, rule=rule
         )
-        answer = outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.CANCELED, result=not_running, rule="R10.1")
-        return Transition(after, (outs.CancelResponse(goal_uuid=uuid, accepted=True, rule="R10.1"), answer))
-    if uuid in state.cancels:
-        after = _replace_state(state, cancels=tuple(other for other in state.cancels if other != uuid))
-        answer = outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.CANCELED, result=not_running, rule="R10.2")
-        return Transition(after, (outs.CancelResponse(goal_uuid=uuid, accepted=True, rule="R10.2"), answer))
-    running = state.running
-    if running is None or running.goal_uuid != uuid:
-        return Transition(state, (outs.CancelResponse(goal_uuid=uuid, accepted=False, rule="R10.5"),))
-    running = _replace_running(running, cancel_requested=True)
-    if not running.started:
-        outputs: list[outs.Output] = [outs.CancelResponse(goal_uuid=uuid, accepted=True, rule="R10.4")]
-        outputs.extend(_answers_at_child_end(state, running, Status.CANCELED.value, "R10.4", "R10.4"))
-        after = _replace_state(state, running=None, cancels=(), status=Status.STANDBY.value)
-        return _finish(state, after, outputs, event.now)
-    outputs = [outs.CancelResponse(goal_uuid=uuid, accepted=True, rule="R10.3")]
-    if not running.canceling:
-        outputs.append(outs.CancelChild(id=running.child_id, rule="R10.3"))
-        running = _replace_running(running, canceling=True)
-    return Transition(_replace_state(state, running=running), tuple(outputs))
+    )
+    if not running.started or running.child_status != _UNDERWAY:
+        running = _replace_running(running, started=True, child_status=_UNDERWAY)
+    feedback = _make_feedback(status=_UNDERWAY, id=child_id, logs=logs)
+    outputs.append(outs.PublishFeedback(goal_uuid=running.goal_uuid, feedback=feedback, rule=rule))
+    return running
+
+
+# ------------------------------------------------- §7 child progress and logs
+
+
+def _log_entry(seq: int, text: str, tier: str, now: int) -> LogEntry:
+    """The log entry numbered ``seq`` (the robot's next LogEntry.seq, which wraps at 2**32, R7.3)."""
+    return _make_log_entry(seq=seq, tier=tier, unix_millis_time=now // 1_000_000, text=text)
 
 
 def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerConfig) -> Transition:
@@ -1246,6 +1212,46 @@ def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerCon
     elif after.status != state.status:  # the run, the slot and the id are as they were (R2.3)
         outputs.append(outs.PublishStatus(message=status_message(after, event.now), rule="R2.3"))
     return Transition(after, tuple(outputs))
+
+
+# --------------------------------------------------------------- §8 child end
+
+
+# Child statuses that end a child early: its goal is not answered as succeeded (R8.2).
+_EARLY_END = frozenset({Status.CANCELED.value, Status.KILLED.value, Status.SKIPPED.value})
+
+
+def ends_a_child(status: str) -> bool:
+    """Whether a child reporting ``status`` has ended: a final status (R8.1)."""
+    return status in ENDED_CHILD_STATUSES
+
+
+def ends_early(status: str) -> bool:
+    """Whether a child ending with ``status`` ended early, and its goal is not answered succeeded (R8.2)."""
+    return status in _EARLY_END
+
+
+def _answers_at_child_end(
+    state: State,
+    running: RunningGoal,
+    final: str,
+    rule: str = CHILD_END_RULE,
+    cancels_rule: str = WAITING_CANCEL_RULE,
+) -> list[outs.Output]:
+    """The running goal's and every waiting CANCEL goal's answers when the child ends (R8.2, R8.3).
+
+    ``rule`` and ``cancels_rule`` name the rules that end it, when not a child's end (R9.4, R10.4, R13.3).
+    """
+    result = _result("", final, running.child_id)
+    status = _SUCCEEDED
+    if final in _EARLY_END:
+        status = _CANCELED_GOAL if running.cancel_requested else _ABORTED
+    answers: list[outs.Output] = [
+        outs.AnswerGoal(goal_uuid=running.goal_uuid, status=status, result=result, rule=rule)
+    ]
+    for uuid in state.cancels:
+        answers.append(outs.AnswerGoal(goal_uuid=uuid, status=_SUCCEEDED, result=result, rule=cancels_rule))
+    return answers
 
 
 def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerConfig) -> Transition:
@@ -1294,8 +1300,89 @@ def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerCon
     return Transition(after, tuple(outputs))
 
 
+# ------------------------------------------------------------------ §9 CANCEL
+
+
+def _start_cancel(state: State, uuid: str, goal: Goal, outputs: list[outs.Output], now: int) -> State:
+    running = state.running
+    if running is None:
+        outputs.append(_failure("R9.1", uuid, Failure.IDLE_CANCEL))
+        return state
+    if goal.id != running.child_id:
+        outputs.append(_failure("R9.2", uuid, Failure.CANCEL_ID))
+        return state
+    if not running.started:  # the child never started; it is cancelled at once
+        state = _replace_state(state, cancels=(*state.cancels, uuid))
+        outputs.extend(_answers_at_child_end(state, running, Status.CANCELED.value, "R9.4", "R9.4"))
+        return _replace_state(state, running=None, cancels=(), status=Status.STANDBY.value)
+    if not running.canceling:
+        outputs.append(outs.CancelChild(id=running.child_id, rule="R9.3"))
+        running = _replace_running(running, canceling=True)
+    return _replace_state(state, running=running, cancels=(*state.cancels, uuid))
+
+
+# ---------------------------------------------------- §10 action-level cancel
+
+
+def _on_cancel_requested(state: State, event: ins.CancelRequested, config: ServerConfig) -> Transition:
+    uuid = event.goal_uuid
+    not_running = _result(Failure.NOT_RUNNING.value, "", 0)
+    if any(queued.goal_uuid == uuid for queued in state.queued):
+        after = _replace_state(
+            state, queued=tuple(queued for queued in state.queued if queued.goal_uuid != uuid)
+        )
+        answer = outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.CANCELED, result=not_running, rule="R10.1")
+        return Transition(after, (outs.CancelResponse(goal_uuid=uuid, accepted=True, rule="R10.1"), answer))
+    if uuid in state.cancels:
+        after = _replace_state(state, cancels=tuple(other for other in state.cancels if other != uuid))
+        answer = outs.AnswerGoal(goal_uuid=uuid, status=GoalStatus.CANCELED, result=not_running, rule="R10.2")
+        return Transition(after, (outs.CancelResponse(goal_uuid=uuid, accepted=True, rule="R10.2"), answer))
+    running = state.running
+    if running is None or running.goal_uuid != uuid:
+        return Transition(state, (outs.CancelResponse(goal_uuid=uuid, accepted=False, rule="R10.5"),))
+    running = _replace_running(running, cancel_requested=True)
+    if not running.started:
+        outputs: list[outs.Output] = [outs.CancelResponse(goal_uuid=uuid, accepted=True, rule="R10.4")]
+        outputs.extend(_answers_at_child_end(state, running, Status.CANCELED.value, "R10.4", "R10.4"))
+        after = _replace_state(state, running=None, cancels=(), status=Status.STANDBY.value)
+        return _finish(state, after, outputs, event.now)
+    outputs = [outs.CancelResponse(goal_uuid=uuid, accepted=True, rule="R10.3")]
+    if not running.canceling:
+        outputs.append(outs.CancelChild(id=running.child_id, rule="R10.3"))
+        running = _replace_running(running, canceling=True)
+    return Transition(_replace_state(state, running=running), tuple(outputs))
+
+
+# ------------------------------------------ §11 FINISHED and the end of a run
+
+
+def _end_dynamic_event(
+    state: State, final: str, outputs: list[outs.Output], task_over: bool = False
+) -> State:
+    """The dynamic event is over (R11.2, R13.4): the task may move on.
+
+    When a task signal ends it, the task itself is over and its interruption with it (R13.6).
+    """
+    outputs.append(outs.DynamicEventFinished(status=final, rule="R11.2"))
+    interrupted = False if task_over else state.interrupted
+    return _replace_state(
+        state, active=False, status=final, running=None, cancels=(), interrupted=interrupted
+    )
+
+
+# ----------------------------------------------------------- §12 stubbornness
+
+
 def _seconds(value: float) -> int:
     return round(value * SECOND)
+
+
+def _end_stubbornness(state: State, outputs: list[outs.Output], rule: str = "R12.5") -> State:
+    """End an active stubbornness (R12.5; a restart's own rule is R21.2)."""
+    if state.stubborn is None:
+        return state
+    outputs.append(outs.StubbornEnd(rule=rule))
+    return _replace_state(state, stubborn=None)
 
 
 def _on_tick(state: State, event: ins.Tick, config: ServerConfig) -> Transition:
@@ -1331,42 +1418,7 @@ def _on_tick(state: State, event: ins.Tick, config: ServerConfig) -> Transition:
     return Transition(_replace_state(state, position=position, stubborn=stubborn), (output,))
 
 
-def _on_interrupt(state: State, event: ins.Interrupt, config: ServerConfig) -> Transition:
-    if not state.active:
-        return _ignored("R18.5", state, event.KIND, "no dynamic event is active")
-    if state.interrupted:
-        return _ignored("R18.6", state, event.KIND, "the task is already interrupted")
-    after = _replace_state(state, interrupted=True)
-    running = state.running
-    if running is not None and running.started:
-        return Transition(after, (outs.InterruptChild(id=running.child_id, rule="R14.1"),))
-    return Transition(after, (outs.InterruptConfirmed(rule="R14.2"),))
-
-
-def _on_resume(state: State, event: ins.Resume, config: ServerConfig) -> Transition:
-    if not state.interrupted:
-        return _ignored("R18.6", state, event.KIND, "the task is not interrupted")
-    after = _replace_state(state, interrupted=False)  # R14.3
-    running = state.running
-    if running is None or not after.active:
-        return Transition(after, ())
-    if running.started:
-        return Transition(after, (outs.ResumeChild(id=running.child_id, rule="R14.4"),))
-    outputs: list[outs.Output] = []
-    running = _start_child("R14.5", after, running, outputs, ())
-    after = _replace_state(after, running=running, status=_UNDERWAY, stubborn=None)
-    return _finish(state, after, outputs, event.now)
-
-
-def _on_id_drawn(state: State, event: ins.IdDrawn, config: ServerConfig) -> Transition:
-    """The adapter's counter moved on (R17.8): the next child's id is above the id drawn."""
-    if config.id_policy is _GOAL_IDS:
-        return _ignored("R18.8", state, event.KIND, "the NEXT goals name the children (id policy goal)")
-    if not state.active:
-        return _ignored("R18.8", state, event.KIND, "no dynamic event is active")
-    fresh = fresh_id(state.last_id)  # the adapter's counter wraps to 0, as next_child_id does
-    after = _replace_state(state, last_id=0 if fresh is None else fresh)
-    return _finish(state, after, [], event.now)
+# --------------------------------------------------- §13 task cancel and kill
 
 
 def _on_task_signal(state: State, event: ins.TaskCancel | ins.TaskKill, config: ServerConfig) -> Transition:
@@ -1403,6 +1455,39 @@ def _on_task_signal(state: State, event: ins.TaskCancel | ins.TaskKill, config: 
     return _finish(state, after, outputs, event.now)
 
 
+# ----------------------------------------------------------- §14 interruption
+
+
+def _on_interrupt(state: State, event: ins.Interrupt, config: ServerConfig) -> Transition:
+    if not state.active:
+        return _ignored("R18.5", state, event.KIND, "no dynamic event is active")
+    if state.interrupted:
+        return _ignored("R18.6", state, event.KIND, "the task is already interrupted")
+    after = _replace_state(state, interrupted=True)
+    running = state.running
+    if running is not None and running.started:
+        return Transition(after, (outs.InterruptChild(id=running.child_id, rule="R14.1"),))
+    return Transition(after, (outs.InterruptConfirmed(rule="R14.2"),))
+
+
+def _on_resume(state: State, event: ins.Resume, config: ServerConfig) -> Transition:
+    if not state.interrupted:
+        return _ignored("R18.6", state, event.KIND, "the task is not interrupted")
+    after = _replace_state(state, interrupted=False)  # R14.3
+    running = state.running
+    if running is None or not after.active:
+        return Transition(after, ())
+    if running.started:
+        return Transition(after, (outs.ResumeChild(id=running.child_id, rule="R14.4"),))
+    outputs: list[outs.Output] = []
+    running = _start_child("R14.5", after, running, outputs, ())
+    after = _replace_state(after, running=running, status=_UNDERWAY, stubborn=None)
+    return _finish(state, after, outputs, event.now)
+
+
+# --------------------------------------------------------------- §15 shutdown
+
+
 def _abort_open_goals(rule: str, state: State, failure: Failure) -> list[outs.Output]:
     """Every goal the state holds open, aborted: the running goal, the waiting CANCELs, the queued goals."""
     outputs: list[outs.Output] = []
@@ -1424,6 +1509,75 @@ def _on_shutdown(state: State, event: ins.Shutdown, config: ServerConfig) -> Tra
     return _finish(state, after, outputs, event.now)
 
 
+# ------------------------------------------------------ §16 description query
+
+
+def _on_description_query(state: State, event: ins.DescriptionQuery, config: ServerConfig) -> Transition:
+    if not state.active:
+        return Transition(state, (outs.DescriptionAnswer(response=DescriptionResponse(), rule="R16.1"),))
+    response = DescriptionResponse(
+        running=True, status=state.status, description=state.description, id=state.current_id
+    )
+    return Transition(state, (outs.DescriptionAnswer(response=response, rule="R16.2"),))
+
+
+# ------------------------------------------------- §17 rmf_ros2 compatibility
+
+
+def _running_status(
+    state: State, status: str, child_id: int, now: int, dynamic_state: int = _RUNNING
+) -> DynamicEventStatus:
+    """A status message naming a child, RUNNING unless told otherwise, whatever the state (rmf_ros2
+    mode, R17.4, R17.5)."""
+    return _make_status(
+        dynamic_event_seq=state.seq,
+        dynamic_state=dynamic_state,
+        status=status,
+        id=child_id,
+        time=_time(now),
+    )
+
+
+def _on_id_drawn(state: State, event: ins.IdDrawn, config: ServerConfig) -> Transition:
+    """The adapter's counter moved on (R17.8): the next child's id is above the id drawn."""
+    if config.id_policy is _GOAL_IDS:
+        return _ignored("R18.8", state, event.KIND, "the NEXT goals name the children (id policy goal)")
+    if not state.active:
+        return _ignored("R18.8", state, event.KIND, "no dynamic event is active")
+    fresh = fresh_id(state.last_id)  # the adapter's counter wraps to 0, as next_child_id does
+    after = _replace_state(state, last_id=0 if fresh is None else fresh)
+    return _finish(state, after, [], event.now)
+
+
+# -------------------------------------------------- §18 inputs without effect
+
+
+def _ignored(rule: str, state: State, kind: str, why: str) -> Transition:
+    return Transition(state, (outs.Ignored(input=kind, why=why, rule=rule),))
+
+
+# --------------------------------------------- §20 clients that keep no state
+
+
+def child_ended(message: DynamicEventStatus) -> bool:
+    """R20.2: a RUNNING status carrying a child's final status (:data:`ENDED_CHILD_STATUSES`) names
+    a child that has ended (or is about to, R7.4): a client takes the robot as waiting."""
+    return message.dynamic_state == _RUNNING and message.status in ENDED_CHILD_STATUSES
+
+
+def runs_a_child(message: DynamicEventStatus) -> bool:
+    """A status that shows a child running: RUNNING, and not a child's final status (R2.2, R20.2)."""
+    return message.dynamic_state == _RUNNING and message.status not in ENDED_CHILD_STATUSES
+
+
+def robot_waits(message: DynamicEventStatus) -> bool:
+    """A status that shows the robot waiting for its next goal: WAITING, or a child's end (R20.2)."""
+    return message.dynamic_state == _WAITING or child_ended(message)
+
+
+# ---------------------------------------------------------------- §21 restart
+
+
 def _on_restart(state: State, event: ins.Restart, config: ServerConfig) -> Transition:
     outputs = _abort_open_goals("R21.1", state, Failure.RESTART)  # the goals of the process that ended
     running = state.running
@@ -1438,120 +1592,35 @@ def _on_restart(state: State, event: ins.Restart, config: ServerConfig) -> Trans
     return Transition(after, tuple(outputs))
 
 
-def _on_description_query(state: State, event: ins.DescriptionQuery, config: ServerConfig) -> Transition:
-    if not state.active:
-        return Transition(state, (outs.DescriptionAnswer(response=DescriptionResponse(), rule="R16.1"),))
-    response = DescriptionResponse(
-        running=True, status=state.status, description=state.description, id=state.current_id
-    )
-    return Transition(state, (outs.DescriptionAnswer(response=response, rule="R16.2"),))
+# --------------------------------------------- the table's handlers, resolved
 
 
-# --------------------------------------------------------------------------- the transition table
-
-
-@attrs.frozen
-class Edge:
-    """One declared way a step may move the phase: ``source --input [guard]--> target`` (rule)."""
-
-    source: DynamicState
-    input: str
-    target: DynamicState
-    guard: str
-    rule: str
-
-
-_Handler: TypeAlias = Callable[[State, Any, ServerConfig], Transition]
-_I, _W, _R = DynamicState.INACTIVE, DynamicState.WAITING, DynamicState.RUNNING
-
-#: Input kind -> its handler.  One handler per input; the phase rules live in :data:`TRANSITIONS`.
-HANDLERS: Mapping[str, _Handler] = {
-    ins.Begin.KIND: _on_begin,
-    ins.GoalRequested.KIND: _on_goal_requested,
-    ins.GoalStarted.KIND: _on_goal_started,
-    ins.GoalSubmitted.KIND: _on_goal_submitted,
-    ins.CancelRequested.KIND: _on_cancel_requested,
-    ins.ChildProgress.KIND: _on_child_progress,
-    ins.ChildFinished.KIND: _on_child_finished,
-    ins.Tick.KIND: _on_tick,
-    ins.Interrupt.KIND: _on_interrupt,
-    ins.Resume.KIND: _on_resume,
-    ins.IdDrawn.KIND: _on_id_drawn,
-    ins.TaskCancel.KIND: _on_task_signal,
-    ins.TaskKill.KIND: _on_task_signal,
-    ins.Shutdown.KIND: _on_shutdown,
-    ins.Restart.KIND: _on_restart,
-    ins.DescriptionQuery.KIND: _on_description_query,
-}
-
-#: Every phase change the machine can make.  A step that is not listed here keeps the phase.
-TRANSITIONS: tuple[Edge, ...] = (
-    Edge(_I, "begin", _W, "not shut down", "R3.1"),
-    Edge(_W, "goal_started", _R, "NEXT", "R6.3, R6.4"),
-    Edge(_W, "goal_started", _I, "FINISHED", "R11.1"),
-    Edge(_W, "goal_submitted", _R, "NEXT", "R5.3, R6.3, R6.4"),
-    Edge(_W, "goal_submitted", _I, "FINISHED", "R5.3, R11.1"),
-    Edge(_W, "task_cancel", _I, "", "R13.3"),
-    Edge(_W, "task_kill", _I, "", "R13.3"),
-    Edge(_W, "shutdown", _I, "", "R15.2"),
-    Edge(_R, "child_finished", _W, "task not cancelled", "R8.4"),
-    Edge(_R, "child_finished", _I, "task cancelled or killed", "R13.4"),
-    Edge(_R, "goal_started", _W, "CANCEL of a deferred child", "R9.4"),
-    Edge(_R, "goal_submitted", _W, "CANCEL of a deferred child", "R5.3, R9.4"),
-    Edge(_R, "cancel_requested", _W, "of a deferred child", "R10.4"),
-    Edge(_R, "task_cancel", _I, "deferred child", "R13.3"),
-    Edge(_R, "task_kill", _I, "deferred child", "R13.3"),
-    Edge(_R, "shutdown", _I, "", "R15.2"),
-    Edge(_R, "restart", _W, "task not cancelled", "R21.2"),
-    Edge(_R, "restart", _I, "task cancelled or killed", "R21.2"),
-)
-
-
+#: Input kind -> its handler: :data:`_HANDLER_NAMES` resolved (a name that is no function fails here).
+HANDLERS: Mapping[str, _Handler] = {kind: globals()[name] for kind, name in _HANDLER_NAMES.items()}
 #: Input class -> its handler (the lookup :func:`step` makes; a class, not a kind, so that another
 #: machine's input of the same kind, the client's ``Tick``, is refused rather than taken).
 _BY_CLASS: dict[type, _Handler] = {cls: HANDLERS[cls.KIND] for cls in typing.get_args(ins.Input)}
 
-
-def step(state: State, event: ins.Input, config: ServerConfig) -> Transition:
-    """Apply one input to the state: the new state and the outputs, in order.
-
-    Pure and total: any well-typed input in any state yields a transition.  A
-    value of another type than the three parameters name is refused with
-    :class:`~dynevent.errors.WrongInput` (a ``TypeError``).
-    """
-    handler = _BY_CLASS.get(event.__class__)
-    if handler is None or state.__class__ is not State or config.__class__ is not ServerConfig:
-        handler = _checked(state, event, config)
-    return handler(state, event, config)
-
-
-def _checked(state: object, event: object, config: object) -> _Handler:
-    """The handler of an input given as a subclass; :class:`WrongInput` for a value of a wrong type."""
-    if not isinstance(state, State):
-        raise WrongInput("step(state, ...)", "a dynevent.server.machine.State", state)
-    if not isinstance(config, ServerConfig):
-        raise WrongInput("step(..., config)", "a dynevent.server.machine.ServerConfig", config)
-    for cls, handler in _BY_CLASS.items():
-        if isinstance(event, cls):
-            return handler
-    raise WrongInput(
-        "step(state, event, ...)",
-        "a server input of dynevent.server.inputs (Begin, GoalRequested, ...)",
-        event,
-    )
-
-
-def allowed_targets(source: DynamicState, kind: str) -> frozenset[DynamicState]:
-    """The phases a step of input ``kind`` may lead to from ``source`` (the source itself included)."""
-    return frozenset(
-        {source} | {edge.target for edge in TRANSITIONS if edge.source is source and edge.input == kind}
-    )
-
-
-# --------------------------------------------------------------------------- shortcuts for speed
+# -------------------------------------------------------- shortcuts for speed
 #
-# Nothing below states a rule: each shortcut is derived from the tables above, and the benchmark
-# named beside it shows what it saves.
+# Nothing below states a rule: each shortcut is derived from the types and tables above, and the
+# benchmark named beside it shows what it saves.
+
+# Messages built from checked state skip their converters; copies skip __init__ (attrs.evolve re-runs
+# it).  bench/run.py's rows in docs/performance.md ("Changes made, measured") show what each gave.
+_make_status = maker(DynamicEventStatus)
+_make_feedback = maker(Feedback)
+_make_log_entry = maker(LogEntry)
+_make_result = maker(Result)
+_make_time = maker(Time)
+_replace_state = replacer(State)
+# the copies of the most frequent steps, each taking the fields it changes positionally
+_copy_queued = copier(State, "queued")
+_copy_at_start = copier(State, "queued", "last_id", "running", "status", "stubborn", "log_seq")
+_copy_at_progress = copier(State, "running", "status", "log_seq")
+_copy_at_child_end = copier(State, "running", "cancels", "status", "stubborn")
+_replace_running = replacer(RunningGoal)
+_replace_stubborn = replacer(Stubbornness)
 
 _Walk: TypeAlias = Callable[[State, Goal, ServerConfig, list[Any]], outs.Rejected | None]
 
