@@ -5,7 +5,6 @@ from __future__ import annotations
 import ast
 import os
 import re
-import textwrap
 from pathlib import Path
 
 from dynevent.tools.diagram import render
@@ -92,30 +91,103 @@ def _tests_by_rule() -> dict[str, list[str]]:
     return found
 
 
+# --------------------------------------------------------------------------- where each rule is carried out
+
+SRC = ROOT / "src" / "dynevent"
+#: Where the rules are carried out: the library.  Left out are the judges, the probe and the kit
+#: (conformance/, testing/), which check rules, the tools and simulations that use the library
+#: (tools/, sim/, bags/), and wire/vocab.py, which names the words of every rule.
+NOT_CARRIERS = ("conformance/", "testing/", "tools/", "sim/", "bags/", "wire/vocab.py")
+
+#: The rules that no place of the library cites: where they are carried out, or why nothing does.
+ELSEWHERE = {
+    "R19.1": "every handler together (each goal answered once: R5, R8 to R11, R15.1, R21.1); "
+    "tests/spec/test_19_invariants.py holds it over generated runs, and `conformance.judge.observer` "
+    "judges it on every record",
+    **{
+        rule: "a rule on what a client sends: a server refuses such a goal by R4 whoever sent it, and "
+        "`conformance.clients.ClientJudge` (`dynevent check`) names the client that breaks it"
+        for rule in ("R22.2", "R22.3", "R22.4", "R22.5", "R22.6")
+    },
+    "R22.8": "a rule on clients: no server can make a client end the run it drove, and "
+    "`conformance.clients.ClientJudge.close` (`dynevent check`) names the client that left it open",
+}
+
+
+def _carried_out() -> dict[str, dict[str, list[str]]]:
+    """Rule -> module -> the top-level functions, classes and tables of the library that cite the rule
+    (in their text, or the ``#:``/``#`` comment lines just above them)."""
+    where: dict[str, dict[str, list[str]]] = {}
+    for path in sorted(SRC.glob("**/*.py")):
+        relative = path.relative_to(SRC).as_posix()
+        if relative.startswith(NOT_CARRIERS):
+            continue
+        module = relative.removesuffix(".py").removesuffix("/__init__").replace("/", ".")
+        source = path.read_text(encoding="utf-8")
+        lines = source.split("\n")
+        for node in ast.parse(source).body:
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                name = node.name
+            elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                name = next((target.id for target in targets if isinstance(target, ast.Name)), "")
+            else:
+                continue
+            if not name:
+                continue
+            first = min(
+                [node.lineno] + [decorator.lineno for decorator in getattr(node, "decorator_list", [])]
+            )
+            while first > 1 and lines[first - 2].startswith("#") and not lines[first - 2].startswith("# --"):
+                first -= 1
+            text = "\n".join(lines[first - 1 : node.end_lineno])
+            for rule in dict.fromkeys(re.findall(r"\bR\d+\.\d+\b", text)):
+                where.setdefault(rule, {}).setdefault(module, []).append(name)
+    return where
+
+
+def _places(rule: str, where: dict[str, dict[str, list[str]]]) -> str:
+    if rule not in where:
+        return ELSEWHERE.get(rule, "")
+    return "; ".join(
+        f"`{module}`: " + ", ".join(f"`{name}`" for name in names) for module, names in where[rule].items()
+    )
+
+
 def rule_index() -> str:
-    """docs/rule-index.md as the tests and the vectors make it now."""
+    """docs/rule-index.md as the code, the tests and the vectors make it now."""
     from dynevent.conformance.vectors import load_vectors
 
     tests = _tests_by_rule()
+    where = _carried_out()
     vectors: dict[str, list[str]] = {}
     for vector in load_vectors():
         for rule in vector.rules:
             vectors.setdefault(rule, []).append(vector.source.rsplit("/", 1)[-1])
     lines = [
-        "# Every rule and what checks it",
+        "# Every rule: where it is carried out, and what checks it",
         "",
-        "Generated from the tests' `@pytest.mark.spec(...)` marks and the conformance vectors'",
-        "`rules`; `DYNEVENT_UPDATE_RULE_INDEX=1 pytest tests/project/test_spec_document.py` rewrites it, and",
-        "that test fails while it is stale.  Rules are those of [spec.md](spec.md).",
+        "One index for the whole project, generated: `DYNEVENT_UPDATE_RULE_INDEX=1 pytest",
+        "tests/project/test_spec_document.py` rewrites it, and that test fails while it is stale.  Rules",
+        "are those of [spec.md](spec.md).",
         "",
-        "| rule | tests | vectors |",
-        "|---|---|---|",
+        "- **carried out in**: the top-level functions, classes and tables of the library",
+        "  (`src/dynevent`, module by module) that cite the rule, in their text or the comment just",
+        "  above them.  The judges, the probe and the test kit (`conformance/`, `testing/`), which check",
+        "  rules, the tools and simulations that use the library, and `wire/vocab.py`, which names",
+        "  every rule's words, are left out.  A rule no place of the library cites says where it is",
+        "  carried out instead (the list `ELSEWHERE` of the test).",
+        "- **tests**: the tests' `@pytest.mark.spec(...)` marks; **vectors**: the conformance vectors'",
+        "  `rules` (src/dynevent/conformance/*.json).",
+        "",
+        "| rule | carried out in | tests | vectors |",
+        "|---|---|---|---|",
     ]
     for rule in sorted(RULES, key=_rule_key):
         cited = ", ".join(f"`{test}`" for test in tests.get(rule, []))
         files = vectors.get(rule, [])
         counted = ", ".join(f"{source} ({files.count(source)})" for source in dict.fromkeys(files))
-        lines.append(f"| {rule} | {cited} | {counted} |")
+        lines.append(f"| {rule} | {_places(rule, where)} | {cited} | {counted} |")
     return "\n".join(lines) + "\n"
 
 
@@ -134,60 +206,22 @@ def test_the_rule_index_reads_module_and_function_marks() -> None:
     assert set(tests) == _cited()  # the index's reading of the marks agrees with the citations found
 
 
-# --------------------------------------------------------------------------- the machine's own index
-
-SERVER = ROOT / "src" / "dynevent" / "server"
-#: The files of the rules: the machine, and the configuration and state types beside it.
-RULE_FILES = ("machine.py", "config.py", "state.py")
-INDEX_START = "Where each rule is carried out"
-INDEX_END = '"""'
-
-
-def machine_rule_index() -> str:
-    """The module docstring's index of machine.py: each rule cited in the rule files, and the top-level
-    functions, classes and constants that cite it (of config.py and state.py, named with their module)."""
-    where: dict[str, list[str]] = {}
-    for file in RULE_FILES:
-        source = (SERVER / file).read_text(encoding="utf-8")
-        lines = source.split("\n")
-        for node in ast.parse(source).body:
-            if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
-                name = node.name
-            elif isinstance(node, (ast.Assign, ast.AnnAssign)):
-                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
-                name = next((target.id for target in targets if isinstance(target, ast.Name)), "")
-            else:
-                continue
-            if not name:
-                continue
-            text = "\n".join(lines[node.lineno - 1 : node.end_lineno])
-            label = name if file == "machine.py" else f"{file.removesuffix('.py')}.{name}"
-            for rule in dict.fromkeys(re.findall(r"\bR\d+\.\d+\b", text)):
-                where.setdefault(rule, []).append(label)
-    rows = [
-        f"{INDEX_START} (the functions, classes and tables that cite it; those of",
-        ":mod:`dynevent.server.config` and :mod:`dynevent.server.state` named with their module).",
-        "``DYNEVENT_UPDATE_RULE_INDEX=1 pytest tests/project/test_spec_document.py`` rewrites it from the",
-        "citations, and that test fails while it is stale::",
-        "",
-    ]
-    for rule in sorted(where, key=_rule_key):
-        rows.extend(textwrap.wrap(", ".join(where[rule]), 100, initial_indent=f"    {rule:<7}",
-                                  subsequent_indent=" " * 11, break_on_hyphens=False))  # fmt: skip
-    return "\n".join(rows) + "\n"
+def test_every_rule_is_carried_out_somewhere_the_index_names() -> None:
+    where = _carried_out()
+    unknown = sorted(set(where) - RULES, key=_rule_key)
+    assert not unknown, f"the code cites rules that docs/spec.md does not define: {unknown}"
+    nowhere = sorted(RULES - set(where) - set(ELSEWHERE), key=_rule_key)
+    assert not nowhere, f"rules no code cites and ELSEWHERE does not place: {nowhere}"
+    stale = sorted(set(ELSEWHERE) & set(where), key=_rule_key)
+    assert not stale, f"ELSEWHERE places rules the code now cites: {stale}"
+    assert set(ELSEWHERE) <= RULES
+    machine = {rule for rule, modules in where.items() if "server.machine" in modules}
+    assert {"R4.2", "R8.4", "R12.2", "R19.3", "R20.2"} <= machine
+    assert "_seq_mismatch" in where["R4.2"]["server.machine"]
+    assert "ros.server" in where["R22.1"] and "server.snapshot" in where["R19.8"]
 
 
-def test_the_machine_names_where_each_rule_is_carried_out() -> None:
-    path = SERVER / "machine.py"
-    source = path.read_text(encoding="utf-8")
-    start = source.index(INDEX_START)
-    end = source.index(INDEX_END, start)
-    expected = machine_rule_index()
-    if os.environ.get("DYNEVENT_UPDATE_RULE_INDEX") == "1":
-        path.write_text(source[:start] + expected + source[end:], encoding="utf-8")
-        return
-    how = "DYNEVENT_UPDATE_RULE_INDEX=1 pytest tests/project/test_spec_document.py"
-    assert source[start:end] == expected, f"machine.py's rule index is stale: {how}"
-    cited = {line.split()[0] for line in expected.splitlines() if line.startswith("    R")}
-    assert cited <= RULES, sorted(cited - RULES)  # every rule the machine cites is one of the spec's
-    assert {"R4.2", "R8.4", "R12.2", "R20.2"} <= cited
+def test_machine_py_points_to_the_one_index_and_holds_no_copy() -> None:
+    note = ast.get_docstring(ast.parse((SRC / "server" / "machine.py").read_text(encoding="utf-8")))
+    assert note is not None and "docs/rule-index.md" in note
+    assert not re.search(r"^\s+R\d+\.\d+\s", note, re.MULTILINE), "machine.py holds a second index"

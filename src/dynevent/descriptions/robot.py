@@ -127,7 +127,8 @@ class Robot:
 
     def check(self, category: str, description: Any) -> tuple[str, ...]:
         """Why this robot refuses ``description`` (parsed JSON) of ``category``: the schema's faults,
-        else what is not on its map or in its abilities; empty when it accepts it.  At most
+        else what is not on its map or in its abilities, the two steps of the fleet adapter (R4.18);
+        empty when it accepts it.  At most
         :data:`~dynevent.server.machine.MAX_LISTED_ERRORS` faults are listed (R4.19), found in time
         linear in the description's size."""
         return listed_errors(self._faults(category, description, _Judging(None)))

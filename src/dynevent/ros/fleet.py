@@ -242,7 +242,7 @@ class Fleet:
             self.follower.start()
 
     def shut_down(self) -> None:
-        """End every robot's run (R20.3) and stop spinning, once the answers have gone out."""
+        """Shut every robot down (R15.1, R15.2) and stop spinning, once the answers have gone out."""
         for server in self.servers.values():
             server.shutdown()
         time.sleep(0.2)  # let the shutdown answers go out before the node goes

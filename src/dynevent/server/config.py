@@ -152,5 +152,6 @@ class ServerConfig:
 
     @classmethod
     def rmf_ros2(cls, categories: Mapping[str, Validator]) -> ServerConfig:
-        """The configuration that behaves as rmf_ros2 does where dynevent diverges by option."""
+        """The configuration that behaves as rmf_ros2 does where dynevent diverges by option: the
+        ``rmf_ros2`` mode and the ``adapter`` id policy (R17.3)."""
         return cls(categories=categories, id_policy=IdPolicy.ADAPTER, compatibility=Compatibility.RMF_ROS2)

@@ -4,7 +4,9 @@ Rule 1: everything that decides what the server does lives in this file (and,
 beside it, the configuration's bounds and the state's derived phase and id:
 :mod:`dynevent.server.config`, :mod:`dynevent.server.state`).  The rules are
 numbered as in docs/spec.md (``R4.2`` and so on) and every rule is
-cited where it is carried out.  The machine never raises, never reads a clock
+cited where it is carried out: docs/rule-index.md, the one index of the whole project, names
+for every rule the places that carry it out (this module's among them) and the tests that cite
+it, and tests/project/test_spec_document.py keeps it current.  The machine never raises, never reads a clock
 and never does I/O: time arrives in the inputs, and every effect leaves as an
 output value (:mod:`dynevent.server.outputs`).
 
@@ -22,105 +24,6 @@ The module reads as the spec does, top down:
 
 The table names its handlers rather than holding them, so that it stands above the functions it
 names; :data:`HANDLERS` resolves the names once, at import, at the bottom of the module.
-
-Where each rule is carried out (the functions, classes and tables that cite it; those of
-:mod:`dynevent.server.config` and :mod:`dynevent.server.state` named with their module).
-``DYNEVENT_UPDATE_RULE_INDEX=1 pytest tests/project/test_spec_document.py`` rewrites it from the
-citations, and that test fails while it is stale::
-
-    R2.1   state.State, state.phase_of
-    R2.2   status_message, status_of, state_from_status, runs_a_child, state.State,
-           state.reported_id
-    R2.3   _finish, _start_goal, _on_child_progress, _on_child_finished
-    R3.1   TRANSITIONS, next_seq, _on_begin
-    R3.2   next_seq, _on_begin
-    R3.3   begin_description, _on_begin
-    R3.4   _on_begin
-    R4.1   _shutting_down, REQUEST_CHECKS
-    R4.2   _seq_mismatch, REQUEST_CHECKS
-    R4.3   _inactive, REQUEST_CHECKS
-    R4.4   _uninitialized_type, REQUEST_CHECKS
-    R4.5   _unknown_type, REQUEST_CHECKS
-    R4.6   _busy, REQUEST_CHECKS
-    R4.7   _unsupported_category, _description_invalid, REQUEST_CHECKS, _DESCRIPTION_CHECKS,
-           _check_description, _start_next
-    R4.8   _description_too_long, REQUEST_CHECKS, _DESCRIPTION_CHECKS, config.ServerConfig
-    R4.9   _description_not_json, REQUEST_CHECKS, _DESCRIPTION_CHECKS, check_index, _start_child,
-           config.any_description
-    R4.10  _description_invalid, REQUEST_CHECKS, _DESCRIPTION_CHECKS, _check_description
-    R4.11  _non_finite_stubborn, REQUEST_CHECKS
-    R4.12  _stale_id, _stale, fresh_id, REQUEST_CHECKS, next_child_id
-    R4.13  _cancel_idle, _cancel_id_mismatch, REQUEST_CHECKS
-    R4.14  _cancel_id_mismatch, REQUEST_CHECKS
-    R4.15  _on_goal_requested
-    R4.16  _ACCEPTANCES, _on_goal_requested
-    R4.17  config._categories, config.ServerConfig
-    R4.19  _description_invalid, config.listed_errors
-    R5.1   _start_goal
-    R5.2   race_lost, _start_goal
-    R5.3   TRANSITIONS, _on_goal_submitted
-    R6.1   _start_goal, _start_next, _start_child, state.QueuedGoal
-    R6.2   fresh_id, next_child_id
-    R6.3   TRANSITIONS, DEFERRED_START_RULE, state_from_status
-    R6.4   TRANSITIONS, START_RULE, _start_child
-    R7.1   _on_child_progress
-    R7.2   _on_child_progress
-    R7.3   _start_next, _log_entry, _on_child_progress
-    R7.4   _on_child_progress, child_ended
-    R8.1   CHILD_RESULT_RULE, ends_a_child
-    R8.2   CHILD_END_RULE, ends_early, _answers_at_child_end
-    R8.3   WAITING_CANCEL_RULE, _answers_at_child_end
-    R8.4   TRANSITIONS, state_from_status, _on_child_finished
-    R9.1   _start_cancel
-    R9.2   _start_cancel
-    R9.3   _start_cancel
-    R9.4   TRANSITIONS, _answers_at_child_end, _start_cancel
-    R10.1  _on_cancel_requested
-    R10.2  _on_cancel_requested
-    R10.3  _on_cancel_requested
-    R10.4  TRANSITIONS, _answers_at_child_end, _on_cancel_requested
-    R10.5  _on_cancel_requested
-    R11.1  TRANSITIONS, FINISHED_RULE
-    R11.2  _end_dynamic_event
-    R12.1  _on_child_finished
-    R12.2  _start_next
-    R12.3  _on_tick
-    R12.4  _on_tick
-    R12.5  _start_child, _end_stubbornness
-    R13.1  _on_task_signal
-    R13.2  _on_task_signal
-    R13.3  TRANSITIONS, _answers_at_child_end, _on_task_signal
-    R13.4  TRANSITIONS, _on_child_finished, _end_dynamic_event
-    R13.6  _end_dynamic_event
-    R14.1  _on_interrupt
-    R14.2  _on_interrupt
-    R14.3  _on_resume
-    R14.4  _on_resume
-    R14.5  _start_child, _on_resume
-    R15.1  _on_shutdown
-    R15.2  TRANSITIONS
-    R16.1  _on_description_query
-    R16.2  _on_description_query
-    R17.1  RequestCheck, _walk, _deferred, _decide
-    R17.2  _start_goal
-    R17.4  _on_child_finished, _running_status
-    R17.5  _on_child_progress, _running_status
-    R17.6  begin_description, _on_begin
-    R17.7  _on_child_finished
-    R17.8  _on_id_drawn
-    R18.1  _on_begin, _on_shutdown
-    R18.2  _on_goal_requested, _on_goal_submitted
-    R18.3  _on_goal_started
-    R18.4  _on_child_progress, _on_child_finished
-    R18.5  _on_task_signal, _on_interrupt
-    R18.6  _on_interrupt, _on_resume
-    R18.7  _on_task_signal
-    R18.8  _on_id_drawn
-    R20.2  state_from_status, child_ended, runs_a_child, robot_waits
-    R21.1  _on_restart
-    R21.2  TRANSITIONS, _end_stubbornness, _on_restart
-    R21.3  _on_restart
-    R22.7  RequestCheck
 """
 
 from __future__ import annotations
@@ -314,7 +217,8 @@ TRANSITIONS: tuple[Edge, ...] = (
 def step(state: State, event: ins.Input, config: ServerConfig) -> Transition:
     """Apply one input to the state: the new state and the outputs, in order.
 
-    Pure and total: any well-typed input in any state yields a transition.  A
+    Pure and total: the same state and input give the same transition (R19.6), and any well-typed
+    input in any state yields one.  A
     value of another type than the three parameters name is refused with
     :class:`~dynevent.errors.WrongInput` (a ``TypeError``).
     """
@@ -421,7 +325,7 @@ def _status_key(state: State) -> tuple[int, bool, bool, str, int]:
 
 
 def _finish(before: State, after: State, outputs: list[outs.Output], now: int) -> Transition:
-    """Close a step: append the status message when the status changed (R2.3)."""
+    """Close a step: append the status message when the status changed (R2.3), the state's own (R19.5)."""
     if _status_key(before) != _status_key(after):
         outputs.append(outs.PublishStatus(message=status_message(after, now), rule="R2.3"))
     return Transition(after, tuple(outputs))
@@ -519,7 +423,7 @@ def _on_begin(state: State, event: ins.Begin, config: ServerConfig) -> Transitio
     if state.active:
         return _ignored("R3.4", state, event.KIND, "a dynamic event is already active")
     outputs: list[outs.Output] = []
-    seq = next_seq(state.seq)  # R3.1
+    seq = next_seq(state.seq)  # R3.1: the one step that changes the seq (R19.3)
     if seq == 0:
         outputs.append(outs.SeqWrapped(previous=state.seq, seq=seq, rule="R3.2"))
     description = begin_description(event.description, config)  # R3.3, R17.6
@@ -667,7 +571,7 @@ def _description_invalid(
     try:
         errors = validator(goal.category, found[0])
         errors = () if type(errors) in (tuple, list) and not errors else listed_errors(errors)  # R4.19
-    except Exception as exc:  # a faulty validator must not break the machine
+    except Exception as exc:  # a faulty validator must not break the machine (R19.7)
         errors = (f"the validator raised {type(exc).__name__}: {exc}",)
     if not errors:
         return None
@@ -703,7 +607,8 @@ def _stale_id(state: State, goal: Goal, config: ServerConfig, found: list[Any]) 
 
 
 def _stale(state: State, goal: Goal, config: ServerConfig) -> bool:
-    """R4.12: under id policy ``goal`` a NEXT names a fresh id, or 0 while one is left to assign."""
+    """R4.12: under id policy ``goal`` a NEXT names a fresh id, or 0 while one is left to assign;
+    under id policy ``adapter`` the server numbers children itself and nothing is stale (R17.3)."""
     if config.id_policy is not _GOAL_IDS:
         return False
     return fresh_id(state.last_id) is None if goal.id == 0 else goal.id <= state.last_id
@@ -819,6 +724,7 @@ REQUEST_CHECKS: tuple[RequestCheck, ...] = (
         standard_only=True,
         goal_only=True,
     ),
+    # no NEXT while a goal holds the running slot (R19.2)
     _one_condition("R4.6", RejectReason.BUSY, _ALL_TYPES - _ONLY_CANCEL, "state.running is None", _busy),
     RequestCheck(
         "R4.7", RejectReason.UNSUPPORTED_CATEGORY, _ONLY_NEXT, _unsupported_category, configured=True
@@ -1270,7 +1176,7 @@ def _on_child_finished(state: State, event: ins.ChildFinished, config: ServerCon
     stubborn = None
     period = running.goal.stubborn_period
     if period > 0.0:
-        applied = max(period, config.stubborn_minimum)
+        applied = max(period, config.stubborn_minimum)  # never below the minimum (R19.4)
         anchor = state.position
         outputs.append(
             outs.StubbornBegin(
@@ -1426,7 +1332,7 @@ def _on_task_signal(state: State, event: ins.TaskCancel | ins.TaskKill, config: 
     signal = Status.KILLED.value if kill else Status.CANCELED.value
     if not state.active:
         return _ignored("R18.5", state, event.KIND, "no dynamic event is active")
-    if state.task_signal in (Status.KILLED.value, signal):
+    if state.task_signal in (Status.KILLED.value, signal):  # a kill after a cancel escalates (R13.5)
         return _ignored("R18.7", state, event.KIND, f"the task was already {state.task_signal}")
     outputs: list[outs.Output] = []
     entry = _log_entry(state.log_seq, TASK_SIGNAL_LOGS[signal], "info", event.now)

@@ -417,7 +417,7 @@ def _optional_specs(value: object) -> tuple[EventSpec, ...] | None:
 
 @attrs.frozen
 class EventDescription:
-    """The ``dynamic_event`` event description.
+    """The ``dynamic_event`` event description (R1.5).
 
     Construct with the fields as keywords; ``None`` (the default) means the
     field is absent from the JSON object:

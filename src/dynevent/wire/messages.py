@@ -71,7 +71,8 @@ _M = TypeVar("_M", bound="WireMessage")
 
 
 class WireMessage:
-    """Base of every wire mirror: conversion to and from dicts and JSON text."""
+    """Base of every wire mirror, field for field with its ROS names and defaults (R1.1): conversion
+    to and from dicts and JSON text (R1.3)."""
 
     __slots__ = ()
 

@@ -148,7 +148,7 @@ def validate_token(field: str, value: object) -> str:
 
 
 def build_name(kind: NameKind, fleet: object, robot: object) -> str:
-    """Return the ``kind`` name of ``robot`` in ``fleet``.
+    """Return the ``kind`` name of ``robot`` in ``fleet`` (R1.4).
 
     Raise :class:`~dynevent.errors.InvalidName` if either token is invalid or
     the fully qualified name would be longer than :data:`MAX_NAME_LENGTH`.
