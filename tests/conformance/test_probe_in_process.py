@@ -9,6 +9,7 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
+import threading
 import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -698,6 +699,51 @@ def test_an_answer_that_comes_after_the_timeout_is_no_failure_of_the_server() ->
     late = _lagging_verdicts(answer=4.0)["next.runs_a_child"]
     assert late.verdict is Verdict.MISSING and not late.absent, late
     assert late.seen.startswith(probing.LATE.format(timeout=OPTIONS.timeout)), late.seen
+
+
+@pytest.mark.spec("R6.4", "R19.1")
+@pytest.mark.parametrize("case", ["next.runs_a_child", "next.id_zero", "next.id_chosen"])
+def test_feedback_that_comes_after_the_answer_and_the_timeout_is_no_failure_of_the_server(case: str) -> None:
+    """A lossy link may deliver a child's start feedback after its answer, and after --timeout: the
+    case that waited for it is not run, saying which bound to raise, rather than failed."""
+    late = _lagging_verdicts(feedback=4.0)[case]
+    assert late.verdict is Verdict.MISSING and not late.absent, late
+    assert late.seen.startswith(probing.LATE.format(timeout=OPTIONS.timeout)), late.seen
+
+
+@pytest.mark.spec("R5.2", "R19.1")
+def test_a_racing_next_whose_response_comes_after_the_timeout_is_no_failure_of_the_server() -> None:
+    late = _lagging_verdicts(response=7.0)["next.race"]  # past both of its waits
+    assert late.verdict is Verdict.MISSING and not late.absent, late
+    assert late.seen.startswith(probing.LATE.format(timeout=OPTIONS.timeout)), late.seen
+
+
+class _LateSubscriberLink(InProcessLink):
+    """The in-process link whose late subscribers hear the latched status ``after`` seconds late (a
+    lossy link matches a new subscription, and delivers to it, late), or never."""
+
+    def __init__(self, after: float | None) -> None:
+        self.after = after
+        super().__init__(CONFIG)
+
+    def late_subscriber(self) -> Any:
+        heard = threading.Event()
+        if self.after is not None:
+            self._at(self.now + round(self.after * 1_000_000_000), heard.set)
+        return heard
+
+
+@pytest.mark.spec("R1.4")
+def test_a_late_subscriber_that_hears_the_status_after_the_timeout_is_no_failure_of_the_server() -> None:
+    options = attrs.evolve(OPTIONS, deadline=1000)
+    for after, verdict in ((1.0, Verdict.PASS), (5.0, Verdict.MISSING), (None, Verdict.FAIL)):
+        link = _LateSubscriberLink(after)
+        findings = probing.run_cases(link, options, list(CASES), lambda _: None)
+        _, findings = probing.conclude(findings, "", options, lambda _: None)
+        latched = {finding.case.id: finding for finding in findings}["status.latched"]
+        assert latched.verdict is verdict, (after, latched)
+        if verdict is Verdict.MISSING:
+            assert latched.seen.startswith(probing.LATE.format(timeout=OPTIONS.timeout)), latched.seen
 
 
 #: Channels lagging one another by up to 3 s, each mix once: children of 3 to 6 s, longer than the lag

@@ -23,6 +23,7 @@ import collections
 import heapq
 import itertools
 import math
+import threading
 import time
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -211,8 +212,11 @@ class InProcessLink(Link):
     def wait_for_server(self, timeout: float) -> bool:
         return True
 
-    def late_subscriber_hears(self, timeout: float) -> bool:
-        return self._latest is not None
+    def late_subscriber(self) -> threading.Event:
+        heard = threading.Event()
+        if self._latest is not None:
+            heard.set()
+        return heard
 
     def send(self, goal: Goal) -> Exchange:
         exchange = Exchange(goal, self)

@@ -188,8 +188,9 @@ class Link:
         None and why there is none."""
         raise NotImplementedError
 
-    def late_subscriber_hears(self, timeout: float) -> bool:
-        """Whether a subscription made now receives a status (what transient-local keeps)."""
+    def late_subscriber(self) -> threading.Event:
+        """A subscription to the status topic made now: the event is set once it receives a status
+        (what transient-local keeps).  It listens until the link is destroyed."""
         raise NotImplementedError
 
     def introspect(self) -> bool:
@@ -346,8 +347,15 @@ class _TimedOut(_Unreachable):
 
 
 def _complete(exchange: Exchange) -> bool:
-    """The goal has its response and, accepted, its answer."""
-    return exchange.accepted is False or (exchange.accepted is True and bool(exchange.answers))
+    """The goal has its response and, accepted, its answer, and a NEXT that ran a child its start's
+    feedback (R6.4: a lossy link may deliver it after the answer)."""
+    if exchange.accepted is False:
+        return True
+    return (
+        exchange.accepted is True
+        and bool(exchange.answers)
+        and (bool(exchange.feedback) or not _ran_a_child(exchange))
+    )
 
 
 def _ran_a_child(exchange: Exchange) -> bool:
@@ -401,6 +409,8 @@ class Probe:
         #: each case's goals left without their response or answer when it ended, by case id: the run's
         #: end sees whether it came late
         self.unanswered: dict[str, list[Exchange]] = {}
+        #: what a case waited for in vain besides its goals' messages, by case id: whether it came since
+        self.heard_later: dict[str, Callable[[], bool]] = {}
 
     @property
     def timeout(self) -> float:
@@ -482,7 +492,10 @@ class Probe:
         case is not run, with which bound to raise, rather than failed.  A status or feedback that
         never came stays the server's failure."""
         unanswered = self.unanswered.get(finding.case.id, [])
-        came_late = bool(unanswered) and all(_complete(exchange) for exchange in unanswered)
+        later = self.heard_later.get(finding.case.id)
+        came_late = (bool(unanswered) and all(_complete(exchange) for exchange in unanswered)) or (
+            later is not None and later()
+        )
         if not (finding.absent and finding.verdict is Verdict.FAIL and came_late):
             return finding
         why = f"{LATE.format(timeout=self.options.timeout)} ({finding.seen})"
@@ -760,9 +773,13 @@ def _status_latched(probe: Probe, case: Case) -> Finding:
         # a server with no transient-local status (a volatile one never matches this subscriber)
         seen = f"no status within {probe.timeout:g} s"
         return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=True)
-    if probe.link.late_subscriber_hears(probe.timeout):
+    heard = probe.link.late_subscriber()
+    if probe.link.wait(heard.is_set, probe.timeout):
         return Finding(case, Verdict.PASS, expected="a status", seen="a status")
-    return Finding(case, Verdict.FAIL, expected=expected, seen="nothing")
+    probe.heard_later[case.id] = heard.is_set  # a lossy link: matched, or delivered to, late
+    return Finding(
+        case, Verdict.FAIL, expected=expected, seen=f"nothing within {probe.timeout:g} s", absent=True
+    )
 
 
 def _status_waiting(probe: Probe, case: Case) -> Finding:
@@ -834,7 +851,8 @@ def _runs_a_child(probe: Probe, case: Case) -> Finding:
     exchange = probe.send(goal)
     expected = f"accepted; feedback for id {goal.id}; succeeded, completed, id {goal.id}"
     if not exchange.accepted:
-        return Finding(case, Verdict.FAIL, expected=expected, seen=_describe_answer(exchange))
+        seen = _describe_answer(exchange)
+        return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=exchange.accepted is None)
     ids = sorted({feedback.id for feedback in exchange.feedback})
     probe.note(f"feedback: {len(exchange.feedback)} message(s), ids {ids}")
     answer = exchange.answer
@@ -852,9 +870,8 @@ def _runs_a_child(probe: Probe, case: Case) -> Finding:
         _COMPLETED,
         goal.id,
     ):
-        return Finding(
-            case, Verdict.FAIL, expected=expected, seen=f"feedback ids {ids}; {_describe_answer(exchange)}"
-        )
+        seen = f"feedback ids {ids}; {_describe_answer(exchange)}"
+        return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=not _complete(exchange))
     return Finding(case, Verdict.PASS, expected=expected, seen="so")
 
 
@@ -1106,8 +1123,9 @@ def _ran_finding(probe: Probe, case: Case, exchange: Exchange, child_id: int, ex
     seen = _ran(exchange, child_id)
     if seen is None:
         return Finding(case, Verdict.PASS, expected=expected, seen="so")
-    absent = bool(exchange.accepted) and exchange.answer is None
-    return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=absent)
+    # seen in part (no response, no answer, or a child that ran without its start's feedback): the
+    # run's end tells a server that never sent the rest from a link that delivered it late
+    return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=not _complete(exchange))
 
 
 def _numbered_by_server(finding: Finding, exchange: Exchange, asked: int, above: int) -> Finding:
@@ -1177,10 +1195,13 @@ def _race(probe: Probe, case: Case) -> Finding:
     )
     ran = [exchange for exchange in exchanges if exchange.feedback]
     if len(ran) != 1:
-        return Finding(case, Verdict.FAIL, expected=expected, seen=f"{len(ran)} of the NEXTs ran a child")
+        absent = not all(_complete(exchange) for exchange in exchanges)  # a response or feedback to come
+        return Finding(
+            case, Verdict.FAIL, expected=expected, seen=f"{len(ran)} of the NEXTs ran a child", absent=absent
+        )
     seen = _ran(ran[0], ran[0].goal.id)
     if seen is not None:
-        absent = ran[0].answer is None
+        absent = not _complete(ran[0])
         failed = Finding(
             case, Verdict.FAIL, expected=expected, seen=f"the child that ran: {seen}", absent=absent
         )

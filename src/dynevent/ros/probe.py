@@ -117,18 +117,19 @@ class RosLink(Link):
     def wait_for_server(self, timeout: float) -> bool:
         return bool(self._action.wait_for_server(timeout_sec=timeout))
 
-    def late_subscriber_hears(self, timeout: float) -> bool:
+    def late_subscriber(self) -> threading.Event:
         heard = threading.Event()
-        subscription = self._node.create_subscription(
-            RosStatus,
-            status_topic(self.fleet, self.robot),
-            lambda _: heard.set(),
-            latched(STATUS_TOPIC_DEPTH),
+
+        def hear(_: Any) -> None:
+            with self._changed:  # a wait of the link looks again
+                heard.set()
+                self._changed.notify_all()
+
+        topic = status_topic(self.fleet, self.robot)
+        self._subscriptions.append(
+            self._node.create_subscription(RosStatus, topic, hear, latched(STATUS_TOPIC_DEPTH))
         )
-        try:
-            return heard.wait(timeout)
-        finally:
-            self._node.destroy_subscription(subscription)
+        return heard
 
     def send(self, goal: Goal) -> Exchange:
         exchange = Exchange(goal, self)
