@@ -675,6 +675,9 @@ class _LaggingLink(InProcessLink):
     def hear_response(self, exchange: probing.Exchange, accepted: bool) -> None:
         self._later("response", lambda: InProcessLink.hear_response(self, exchange, accepted))
 
+    def hear_begin(self, begin: Any) -> None:
+        self._later("begin", lambda: InProcessLink.hear_begin(self, begin))
+
 
 def _lagging_verdicts(**lags: float) -> dict[str, Finding]:
     link = _LaggingLink(CONFIG, **lags)
@@ -716,6 +719,28 @@ def test_a_racing_next_whose_response_comes_after_the_timeout_is_no_failure_of_t
     late = _lagging_verdicts(response=7.0)["next.race"]  # past both of its waits
     assert late.verdict is Verdict.MISSING and not late.absent, late
     assert late.seen.startswith(probing.LATE.format(timeout=OPTIONS.timeout)), late.seen
+
+
+def test_responses_that_all_come_after_the_timeout_fail_no_case_not_even_the_last() -> None:
+    """Every response lags past --timeout: each case that waited for one in vain is not run, saying
+    which bound to raise, the last ones too (the run's end waits for what is still on its way)."""
+    link = _LaggingLink(CONFIG, response=4.0)
+    options = attrs.evolve(OPTIONS, deadline=1000)
+    findings = probing.conclude(probing.run_cases(link, options, list(CASES), lambda _: None), "", options,
+                                lambda _: None)[1]  # fmt: skip
+    assert [finding for finding in findings if finding.verdict is Verdict.FAIL] == []
+    late = [
+        finding.case.id for finding in findings if finding.seen.startswith(probing.LATE.format(timeout=3))
+    ]
+    assert "begin.seq_wrap" in late and "finished.finished_after" in late, late
+
+
+@pytest.mark.spec("R3.1")
+def test_a_begin_that_comes_after_the_timeout_is_no_failure_of_the_server() -> None:
+    waiting = _lagging_verdicts(begin=5.0)["status.waiting"]
+    assert waiting.verdict is Verdict.MISSING, waiting
+    assert waiting.seen.startswith(probing.LATE.format(timeout=OPTIONS.timeout)), waiting.seen
+    assert _lagging_verdicts(begin=1.0)["status.waiting"].verdict is Verdict.PASS
 
 
 class _LateSubscriberLink(InProcessLink):

@@ -491,15 +491,19 @@ class Probe:
         its response and, accepted, its answer since, they came late (a slow or lossy link), and the
         case is not run, with which bound to raise, rather than failed.  A status or feedback that
         never came stays the server's failure."""
-        unanswered = self.unanswered.get(finding.case.id, [])
-        later = self.heard_later.get(finding.case.id)
-        came_late = (bool(unanswered) and all(_complete(exchange) for exchange in unanswered)) or (
-            later is not None and later()
-        )
-        if not (finding.absent and finding.verdict is Verdict.FAIL and came_late):
+        if not (finding.absent and finding.verdict is Verdict.FAIL and self.came_late(finding)):
             return finding
         why = f"{LATE.format(timeout=self.options.timeout)} ({finding.seen})"
         return attrs.evolve(finding, verdict=Verdict.MISSING, seen=why, absent=False)
+
+    def came_late(self, finding: Finding) -> bool:
+        """Whether what ``finding``'s case waited for in vain has come since: its goals' responses,
+        answers and start feedback, or what else it waited for (:attr:`heard_later`)."""
+        unanswered = self.unanswered.get(finding.case.id, [])
+        later = self.heard_later.get(finding.case.id)
+        return (bool(unanswered) and all(_complete(exchange) for exchange in unanswered)) or (
+            later is not None and later()
+        )
 
     def not_run(self, case: Case, why: str) -> Finding:
         """The finding of a case the probe did not carry out."""
@@ -792,7 +796,14 @@ def _status_waiting(probe: Probe, case: Case) -> Finding:
         return Finding(case, Verdict.FAIL, expected="WAITING, standby", seen=f"WAITING, {status.status}",
                        divergence=divergence)  # fmt: skip
     if seq not in begins:
-        return Finding(case, Verdict.FAIL, expected=f"a begin for run {seq}", seen=f"begins for {begins}")
+        # the begin topic is another channel than the status's: over a lossy link, it may come later
+        def begun() -> bool:
+            return any(begin.dynamic_event_seq == seq for begin in probe.link.begins)
+
+        if not probe.link.wait(begun, probe.timeout):
+            probe.heard_later[case.id] = begun
+            seen = f"begins for {begins} within {probe.timeout:g} s"
+            return Finding(case, Verdict.FAIL, expected=f"a begin for run {seq}", seen=seen, absent=True)
     return Finding(case, Verdict.PASS, expected="WAITING, standby, begun", seen="so")
 
 
@@ -1466,6 +1477,11 @@ def run_cases(
         if progress is not None:
             progress(f"{case.id} ...")
         findings.append(probe.run(case))
+    # what a case waited for in vain may still be on its way over a lossy link (the last cases' most
+    # of all): the run's end waits for it, once, within --timeout and what the deadline leaves
+    pending = [finding for finding in findings if finding.absent and finding.verdict is Verdict.FAIL]
+    if pending and not probe.past_deadline:
+        link.wait(lambda: all(probe.came_late(finding) for finding in pending), probe.timeout)
     findings[:] = [probe.late(finding) for finding in findings]
     return findings
 
