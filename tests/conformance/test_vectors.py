@@ -655,24 +655,33 @@ def test_a_driver_that_never_answers_a_next_stops_the_run_at_three_timeouts_in_a
     assert 0 < summary["seconds"] <= took < 60  # three 1 s timeouts and their restarts, not one per vector
 
 
-def test_json_prints_each_vector_as_it_ends_so_that_a_run_cut_short_keeps_them(tmp_path: Path) -> None:
+@pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM])
+def test_json_prints_each_vector_as_it_ends_so_that_a_run_cut_short_keeps_them(
+    tmp_path: Path, stop: signal.Signals
+) -> None:
     """A driver that hangs at its 30th request, under --timeout 60: the vectors before it are printed
-    as they end, long before the run would; the run stopped then (Ctrl-C: the driver is ended too),
-    what it printed stays."""
+    as they end, long before the run would; the run stopped then (Ctrl-C or SIGTERM, though the run
+    began with SIGINT ignored, as a shell's background job does: the driver is ended too), what it
+    printed stays, and it exits 128 + the signal."""
     command = f"{PYTHON} {MISBEHAVING} hang 30"
-    process = subprocess.Popen(
-        [PYTHON, "-m", "dynevent", "vectors", "--json", "--timeout", "60", "--impl", command],
-        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, cwd=ROOT,
-    )  # fmt: skip
+    # a shell starts a background job with SIGINT ignored (and Python then installs no Ctrl-C of its own)
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        process = subprocess.Popen(
+            [PYTHON, "-m", "dynevent", "vectors", "--json", "--timeout", "60", "--impl", command],
+            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, cwd=ROOT,
+        )  # fmt: skip
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert process.stdout is not None
     try:
         ready, _, _ = select.select([process.stdout], [], [], 30)
         assert ready and process.poll() is None, "no line within 30 s: the records wait for the run's end"
         first = json.loads(process.stdout.readline())
     finally:
-        process.send_signal(signal.SIGINT)
+        process.send_signal(stop)
         rest = process.communicate(timeout=30)[0]
-    assert process.returncode == 130
+    assert process.returncode == 128 + stop
     assert first["type"] == "vector" and first["passed"] is True, first
     assert all(json.loads(line)["type"] == "vector" for line in rest.splitlines())
 

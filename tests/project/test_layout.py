@@ -21,6 +21,8 @@ SRC = Path(__file__).resolve().parents[2] / "src" / "dynevent"
 #: (``dynevent/__init__.py``) names everything lazily, and ``__main__`` is the command line.
 ALLOWED: dict[str, frozenset[str]] = {
     "errors": frozenset(),
+    # a command line's stop (SIGINT, SIGTERM): what the commands and the ROS sessions share
+    "interrupts": frozenset(),
     "wire": frozenset({"errors"}),
     # the files a user names: read bounded, only regular ones, one error line for any fault
     "files": frozenset({"errors", "wire"}),
@@ -35,7 +37,19 @@ ALLOWED: dict[str, frozenset[str]] = {
     "sim": frozenset({"errors", "wire", "server", "descriptions", "files"}),
     # the command line, and what only it runs: nothing below imports it
     "tools": frozenset(
-        {"errors", "wire", "server", "client", "conformance", "descriptions", "files", "bags", "sim", "ros"}
+        {
+            "errors",
+            "wire",
+            "server",
+            "client",
+            "conformance",
+            "descriptions",
+            "files",
+            "bags",
+            "sim",
+            "ros",
+            "interrupts",
+        }
     ),
     # judging is conformance (docs/design): ros reads the judges from below, never the command line
     "ros": frozenset(

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import contextlib
 import faulthandler
-import signal
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -30,10 +29,7 @@ from rclpy.executors import ExternalShutdownException
 
 from dynevent.errors import LocalError
 
-__all__ = [
-    "CLOSE_BOUND", "Interrupted", "Session", "Spinner", "bounded_close", "close_down", "init",
-    "interruptible",
-]  # fmt: skip
+__all__ = ["CLOSE_BOUND", "Session", "Spinner", "bounded_close", "close_down", "init"]
 
 
 def init(ros_args: Sequence[str] = (), context: Any = None) -> None:
@@ -185,33 +181,3 @@ def bounded_close(bound: float = CLOSE_BOUND) -> Iterator[None]:
         yield
     finally:
         faulthandler.cancel_dump_traceback_later()
-
-
-class Interrupted(Exception):
-    """Ctrl-C or SIGTERM, raised in the main thread inside :func:`interruptible`."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(signum)
-        self.signal = signum
-
-    @property
-    def name(self) -> str:
-        """``SIGINT`` or ``SIGTERM``."""
-        return signal.Signals(self.signal).name
-
-
-@contextlib.contextmanager
-def interruptible() -> Iterator[None]:
-    """SIGINT and SIGTERM raise :class:`Interrupted` in the main thread within the block (in place of
-    rclpy's handlers, which shut the context down under whatever waits on it), the previous handlers
-    restored after it.  A command line says what it stopped and exits 128 + the signal."""
-
-    def interrupt(signum: int, frame: object) -> None:
-        raise Interrupted(signum)
-
-    previous = {signum: signal.signal(signum, interrupt) for signum in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        yield
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)

@@ -131,6 +131,7 @@ def _vectors(args: argparse.Namespace) -> int:
     from dynevent import files
     from dynevent.conformance import vectors
     from dynevent.errors import FileError
+    from dynevent.interrupts import interruptible
     from dynevent.tools._progress import Progress
     from dynevent.wire import _json
 
@@ -166,12 +167,13 @@ def _vectors(args: argparse.Namespace) -> int:
     outcomes: list[vectors.Outcome] = []
     began = time.monotonic()
     try:
-        for outcome in vectors.run_vectors(chosen, implementation, max_failures=args.max_failures):
-            outcomes.append(outcome)
-            if args.json:  # as it is known: a run cut short keeps a line for each vector it ran
-                progress.close()
-                print(_json.dumps(vectors.outcome_record(outcome)), flush=True)
-            progress.update(len(outcomes), f"({len(outcomes)} of {len(chosen)}: {outcome.vector.name})")
+        with interruptible():  # Ctrl-C or SIGTERM, however inherited: the driver is ended as it stops
+            for outcome in vectors.run_vectors(chosen, implementation, max_failures=args.max_failures):
+                outcomes.append(outcome)
+                if args.json:  # as it is known: a run cut short keeps a line for each vector it ran
+                    progress.close()
+                    print(_json.dumps(vectors.outcome_record(outcome)), flush=True)
+                progress.update(len(outcomes), f"({len(outcomes)} of {len(chosen)}: {outcome.vector.name})")
     finally:
         progress.close()
         implementation.close()
@@ -609,11 +611,13 @@ def _probe_implementation(args: argparse.Namespace, chosen: Any, cases: Any, con
     """``--impl CMD``: the driver started (given at least the runner's START_TIMEOUT), probed, closed."""
     from dynevent.conformance import in_process
     from dynevent.conformance.runner import MAX_TIMEOUT, ExternalImplementation
+    from dynevent.interrupts import interruptible
 
     implementation = ExternalImplementation(args.impl, timeout=min(args.timeout, MAX_TIMEOUT))
     try:
-        _say(f"implementation: {implementation.name}")
-        return in_process.probe_in_process(chosen, cases, _say, config, implementation=implementation)[0]
+        with interruptible():  # Ctrl-C or SIGTERM, however inherited: the driver is ended as it stops
+            _say(f"implementation: {implementation.name}")
+            return in_process.probe_in_process(chosen, cases, _say, config, implementation=implementation)[0]
     finally:
         implementation.close()
 
@@ -864,11 +868,14 @@ def _command(argv: Sequence[str] | None) -> int:
         parser.print_help()
         return 0
     from dynevent.errors import DyneventError
+    from dynevent.interrupts import Interrupted
 
     try:
         result: int = args.run(args)
     except KeyboardInterrupt:
         return 130  # Ctrl-C: the command stops, without a traceback
+    except Interrupted as stop:  # a command that held something closed it as this passed
+        return 128 + stop.signal
     except DyneventError as exc:  # what a command did not name itself is still one line, never a traceback
         print(f"dynevent {args.command}: {exc}", file=sys.stderr)
         return 2

@@ -12,9 +12,10 @@ from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.conformance.probe_cases import Case
 from dynevent.conformance.probing import Options
 from dynevent.errors import FileError, ProbeError
+from dynevent.interrupts import Interrupted, interruptible
 from dynevent.ros.graph import no_server_text
 from dynevent.ros.probe import RosLink
-from dynevent.ros.spinning import Interrupted, Session, interruptible
+from dynevent.ros.spinning import Session
 from dynevent.tools._progress import Progress
 from dynevent.tools.live import offline, see_the_whole_graph
 

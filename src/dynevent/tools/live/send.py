@@ -26,9 +26,10 @@ from dynevent.errors import (
     FileError,
     SendError,  # defined there with every error; importable here too
 )
+from dynevent.interrupts import Interrupted, interruptible
 from dynevent.ros.client import DynamicEventClient, GoalRun, GoalWaitTimeout
 from dynevent.ros.graph import graph_text, no_server_text, servers_seen
-from dynevent.ros.spinning import Interrupted, Session, interruptible
+from dynevent.ros.spinning import Session
 from dynevent.server import outputs as outs
 from dynevent.tools.live import offline, see_the_whole_graph
 from dynevent.wire.messages import DynamicEventStatus, Goal
