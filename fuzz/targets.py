@@ -635,7 +635,8 @@ def _reports(value: Any) -> object:
     failed = Outcome(vector, Failure(1, {"x": text}, [text], [], text))
     written = [vectors.junit_xml([failed], text)]
     case = probe_cases.CASES[0]
-    finding = probe_cases.Finding(case, probe_cases.Verdict.FAIL, expected=text, seen=text, messages=(text,))
+    verdict = probe_cases.Verdict.FAIL
+    finding = probe_cases.CaseFinding(case, verdict, expected=text, seen=text, messages=(text,))
     written.append(probe_cases.junit_xml([finding], text))
     for xml in written:
         ElementTree.fromstring(xml.encode("utf-8"))

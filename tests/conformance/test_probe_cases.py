@@ -12,7 +12,7 @@ import pytest
 from dynevent.conformance import probe_cases
 from dynevent.conformance.judge import divergences
 from dynevent.conformance.judge.trace import Finding as JudgeFinding
-from dynevent.conformance.probe_cases import CASES, KNOWN, Case, Finding, Verdict
+from dynevent.conformance.probe_cases import CASES, KNOWN, Case, CaseFinding, Verdict
 
 ROOT = Path(__file__).resolve().parents[2]
 SPEC_RULES = set(re.findall(r"\*\*(R\d+\.\d+)\*\*", (ROOT / "docs" / "spec.md").read_text(encoding="utf-8")))
@@ -68,12 +68,12 @@ def test_a_case_not_run_is_never_a_pass() -> None:
     (--allow-missing, --known); a failure outranks it; the report says first how many were not run
     and why, and a missing case says why it was not run instead of a blank expectation."""
     place = "no place to send the robot to: give --place"
-    missing = [Finding(CASE, Verdict.MISSING, seen=place), Finding(CASE, Verdict.MISSING, seen=place)]
-    ran = Finding(CASE, Verdict.PASS, expected="rejected", seen="so")
+    missing = [CaseFinding(CASE, Verdict.MISSING, seen=place), CaseFinding(CASE, Verdict.MISSING, seen=place)]
+    ran = CaseFinding(CASE, Verdict.PASS, expected="rejected", seen="so")
     assert probe_cases.exit_status([*missing, ran]) == probe_cases.EXIT_NOT_RUN == 3
     allowed = [attrs.evolve(finding, expected_missing=True) for finding in missing]
     assert probe_cases.exit_status([*allowed, ran]) == 0
-    failing = Finding(CASE, Verdict.FAIL, expected="rejected", seen="accepted")
+    failing = CaseFinding(CASE, Verdict.FAIL, expected="rejected", seen="accepted")
     assert probe_cases.exit_status([*missing, failing]) == 1
     text = probe_cases.format_findings([*missing, ran])
     assert text.splitlines()[0] == f"2 of 3 case(s) not run: {place} (2)"
@@ -116,19 +116,19 @@ def test_a_run_s_place_is_its_go_to_place_estimate(description: str, place: str 
 
 
 def test_a_known_divergence_is_shown_and_does_not_fail_the_run() -> None:
-    failing = Finding(CASE, Verdict.FAIL, expected="rejected", seen="accepted", divergence="D7")
+    failing = CaseFinding(CASE, Verdict.FAIL, expected="rejected", seen="accepted", divergence="D7")
     assert probe_cases.exit_status([failing]) == 1
-    known = Finding(CASE, Verdict.FAIL, expected="rejected", seen="accepted", divergence="D7", known=True)
+    known = CaseFinding(CASE, Verdict.FAIL, expected="rejected", seen="accepted", divergence="D7", known=True)
     assert probe_cases.exit_status([known]) == 0
-    assert probe_cases.exit_status([Finding(CASE, Verdict.MISSING), Finding(CASE, Verdict.PASS)]) == 3
-    text = probe_cases.format_findings([failing, known, Finding(CASE, Verdict.PASS)])
+    assert probe_cases.exit_status([CaseFinding(CASE, Verdict.MISSING), CaseFinding(CASE, Verdict.PASS)]) == 3
+    text = probe_cases.format_findings([failing, known, CaseFinding(CASE, Verdict.PASS)])
     assert "fail (D7)" in text and "known (D7)" in text
     assert text.rstrip().endswith("1 pass, 2 fail (1 of the failures known)")
 
 
 def test_the_junit_report_is_what_a_ci_server_reads() -> None:
     findings = [
-        Finding(
+        CaseFinding(
             CASE,
             Verdict.FAIL,
             expected="rejected",
@@ -136,8 +136,8 @@ def test_the_junit_report_is_what_a_ci_server_reads() -> None:
             divergence="D7",
             messages=("sent type 0",),
         ),
-        Finding(CASE, Verdict.MISSING, seen="no active run"),
-        Finding(CASE, Verdict.PASS),
+        CaseFinding(CASE, Verdict.MISSING, seen="no active run"),
+        CaseFinding(CASE, Verdict.PASS),
     ]
     suites = ET.fromstring(probe_cases.junit_xml(findings, "tinyRobot/r1"))
     suite = suites.find("testsuite")
@@ -155,9 +155,9 @@ def test_the_report_a_person_reads_says_per_case_the_rules_verdict_and_messages(
     import html.parser
 
     findings = [
-        Finding(CASE, Verdict.FAIL, expected="rejected", seen="accepted <then> aborted | D7",
+        CaseFinding(CASE, Verdict.FAIL, expected="rejected", seen="accepted <then> aborted | D7",
                 divergence="D7", messages=("sent type 0 seq=1 id=0", "accepted, answered aborted")),
-        Finding(CASE, Verdict.PASS, expected="rejected", seen="so", seconds=0.25),
+        CaseFinding(CASE, Verdict.PASS, expected="rejected", seen="so", seconds=0.25),
     ]  # fmt: skip
     text = probe_cases.report(findings, "tinyRobot/r1")
     assert text.startswith("# dynevent probe: tinyRobot/r1\n\n1 pass, 1 fail\n")
@@ -222,9 +222,9 @@ def _with_cases(text: str, *cases: tuple[str, str]) -> str:
     return text
 
 
-def _finding(case_id: str, verdict: probe_cases.Verdict) -> probe_cases.Finding:
+def _finding(case_id: str, verdict: probe_cases.Verdict) -> probe_cases.CaseFinding:
     case = next(case for case in probe_cases.CASES if case.id == case_id)
-    return probe_cases.Finding(case, verdict)
+    return probe_cases.CaseFinding(case, verdict)
 
 
 def _late_feedback(case: str = "next.runs_a_child") -> str:

@@ -22,7 +22,7 @@ from dynevent.conformance import probe_cases, probing
 from dynevent.conformance.in_process import InProcessLink, probe_in_process
 from dynevent.conformance.judge import check_trace
 from dynevent.conformance.judge.trace import TraceWriter
-from dynevent.conformance.probe_cases import CASES, Finding, Verdict
+from dynevent.conformance.probe_cases import CASES, CaseFinding, Verdict
 from dynevent.conformance.probing import Options
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
@@ -43,7 +43,7 @@ OPTIONS = Options(fleet="tinyRobot", robot="tinyRobot1", place="pantry", more_pl
 
 def _probe(
     mode: str = "standard", defect: str | None = None, **options: object
-) -> tuple[int, list[Finding], str]:
+) -> tuple[int, list[CaseFinding], str]:
     config = attrs.evolve(CONFIG, compatibility=mode)
     stepper = None
     if defect is not None:
@@ -57,8 +57,8 @@ def _probe(
     return code, findings, "\n".join(said)
 
 
-def _verdicts(findings: list[Finding]) -> dict[str, str]:
-    def shown(finding: Finding) -> str:
+def _verdicts(findings: list[CaseFinding]) -> dict[str, str]:
+    def shown(finding: CaseFinding) -> str:
         verdict = "known" if finding.known else finding.verdict.value
         return f"{verdict} ({finding.divergence})" if finding.divergence else verdict
 
@@ -615,7 +615,7 @@ def test_a_wait_the_deadline_cut_short_is_no_failure_of_the_server() -> None:
     --timeout for the answer: the case whose wait the --deadline cut short is not run, saying so and
     which bound to raise, never failed for what it had no time to see."""
 
-    def run(deadline: float) -> dict[str, Finding]:
+    def run(deadline: float) -> dict[str, CaseFinding]:
         first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
         server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG), first)
 
@@ -679,7 +679,7 @@ class _LaggingLink(InProcessLink):
         self._later("begin", lambda: InProcessLink.hear_begin(self, begin))
 
 
-def _lagging_verdicts(**lags: float) -> dict[str, Finding]:
+def _lagging_verdicts(**lags: float) -> dict[str, CaseFinding]:
     link = _LaggingLink(CONFIG, **lags)
     findings = probing.run_cases(link, attrs.evolve(OPTIONS, deadline=1000), list(CASES), lambda _: None)
     return {finding.case.id: finding for finding in findings}

@@ -103,10 +103,10 @@ def _check_agrees(
 ) -> set[str]:
     """``dynevent check`` on the probe's trace agrees with the probe's verdicts: it finds a violation
     within every case the probe failed on a message it saw (not one that never came) whose failure a
-    trace shows (``Case.traced``); with ``only_failed``, within no case the probe passed.  (A defect
-    that shows in every message, a wrong feedback id, is found by check in every case, and by the
-    probe in the case of its rule: so not ``only_failed`` for broken servers; ``everywhere`` names
-    the findings of such a defect that check may make in the other cases.)  The cases it found."""
+    trace shows (``Case.trace_shows_failure``); with ``only_failed``, within no case the probe passed.
+    (A defect that shows in every message, a wrong feedback id, is found by check in every case, and
+    by the probe in the case of its rule: so not ``only_failed`` for broken servers; ``everywhere``
+    names the findings of such a defect that check may make in the other cases.)  The cases it found."""
     text = trace.read_text("utf-8")
     case_at: dict[int, str] = {}
     current = ""
@@ -130,9 +130,9 @@ def _check_agrees(
             # the moment R20.2 allows a server: check does not see it
             if "absent" not in properties and "(D2)" not in str(properties["verdict"]):
                 seen.add(test.get("name"))
-    traced = {case.id for case in CASES if case.traced}
+    shown_by_trace = {case.id for case in CASES if case.trace_shows_failure}
     findings = [finding.to_dict() for finding in report.findings]
-    assert seen & traced <= found, findings
+    assert seen & shown_by_trace <= found, findings
     if only_failed:
         assert elsewhere <= failed, findings
     assert failed or report.clean, findings

@@ -33,7 +33,7 @@ import attrs
 from dynevent import descriptions
 from dynevent.conformance import probing, runner
 from dynevent.conformance.judge.trace import TraceWriter
-from dynevent.conformance.probe_cases import Case, Finding
+from dynevent.conformance.probe_cases import Case, CaseFinding
 from dynevent.conformance.probing import Exchange, Link, Options
 from dynevent.conformance.records import InvalidRecord, input_to_json, output_from_json
 from dynevent.errors import DeadlinePassed, ImplementationError
@@ -328,7 +328,7 @@ def probe_in_process(
     stepper: Stepper | None = None,
     implementation: runner.Implementation | None = None,
     wall: Callable[[], float] = time.monotonic,
-) -> tuple[int, list[Finding]]:
+) -> tuple[int, list[CaseFinding]]:
     """Run ``cases`` against the machine as serve runs ``config``'s robot (or ``stepper``, or
     ``implementation`` behind the driver protocol), judge every record of the exchange, write the
     reports ``options`` asks for, and say last what the run took (on ``wall``, and in simulated

@@ -5,7 +5,7 @@ docs/spec.md it tests, what it needs of the server (an active run, a child
 it can run), and the divergences of docs/divergences.md whose way of
 breaking it shows.  :mod:`dynevent.conformance.probing` carries each case out over a link (in
 process, through the driver protocol, or over DDS with :mod:`dynevent.ros.probe`) and gives a
-:class:`Finding` per case; this module selects
+:class:`CaseFinding` per case; this module selects
 cases, lists them, and reports findings (a table, JUnit XML) and the exit
 status, so that ``dynevent probe --list`` needs no ROS.
 
@@ -45,7 +45,7 @@ __all__ = [
     "KNOWN",
     "KNOWN_MISSING",
     "Case",
-    "Finding",
+    "CaseFinding",
     "Judged",
     "Verdict",
     "exit_status",
@@ -79,15 +79,16 @@ class Case:
     """One probe case: ``needs`` is ``"status"`` (a status on the graph), ``"run"`` (an active
     dynamic event, WAITING), ``"place"`` (a place to send the robot to, for a NEXT the server must
     refuse for another reason only) or ``"child"`` (an active run and a place).
-    ``traced`` says whether ``dynevent check``, reading the probe's ``--trace``, can see the case's
-    failure too (not when a passive observer cannot tell the failure from a moment the spec allows)."""
+    ``trace_shows_failure`` says whether ``dynevent check``, reading the probe's ``--trace``, can see
+    the case's failure too (not when a passive observer cannot tell the failure from a moment the spec
+    allows)."""
 
     id: str
     title: str
     rules: tuple[str, ...]
     needs: str = "run"
     divergences: tuple[str, ...] = ()
-    traced: bool = True
+    trace_shows_failure: bool = True
 
     @property
     def section(self) -> str:
@@ -95,7 +96,7 @@ class Case:
 
 
 @attrs.frozen
-class Finding:
+class CaseFinding:
     """A case's verdict, what the spec expects and what was seen, the messages exchanged, and the
     D-number when the failure is one docs/divergences.md records; ``known`` when ``--known`` covers
     it; ``absent`` when the failure is a message that did not come within the timeout (a trace,
@@ -149,7 +150,7 @@ class Judged:
 _GOAL_UUID = re.compile(r'"goal_uuid"\s*:\s*"([0-9a-f]{32})"')
 
 
-def judge_exchange(text: str, findings: Sequence[Finding], known: Iterable[str] = ()) -> list[Judged]:
+def judge_exchange(text: str, findings: Sequence[CaseFinding], known: Iterable[str] = ()) -> list[Judged]:
     """What the judge finds in the probe's trace ``text`` beside the cases' verdicts: every finding
     but those of a rule a case that holds it failed on (its verdict says so already); ``known`` are
     the divergences ``--known`` covers (:data:`KNOWN`)."""
@@ -182,8 +183,8 @@ def judge_exchange(text: str, findings: Sequence[Finding], known: Iterable[str] 
 
 
 def judge_verdicts(
-    text: str, findings: Sequence[Finding], known: Iterable[str] = ()
-) -> tuple[list[Finding], list[Judged]]:
+    text: str, findings: Sequence[CaseFinding], known: Iterable[str] = ()
+) -> tuple[list[CaseFinding], list[Judged]]:
     """The cases' verdicts with the judge's (:func:`judge_exchange`, over the probe's trace ``text``):
     a case carried out whose own records hold a finding of the judge on one of its rules, or on
     R19.1 (every goal answered exactly once, which each case holds its goals to), fails with that
@@ -201,7 +202,11 @@ def judge_verdicts(
             if item.case == case.id and not item.uncertain and item.finding.rule in rules
         ]  # fmt: skip
         finding = scripted
-        if case.traced and mine and scripted.verdict in (Verdict.PASS, Verdict.NON_STRICT, Verdict.INFO):
+        if (
+            case.trace_shows_failure
+            and mine
+            and scripted.verdict in (Verdict.PASS, Verdict.NON_STRICT, Verdict.INFO)
+        ):
             first = mine[0].finding
             divergence = mine[0].label if mine[0].label.startswith("D") else None
             said = [
@@ -234,7 +239,7 @@ CASES: tuple[Case, ...] = (
     Case("request.event_type_unknown", "a goal of event_type 4 is refused", ("R4.5",), divergences=("D7",)),
     # which categories a server supports is its configuration, which a trace tapped at a client lacks
     Case("request.category_unknown", "a NEXT of a category the robot does not support is refused", ("R4.7",),
-         traced=False),
+         trace_shows_failure=False),
     Case("request.description_not_json", "a NEXT whose description is not JSON is refused", ("R4.9",)),
     Case("request.cancel_idle", "a CANCEL while no child runs is refused", ("R4.13",), divergences=("D8",)),
     Case("next.runs_a_child", "a NEXT runs its child: accepted, feedback with its id, one answer",
@@ -248,7 +253,7 @@ CASES: tuple[Case, ...] = (
     Case("next.id_stale", "a NEXT whose id is not above the run's highest is refused", ("R4.12",),
          needs="child", divergences=("D10",)),
     Case("next.status_after_child", "after a child ends the status is WAITING with its id", ("R2.2", "R8.4"),
-         needs="child", divergences=("D2",), traced=False),
+         needs="child", divergences=("D2",), trace_shows_failure=False),
     Case("next.busy", "a NEXT while a child runs is refused", ("R4.6",), needs="child"),
     Case("next.busy_finished", "a FINISHED while a child runs is refused", ("R4.6",), needs="child",
          divergences=("D30",)),
@@ -326,7 +331,7 @@ def format_list(cases: Sequence[Case]) -> str:
     return "\n".join([*lines, f"{len(cases)} case(s)"]) + "\n"
 
 
-def _label(finding: Finding) -> str:
+def _label(finding: CaseFinding) -> str:
     if finding.verdict is Verdict.MISSING and finding.expected_missing:
         return "missing (allowed)"
     if finding.verdict is Verdict.FAIL and finding.known:
@@ -336,7 +341,7 @@ def _label(finding: Finding) -> str:
     return finding.verdict.value
 
 
-def format_findings(findings: Sequence[Finding], judged: Sequence[Judged] = ()) -> str:
+def format_findings(findings: Sequence[CaseFinding], judged: Sequence[Judged] = ()) -> str:
     """A line per case, the account of every failure, what the judge found beside the cases, and the
     counts."""
     width = max((len(finding.case.id) for finding in findings), default=0)
@@ -372,7 +377,7 @@ def judged_summary(judged: Sequence[Judged]) -> str:
     return f"{len(judged)} finding(s)" + (f" ({', '.join(parts)})" if parts else "")
 
 
-def exit_status(findings: Sequence[Finding], judged: Sequence[Judged] = ()) -> int:
+def exit_status(findings: Sequence[CaseFinding], judged: Sequence[Judged] = ()) -> int:
     """1 when a case failed or the judge found what no case did (a known divergence, or an uncertain
     finding, does not count); else 3 when a case was not run (missing) that no ``--allow-missing`` or
     ``--known`` expected; else 0.  A conformance run never passes what it did not test."""
@@ -391,7 +396,7 @@ def matches(case: Case, patterns: Iterable[str]) -> bool:
     return any(fnmatch.fnmatchcase(name, pattern) for pattern in patterns for name in names)
 
 
-def not_run_summary(findings: Sequence[Finding]) -> str | None:
+def not_run_summary(findings: Sequence[CaseFinding]) -> str | None:
     """The line that opens a report when cases were not run: how many, and why, most frequent first;
     None when every case ran."""
     missing = [finding for finding in findings if finding.verdict is Verdict.MISSING]
@@ -408,7 +413,7 @@ def not_run_summary(findings: Sequence[Finding]) -> str | None:
     return f"{len(missing)} of {len(findings)} case(s) not run{allowed}: {why}"
 
 
-def junit_xml(findings: Sequence[Finding], server: str = "", judged: Sequence[Judged] = ()) -> str:
+def junit_xml(findings: Sequence[CaseFinding], server: str = "", judged: Sequence[Judged] = ()) -> str:
     """The run as JUnit XML: a test case per probe case (``classname`` its section), a failure with
     the account, a skip for a missing case; each case's rules as a property.  What the judge found
     beside the cases is a second test suite, a test case per finding (``classname`` ``judge``)."""
@@ -455,7 +460,7 @@ def junit_xml(findings: Sequence[Finding], server: str = "", judged: Sequence[Ju
     return xml_document(suites)
 
 
-def probe_summary(findings: Sequence[Finding]) -> str:
+def probe_summary(findings: Sequence[CaseFinding]) -> str:
     """The counts line: ``15 pass, 2 fail (2 of the failures known)``."""
     counts = {verdict: 0 for verdict in Verdict}
     for finding in findings:
@@ -466,7 +471,7 @@ def probe_summary(findings: Sequence[Finding]) -> str:
 
 
 def report(
-    findings: Sequence[Finding], server: str, *, html_form: bool = False, judged: Sequence[Judged] = ()
+    findings: Sequence[CaseFinding], server: str, *, html_form: bool = False, judged: Sequence[Judged] = ()
 ) -> str:
     """A report a person reads: a table of the cases, then per case its rules, verdict, what the spec
     expects, what was seen and every message sent and seen, then what the judge found beside the
@@ -500,7 +505,7 @@ def report(
     return "\n".join(lines) + "\n"
 
 
-def _facts(finding: Finding) -> list[tuple[str, str]]:
+def _facts(finding: CaseFinding) -> list[tuple[str, str]]:
     """What a report says of a case, in order: its rules, divergence, expected, seen and time."""
     facts = [("rules", f"{', '.join(finding.case.rules)} (docs/spec.md)")]
     if finding.divergence:
@@ -525,7 +530,10 @@ _STYLE = (
 
 
 def _report_html(
-    title: str, rows: list[tuple[str, str, str, str]], findings: Sequence[Finding], judged: Sequence[Judged]
+    title: str,
+    rows: list[tuple[str, str, str, str]],
+    findings: Sequence[CaseFinding],
+    judged: Sequence[Judged],
 ) -> str:
     escape = html.escape
     parts = [

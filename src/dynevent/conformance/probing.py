@@ -4,7 +4,7 @@ The probe is a client that may break the protocol on purpose: it sends raw
 goals (a stale seq, event type 0, a CANCEL naming another event...) and watches
 the robot's status and begin topics.  Each case of
 :data:`dynevent.conformance.probe_cases.CASES` ends in a
-:class:`~dynevent.conformance.probe_cases.Finding`; every wait is bounded by
+:class:`~dynevent.conformance.probe_cases.CaseFinding`; every wait is bounded by
 ``--timeout`` and the whole run by ``--deadline``.  A refusal carries no reason
 on the wire (D6), so a case judges what a client can see: accepted or
 rejected, the feedback, the answer, the status that follows.
@@ -35,7 +35,7 @@ import attrs
 from dynevent import files
 from dynevent.conformance import probe_cases
 from dynevent.conformance.judge.trace import TraceWriter
-from dynevent.conformance.probe_cases import Case, Finding, Verdict
+from dynevent.conformance.probe_cases import Case, CaseFinding, Verdict
 from dynevent.conformance.report import took_line
 from dynevent.errors import FileError, ProbeError
 from dynevent.server import machine
@@ -436,7 +436,7 @@ class Probe:
 
     # ---------------------------------------------------------------- carrying out
 
-    def run(self, case: Case) -> Finding:
+    def run(self, case: Case) -> CaseFinding:
         self.messages = []
         self.exchanges = []
         self.cut_short = False
@@ -449,7 +449,7 @@ class Probe:
                 raise _Unreachable(NO_PLACE)
             finding = _CASES[case.id](self, case)
         except _Unreachable as exc:
-            finding = Finding(case, Verdict.MISSING, seen=str(exc))
+            finding = CaseFinding(case, Verdict.MISSING, seen=str(exc))
             timed_out = isinstance(exc, _TimedOut)
         # what the case's verdict lacked, before the waits below: the run's end sees whether it came late
         self.unanswered[case.id] = [exchange for exchange in self.exchanges if not _complete(exchange)]
@@ -457,13 +457,13 @@ class Probe:
         # the server had less than --timeout, or was not heard to the end: not its failure
         if (finding.absent and self.cut_short) or self.link.cut_off:
             why = f"{CUT_SHORT.format(deadline=self.options.deadline)} ({finding.seen})"
-            finding = Finding(case, Verdict.MISSING, seen=why)
+            finding = CaseFinding(case, Verdict.MISSING, seen=why)
         # silent: the case waited out the timeout and the server sent nothing at all meanwhile
         silent = (timed_out or finding.absent) and self.link.heard == heard
         self.timeouts_in_a_row = self.timeouts_in_a_row + 1 if silent else 0
         return self._settled(finding, started)
 
-    def _settled(self, finding: Finding, started: float) -> Finding:
+    def _settled(self, finding: CaseFinding, started: float) -> CaseFinding:
         """The finding with the case's messages and time, and whether --known or --allow-missing
         expected its failure or its absence."""
         case = finding.case
@@ -485,7 +485,7 @@ class Probe:
         with no message from it?"""
         return self.timeouts_in_a_row >= SILENT_AFTER
 
-    def late(self, finding: Finding) -> Finding:
+    def late(self, finding: CaseFinding) -> CaseFinding:
         """A failure for a goal's response or answer that did not come within ``--timeout``
         (``absent``), seen again at the run's end: when every goal the case left unanswered has had
         its response and, accepted, its answer since, they came late (a slow or lossy link), and the
@@ -496,7 +496,7 @@ class Probe:
         why = f"{LATE.format(timeout=self.options.timeout)} ({finding.seen})"
         return attrs.evolve(finding, verdict=Verdict.MISSING, seen=why, absent=False)
 
-    def came_late(self, finding: Finding) -> bool:
+    def came_late(self, finding: CaseFinding) -> bool:
         """Whether what ``finding``'s case waited for in vain has come since: its goals' responses,
         answers and start feedback, or what else it waited for (:attr:`heard_later`)."""
         unanswered = self.unanswered.get(finding.case.id, [])
@@ -505,15 +505,15 @@ class Probe:
             later is not None and later()
         )
 
-    def not_run(self, case: Case, why: str) -> Finding:
+    def not_run(self, case: Case, why: str) -> CaseFinding:
         """The finding of a case the probe did not carry out."""
         self.messages = []
-        return self._settled(Finding(case, Verdict.MISSING, seen=why), self.link.clock())
+        return self._settled(CaseFinding(case, Verdict.MISSING, seen=why), self.link.clock())
 
     def note(self, text: str) -> None:
         self.messages.append(text)
 
-    def _answered_once(self, finding: Finding) -> Finding:
+    def _answered_once(self, finding: CaseFinding) -> CaseFinding:
         """Every goal the case saw accepted, its own and its clean-up's, answered exactly once (R19.1):
         a case that otherwise passed fails when one was not."""
         for exchange in self.exchanges:
@@ -526,7 +526,7 @@ class Probe:
                 continue
             self.note(f"{what} within {self.timeout:g} s (R19.1)")
             if finding.verdict in (Verdict.PASS, Verdict.NON_STRICT, Verdict.INFO):
-                return Finding(
+                return CaseFinding(
                     finding.case, Verdict.FAIL, expected="every accepted goal answered exactly once (R19.1)",
                     seen=what, absent="no answer" in what,
                 )  # fmt: skip
@@ -656,17 +656,17 @@ class Probe:
                 return str(places[0])
         return None
 
-    def refused(self, case: Case, goal: Goal, divergence: str | None = None) -> Finding:
+    def refused(self, case: Case, goal: Goal, divergence: str | None = None) -> CaseFinding:
         """A case whose goal the spec refuses: pass when rejected.  Accepted and then aborted is the
         way ``divergence`` breaks it, when given."""
         exchange = self.send(goal)
         if exchange.accepted is False:
-            return Finding(case, Verdict.PASS, expected="rejected", seen="rejected")
+            return CaseFinding(case, Verdict.PASS, expected="rejected", seen="rejected")
         if exchange.accepted is None:
-            return Finding(case, Verdict.FAIL, expected="rejected", seen="no response", absent=True)
+            return CaseFinding(case, Verdict.FAIL, expected="rejected", seen="no response", absent=True)
         answer = exchange.answer
         aborted = answer is not None and answer[0] is GoalStatus.ABORTED
-        return Finding(
+        return CaseFinding(
             case, Verdict.FAIL, expected="rejected", seen=_describe_answer(exchange),
             divergence=divergence if aborted else None,
         )  # fmt: skip
@@ -767,33 +767,33 @@ _LOOK_AGAIN = 0.2
 # -------------------------------------------------------------------- the cases
 
 
-def _status_latched(probe: Probe, case: Case) -> Finding:
+def _status_latched(probe: Probe, case: Case) -> CaseFinding:
     expected = "a late subscriber receives the status"
     offered = probe.link.offered.get("status")
     if offered is not None:  # what the transport saw of the topic: no trace carries it
         probe.note(f"the status topic is {offered}")
-        return Finding(case, Verdict.FAIL, expected=expected, seen=f"the status topic is {offered}")
+        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=f"the status topic is {offered}")
     if probe.link.wait_status(lambda status: True, probe.timeout) is None:
         # a server with no transient-local status (a volatile one never matches this subscriber)
         seen = f"no status within {probe.timeout:g} s"
-        return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=True)
+        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, absent=True)
     heard = probe.link.late_subscriber()
     if probe.link.wait(heard.is_set, probe.timeout):
-        return Finding(case, Verdict.PASS, expected="a status", seen="a status")
+        return CaseFinding(case, Verdict.PASS, expected="a status", seen="a status")
     probe.heard_later[case.id] = heard.is_set  # a lossy link: matched, or delivered to, late
-    return Finding(
+    return CaseFinding(
         case, Verdict.FAIL, expected=expected, seen=f"nothing within {probe.timeout:g} s", absent=True
     )
 
 
-def _status_waiting(probe: Probe, case: Case) -> Finding:
+def _status_waiting(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     seq = status.dynamic_event_seq
     begins = [begin.dynamic_event_seq for begin in probe.link.begins]
     probe.note(f"status {status_text(status)}; begins seen for runs {begins}")
     if status.status != _STANDBY:
         divergence = "D26" if status.status == Status.UNINITIALIZED.value else None
-        return Finding(case, Verdict.FAIL, expected="WAITING, standby", seen=f"WAITING, {status.status}",
+        return CaseFinding(case, Verdict.FAIL, expected="WAITING, standby", seen=f"WAITING, {status.status}",
                        divergence=divergence)  # fmt: skip
     if seq not in begins:
         # the begin topic is another channel than the status's: over a lossy link, it may come later
@@ -803,8 +803,8 @@ def _status_waiting(probe: Probe, case: Case) -> Finding:
         if not probe.link.wait(begun, probe.timeout):
             probe.heard_later[case.id] = begun
             seen = f"begins for {begins} within {probe.timeout:g} s"
-            return Finding(case, Verdict.FAIL, expected=f"a begin for run {seq}", seen=seen, absent=True)
-    return Finding(case, Verdict.PASS, expected="WAITING, standby, begun", seen="so")
+            return CaseFinding(case, Verdict.FAIL, expected=f"a begin for run {seq}", seen=seen, absent=True)
+    return CaseFinding(case, Verdict.PASS, expected="WAITING, standby, begun", seen="so")
 
 
 def _goal(status: DynamicEventStatus, event_type: int, **values: Any) -> Goal:
@@ -817,58 +817,58 @@ def _goal(status: DynamicEventStatus, event_type: int, **values: Any) -> Goal:
     return Goal(**fields)
 
 
-def _seq_stale(probe: Probe, case: Case) -> Finding:
+def _seq_stale(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     goal = _goal(status, EventType.FINISHED, dynamic_event_seq=(status.dynamic_event_seq - 1) % _U32)
     return probe.refused(case, goal)
 
 
-def _seq_future(probe: Probe, case: Case) -> Finding:
+def _seq_future(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     goal = _goal(status, EventType.FINISHED, dynamic_event_seq=machine.next_seq(status.dynamic_event_seq))
     return probe.refused(case, goal)
 
 
-def _event_type_0(probe: Probe, case: Case) -> Finding:
+def _event_type_0(probe: Probe, case: Case) -> CaseFinding:
     return probe.refused(case, _goal(probe.waiting(), 0), divergence="D7")
 
 
-def _event_type_unknown(probe: Probe, case: Case) -> Finding:
+def _event_type_unknown(probe: Probe, case: Case) -> CaseFinding:
     return probe.refused(case, _goal(probe.waiting(), 4), divergence="D7")
 
 
-def _category_unknown(probe: Probe, case: Case) -> Finding:
+def _category_unknown(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     goal = _goal(status, EventType.NEXT, category="dynevent_probe_no_such_category", description="{}",
                  id=_fresh(status.id))  # fmt: skip
     return probe.refused(case, goal)
 
 
-def _description_not_json(probe: Probe, case: Case) -> Finding:
+def _description_not_json(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     goal = _goal(status, EventType.NEXT, category=probe.options.category, description="{not json",
                  id=_fresh(status.id))  # fmt: skip
     return probe.refused(case, goal)
 
 
-def _cancel_idle(probe: Probe, case: Case) -> Finding:
+def _cancel_idle(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     return probe.refused(case, _goal(status, EventType.CANCEL, id=status.id), divergence="D8")
 
 
-def _runs_a_child(probe: Probe, case: Case) -> Finding:
+def _runs_a_child(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     goal = probe.next_goal(status)
     exchange = probe.send(goal)
     expected = f"accepted; feedback for id {goal.id}; succeeded, completed, id {goal.id}"
     if not exchange.accepted:
         seen = _describe_answer(exchange)
-        return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=exchange.accepted is None)
+        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, absent=exchange.accepted is None)
     ids = sorted({feedback.id for feedback in exchange.feedback})
     probe.note(f"feedback: {len(exchange.feedback)} message(s), ids {ids}")
     answer = exchange.answer
     if answer is None:
-        return Finding(
+        return CaseFinding(
             case,
             Verdict.FAIL,
             expected=expected,
@@ -882,11 +882,11 @@ def _runs_a_child(probe: Probe, case: Case) -> Finding:
         goal.id,
     ):
         seen = f"feedback ids {ids}; {_describe_answer(exchange)}"
-        return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=not _complete(exchange))
-    return Finding(case, Verdict.PASS, expected=expected, seen="so")
+        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, absent=not _complete(exchange))
+    return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
-def _id_stale(probe: Probe, case: Case) -> Finding:
+def _id_stale(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     goal = probe.next_goal(status, goal_id=status.id)  # not above the run's highest id
     if status.id == 0:
@@ -897,7 +897,7 @@ def _id_stale(probe: Probe, case: Case) -> Finding:
     return finding
 
 
-def _status_after_child(probe: Probe, case: Case) -> Finding:
+def _status_after_child(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     goal = probe.next_goal(status)
     exchange = probe.send(goal)
@@ -907,7 +907,7 @@ def _status_after_child(probe: Probe, case: Case) -> Finding:
     child = answer[1].id if answer is not None and answer[1].id else goal.id  # R8.1: the result names it
     after = probe.link.wait_status(lambda s: s.id == child and s.status != _UNDERWAY, probe.timeout)
     if after is None:
-        return Finding(
+        return CaseFinding(
             case,
             Verdict.FAIL,
             expected=f"WAITING, id {child}",
@@ -916,13 +916,13 @@ def _status_after_child(probe: Probe, case: Case) -> Finding:
         )
     probe.note(f"status {status_text(after)}")
     if after.dynamic_state == DynamicState.WAITING and after.status == _STANDBY:
-        return Finding(case, Verdict.PASS, expected=f"WAITING, standby, id {child}", seen="so")
+        return CaseFinding(case, Verdict.PASS, expected=f"WAITING, standby, id {child}", seen="so")
     divergence = "D2" if after.dynamic_state == DynamicState.RUNNING else None
-    return Finding(case, Verdict.FAIL, expected=f"WAITING, standby, id {child}",
+    return CaseFinding(case, Verdict.FAIL, expected=f"WAITING, standby, id {child}",
                    seen=f"status {status_text(after)}", divergence=divergence)  # fmt: skip
 
 
-def _busy(probe: Probe, case: Case) -> Finding:
+def _busy(probe: Probe, case: Case) -> CaseFinding:
     with probe.child() as (_, child_id):
         status = probe.link.status or probe.any_status()
         goal = probe.next_goal(status, goal_id=_fresh(child_id))
@@ -932,7 +932,7 @@ def _busy(probe: Probe, case: Case) -> Finding:
         )
 
 
-def _busy_finished(probe: Probe, case: Case) -> Finding:
+def _busy_finished(probe: Probe, case: Case) -> CaseFinding:
     with probe.child() as (_, child_id):
         status = probe.link.status or probe.any_status()
         finding = probe.refused(case, _goal(status, EventType.FINISHED))
@@ -948,8 +948,8 @@ def _busy_finished(probe: Probe, case: Case) -> Finding:
 
 
 def _unless_ended_first(
-    probe: Probe, finding: Finding, child_id: int, took_effect: Callable[[DynamicEventStatus], bool]
-) -> Finding:
+    probe: Probe, finding: CaseFinding, child_id: int, took_effect: Callable[[DynamicEventStatus], bool]
+) -> CaseFinding:
     """A goal sent while a status showed ``child_id`` running, and accepted where the spec refuses it:
     when the server's own stamps show the child's end before the goal took effect (the status whose
     ``time`` says the child ended, before the one that shows the goal's effect), the status the probe
@@ -967,7 +967,7 @@ def _unless_ended_first(
         return finding
     probe.note(f"the server's statuses: child {child_id} ended at {_instant(end)}, the goal took effect "
                f"at {_instant(effect)}")  # fmt: skip
-    return Finding(finding.case, Verdict.MISSING, seen=ENDED_FIRST.format(child=child_id))
+    return CaseFinding(finding.case, Verdict.MISSING, seen=ENDED_FIRST.format(child=child_id))
 
 
 def _instant(status: DynamicEventStatus) -> int:
@@ -975,14 +975,14 @@ def _instant(status: DynamicEventStatus) -> int:
     return status.time.sec * 1_000_000_000 + status.time.nanosec
 
 
-def _cancel_wrong_id(probe: Probe, case: Case) -> Finding:
+def _cancel_wrong_id(probe: Probe, case: Case) -> CaseFinding:
     with probe.child() as (_, child_id):
         status = probe.link.status or probe.any_status()
         other = _within_ids(child_id + 1000)
         return probe.refused(case, _goal(status, EventType.CANCEL, id=other), divergence="D8")
 
 
-def _cancel_running_child(probe: Probe, case: Case) -> Finding:
+def _cancel_running_child(probe: Probe, case: Case) -> CaseFinding:
     expected = "CANCEL succeeded; the NEXT answered once, its child canceled"
     with probe.child() as (running, child_id):
         status = probe.link.status or probe.any_status()
@@ -992,18 +992,18 @@ def _cancel_running_child(probe: Probe, case: Case) -> Finding:
         probe.note(f"the NEXT: {_describe_answer(running)}")
         cancel_answer, next_answer = cancel.answer, running.answer
         if cancel_answer is None or next_answer is None:
-            return Finding(
+            return CaseFinding(
                 case, Verdict.FAIL, expected=expected, seen="a goal left without an answer", absent=True
             )
         if len(running.answers) != 1 or len(cancel.answers) != 1:
-            return Finding(case, Verdict.FAIL, expected=expected, seen="a goal answered twice")
+            return CaseFinding(case, Verdict.FAIL, expected=expected, seen="a goal answered twice")
         if cancel_answer[0] is not GoalStatus.SUCCEEDED or next_answer[1].status != _CANCELED:
             seen = f"CANCEL {_describe_answer(cancel)}; NEXT {_describe_answer(running)}"
-            return Finding(case, Verdict.FAIL, expected=expected, seen=seen)
+            return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen)
         return _status_after_cancel(probe, case, child_id, since)
 
 
-def _status_after_cancel(probe: Probe, case: Case, child_id: int, since: int) -> Finding:
+def _status_after_cancel(probe: Probe, case: Case, child_id: int, since: int) -> CaseFinding:
     """R8.4: once a cancelled child has ended, the status says WAITING ``standby`` with its id; every
     status after the CANCEL that shows the robot waiting must say so (rmf_ros2's says WAITING
     ``canceled``, D28, or RUNNING with the child's end, D2)."""
@@ -1013,25 +1013,27 @@ def _status_after_cancel(probe: Probe, case: Case, child_id: int, since: int) ->
         return status.id == child_id and machine.robot_waits(status)
 
     if not probe.link.wait_seen(shows_the_end, since, probe.timeout):
-        return Finding(case, Verdict.FAIL, expected=expected, seen="no status after the child", absent=True)
+        return CaseFinding(
+            case, Verdict.FAIL, expected=expected, seen="no status after the child", absent=True
+        )
     for after in filter(shows_the_end, probe.link.history()[since:]):
         if after.dynamic_state == DynamicState.WAITING and after.status == _STANDBY:
             continue
         probe.note(f"status {status_text(after)}")
         divergence = "D2" if after.dynamic_state == DynamicState.RUNNING else "D28"
         seen = f"status {status_text(after)}"
-        return Finding(case, Verdict.FAIL, expected=expected, seen=seen, divergence=divergence)
-    return Finding(case, Verdict.PASS, expected=expected, seen="so")
+        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, divergence=divergence)
+    return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
-def _finished(probe: Probe, case: Case) -> Finding:
+def _finished(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     since = len(probe.link.history())
     exchange = probe.send(_goal(status, EventType.FINISHED))
     expected = "succeeded, completed; then INACTIVE"
     answer = exchange.answer
     if answer is None or (answer[0], answer[1].status) != (GoalStatus.SUCCEEDED, _COMPLETED):
-        return Finding(case, Verdict.FAIL, expected=expected, seen=_describe_answer(exchange))
+        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=_describe_answer(exchange))
     seq = status.dynamic_event_seq
     missed = probe.link.statuses_missed
     if not probe.link.wait_seen(
@@ -1041,11 +1043,11 @@ def _finished(probe: Probe, case: Case) -> Finding:
     ):
         later = [s for s in probe.link.history()[since:] if seq_after(s.dynamic_event_seq, seq)]
         if later and probe.link.statuses_missed > missed:  # the next run's took the INACTIVE's place
-            return Finding(
+            return CaseFinding(
                 case, Verdict.MISSING, seen=OVERWRITTEN.format(seq=seq, later=later[0].dynamic_event_seq)
             )
-        return Finding(case, Verdict.FAIL, expected=expected, seen="no INACTIVE status", absent=True)
-    return Finding(case, Verdict.PASS, expected=expected, seen="so")
+        return CaseFinding(case, Verdict.FAIL, expected=expected, seen="no INACTIVE status", absent=True)
+    return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
 def _ended(probe: Probe) -> DynamicEventStatus:
@@ -1071,34 +1073,34 @@ def _ended(probe: Probe) -> DynamicEventStatus:
     return status
 
 
-def _next_after(probe: Probe, case: Case) -> Finding:
+def _next_after(probe: Probe, case: Case) -> CaseFinding:
     # a NEXT the server would run but for R4.3: a server that refuses it only for its description
     # would pass a NEXT without a place
     return probe.refused(case, probe.next_goal(_ended(probe)))
 
 
-def _cancel_after(probe: Probe, case: Case) -> Finding:
+def _cancel_after(probe: Probe, case: Case) -> CaseFinding:
     status = _ended(probe)
     return probe.refused(case, _goal(status, EventType.CANCEL, id=status.id))
 
 
-def _finished_after(probe: Probe, case: Case) -> Finding:
+def _finished_after(probe: Probe, case: Case) -> CaseFinding:
     return probe.refused(case, _goal(_ended(probe), EventType.FINISHED))
 
 
-def _seq_stale_next(probe: Probe, case: Case) -> Finding:
+def _seq_stale_next(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     goal = attrs.evolve(probe.next_goal(status), dynamic_event_seq=(status.dynamic_event_seq - 1) % _U32)
     return probe.refused(case, goal)
 
 
-def _seq_future_next(probe: Probe, case: Case) -> Finding:
+def _seq_future_next(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     goal = attrs.evolve(probe.next_goal(status), dynamic_event_seq=machine.next_seq(status.dynamic_event_seq))
     return probe.refused(case, goal)
 
 
-def _cancel_seq(probe: Probe, case: Case, seq_of: Callable[[int], int]) -> Finding:
+def _cancel_seq(probe: Probe, case: Case, seq_of: Callable[[int], int]) -> CaseFinding:
     """A CANCEL naming the running child, but for another run than the child's."""
     with probe.child() as (_, child_id):
         status = probe.link.status or probe.any_status()
@@ -1106,11 +1108,11 @@ def _cancel_seq(probe: Probe, case: Case, seq_of: Callable[[int], int]) -> Findi
         return probe.refused(case, _goal(status, EventType.CANCEL, id=child_id, dynamic_event_seq=seq))
 
 
-def _cancel_seq_stale(probe: Probe, case: Case) -> Finding:
+def _cancel_seq_stale(probe: Probe, case: Case) -> CaseFinding:
     return _cancel_seq(probe, case, lambda seq: (seq - 1) % _U32)
 
 
-def _cancel_seq_future(probe: Probe, case: Case) -> Finding:
+def _cancel_seq_future(probe: Probe, case: Case) -> CaseFinding:
     return _cancel_seq(probe, case, machine.next_seq)
 
 
@@ -1130,16 +1132,16 @@ def _ran(exchange: Exchange, child_id: int) -> str | None:
     return None
 
 
-def _ran_finding(probe: Probe, case: Case, exchange: Exchange, child_id: int, expected: str) -> Finding:
+def _ran_finding(probe: Probe, case: Case, exchange: Exchange, child_id: int, expected: str) -> CaseFinding:
     seen = _ran(exchange, child_id)
     if seen is None:
-        return Finding(case, Verdict.PASS, expected=expected, seen="so")
+        return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
     # seen in part (no response, no answer, or a child that ran without its start's feedback): the
     # run's end tells a server that never sent the rest from a link that delivered it late
-    return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=not _complete(exchange))
+    return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, absent=not _complete(exchange))
 
 
-def _numbered_by_server(finding: Finding, exchange: Exchange, asked: int, above: int) -> Finding:
+def _numbered_by_server(finding: CaseFinding, exchange: Exchange, asked: int, above: int) -> CaseFinding:
     """A NEXT whose child ran and completed under another fresh id (above ``above``) than the one
     asked for: the server numbered the child itself, by a counter of its own (D10)."""
     answer = exchange.answer
@@ -1154,7 +1156,7 @@ def _numbered_by_server(finding: Finding, exchange: Exchange, asked: int, above:
     )
 
 
-def _id_zero(probe: Probe, case: Case) -> Finding:
+def _id_zero(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     child_id = machine.next_child_id(Goal(id=0), status.id, _SERVER_NUMBERS)
     exchange = probe.send(probe.next_goal(status, goal_id=0))
@@ -1162,7 +1164,7 @@ def _id_zero(probe: Probe, case: Case) -> Finding:
     return _numbered_by_server(finding, exchange, child_id, status.id)
 
 
-def _id_chosen(probe: Probe, case: Case) -> Finding:
+def _id_chosen(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     chosen = status.id + 5
     if chosen > U64_MAX:
@@ -1174,7 +1176,7 @@ def _id_chosen(probe: Probe, case: Case) -> Finding:
     return _numbered_by_server(finding, exchange, chosen, status.id)  # the id ignored
 
 
-def _stateless_id(probe: Probe, case: Case) -> Finding:
+def _stateless_id(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     first = probe.next_goal(status)
     ran = probe.send(first)
@@ -1191,7 +1193,7 @@ def _stateless_id(probe: Probe, case: Case) -> Finding:
     return _numbered_by_server(finding, exchange, fresh, after.id)
 
 
-def _race(probe: Probe, case: Case) -> Finding:
+def _race(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     goals = [probe.next_goal(status), probe.next_goal(status, goal_id=_within_ids(status.id + 2))]
     exchanges = [probe.link.send(goal) for goal in goals]  # at once: no wait between them
@@ -1207,27 +1209,29 @@ def _race(probe: Probe, case: Case) -> Finding:
     ran = [exchange for exchange in exchanges if exchange.feedback]
     if len(ran) != 1:
         absent = not all(_complete(exchange) for exchange in exchanges)  # a response or feedback to come
-        return Finding(
+        return CaseFinding(
             case, Verdict.FAIL, expected=expected, seen=f"{len(ran)} of the NEXTs ran a child", absent=absent
         )
     seen = _ran(ran[0], ran[0].goal.id)
     if seen is not None:
         absent = not _complete(ran[0])
-        failed = Finding(
+        failed = CaseFinding(
             case, Verdict.FAIL, expected=expected, seen=f"the child that ran: {seen}", absent=absent
         )
         return _numbered_by_server(failed, ran[0], ran[0].goal.id, status.id)
     other = exchanges[1] if ran[0] is exchanges[0] else exchanges[0]
     if other.accepted is None:
-        return Finding(case, Verdict.FAIL, expected=expected, seen="the other NEXT: no response", absent=True)
+        return CaseFinding(
+            case, Verdict.FAIL, expected=expected, seen="the other NEXT: no response", absent=True
+        )
     if other.accepted and other.answer is not None and other.answer[0] is not GoalStatus.ABORTED:
-        return Finding(
+        return CaseFinding(
             case, Verdict.FAIL, expected=expected, seen=f"the other NEXT: {_describe_answer(other)}"
         )
-    return Finding(case, Verdict.PASS, expected=expected, seen="so")  # an unanswered other: R19.1 below
+    return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")  # an unanswered other: R19.1 below
 
 
-def _log_seq(probe: Probe, case: Case) -> Finding:
+def _log_seq(probe: Probe, case: Case) -> CaseFinding:
     children: list[list[LogEntry]] = []
     for _ in range(2):
         exchange = probe.send(probe.next_goal(probe.waiting()))
@@ -1240,26 +1244,30 @@ def _log_seq(probe: Probe, case: Case) -> Finding:
         tier.value for tier in Tier
     )
     if len(entries) < 2:
-        return Finding(
+        return CaseFinding(
             case, Verdict.INFO, expected=expected, seen=f"{len(entries)} log entries: nothing to judge"
         )
     tiers = sorted({entry.tier for entry in entries} - {tier.value for tier in Tier})
     if tiers:
-        return Finding(case, Verdict.FAIL, expected=expected, seen=f"tiers {tiers}")
+        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=f"tiers {tiers}")
     within = all((b.seq - a.seq) % _U32 == 1 for logs in children for a, b in itertools.pairwise(logs))
     gaps = [(b.seq - a.seq) % _U32 for a, b in itertools.pairwise(entries)]
     if within and all(0 < gap <= 2**31 for gap in gaps):
-        return Finding(case, Verdict.PASS, expected=expected, seen="so")
+        return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
     seq = probe.link.status.dynamic_event_seq if probe.link.status else None
     same_as_run = all(entry.seq == seq for entry in entries)
     seen = "every entry's seq is the run's seq" if same_as_run else f"steps between entries {gaps}"
-    return Finding(case, Verdict.FAIL, expected=expected, seen=seen, divergence="D9" if same_as_run else None)
+    return CaseFinding(
+        case, Verdict.FAIL, expected=expected, seen=seen, divergence="D9" if same_as_run else None
+    )
 
 
-def _clamp_notice(probe: Probe, case: Case) -> Finding:
+def _clamp_notice(probe: Probe, case: Case) -> CaseFinding:
     minimum = probe.options.stubborn_minimum
     if minimum <= 0:
-        return Finding(case, Verdict.INFO, expected="a clamp", seen="--stubborn-minimum 0: nothing to clamp")
+        return CaseFinding(
+            case, Verdict.INFO, expected="a clamp", seen="--stubborn-minimum 0: nothing to clamp"
+        )
     goal = attrs.evolve(probe.next_goal(probe.waiting()), stubborn_period=minimum / 4)  # float32 on the wire
     period = goal.stubborn_period
     exchange = probe.send(goal)
@@ -1268,21 +1276,21 @@ def _clamp_notice(probe: Probe, case: Case) -> Finding:
     )
     if not exchange.feedback:
         seen = f"{_describe_answer(exchange)}, no feedback"
-        return Finding(case, Verdict.FAIL, expected=expected, seen=seen, absent=True)
+        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, absent=True)
     warnings = [(i, entry) for i, feedback in enumerate(exchange.feedback) for entry in feedback.logs
                 if entry.tier == Tier.WARNING.value]  # fmt: skip
     for index, entry in warnings:
         probe.note(f"feedback {index + 1}: warning {entry.text!r}")
     if not warnings:
-        return Finding(case, Verdict.FAIL, expected=expected, seen="no warning: the clamp is silent",
+        return CaseFinding(case, Verdict.FAIL, expected=expected, seen="no warning: the clamp is silent",
                        divergence="D11")  # fmt: skip
     if warnings[0][0] != 0:
-        return Finding(case, Verdict.NON_STRICT, expected=expected,
+        return CaseFinding(case, Verdict.NON_STRICT, expected=expected,
                        seen=f"the warning came with feedback {warnings[0][0] + 1}")  # fmt: skip
-    return Finding(case, Verdict.PASS, expected=expected, seen="so")
+    return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
-def _cancel_both_answered(probe: Probe, case: Case) -> Finding:
+def _cancel_both_answered(probe: Probe, case: Case) -> CaseFinding:
     expected = "both CANCELs accepted and answered succeeded with the child's result; the NEXT answered once"
     with probe.child() as (running, child_id):
         status = probe.link.status or probe.any_status()
@@ -1296,9 +1304,11 @@ def _cancel_both_answered(probe: Probe, case: Case) -> Finding:
         probe.note(f"the NEXT: {_describe_answer(running)}")
         if not all(cancel.accepted for cancel in cancels):
             absent = any(cancel.accepted is None for cancel in cancels)
-            return Finding(case, Verdict.FAIL, expected=expected, seen="a CANCEL not accepted", absent=absent)
+            return CaseFinding(
+                case, Verdict.FAIL, expected=expected, seen="a CANCEL not accepted", absent=absent
+            )
         if running.answer is None or any(cancel.answer is None for cancel in cancels):
-            return Finding(case, Verdict.FAIL, expected=expected, seen="a goal left without an answer",
+            return CaseFinding(case, Verdict.FAIL, expected=expected, seen="a goal left without an answer",
                            absent=True)  # fmt: skip
         result = running.answer[1]
         wrong = [cancel for cancel in cancels if cancel.answer != (GoalStatus.SUCCEEDED, result)]
@@ -1307,9 +1317,9 @@ def _cancel_both_answered(probe: Probe, case: Case) -> Finding:
             # the first CANCEL freed the robot before its child ended (D1), and the second, accepted,
             # was aborted as idle (in D8's words)
             idle = [cancel for cancel in wrong if _aborted_with(cancel, Failure.IDLE_CANCEL)]
-            return Finding(case, Verdict.FAIL, expected=expected, seen=seen,
+            return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen,
                            divergence="D1" if idle == wrong else None)  # fmt: skip
-        return Finding(case, Verdict.PASS, expected=expected, seen="so")
+        return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
 def _aborted_with(exchange: Exchange, failure: Failure) -> bool:
@@ -1321,45 +1331,49 @@ def _aborted_with(exchange: Exchange, failure: Failure) -> bool:
     )
 
 
-def _action_cancel_running(probe: Probe, case: Case) -> Finding:
+def _action_cancel_running(probe: Probe, case: Case) -> CaseFinding:
     expected = "the cancel accepted; the NEXT answered canceled"
     with probe.child() as (running, _):
         accepted = probe.cancel(running)
         running.answered(probe.timeout)
         probe.note(f"the NEXT: {_describe_answer(running)}")
         if accepted is None:
-            return Finding(case, Verdict.FAIL, expected=expected, seen="no cancel response", absent=True)
+            return CaseFinding(case, Verdict.FAIL, expected=expected, seen="no cancel response", absent=True)
         if not accepted:
-            return Finding(case, Verdict.FAIL, expected=expected, seen="the cancel refused", divergence="D31")
+            return CaseFinding(
+                case, Verdict.FAIL, expected=expected, seen="the cancel refused", divergence="D31"
+            )
         if running.answer is None:
-            return Finding(case, Verdict.FAIL, expected=expected, seen="the NEXT not answered", absent=True)
+            return CaseFinding(
+                case, Verdict.FAIL, expected=expected, seen="the NEXT not answered", absent=True
+            )
         if running.answer[0] is not GoalStatus.CANCELED:
-            return Finding(
+            return CaseFinding(
                 case, Verdict.FAIL, expected=expected, seen=f"the NEXT {_describe_answer(running)}"
             )
-        return Finding(case, Verdict.PASS, expected=expected, seen="so")
+        return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
-def _action_cancel_answered(probe: Probe, case: Case) -> Finding:
+def _action_cancel_answered(probe: Probe, case: Case) -> CaseFinding:
     exchange = probe.send(probe.next_goal(probe.waiting()))
     if not exchange.answers:
         raise _TimedOut(f"the child did not end within {probe.timeout:g} s")
     accepted = probe.cancel(exchange)
     if accepted is None:
-        return Finding(
+        return CaseFinding(
             case, Verdict.FAIL, expected="the cancel refused", seen="no cancel response", absent=True
         )
     if accepted:
-        return Finding(case, Verdict.FAIL, expected="the cancel refused", seen="the cancel accepted")
-    return Finding(case, Verdict.PASS, expected="the cancel refused", seen="so")
+        return CaseFinding(case, Verdict.FAIL, expected="the cancel refused", seen="the cancel accepted")
+    return CaseFinding(case, Verdict.PASS, expected="the cancel refused", seen="so")
 
 
-def _describe_query(probe: Probe, case: Case) -> Finding:
+def _describe_query(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     answer, why = probe.link.describe(probe.timeout)
     if answer is None:
         probe.note(why)
-        return Finding(case, Verdict.INFO, expected="an answer, where the server offers the query",
+        return CaseFinding(case, Verdict.INFO, expected="an answer, where the server offers the query",
                        seen=f"{why} (a server need not offer it: rmf_ros2 does not, D17)")  # fmt: skip
     begun = [begin for begin in probe.link.begins if begin.dynamic_event_seq == status.dynamic_event_seq]
     wanted = (True, status.status, status.id)
@@ -1367,15 +1381,15 @@ def _describe_query(probe: Probe, case: Case) -> Finding:
     probe.note(f"answer: running={got[0]} status={got[1]} id={got[2]} description={answer.description!r}")
     expected = f"running, {status.status}, id {status.id}, the begin's description"
     if got != wanted or (begun and answer.description != begun[-1].description):
-        return Finding(case, Verdict.FAIL, expected=expected,
+        return CaseFinding(case, Verdict.FAIL, expected=expected,
                        seen=f"running={got[0]}, {got[1]}, id {got[2]}, {answer.description!r}")  # fmt: skip
-    return Finding(case, Verdict.PASS, expected=expected, seen="so")
+    return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
 _LAST_SEQ = U32_MAX
 
 
-def _seq_wrap(probe: Probe, case: Case) -> Finding:
+def _seq_wrap(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     if status.dynamic_event_seq == _LAST_SEQ:
         ended = probe.send(_goal(status, EventType.FINISHED))
@@ -1400,14 +1414,14 @@ def _seq_wrap(probe: Probe, case: Case) -> Finding:
     probe.note(f"the run after {_LAST_SEQ}: {after[0]}; begins seen for runs {begins}")
     expected = f"run 0 after run {_LAST_SEQ}, begun on the begin topic; a goal for {_LAST_SEQ} refused"
     if after[0] != 0 or 0 not in begins:
-        return Finding(case, Verdict.FAIL, expected=expected, seen=f"run {after[0]}; begins for {begins}")
+        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=f"run {after[0]}; begins for {begins}")
     if status.dynamic_event_seq != 0:
         raise _Unreachable(f"run 0 is over: the robot is in run {status.dynamic_event_seq}")
     finding = probe.refused(case, _goal(status, EventType.FINISHED, dynamic_event_seq=_LAST_SEQ))
     return attrs.evolve(finding, expected=expected)
 
 
-_CASES: dict[str, Callable[[Probe, Case], Finding]] = {
+_CASES: dict[str, Callable[[Probe, Case], CaseFinding]] = {
     "status.latched": _status_latched,
     "status.waiting": _status_waiting,
     "describe.query": _describe_query,
@@ -1457,8 +1471,8 @@ def run_cases(
     cases: list[Case],
     say: Callable[[str], None],
     progress: Callable[[str], None] | None = None,
-    findings: list[Finding] | None = None,
-) -> list[Finding]:
+    findings: list[CaseFinding] | None = None,
+) -> list[CaseFinding]:
     """Carry out ``cases`` over ``link`` (its server found), appending each finding to ``findings``
     (a list the caller keeps, so that an interruption keeps those of the cases that ended); the
     findings."""
@@ -1522,8 +1536,8 @@ def _ready(
 
 
 def conclude(
-    findings: list[Finding], trace: str, options: Options, say: Callable[[str], None]
-) -> tuple[int, list[Finding]]:
+    findings: list[CaseFinding], trace: str, options: Options, say: Callable[[str], None]
+) -> tuple[int, list[CaseFinding]]:
     """The end of a run: the judge over every record of the exchange (``trace``, the trace's text)
     fails the cases whose own records show a finding on their rules
     (:func:`~dynevent.conformance.probe_cases.judge_verdicts`), the findings and the judge's own

@@ -87,7 +87,7 @@ class _Findings:
         return tuple(self._found)
 
 
-class _Ahead:
+class _Lookahead:
     """The records after the one being judged, which the checker's window holds: the only copy."""
 
     def __init__(self) -> None:
@@ -121,7 +121,7 @@ class _Replica:
     and what the trace leaves uncertain about it.  The only writer of all of them: the parts change
     them through its methods, each named for what the trace showed."""
 
-    def __init__(self, header: TraceHeader, findings: _Findings, ahead: _Ahead) -> None:
+    def __init__(self, header: TraceHeader, findings: _Findings, ahead: _Lookahead) -> None:
         self._findings = findings
         self._ahead = ahead
         self.config_known = header.config is not None
@@ -432,7 +432,7 @@ class _Rooms:
     server as the machine has it, and the goals seen."""
 
     findings: _Findings
-    ahead: _Ahead
+    ahead: _Lookahead
     replica: _Replica
     goals: _Goals
 
@@ -1172,7 +1172,7 @@ class _Observer:
     """
 
     def __init__(self, header: TraceHeader) -> None:
-        findings, ahead = _Findings(), _Ahead()
+        findings, ahead = _Findings(), _Lookahead()
         replica = _Replica(header, findings, ahead)
         self.rooms = _Rooms(findings=findings, ahead=ahead, replica=replica, goals=_Goals(replica))
         self.requests = _Requests(self.rooms)

@@ -49,7 +49,7 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
 class ProbeInterrupted(Interrupted):
     """Ctrl-C or SIGTERM during a probe run: ``findings`` are those of the cases that ended before."""
 
-    def __init__(self, signum: int, findings: list[probe_cases.Finding]) -> None:
+    def __init__(self, signum: int, findings: list[probe_cases.CaseFinding]) -> None:
         super().__init__(signum)
         self.findings = list(findings)
 
@@ -61,7 +61,7 @@ def run(
     progress: Callable[[str], None] | None = None,
     *,
     trace: TraceWriter | None = None,
-) -> tuple[list[probe_cases.Finding], float] | None:
+) -> tuple[list[probe_cases.CaseFinding], float] | None:
     """Carry out ``cases`` against the robot over DDS, writing every record of the exchange to
     ``trace``; the findings and the seconds the run took on the link's clock, from the server found
     to the last case's end, or None when no server was found."""
@@ -72,7 +72,7 @@ def run(
     if options.introspection:
         link.introspect()
     session.start()
-    findings: list[probe_cases.Finding] = []
+    findings: list[probe_cases.CaseFinding] = []
     try:
         with interruptible():
             if not link.wait_for_server(options.server_wait):
