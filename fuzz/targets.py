@@ -27,9 +27,10 @@ from typing import Any
 import attrs
 
 from dynevent import client as cl
-from dynevent.conformance import driver, vectors
+from dynevent.conformance import vectors
 from dynevent.conformance.judge import check_trace
 from dynevent.conformance.records import config_from_json, input_from_json, output_from_json, rule_validator
+from dynevent.conformance.vectors import driver
 from dynevent.errors import DyneventError, FileError
 from dynevent.server import inputs as ins
 from dynevent.server import machine, snapshot
@@ -293,7 +294,7 @@ def _trace_seeds() -> tuple[str, ...]:
 
 
 def _vector_file_seeds() -> tuple[str, ...]:
-    folder = ROOT / "src" / "dynevent" / "conformance"
+    folder = ROOT / "src" / "dynevent" / "conformance" / "vectors"
     seeds = []
     for path in sorted(folder.glob("[0-9]*.json"))[::3]:
         data = mutate.json.loads(path.read_text(encoding="utf-8"))
@@ -627,8 +628,8 @@ def _reports(value: Any) -> object:
     parses and every report encodes as UTF-8."""
     from xml.etree import ElementTree
 
-    from dynevent.conformance import probe_cases
-    from dynevent.conformance.runner import Failure, Outcome
+    from dynevent.conformance.probe import cases as probe_cases
+    from dynevent.conformance.vectors.runner import Failure, Outcome
 
     text = _text(value) if isinstance(value, (str, bytes)) else mutate.dumps(value)
     vector = vectors.load_vectors()[0]

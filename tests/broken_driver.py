@@ -16,7 +16,7 @@ import json
 import sys
 from typing import Any
 
-from dynevent.conformance.driver import Driver
+from dynevent.conformance.vectors.driver import Driver
 
 
 class BrokenDriver(Driver):

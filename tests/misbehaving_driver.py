@@ -30,7 +30,7 @@ import sys
 import time
 from pathlib import Path
 
-from dynevent.conformance.driver import Driver
+from dynevent.conformance.vectors.driver import Driver
 from dynevent.wire import _json
 
 

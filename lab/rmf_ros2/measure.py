@@ -128,7 +128,7 @@ def recording(out: Path, name: str) -> Child:
 
 
 def probe(out: Path, timeout: float, with_stubborn: bool) -> subprocess.CompletedProcess[str]:
-    from dynevent.conformance.probe_cases import CASES
+    from dynevent.conformance.probe.cases import CASES
 
     cases = [case.id for case in CASES if with_stubborn or case.id != "stubborn.clamp_notice"]
     argv = dynevent(
@@ -222,11 +222,11 @@ def comparison(out: Path, site: str = "full_control") -> str:
 
 def replayed(bag: Path) -> list[str]:
     """serve's rmf_ros2 mode driven through the new probe session (the clients' goals and the site's
-    events, dynevent.conformance.replay): each difference left, with the divergence it stands for
+    events, dynevent.conformance.judge.replay): each difference left, with the divergence it stands for
     ("?": none recorded yet), and the ids the site's children took."""
     from dynevent.bags import bag_records
     from dynevent.conformance.judge.divergences import label_difference
-    from dynevent.conformance.replay import compare_recording
+    from dynevent.conformance.judge.replay import compare_recording
     from dynevent.sim.config import ServeConfig, machine_config
 
     if not bag.exists():

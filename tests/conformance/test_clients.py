@@ -8,7 +8,7 @@ import random
 import pytest
 
 from dynevent import client as cl
-from dynevent.conformance.clients import ONE_CLIENT, ClientJudge
+from dynevent.conformance.judge.clients import ONE_CLIENT, ClientJudge
 from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from dynevent.conformance import probe_cases
+from dynevent.conformance.probe import cases as probe_cases
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "rmf_ros2"
 RUNS = [DATA / name / "probe-known.txt" for name in ("calibration", "remeasure", "easy")]

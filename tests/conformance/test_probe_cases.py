@@ -9,10 +9,10 @@ from pathlib import Path
 import attrs
 import pytest
 
-from dynevent.conformance import probe_cases
 from dynevent.conformance.judge import divergences
 from dynevent.conformance.judge.trace import Finding as JudgeFinding
-from dynevent.conformance.probe_cases import CASES, KNOWN, Case, CaseFinding, Verdict
+from dynevent.conformance.probe import cases as probe_cases
+from dynevent.conformance.probe.cases import CASES, KNOWN, Case, CaseFinding, Verdict
 
 ROOT = Path(__file__).resolve().parents[2]
 SPEC_RULES = set(re.findall(r"\*\*(R\d+\.\d+)\*\*", (ROOT / "docs" / "spec.md").read_text(encoding="utf-8")))

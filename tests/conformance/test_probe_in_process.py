@@ -18,12 +18,13 @@ from typing import Any
 import attrs
 import pytest
 
-from dynevent.conformance import probe_cases, probing
-from dynevent.conformance.in_process import InProcessLink, probe_in_process
 from dynevent.conformance.judge import check_trace
 from dynevent.conformance.judge.trace import TraceWriter
-from dynevent.conformance.probe_cases import CASES, CaseFinding, Verdict
-from dynevent.conformance.probing import Options
+from dynevent.conformance.probe import cases as probe_cases
+from dynevent.conformance.probe import runner as probe_runner
+from dynevent.conformance.probe.cases import CASES, CaseFinding, Verdict
+from dynevent.conformance.probe.in_process import InProcessLink, probe_in_process
+from dynevent.conformance.probe.runner import Options
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.holder import RobotServer
@@ -84,7 +85,7 @@ def _judge_section(text: str) -> str:
 
 
 def test_every_case_is_carried_out() -> None:
-    assert probing.implemented() == {case.id for case in CASES}
+    assert probe_runner.implemented() == {case.id for case in CASES}
 
 
 @pytest.mark.spec(
@@ -121,8 +122,8 @@ def test_the_rmf_ros2_mode_fails_exactly_at_its_recorded_divergences() -> None:
 def test_the_rmf_ros2_mode_fails_alike_on_both_in_process_links_as_probe_md_counts() -> None:
     """``--loopback`` and ``--impl`` (dynevent's driver) against serve's rmf_ros2 mode: the same
     verdicts, and the count docs/probe.md gives for them."""
-    from dynevent.conformance.in_process import DriverServer
-    from dynevent.conformance.runner import InProcessImplementation
+    from dynevent.conformance.probe.in_process import DriverServer
+    from dynevent.conformance.vectors.runner import InProcessImplementation
 
     _, loopback, text = _probe("rmf_ros2")
     config = attrs.evolve(CONFIG, compatibility="rmf_ros2")
@@ -195,7 +196,7 @@ def test_a_server_that_never_answers_a_next_ends_the_run_within_its_deadline() -
         return ()
 
     link = InProcessLink(CONFIG, trace=trace, stepper=never_answers)
-    findings = probing.run_cases(link, attrs.evolve(OPTIONS, deadline=20), list(CASES), lambda _: None)
+    findings = probe_runner.run_cases(link, attrs.evolve(OPTIONS, deadline=20), list(CASES), lambda _: None)
     assert silent and link.clock() <= 20 + 3  # the last wait began before the deadline
     assert all(finding.verdict in (Verdict.FAIL, Verdict.MISSING) for finding in findings)
     assert any(finding.seen.startswith("no status was heard") for finding in findings)
@@ -241,7 +242,7 @@ def _probe_impl(command: str, *args: str) -> subprocess.CompletedProcess[str]:
 def test_an_implementation_behind_the_driver_protocol_is_probed_without_ros() -> None:
     """dynevent's own driver, run as a separate program, passes every case; the broken driver of the
     vectors' tests (a started CANCEL frees the robot at once, R9.3) fails the cases of that rule."""
-    own = _probe_impl(f"{sys.executable} -m dynevent.conformance.driver")
+    own = _probe_impl(f"{sys.executable} -m dynevent.conformance.vectors.driver")
     assert own.returncode == 0, own.stdout + own.stderr
     assert own.stdout.startswith("implementation: dynevent "), own.stdout
     assert _took(own.stdout)[0].endswith(f"\n{len(CASES)} pass"), own.stdout
@@ -257,7 +258,7 @@ class _Stateless:
     name = "stateless"
 
     def __init__(self) -> None:
-        from dynevent.conformance.runner import InProcessImplementation
+        from dynevent.conformance.vectors.runner import InProcessImplementation
 
         self.inner = InProcessImplementation()
         self.states: list[Any] = []
@@ -281,7 +282,7 @@ def test_a_driver_that_takes_no_state_object_is_probed_from_seq_0() -> None:
     """The probe sends a driver a state object only to start the robot at a seq other than 0, and
     then one holding only its seq (the one a driver must take); a driver that refuses it is told so,
     with the way round: ``--first-seq 1``, which sends none, and every case but the wrap runs."""
-    from dynevent.conformance.in_process import DriverServer
+    from dynevent.conformance.probe.in_process import DriverServer
     from dynevent.errors import ImplementationError
 
     refusing = _Stateless()
@@ -368,7 +369,9 @@ def test_a_slow_server_is_left_when_the_deadline_passes_in_real_time() -> None:
     assert all(when < 10 for when in asked) and now[0] <= 10 + 5, asked
     verdicts = _verdicts(findings)
     assert "fail" not in verdicts.values() and "pass" in verdicts.values(), verdicts
-    cut = [finding for finding in findings if finding.seen.startswith(probing.CUT_SHORT.format(deadline=10))]
+    cut = [
+        finding for finding in findings if finding.seen.startswith(probe_runner.CUT_SHORT.format(deadline=10))
+    ]
     passed = [finding for finding in findings if finding.seen == "the run's --deadline of 10 s passed"]
     assert len(cut) == 1 and len(passed) == len(CASES) - 1 - list(verdicts.values()).count("pass"), findings
     assert code == probe_cases.EXIT_NOT_RUN
@@ -433,7 +436,7 @@ def test_against_any_configuration_of_serve_the_cases_and_the_judge_agree(
 def test_a_server_that_starts_children_without_end_cannot_fill_the_link() -> None:
     """A broken server that starts a thousand children at every step: the link simulates at most
     MAX_CHILDREN at once, and the run ends within its deadline like any other."""
-    from dynevent.conformance.in_process import MAX_CHILDREN
+    from dynevent.conformance.probe.in_process import MAX_CHILDREN
     from dynevent.server import outputs as outs
 
     first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
@@ -450,7 +453,7 @@ def test_a_server_that_starts_children_without_end_cannot_fill_the_link() -> Non
 
     trace = TraceWriter(None, fleet="tinyRobot", robot="tinyRobot1", keep=True)
     link = InProcessLink(CONFIG, trace=trace, stepper=breeding)
-    findings = probing.run_cases(link, attrs.evolve(OPTIONS, deadline=30), list(CASES), lambda _: None)
+    findings = probe_runner.run_cases(link, attrs.evolve(OPTIONS, deadline=30), list(CASES), lambda _: None)
     assert len(link._children) <= MAX_CHILDREN
     assert len(findings) == len(CASES) and link.clock() <= 30 + 3
 
@@ -496,7 +499,7 @@ def test_a_server_that_accepts_a_next_and_never_runs_it_ends_every_wait(timeout:
     link = InProcessLink(CONFIG, stepper=never_runs)
     cases = [case for case in CASES if case.id == "next.busy"]
     with _with_alarm(60):
-        findings = probing.run_cases(link, attrs.evolve(OPTIONS, timeout=timeout), cases, lambda _: None)
+        findings = probe_runner.run_cases(link, attrs.evolve(OPTIONS, timeout=timeout), cases, lambda _: None)
     assert [finding.verdict for finding in findings] == [Verdict.MISSING], findings
 
 
@@ -514,7 +517,7 @@ def test_a_status_of_an_unknown_state_is_a_verdict_not_a_traceback() -> None:
 
     link = InProcessLink(CONFIG, stepper=odd_state)
     cases = [case for case in CASES if case.id == "next.status_after_child"]
-    (finding,) = probing.run_cases(link, OPTIONS, cases, lambda _: None)
+    (finding,) = probe_runner.run_cases(link, OPTIONS, cases, lambda _: None)
     assert finding.verdict is Verdict.FAIL and "dynamic_state=9" in finding.seen, finding
 
 
@@ -529,14 +532,14 @@ def test_a_case_that_needs_an_id_above_the_highest_is_not_run() -> None:
 
     link = InProcessLink(CONFIG, stepper=high)
     cases = [case for case in CASES if case.id == "next.race"]
-    (finding,) = probing.run_cases(link, OPTIONS, cases, lambda _: None)
+    (finding,) = probe_runner.run_cases(link, OPTIONS, cases, lambda _: None)
     assert finding.verdict is Verdict.MISSING and "2**64 - 1" in finding.seen, finding
 
 
 def test_the_deadline_bounds_the_first_wait_too() -> None:
     link = InProcessLink(CONFIG, stepper=lambda event: ())
     options = attrs.evolve(OPTIONS, timeout=100, deadline=1)
-    findings = probing.run_cases(link, options, list(CASES), lambda _: None)
+    findings = probe_runner.run_cases(link, options, list(CASES), lambda _: None)
     assert link.clock() <= 1 + 0.1 and all(finding.verdict is not Verdict.PASS for finding in findings)
 
 
@@ -578,7 +581,7 @@ def test_a_next_is_not_sent_where_the_robot_already_stands() -> None:
     site ran one in 2 ms), so a case that needs a running child would test nothing: the probe sends
     the robot elsewhere than the place its last NEXT completed at."""
     link = InProcessLink(CONFIG)
-    probe = probing.Probe(link, attrs.evolve(OPTIONS, more_places=("lounge", "hall")))
+    probe = probe_runner.Probe(link, attrs.evolve(OPTIONS, more_places=("lounge", "hall")))
     first = probe.next_goal(probe.waiting())  # pantry, the first of the rotation
     assert first.description == '{"one_of": ["pantry"]}'
     done = probe.send(first)
@@ -589,7 +592,7 @@ def test_a_next_is_not_sent_where_the_robot_already_stands() -> None:
     ]
     # the rotation's next is pantry, where the robot stands: it goes on to lounge
     assert probe.next_goal(probe.waiting()).description == '{"one_of": ["lounge"]}'
-    alone = probing.Probe(link, attrs.evolve(OPTIONS, more_places=()))
+    alone = probe_runner.Probe(link, attrs.evolve(OPTIONS, more_places=()))
     alone.send(alone.next_goal(alone.waiting()))
     assert alone.next_goal(alone.waiting()).description == '{"one_of": ["pantry"]}'  # no other place
 
@@ -603,7 +606,7 @@ def test_the_race_names_d10_when_the_server_numbers_the_child_as_the_other_next(
     link = InProcessLink(config)
     cases = [case for case in CASES if case.id in ("next.runs_a_child", "next.race")]
     options = attrs.evolve(OPTIONS, known=probe_cases.KNOWN["rmf_ros2"])
-    ran, race = probing.run_cases(link, options, cases, lambda _: None)
+    ran, race = probe_runner.run_cases(link, options, cases, lambda _: None)
     assert ran.verdict is Verdict.PASS, ran  # child 2, as its NEXT asked; its plan then drew id 3
     assert race.verdict is Verdict.FAIL and race.divergence == "D10" and race.known, race
     assert "feedback ids [4]" in race.seen and any("id=3" in message for message in race.messages), race
@@ -624,12 +627,14 @@ def test_a_wait_the_deadline_cut_short_is_no_failure_of_the_server() -> None:
 
         link = InProcessLink(CONFIG, stepper=unanswering)
         options = attrs.evolve(OPTIONS, timeout=3, deadline=deadline)
-        findings = probing.run_cases(link, options, list(CASES), lambda _: None)
+        findings = probe_runner.run_cases(link, options, list(CASES), lambda _: None)
         return {finding.case.id: finding for finding in findings}
 
     cut = run(5)["next.runs_a_child"]  # its wait for the answer began with 2 s of the deadline left
     assert cut.verdict is Verdict.MISSING and not cut.absent, cut
-    assert cut.seen.startswith(probing.CUT_SHORT.format(deadline=5)) and "no answer within 2 s" in cut.seen
+    assert (
+        cut.seen.startswith(probe_runner.CUT_SHORT.format(deadline=5)) and "no answer within 2 s" in cut.seen
+    )
     whole = run(60)["next.runs_a_child"]  # waited --timeout: the server's failure
     assert whole.verdict is Verdict.FAIL and whole.absent and "within 3 s (R19.1)" in " ".join(whole.messages)
 
@@ -655,10 +660,10 @@ class _LaggingLink(InProcessLink):
             return
         self._at(self.now + round(lag * 1_000_000_000), action)
 
-    def hear_answer(self, exchange: probing.Exchange, status: Any, result: Any) -> None:
+    def hear_answer(self, exchange: probe_runner.Exchange, status: Any, result: Any) -> None:
         self._later("answer", lambda: InProcessLink.hear_answer(self, exchange, status, result))
 
-    def hear_feedback(self, exchange: probing.Exchange, feedback: Any) -> None:
+    def hear_feedback(self, exchange: probe_runner.Exchange, feedback: Any) -> None:
         self._later("feedback", lambda: InProcessLink.hear_feedback(self, exchange, feedback))
 
     def hear_status(self, status: Any) -> None:
@@ -672,7 +677,7 @@ class _LaggingLink(InProcessLink):
 
         self._later("status", deliver)
 
-    def hear_response(self, exchange: probing.Exchange, accepted: bool) -> None:
+    def hear_response(self, exchange: probe_runner.Exchange, accepted: bool) -> None:
         self._later("response", lambda: InProcessLink.hear_response(self, exchange, accepted))
 
     def hear_begin(self, begin: Any) -> None:
@@ -681,7 +686,7 @@ class _LaggingLink(InProcessLink):
 
 def _lagging_verdicts(**lags: float) -> dict[str, CaseFinding]:
     link = _LaggingLink(CONFIG, **lags)
-    findings = probing.run_cases(link, attrs.evolve(OPTIONS, deadline=1000), list(CASES), lambda _: None)
+    findings = probe_runner.run_cases(link, attrs.evolve(OPTIONS, deadline=1000), list(CASES), lambda _: None)
     return {finding.case.id: finding for finding in findings}
 
 
@@ -701,7 +706,7 @@ def test_an_answer_that_comes_after_the_timeout_is_no_failure_of_the_server() ->
     not the server's failure (a wait of the whole --timeout that hears nothing at all still is)."""
     late = _lagging_verdicts(answer=4.0)["next.runs_a_child"]
     assert late.verdict is Verdict.MISSING and not late.absent, late
-    assert late.seen.startswith(probing.LATE.format(timeout=OPTIONS.timeout)), late.seen
+    assert late.seen.startswith(probe_runner.LATE.format(timeout=OPTIONS.timeout)), late.seen
 
 
 @pytest.mark.spec("R6.4", "R19.1")
@@ -711,14 +716,14 @@ def test_feedback_that_comes_after_the_answer_and_the_timeout_is_no_failure_of_t
     case that waited for it is not run, saying which bound to raise, rather than failed."""
     late = _lagging_verdicts(feedback=4.0)[case]
     assert late.verdict is Verdict.MISSING and not late.absent, late
-    assert late.seen.startswith(probing.LATE.format(timeout=OPTIONS.timeout)), late.seen
+    assert late.seen.startswith(probe_runner.LATE.format(timeout=OPTIONS.timeout)), late.seen
 
 
 @pytest.mark.spec("R5.2", "R19.1")
 def test_a_racing_next_whose_response_comes_after_the_timeout_is_no_failure_of_the_server() -> None:
     late = _lagging_verdicts(response=7.0)["next.race"]  # past both of its waits
     assert late.verdict is Verdict.MISSING and not late.absent, late
-    assert late.seen.startswith(probing.LATE.format(timeout=OPTIONS.timeout)), late.seen
+    assert late.seen.startswith(probe_runner.LATE.format(timeout=OPTIONS.timeout)), late.seen
 
 
 def test_responses_that_all_come_after_the_timeout_fail_no_case_not_even_the_last() -> None:
@@ -726,11 +731,13 @@ def test_responses_that_all_come_after_the_timeout_fail_no_case_not_even_the_las
     which bound to raise, the last ones too (the run's end waits for what is still on its way)."""
     link = _LaggingLink(CONFIG, response=4.0)
     options = attrs.evolve(OPTIONS, deadline=1000)
-    findings = probing.conclude(probing.run_cases(link, options, list(CASES), lambda _: None), "", options,
-                                lambda _: None)[1]  # fmt: skip
+    ran = probe_runner.run_cases(link, options, list(CASES), lambda _: None)
+    findings = probe_runner.conclude(ran, "", options, lambda _: None)[1]
     assert [finding for finding in findings if finding.verdict is Verdict.FAIL] == []
     late = [
-        finding.case.id for finding in findings if finding.seen.startswith(probing.LATE.format(timeout=3))
+        finding.case.id
+        for finding in findings
+        if finding.seen.startswith(probe_runner.LATE.format(timeout=3))
     ]
     assert "begin.seq_wrap" in late and "finished.finished_after" in late, late
 
@@ -739,7 +746,7 @@ def test_responses_that_all_come_after_the_timeout_fail_no_case_not_even_the_las
 def test_a_begin_that_comes_after_the_timeout_is_no_failure_of_the_server() -> None:
     waiting = _lagging_verdicts(begin=5.0)["status.waiting"]
     assert waiting.verdict is Verdict.MISSING, waiting
-    assert waiting.seen.startswith(probing.LATE.format(timeout=OPTIONS.timeout)), waiting.seen
+    assert waiting.seen.startswith(probe_runner.LATE.format(timeout=OPTIONS.timeout)), waiting.seen
     assert _lagging_verdicts(begin=1.0)["status.waiting"].verdict is Verdict.PASS
 
 
@@ -763,12 +770,12 @@ def test_a_late_subscriber_that_hears_the_status_after_the_timeout_is_no_failure
     options = attrs.evolve(OPTIONS, deadline=1000)
     for after, verdict in ((1.0, Verdict.PASS), (5.0, Verdict.MISSING), (None, Verdict.FAIL)):
         link = _LateSubscriberLink(after)
-        findings = probing.run_cases(link, options, list(CASES), lambda _: None)
-        _, findings = probing.conclude(findings, "", options, lambda _: None)
+        findings = probe_runner.run_cases(link, options, list(CASES), lambda _: None)
+        _, findings = probe_runner.conclude(findings, "", options, lambda _: None)
         latched = {finding.case.id: finding for finding in findings}["status.latched"]
         assert latched.verdict is verdict, (after, latched)
         if verdict is Verdict.MISSING:
-            assert latched.seen.startswith(probing.LATE.format(timeout=OPTIONS.timeout)), latched.seen
+            assert latched.seen.startswith(probe_runner.LATE.format(timeout=OPTIONS.timeout)), latched.seen
 
 
 #: Channels lagging one another by up to 3 s, each mix once: children of 3 to 6 s, longer than the lag
@@ -795,8 +802,8 @@ def test_over_a_link_whose_channels_lag_every_case_passes_and_the_judge_finds_no
     trace = TraceWriter(None, fleet="tinyRobot", robot="tinyRobot1", keep=True, tap="client")
     link = _LaggingLink(config, trace, **lags)  # the trace: the records as the probe hears them, lagged
     options = attrs.evolve(OPTIONS, timeout=10, deadline=5000)
-    findings = probing.run_cases(link, options, list(CASES), lambda _: None)
-    code, findings = probing.conclude(findings, trace.text(), options, lambda _: None)
+    findings = probe_runner.run_cases(link, options, list(CASES), lambda _: None)
+    code, findings = probe_runner.conclude(findings, trace.text(), options, lambda _: None)
     assert {finding.case.id: finding.verdict for finding in findings} == dict.fromkeys(
         (case.id for case in CASES), Verdict.PASS
     )
@@ -815,7 +822,9 @@ def test_a_runs_inactive_status_the_next_run_overwrote_on_its_way_is_not_the_ser
     children = {"go_to_place": CategorySpec(duration=3.0, report_every=0.25)}
     config = attrs.evolve(CONFIG, categories=children)  # a new run 0.3 s after each end
     link = _LaggingLink(config, keep_last=True, status=1.0)
-    findings = probing.run_cases(link, attrs.evolve(OPTIONS, timeout=10, deadline=5000), list(CASES), print)
+    findings = probe_runner.run_cases(
+        link, attrs.evolve(OPTIONS, timeout=10, deadline=5000), list(CASES), print
+    )
     verdicts = {finding.case.id: finding for finding in findings}
     ended = verdicts["finished.ends_the_run"]
     assert ended.verdict is Verdict.MISSING and "the status topic keeps one message" in ended.seen, ended

@@ -2,7 +2,7 @@
 
 Each recording's client goals, in their order, drive the machine configured as ``dynevent serve
 --compatibility rmf_ros2`` serves the lab's site (its places), the site's own events read back
-from what the adapter published (:mod:`dynevent.conformance.replay`).  What the machine says is set
+from what the adapter published (:mod:`dynevent.conformance.judge.replay`).  What the machine says is set
 beside what the adapter said, point by point: each goal's response and answer, the status
 sequence, each goal's feedback and log tiers.  Every point where they part is listed here with the
 D-number that explains it, and the ids the site's children took from the task's counter are
@@ -23,8 +23,8 @@ pytest.importorskip("rosbags", reason="the bags extra (rosbags) reads the record
 
 from dynevent.bags.reader import bag_records
 from dynevent.conformance.judge.divergences import label_difference
+from dynevent.conformance.judge.replay import Comparison, compare_recording
 from dynevent.conformance.judge.trace import read_trace, step_records
-from dynevent.conformance.replay import Comparison, compare_recording
 from dynevent.errors import TraceError
 from dynevent.server import inputs as ins
 from dynevent.server import machine

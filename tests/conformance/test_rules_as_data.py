@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 
 from dynevent.conformance import vectors
-from dynevent.conformance.driver import state_from_json
 from dynevent.conformance.records import config_from_json, input_from_json, output_to_json
+from dynevent.conformance.vectors.driver import state_from_json
 from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.wire.messages import Goal, Result

@@ -1,6 +1,6 @@
 """The conformance vectors: well-formed, covering every rule, passing, and catching a broken implementation.
 
-The vectors (``src/dynevent/conformance/*.json``) are written from docs/spec.md
+The vectors (``src/dynevent/conformance/vectors/*.json``) are written from docs/spec.md
 rule by rule; these tests check the files against their JSON Schema, that
 every numbered rule is cited by at least one vector, that ``dynevent vectors``
 passes against dynevent in process and over the driver protocol, and that it
@@ -38,10 +38,10 @@ SPEC = (ROOT / "docs" / "spec.md").read_text(encoding="utf-8")
 #: (tests/conformance/test_clients.py), not a server's, so no server vector cites them.
 CLIENT_RULES = re.findall(r"\*\*(R22\.\d+)\*\*", SPEC)
 RULES = [rule for rule in re.findall(r"\*\*(R\d+\.\d+)\*\*", SPEC) if rule not in CLIENT_RULES]
-CONFORMANCE = resources.files("dynevent") / "conformance"
+VECTORS_FOLDER = resources.files("dynevent") / "conformance" / "vectors"
 VECTOR_FILES = sorted(
     entry.name
-    for entry in CONFORMANCE.iterdir()
+    for entry in VECTORS_FOLDER.iterdir()
     if entry.name.endswith(".json") and not entry.name.endswith(".schema.json")
 )
 PYTHON = sys.executable
@@ -68,7 +68,7 @@ def _dynevent(*args: str) -> subprocess.CompletedProcess[str]:
 
 @pytest.fixture(scope="module")
 def schema() -> Any:
-    return json.loads((CONFORMANCE / "vector.schema.json").read_text(encoding="utf-8"))
+    return json.loads((VECTORS_FOLDER / "vector.schema.json").read_text(encoding="utf-8"))
 
 
 @pytest.fixture(scope="module")
@@ -86,7 +86,7 @@ def test_the_schema_is_a_valid_draft_2020_12_schema(schema: Any) -> None:
 
 @pytest.mark.parametrize("name", VECTOR_FILES)
 def test_vector_file_validates_against_the_schema(schema: Any, name: str) -> None:
-    data = json.loads((CONFORMANCE / name).read_text(encoding="utf-8"))
+    data = json.loads((VECTORS_FOLDER / name).read_text(encoding="utf-8"))
     errors = sorted(
         jsonschema.Draft202012Validator(schema).iter_errors(data), key=lambda error: error.json_path
     )
@@ -94,7 +94,7 @@ def test_vector_file_validates_against_the_schema(schema: Any, name: str) -> Non
 
 
 def test_the_schema_refuses_a_malformed_vector(schema: Any) -> None:
-    data = json.loads((CONFORMANCE / "03-begin.json").read_text(encoding="utf-8"))
+    data = json.loads((VECTORS_FOLDER / "03-begin.json").read_text(encoding="utf-8"))
     first = data["vectors"][0]
     del first["steps"][0]["expect"][0]["message"]["fleet"]
     first["steps"][0]["input"]["now"] = 1.5
@@ -286,7 +286,7 @@ def test_cli_passes_in_process(shipped: list[vectors.Vector]) -> None:
 
 
 def test_cli_passes_over_the_driver_protocol(shipped: list[vectors.Vector]) -> None:
-    result = _dynevent("--impl", f"{PYTHON} -m dynevent.conformance.driver")
+    result = _dynevent("--impl", f"{PYTHON} -m dynevent.conformance.vectors.driver")
     assert result.returncode == 0, result.stdout + result.stderr
     assert SUMMARY_LINE.findall(result.stdout) == [(str(len(shipped)), "0")]
 
@@ -296,7 +296,9 @@ def test_a_broken_implementation_fails_with_a_diff() -> None:
     assert result.returncode == 1, result.stdout + result.stderr
     assert "broken_driver" in result.stdout.splitlines()[0]
     assert re.search(r"^R9\.3\s+(\d+)\s+0\s+\1  FAIL$", result.stdout, re.MULTILINE)
-    block = result.stdout.split("FAIL cancel-keeps-the-robot-running (conformance/09-cancel.json)", 1)[1]
+    block = result.stdout.split(
+        "FAIL cancel-keeps-the-robot-running (conformance/vectors/09-cancel.json)", 1
+    )[1]
     assert "step 5: outputs differ" in block
     assert '"type":"goal_started"' in block
     # the outputs too many, each marked alone by its path; nothing expected is missing
@@ -359,7 +361,7 @@ def _write(tmp_path: Path, name: str, content: str) -> Path:
 
 
 def test_a_given_file_is_run(tmp_path: Path) -> None:
-    example = json.loads((CONFORMANCE / "03-begin.json").read_text(encoding="utf-8"))
+    example = json.loads((VECTORS_FOLDER / "03-begin.json").read_text(encoding="utf-8"))
     example["vectors"] = example["vectors"][:1]
     path = _write(tmp_path, "one.json", json.dumps(example))
     result = _dynevent(str(path))
@@ -368,7 +370,7 @@ def test_a_given_file_is_run(tmp_path: Path) -> None:
 
 
 def test_a_wrong_expectation_in_a_given_file_fails(tmp_path: Path) -> None:
-    example = json.loads((CONFORMANCE / "03-begin.json").read_text(encoding="utf-8"))
+    example = json.loads((VECTORS_FOLDER / "03-begin.json").read_text(encoding="utf-8"))
     example["vectors"] = example["vectors"][:1]
     example["vectors"][0]["steps"][0]["view"]["seq"] = 2
     path = _write(tmp_path, "wrong.json", json.dumps(example))
@@ -407,7 +409,7 @@ def test_a_malformed_vector_file_is_a_located_usage_error(tmp_path: Path, conten
 
 
 def _with_a_typo_in_an_expectation(tmp_path: Path) -> Path:
-    example = json.loads((CONFORMANCE / "03-begin.json").read_text(encoding="utf-8"))
+    example = json.loads((VECTORS_FOLDER / "03-begin.json").read_text(encoding="utf-8"))
     example["vectors"] = example["vectors"][:1]
     example["vectors"][0]["steps"][0]["expect"][0]["type"] = "publish_stauts"
     return _write(tmp_path, "typo.json", json.dumps(example))
@@ -495,12 +497,12 @@ STALL = "import sys, time; sys.stdout.write('{\"ok'); sys.stdout.flush(); time.s
             f"did not answer within {vectors.START_TIMEOUT:g} s",
         ),
         (
-            f"{sys.executable} -m dynevent.conformance.driver",
+            f"{sys.executable} -m dynevent.conformance.vectors.driver",
             ["--timeout", "nan"],
             "--timeout: expected seconds",
         ),
         (
-            f"{sys.executable} -m dynevent.conformance.driver",
+            f"{sys.executable} -m dynevent.conformance.vectors.driver",
             ["--timeout", "-1"],
             "--timeout: expected seconds",
         ),

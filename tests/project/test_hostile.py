@@ -24,9 +24,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from dynevent import descriptions
-from dynevent.conformance.driver import Driver
 from dynevent.conformance.records import InvalidRecord, config_from_json, input_from_json, output_from_json
 from dynevent.conformance.vectors import InvalidVector, parse_vector_file
+from dynevent.conformance.vectors.driver import Driver
 from dynevent.errors import (
     DyneventError,
     InvalidDescription,

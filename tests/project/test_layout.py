@@ -123,6 +123,46 @@ def test_imports_go_one_way(module: str, path: Path) -> None:
     assert not wrong, f"{module} imports {wrong}: {own} may import only {sorted(ALLOWED[own])}"
 
 
+#: conformance's three folders and what each may import of the others: the vectors and the judge
+#: neither each other, the probe both (it runs a driver through the vectors' runner and has its trace
+#: judged).  The modules beside the folders (records, received, explain: "") import none of the three.
+CONFORMANCE_PARTS: dict[str, frozenset[str]] = {
+    "vectors": frozenset(),
+    "judge": frozenset(),
+    "probe": frozenset({"vectors", "judge"}),
+    "": frozenset(),
+}
+
+
+def _conformance_part(module: str) -> str:
+    """The folder of conformance a module (or a name in one) lies in; ``""`` beside the folders."""
+    parts = module.split(".")
+    return parts[2] if len(parts) > 2 and parts[2] in CONFORMANCE_PARTS else ""
+
+
+CONFORMANCE = [(module, path) for module, path in _modules() if _part(module) == "conformance"]
+
+
+@pytest.mark.parametrize(("module", "path"), CONFORMANCE, ids=[module for module, _ in CONFORMANCE])
+def test_conformances_parts_import_one_way(module: str, path: Path) -> None:
+    own = _conformance_part(module)
+    allowed = CONFORMANCE_PARTS[own] | {own, ""}
+    wrong = sorted(
+        name
+        for name in _imports(module, path)
+        if _part(name) == "conformance" and _conformance_part(name) not in allowed
+    )
+    assert not wrong, f"{module} imports {wrong}: conformance/{own} may import only {sorted(allowed)}"
+
+
+def test_conformance_has_its_three_folders_and_the_reader_tells_them_apart() -> None:
+    folders = {path.parent.name for module, path in CONFORMANCE if path.name == "__init__.py"}
+    assert folders == {"conformance", "vectors", "probe", "judge"}
+    assert _conformance_part("dynevent.conformance.probe.runner.Link") == "probe"
+    assert _conformance_part("dynevent.conformance.vectors") == "vectors"
+    assert _conformance_part("dynevent.conformance.records") == ""
+
+
 def test_the_reader_sees_a_wrong_way_import(tmp_path: Path) -> None:
     """The check is not blind: a lazy import of the tools inside the machine is seen."""
     path = tmp_path / "machine.py"

@@ -26,11 +26,11 @@ NOT_THE_PROTOCOL: dict[tuple[str, str], str] = {
     ("client/outputs.py", "skipped"): "OutcomeKind's own value",
     ("client/outputs.py", "failed"): "OutcomeKind's own value",
     ("client/outputs.py", "error"): "OutcomeKind's own value",
-    ("conformance/driver.py", "error"): "the driver protocol's JSON key",
-    ("conformance/runner.py", "error"): "the driver protocol's JSON key",
-    ("conformance/report.py", "failed"): "a report's tally and JUnit attribute",
-    ("conformance/report.py", "skipped"): "JUnit's element",
-    ("conformance/probe_cases.py", "skipped"): "JUnit's element",
+    ("conformance/vectors/driver.py", "error"): "the driver protocol's JSON key",
+    ("conformance/vectors/runner.py", "error"): "the driver protocol's JSON key",
+    ("conformance/vectors/report.py", "failed"): "a report's tally and JUnit attribute",
+    ("conformance/vectors/report.py", "skipped"): "JUnit's element",
+    ("conformance/probe/cases.py", "skipped"): "JUnit's element",
     ("server/resync.py", "queued"): "a function's name in __all__",
 }
 

@@ -106,11 +106,11 @@ ELSEWHERE = {
     "judges it on every record",
     **{
         rule: "a rule on what a client sends: a server refuses such a goal by R4 whoever sent it, and "
-        "`conformance.clients.ClientJudge` (`dynevent check`) names the client that breaks it"
+        "`conformance.judge.clients.ClientJudge` (`dynevent check`) names the client that breaks it"
         for rule in ("R22.2", "R22.3", "R22.4", "R22.5", "R22.6")
     },
     "R22.8": "a rule on clients: no server can make a client end the run it drove, and "
-    "`conformance.clients.ClientJudge.close` (`dynevent check`) names the client that left it open",
+    "`conformance.judge.clients.ClientJudge.close` (`dynevent check`) names the client that left it open",
 }
 
 
@@ -178,7 +178,7 @@ def rule_index() -> str:
         "  every rule's words, are left out.  A rule no place of the library cites says where it is",
         "  carried out instead (the list `ELSEWHERE` of the test).",
         "- **tests**: the tests' `@pytest.mark.spec(...)` marks; **vectors**: the conformance vectors'",
-        "  `rules` (src/dynevent/conformance/*.json).",
+        "  `rules` (src/dynevent/conformance/vectors/*.json).",
         "",
         "| rule | carried out in | tests | vectors |",
         "|---|---|---|---|",

@@ -20,7 +20,7 @@ from ros_support import Child, child_env, finish
 
 from dynevent.conformance.judge import check_trace
 from dynevent.conformance.judge.trace import Finding
-from dynevent.conformance.probe_cases import CASES
+from dynevent.conformance.probe.cases import CASES
 from dynevent.ros.probe import VOLATILE, RosLink
 from probe_expected import BROKEN, RMF_ROS2_FAILS, UNSEEN_BY_CASES
 

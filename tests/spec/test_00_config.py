@@ -1,6 +1,6 @@
 """§0. Model: the tests of the rules of docs/spec.md §0.
 
-The section's conformance vectors are src/dynevent/conformance/00-config.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/00-config.json.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """§2. Phase and status: the tests of the rules of docs/spec.md §2.
 
-The section's conformance vectors are src/dynevent/conformance/02-status.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/02-status.json.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """§3. Begin: the tests of the rules of docs/spec.md §3.
 
-The section's conformance vectors are src/dynevent/conformance/03-begin.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/03-begin.json.
 """
 
 from __future__ import annotations

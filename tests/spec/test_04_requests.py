@@ -1,6 +1,6 @@
 """§4. Goal requests: the tests of the rules of docs/spec.md §4.
 
-The section's conformance vectors are src/dynevent/conformance/04-requests.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/04-requests.json.
 
 Every reject reason, its values and the check order.
 """

@@ -1,6 +1,6 @@
 """§5. Goal start: the tests of the rules of docs/spec.md §5.
 
-The section's conformance vectors are src/dynevent/conformance/05-start.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/05-start.json.
 """
 
 from __future__ import annotations

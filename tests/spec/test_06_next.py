@@ -1,6 +1,6 @@
 """§6. NEXT: the tests of the rules of docs/spec.md §6.
 
-The section's conformance vectors are src/dynevent/conformance/06-next.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/06-next.json.
 """
 
 from __future__ import annotations

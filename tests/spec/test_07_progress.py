@@ -1,6 +1,6 @@
 """§7. Child progress and logs: the tests of the rules of docs/spec.md §7.
 
-The section's conformance vectors are src/dynevent/conformance/07-progress.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/07-progress.json.
 """
 
 from __future__ import annotations

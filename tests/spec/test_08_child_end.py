@@ -1,6 +1,6 @@
 """§8. Child end: the tests of the rules of docs/spec.md §8.
 
-The section's conformance vectors are src/dynevent/conformance/08-child-end.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/08-child-end.json.
 """
 
 from __future__ import annotations

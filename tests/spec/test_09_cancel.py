@@ -1,6 +1,6 @@
 """§9. CANCEL: the tests of the rules of docs/spec.md §9.
 
-The section's conformance vectors are src/dynevent/conformance/09-cancel.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/09-cancel.json.
 """
 
 from __future__ import annotations

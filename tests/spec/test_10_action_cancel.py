@@ -1,6 +1,6 @@
 """§10. Action-level cancel: the tests of the rules of docs/spec.md §10.
 
-The section's conformance vectors are src/dynevent/conformance/10-action-cancel.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/10-action-cancel.json.
 """
 
 from __future__ import annotations

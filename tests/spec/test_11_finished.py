@@ -1,6 +1,6 @@
 """§11. FINISHED and the end of a run: the tests of the rules of docs/spec.md §11.
 
-The section's conformance vectors are src/dynevent/conformance/11-finished.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/11-finished.json.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """§12. Stubbornness: the tests of the rules of docs/spec.md §12.
 
-The section's conformance vectors are src/dynevent/conformance/12-stubborn.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/12-stubborn.json.
 
 Stubbornness (begin, clamp, refresh ticks, re-anchoring, end).
 """

@@ -1,6 +1,6 @@
 """§13. Task cancel and kill: the tests of the rules of docs/spec.md §13.
 
-The section's conformance vectors are src/dynevent/conformance/13-task-signal.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/13-task-signal.json.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """§14. Interruption: the tests of the rules of docs/spec.md §14.
 
-The section's conformance vectors are src/dynevent/conformance/14-interrupt.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/14-interrupt.json.
 """
 
 from __future__ import annotations

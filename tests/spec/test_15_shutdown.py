@@ -1,6 +1,6 @@
 """§15. Shutdown: the tests of the rules of docs/spec.md §15.
 
-The section's conformance vectors are src/dynevent/conformance/15-shutdown.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/15-shutdown.json.
 """
 
 from __future__ import annotations

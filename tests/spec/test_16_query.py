@@ -1,6 +1,6 @@
 """§16. Description query: the tests of the rules of docs/spec.md §16.
 
-The section's conformance vectors are src/dynevent/conformance/16-query.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/16-query.json.
 """
 
 from __future__ import annotations

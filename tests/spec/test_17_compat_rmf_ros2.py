@@ -1,6 +1,6 @@
 """§17. rmf_ros2 compatibility: the tests of the rules of docs/spec.md §17.
 
-The section's conformance vectors are src/dynevent/conformance/compat-rmf_ros2.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/compat-rmf_ros2.json.
 """
 
 from __future__ import annotations

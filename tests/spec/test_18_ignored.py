@@ -1,6 +1,6 @@
 """§18. Inputs without effect: the tests of the rules of docs/spec.md §18.
 
-The section's conformance vectors are src/dynevent/conformance/18-ignored.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/18-ignored.json.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """§19. Invariants: the tests of the rules of docs/spec.md §19.
 
-The section's conformance vectors are src/dynevent/conformance/19-invariants.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/19-invariants.json.
 
 Properties of the machine over random input sequences, and the stateful kit of dynevent.testing.
 
@@ -25,9 +25,9 @@ from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import run_state_machine_as_test
 
-from dynevent.conformance.driver import Driver
 from dynevent.conformance.records import config_from_json, output_to_json
 from dynevent.conformance.vectors import InProcessImplementation
+from dynevent.conformance.vectors.driver import Driver
 from dynevent.errors import InvalidSnapshot
 from dynevent.server import inputs as ins
 from dynevent.server import machine, resync, snapshot

@@ -1,6 +1,6 @@
 """§21. Restart: the tests of the rules of docs/spec.md §21.
 
-The section's conformance vectors are src/dynevent/conformance/21-restart.json.
+The section's conformance vectors are src/dynevent/conformance/vectors/21-restart.json.
 
 A state restored after its process ended is restarted: nothing the dead process held blocks.
 """

@@ -222,7 +222,7 @@ def _without_reader(args: list[str], buffered: bool) -> tuple[int, str]:
 
 def test_the_driver_stops_quietly_when_its_runner_goes_away() -> None:
     process = subprocess.Popen(
-        [sys.executable, "-m", "dynevent.conformance.driver"],
+        [sys.executable, "-m", "dynevent.conformance.vectors.driver"],
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,

@@ -211,7 +211,7 @@ def check_bag(path: str | Path, *, compatibility: Compatibility | str = Compatib
 
 def bag_records(path: str | Path) -> dict[tuple[str, str], list[Record]]:
     """Each robot's records in the bag at ``path``, by (fleet, robot), in the order the server
-    made them (as :func:`check_bag` judges them; what :mod:`dynevent.conformance.replay` replays).
+    made them (as :func:`check_bag` judges them; what :mod:`dynevent.conformance.judge.replay` replays).
     Raises as :func:`check_bag` does."""
     robots = _read(path, Compatibility.STANDARD, keep=True)[1]
     return {key: robot.kept for key, robot in sorted(robots.items())}

@@ -1,4 +1,4 @@
-"""The probe's link over DDS (:class:`RosLink`): the probe's cases (:mod:`dynevent.conformance.probing`)
+"""The probe's link over DDS (:class:`RosLink`): the probe's cases (:mod:`dynevent.conformance.probe.runner`)
 carried to a live Dynamic Event server through its action, status and begin topics, with nothing of
 the server's process imported.  ``dynevent probe`` (:mod:`dynevent.tools.live.probe`) runs them."""
 
@@ -15,7 +15,7 @@ from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSPolicyKind, QoSProfile, ReliabilityPolicy
 
 from dynevent.conformance.judge.trace import TraceWriter
-from dynevent.conformance.probing import Exchange, Link
+from dynevent.conformance.probe.runner import Exchange, Link
 from dynevent.errors import InvalidMessage
 from dynevent.ros import convert
 from dynevent.ros.client import introspect
@@ -48,7 +48,7 @@ _READER_DEPTH = 100
 
 
 class RosLink(Link):
-    """The probe's :class:`~dynevent.conformance.probing.Link` over DDS: the robot's status and begin
+    """The probe's :class:`~dynevent.conformance.probe.runner.Link` over DDS: the robot's status and begin
     topics, and an action client without a client machine."""
 
     def __init__(self, node: Any, fleet: str, robot: str, trace: TraceWriter | None = None) -> None:
@@ -73,7 +73,7 @@ class RosLink(Link):
 
     def _incompatible(self, name: str, info: Any) -> None:
         """A writer on the topic offers a QoS the probe's transient-local reader cannot match: said
-        (:attr:`~dynevent.conformance.probing.Link.offered`), and, for a volatile writer, a volatile
+        (:attr:`~dynevent.conformance.probe.runner.Link.offered`), and, for a volatile writer, a volatile
         reader too, so that what it publishes from now on is still heard."""
         policy = QoSPolicyKind(info.last_policy_kind)
         if name in self.offered:

@@ -6,7 +6,7 @@ adapter implements to run children (:class:`ChildEvents`) and to hold its place 
 
 A binding gives each its stepper and clock: the ROS binding's server
 (:class:`dynevent.ros.server.DynamicEventServer`, the node's clock) and the probe's in-process
-server (:mod:`dynevent.conformance.in_process`, simulated time) run children through the same
+server (:mod:`dynevent.conformance.probe.in_process`, simulated time) run children through the same
 handle.
 """
 

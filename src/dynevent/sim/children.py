@@ -1,5 +1,5 @@
 """What a simulated child does over time, whatever carries it: ``dynevent serve``'s node timers, or
-the probe's in-process server on simulated time (:mod:`dynevent.conformance.in_process`).
+the probe's in-process server on simulated time (:mod:`dynevent.conformance.probe.in_process`).
 
 A :class:`SimulatedChild` is the plan of one child (:func:`~dynevent.sim.config.plan`) and where it
 has got to; :meth:`SimulatedChild.report` is one report, made ``elapsed`` seconds after the child

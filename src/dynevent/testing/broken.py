@@ -5,7 +5,7 @@ A defect is either a change to what the machine decides (a request check that le
 should refuse, a seq that skips), made only while the broken server steps, or a rewrite of the
 outputs the machine asks the adapter to carry out (an answer dropped, a status or feedback
 changed).  :func:`broken_stepper` is the in-process server of a defect, for
-:class:`dynevent.conformance.in_process.InProcessLink`; the test suite's ``broken_serve.py`` puts the
+:class:`dynevent.conformance.probe.in_process.InProcessLink`; the test suite's ``broken_serve.py`` puts the
 same defects in ``dynevent serve`` over DDS.
 """
 

@@ -5,7 +5,7 @@ The kit has three parts:
 - :class:`ServerUnderTest`, the small adapter interface an implementation is
   wrapped in (``reset``, ``apply``, ``view``), with :class:`DyneventServer`
   (dynevent's own machine) and :class:`ImplementationServer` (any program or
-  object speaking the conformance driver protocol of :mod:`dynevent.conformance.driver`);
+  object speaking the conformance driver protocol of :mod:`dynevent.conformance.vectors.driver`);
 - :class:`Observer`, a small reference model of the protocol state (phase,
   seq, status, current id, the goals and their ROS 2 lifecycle) that is
   derived only from the inputs sent and the outputs received, never from the

@@ -507,7 +507,7 @@ def _check_writable(flag: str, path: str | None, *, directory: bool = False) -> 
 
 
 def _probe(args: argparse.Namespace) -> int:
-    from dynevent.conformance import probe_cases
+    from dynevent.conformance.probe import cases as probe_cases
     from dynevent.errors import DyneventError, ProbeError
 
     def check() -> list[probe_cases.Case]:
@@ -561,7 +561,7 @@ def _probe_in_process(
     """``dynevent probe --loopback`` (dynevent's own machine as ``dynevent serve`` would run the robot:
     ``--config``, ``--compatibility``, ``--first-seq``) or ``--impl CMD`` (an implementation behind the
     driver protocol, configured the same), on simulated time, with no ROS."""
-    from dynevent.conformance import in_process
+    from dynevent.conformance.probe import in_process
     from dynevent.errors import DyneventError, ProbeError
 
     try:
@@ -587,7 +587,8 @@ def _in_process_options(args: argparse.Namespace, options: Callable[[Any], Any])
     period, the configured machine's."""
     import attrs
 
-    from dynevent.conformance import in_process, probing
+    from dynevent.conformance.probe import in_process
+    from dynevent.conformance.probe import runner as probe_runner
     from dynevent.sim.config import load_config, machine_config
 
     first_seq = args.first_seq
@@ -597,7 +598,9 @@ def _in_process_options(args: argparse.Namespace, options: Callable[[Any], Any])
         args.config, fleet=args.fleet, robots=[args.robot], compatibility=args.compatibility,
         first_seq=first_seq,
     )  # fmt: skip
-    chosen = attrs.evolve(options(probing.Options), stubborn_minimum=machine_config(config).stubborn_minimum)
+    chosen = attrs.evolve(
+        options(probe_runner.Options), stubborn_minimum=machine_config(config).stubborn_minimum
+    )
     if chosen.place is None:
         named = [str(place) for place in config.places or () if place is not None]
         if config.places is None:
@@ -609,8 +612,8 @@ def _in_process_options(args: argparse.Namespace, options: Callable[[Any], Any])
 
 def _probe_implementation(args: argparse.Namespace, chosen: Any, cases: Any, config: Any) -> int:
     """``--impl CMD``: the driver started (given at least the runner's START_TIMEOUT), probed, closed."""
-    from dynevent.conformance import in_process
-    from dynevent.conformance.runner import MAX_TIMEOUT, ExternalImplementation
+    from dynevent.conformance.probe import in_process
+    from dynevent.conformance.vectors.runner import MAX_TIMEOUT, ExternalImplementation
     from dynevent.interrupts import interruptible
 
     implementation = ExternalImplementation(args.impl, timeout=min(args.timeout, MAX_TIMEOUT))

@@ -15,6 +15,10 @@ Traces (docs/trace-format.md) are read and written by :mod:`.trace`; :func:`chec
 one; recordings are read into records by :mod:`dynevent.bags`.  ``dynevent check``, ``dynevent
 probe``, serve's judgement of its clients and the test kit all judge through here, so a scripted
 verdict and a passive one can never disagree.
+
+Beside the judges: :mod:`.replay` drives the machine with a recording's inputs and sets what it says
+beside what the server said (:mod:`.divergences` labels the judge's findings on rmf_ros2 with it),
+and :mod:`.clients` judges a server's clients (section 22) for ``dynevent serve``.
 """
 
 from __future__ import annotations

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import re
 
+from dynevent.conformance.judge.replay import Difference
 from dynevent.conformance.judge.trace import Finding
-from dynevent.conformance.replay import Difference
 from dynevent.wire.vocab import Status
 
 __all__ = ["OPEN_ITEMS", "label", "label_difference"]
@@ -32,7 +32,7 @@ OPEN_ITEMS: frozenset[str] = frozenset(
         "task_signal_unseen",
         # a client records its CANCEL's request after sending it, and the server may act on it first:
         # check reads the status of the cancelled child's end before the CANCEL, as the child still
-        # running (the replay pulls such a CANCEL ahead, dynevent.conformance.replay.CLIENT_LAG)
+        # running (the replay pulls such a CANCEL ahead, dynevent.conformance.judge.replay.CLIENT_LAG)
         "cancel_seen_late",
         # the same for a FINISHED: check reads the run's INACTIVE, which the FINISHED caused, before the
         # FINISHED, which then looks sent to an ended run
@@ -120,7 +120,7 @@ def label(finding: Finding) -> str:
 
 def label_difference(difference: Difference) -> tuple[str, ...]:
     """The D-numbers a difference between the deployed server and serve's rmf_ros2 mode, replayed
-    through the same recording (:func:`dynevent.conformance.replay.compare_recording`), stands for;
+    through the same recording (:func:`dynevent.conformance.judge.replay.compare_recording`), stands for;
     ``("?",)`` for one no divergence explains."""
     recorded, replayed = " ".join(difference.recorded), " ".join(difference.replayed)
     found: list[str] = []

@@ -1,4 +1,4 @@
-"""``dynevent probe`` over ROS 2: the probe's cases (:mod:`dynevent.conformance.probing`) run against
+"""``dynevent probe`` over ROS 2: the probe's cases (:mod:`dynevent.conformance.probe.runner`) run against
 a live server through the ROS binding's link (:class:`dynevent.ros.probe.RosLink`), with a progress
 line on a terminal, the findings printed and the reports written; Ctrl-C or SIGTERM stops it, with
 the findings of the cases that ended."""
@@ -7,10 +7,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from dynevent.conformance import probe_cases, probing
 from dynevent.conformance.judge.trace import TraceWriter
-from dynevent.conformance.probe_cases import Case
-from dynevent.conformance.probing import Options
+from dynevent.conformance.probe import cases as probe_cases
+from dynevent.conformance.probe import runner as probe_runner
+from dynevent.conformance.probe.cases import Case
+from dynevent.conformance.probe.runner import Options
 from dynevent.errors import FileError, ProbeError
 from dynevent.interrupts import Interrupted, interruptible
 from dynevent.ros.graph import no_server_text
@@ -41,8 +42,8 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
     if ran is None:
         return probe_cases.EXIT_USAGE
     findings, took = ran
-    status = probing.conclude(findings, trace.text(), options, say)[0]
-    say(probing.took(took, options))  # its bound, checkable
+    status = probe_runner.conclude(findings, trace.text(), options, say)[0]
+    say(probe_runner.took(took, options))  # its bound, checkable
     return status
 
 
@@ -79,7 +80,7 @@ def run(
                 say(no_server_text(session.node, options.fleet, options.robot, options.server_wait))
                 return None
             began = link.clock()
-            probing.run_cases(link, options, cases, say, progress, findings)
+            probe_runner.run_cases(link, options, cases, say, progress, findings)
         return findings, link.clock() - began
     except Interrupted as stop:
         raise ProbeInterrupted(stop.signal, findings) from None

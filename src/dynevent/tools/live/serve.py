@@ -30,7 +30,7 @@ from collections.abc import Callable, Sequence
 import attrs
 
 from dynevent import files
-from dynevent.conformance.clients import ONE_CLIENT, ClientFinding, ClientJudge
+from dynevent.conformance.judge.clients import ONE_CLIENT, ClientFinding, ClientJudge
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.errors import (
     FileError,

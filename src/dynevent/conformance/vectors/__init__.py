@@ -3,16 +3,17 @@
 A vector is a scripted exchange written from docs/spec.md: a server
 configuration, an initial state, and steps, each an input and the exact
 outputs the spec requires in answer (and optionally the phase, seq and current
-id after it).  The vectors ship with the package (``dynevent/conformance/``,
+id after it).  The vectors ship with the package (in this folder,
+``dynevent/conformance/vectors/``,
 one JSON file per spec section, with the JSON Schema ``vector.schema.json``)
 and run against dynevent in process or against any program that speaks the
-driver protocol of :mod:`dynevent.conformance.driver`.
+driver protocol of :mod:`dynevent.conformance.vectors.driver`.
 
 This module is the one to import; the work is done in four parts:
-:mod:`~dynevent.conformance.files` (the vector model and its files),
-:mod:`~dynevent.conformance.diff` (matching, and where a mismatch lies),
-:mod:`~dynevent.conformance.runner` (implementations and running, robust to a
-misbehaving driver) and :mod:`~dynevent.conformance.report` (text, JSON, JUnit).
+:mod:`~dynevent.conformance.vectors.files` (the vector model and its files),
+:mod:`~dynevent.conformance.vectors.diff` (matching, and where a mismatch lies),
+:mod:`~dynevent.conformance.vectors.runner` (implementations and running, robust to a
+misbehaving driver) and :mod:`~dynevent.conformance.vectors.report` (text, JSON, JUnit).
 
 Matching is exact, except that the string ``"*"`` in an expected output
 matches any string (for sentences whose wording the spec leaves open).
@@ -20,7 +21,7 @@ matches any string (for sentences whose wording the spec leaves open).
 
 from __future__ import annotations
 
-from dynevent.conformance.diff import (
+from dynevent.conformance.vectors.diff import (
     MAX_DIFFERENCES,
     MAX_KEPT_VALUE,
     WILDCARD,
@@ -29,7 +30,7 @@ from dynevent.conformance.diff import (
     differences,
     matches,
 )
-from dynevent.conformance.files import (
+from dynevent.conformance.vectors.files import (
     SCHEMA_FILE,
     Step,
     Vector,
@@ -39,7 +40,7 @@ from dynevent.conformance.files import (
     schema_validation_available,
     select_vectors,
 )
-from dynevent.conformance.report import (
+from dynevent.conformance.vectors.report import (
     WIDTH,
     RuleTally,
     format_report,
@@ -49,7 +50,7 @@ from dynevent.conformance.report import (
     summary_record,
     took_line,
 )
-from dynevent.conformance.runner import (
+from dynevent.conformance.vectors.runner import (
     MAX_ANSWER_BYTES,
     MAX_BROKEN,
     MAX_STALLS,

@@ -14,9 +14,9 @@ from typing import Any
 
 import attrs
 
-from dynevent.conformance.files import rule_key
-from dynevent.conformance.runner import Outcome
-from dynevent.conformance.xml_report import xml_document
+from dynevent.conformance.vectors.files import rule_key
+from dynevent.conformance.vectors.runner import Outcome
+from dynevent.conformance.vectors.xml_report import xml_document
 
 __all__ = [
     "WIDTH",

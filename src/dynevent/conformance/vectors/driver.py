@@ -1,6 +1,6 @@
 """The conformance driver protocol: one implementation under test, over JSON lines.
 
-``python -m dynevent.conformance.driver`` serves dynevent's own machine on standard input
+``python -m dynevent.conformance.vectors.driver`` serves dynevent's own machine on standard input
 and output; ``dynevent vectors --impl COMMAND`` talks to any program that
 speaks the same protocol (docs/conformance.md specifies it):
 
@@ -125,7 +125,7 @@ def serve(reader: IO[str], writer: IO[str]) -> None:
 
 
 def main() -> int:
-    """Entry point of ``python -m dynevent.conformance.driver``."""
+    """Entry point of ``python -m dynevent.conformance.vectors.driver``."""
     try:
         serve(sys.stdin, sys.stdout)
     except KeyboardInterrupt:

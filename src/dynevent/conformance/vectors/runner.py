@@ -29,9 +29,15 @@ from typing import IO, Any, Protocol
 import attrs
 
 from dynevent import __version__
-from dynevent.conformance.diff import MAX_DIFFERENCES, Difference, differences, kept, labelled, matches
-from dynevent.conformance.driver import Driver
-from dynevent.conformance.files import Vector
+from dynevent.conformance.vectors.diff import (
+    MAX_DIFFERENCES,
+    Difference,
+    differences,
+    kept,
+    labelled,
+    matches,
+)
+from dynevent.conformance.vectors.files import Vector
 from dynevent.errors import (  # defined there with every error; importable here too
     DeadlinePassed,
     DyneventError,
@@ -107,7 +113,11 @@ class InProcessImplementation:
     """dynevent itself, through the same driver code the external path uses."""
 
     def __init__(self) -> None:
-        self._driver = Driver()
+        # imported here, not at the top: this package's __init__ imports this module, and
+        # ``python -m dynevent.conformance.vectors.driver`` must not find its module imported before it runs
+        from dynevent.conformance.vectors.driver import Driver
+
+        self._driver: Driver = Driver()
         self.name = f"dynevent {__version__} (in process)"
 
     def reset(self, fleet: str, robot: str, config: Any, state: Any) -> None:
@@ -365,7 +375,7 @@ class Failure:
     got: Any
     problem: str
     differences: tuple[Difference, ...] = ()
-    #: the differences past the :data:`~dynevent.conformance.diff.MAX_DIFFERENCES` listed
+    #: the differences past the :data:`~dynevent.conformance.vectors.diff.MAX_DIFFERENCES` listed
     more_differences: int = 0
 
     @classmethod
@@ -373,8 +383,8 @@ class Failure:
         cls, step: int, input: Any, expected: Any, got: Any, problem: str, found: Sequence[Difference] = ()
     ) -> Failure:
         """A failure as a run keeps it, within bounds whatever the implementation answered: the first
-        :data:`~dynevent.conformance.diff.MAX_DIFFERENCES` differences, and each value
-        :func:`~dynevent.conformance.diff.kept`."""
+        :data:`~dynevent.conformance.vectors.diff.MAX_DIFFERENCES` differences, and each value
+        :func:`~dynevent.conformance.vectors.diff.kept`."""
         listed = tuple(
             attrs.evolve(difference, expected=kept(difference.expected), got=kept(difference.got))
             for difference in found[:MAX_DIFFERENCES]

@@ -13,7 +13,7 @@ The judge keeps a bounded history: the statuses of the last grace period (and
 the one before it), the open goals, and the answers of the last minute.  It
 is pure: no clock, no I/O; nothing it is fed makes it raise.
 
->>> from dynevent.conformance.clients import ClientJudge
+>>> from dynevent.conformance.judge.clients import ClientJudge
 >>> judge = ClientJudge("tinyRobot", "r1")
 """
 

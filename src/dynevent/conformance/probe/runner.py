@@ -3,8 +3,8 @@
 The probe is a client that may break the protocol on purpose: it sends raw
 goals (a stale seq, event type 0, a CANCEL naming another event...) and watches
 the robot's status and begin topics.  Each case of
-:data:`dynevent.conformance.probe_cases.CASES` ends in a
-:class:`~dynevent.conformance.probe_cases.CaseFinding`; every wait is bounded by
+:data:`dynevent.conformance.probe.cases.CASES` ends in a
+:class:`~dynevent.conformance.probe.cases.CaseFinding`; every wait is bounded by
 ``--timeout`` and the whole run by ``--deadline``.  A refusal carries no reason
 on the wire (D6), so a case judges what a client can see: accepted or
 rejected, the feedback, the answer, the status that follows.
@@ -12,7 +12,7 @@ rejected, the feedback, the answer, the status that follows.
 The cases reach the server through a :class:`Link`: raw access to one robot
 (send a goal, cancel one, the statuses and begins heard, the clock, and a wait
 for what it hears).  dynevent.ros carries the link over DDS;
-:mod:`dynevent.conformance.in_process` runs the machine itself, as ``dynevent
+:mod:`dynevent.conformance.probe.in_process` runs the machine itself, as ``dynevent
 serve`` configures it, on simulated time, so that every case runs in the core
 test suite without ROS (``dynevent probe --loopback``).
 """
@@ -33,10 +33,10 @@ from typing import Any
 import attrs
 
 from dynevent import files
-from dynevent.conformance import probe_cases
 from dynevent.conformance.judge.trace import TraceWriter
-from dynevent.conformance.probe_cases import Case, CaseFinding, Verdict
-from dynevent.conformance.report import took_line
+from dynevent.conformance.probe import cases as probe_cases
+from dynevent.conformance.probe.cases import Case, CaseFinding, Verdict
+from dynevent.conformance.vectors.report import took_line
 from dynevent.errors import FileError, ProbeError
 from dynevent.server import machine
 from dynevent.wire._fields import U32_MAX, U64_MAX, id_not_after, seq_after
@@ -310,7 +310,7 @@ class Options:
     ros_args: tuple[str, ...] = ()
     #: the cases that may be missing without failing the run: ids, globs, sections or rules
     allow_missing: tuple[str, ...] = ()
-    #: the cases ``--known`` expects to be missing (:data:`~dynevent.conformance.probe_cases.KNOWN_MISSING`)
+    #: the cases ``--known`` expects to be missing (:data:`~dynevent.conformance.probe.cases.KNOWN_MISSING`)
     known_missing: frozenset[str] = frozenset()
     #: where to write the JUnit report, and the readable report (HTML when the name ends .html/.htm)
     junit: str | None = None
@@ -1540,7 +1540,7 @@ def conclude(
 ) -> tuple[int, list[CaseFinding]]:
     """The end of a run: the judge over every record of the exchange (``trace``, the trace's text)
     fails the cases whose own records show a finding on their rules
-    (:func:`~dynevent.conformance.probe_cases.judge_verdicts`), the findings and the judge's own
+    (:func:`~dynevent.conformance.probe.cases.judge_verdicts`), the findings and the judge's own
     section said, the JUnit and readable reports written where asked; the exit status and the
     findings.  A report that cannot be written raises :class:`~dynevent.errors.ProbeError`."""
     findings, judged = probe_cases.judge_verdicts(trace, findings, options.known)

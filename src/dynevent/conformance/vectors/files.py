@@ -3,7 +3,7 @@
 A vector is a scripted exchange written from docs/spec.md: a server
 configuration, an initial state, and steps, each an input and the exact
 outputs the spec requires in answer (and optionally the phase, seq and current
-id after it).  The vectors ship with the package (``dynevent/conformance/``,
+id after it).  The vectors ship with the package (``dynevent/conformance/vectors/``,
 one JSON file per spec section, with the JSON Schema ``vector.schema.json``).
 """
 
@@ -116,7 +116,7 @@ def parse_vector_file(source: str, text: str | bytes, *, schema: bool = False) -
     """The vectors of one file's text; raises :class:`InvalidVector` naming ``source``.
 
     With ``schema``, the file is first validated against the shipped JSON Schema
-    (``conformance/vector.schema.json``) by the ``jsonschema`` package, when it
+    (``conformance/vectors/vector.schema.json``) by the ``jsonschema`` package, when it
     is installed (the ``vectors`` extra): a typo in an ``expect`` is then a
     vector-file error naming the vector and the path, not a failure of the
     implementation under test.
@@ -152,7 +152,7 @@ def schema_problem(data: Any) -> tuple[str, str] | None:
         import jsonschema
     except ImportError:
         return None
-    schema = _json.parse((resources.files("dynevent") / "conformance" / SCHEMA_FILE).read_bytes())
+    schema = _json.parse((resources.files("dynevent") / "conformance" / "vectors" / SCHEMA_FILE).read_bytes())
     error = jsonschema.exceptions.best_match(jsonschema.Draft202012Validator(schema).iter_errors(data))
     if error is None:
         return None
@@ -185,10 +185,10 @@ def load_vectors(paths: Iterable[str | os.PathLike[str]] = ()) -> list[Vector]:
                 raise InvalidVector(path, "$", exc.problem) from None
             found.extend(parse_vector_file(path, text, schema=True))
     else:
-        folder = resources.files("dynevent") / "conformance"
+        folder = resources.files("dynevent") / "conformance" / "vectors"
         for entry in sorted(folder.iterdir(), key=lambda item: item.name):
             if entry.name.endswith(".json") and not entry.name.endswith(".schema.json"):
-                found.extend(parse_vector_file(f"conformance/{entry.name}", entry.read_bytes()))
+                found.extend(parse_vector_file(f"conformance/vectors/{entry.name}", entry.read_bytes()))
     names = [vector.name for vector in found]
     duplicates = sorted({name for name in names if names.count(name) > 1})
     if duplicates:

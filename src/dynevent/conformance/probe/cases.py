@@ -3,7 +3,7 @@
 A case is data: an id (``section.name``), what it checks, the rules of
 docs/spec.md it tests, what it needs of the server (an active run, a child
 it can run), and the divergences of docs/divergences.md whose way of
-breaking it shows.  :mod:`dynevent.conformance.probing` carries each case out over a link (in
+breaking it shows.  :mod:`dynevent.conformance.probe.runner` carries each case out over a link (in
 process, through the driver protocol, or over DDS with :mod:`dynevent.ros.probe`) and gives a
 :class:`CaseFinding` per case; this module selects
 cases, lists them, and reports findings (a table, JUnit XML) and the exit
@@ -32,7 +32,7 @@ import attrs
 
 from dynevent.conformance.judge import check_trace, divergences
 from dynevent.conformance.judge.trace import Finding as JudgeFinding
-from dynevent.conformance.xml_report import xml_document, xml_safe
+from dynevent.conformance.vectors.xml_report import xml_document, xml_safe
 from dynevent.descriptions.reading import GoToPlace, read
 from dynevent.errors import DyneventError
 

@@ -1,11 +1,11 @@
 """The probe's link to a server in this process: dynevent's machine as ``dynevent serve`` runs one
 robot (its ``--config``, either compatibility mode), on simulated time.
 
-:class:`InProcessLink` is a :class:`~dynevent.conformance.probing.Link` whose far end is not a
+:class:`InProcessLink` is a :class:`~dynevent.conformance.probe.runner.Link` whose far end is not a
 network but the machine itself, carried out the way serve's binding carries it out: a goal request
 is stepped (``GoalRequested``) and, accepted, handed over at once (``GoalStarted``, the
 ``handle_accepted`` moment); the outputs are carried out in order (a status published, feedback and
-answers delivered to the goal's :class:`~dynevent.conformance.probing.Exchange`, a child started or
+answers delivered to the goal's :class:`~dynevent.conformance.probe.runner.Exchange`, a child started or
 told to stop); children are :class:`~dynevent.sim.children.SimulatedChild`, reporting on serve's
 periods; a run that ends begins again after serve's ``rebegin``.  Time is simulated: a wait runs
 what is due up to its end and takes no time at all, so every case runs in well under a second, and
@@ -31,11 +31,12 @@ from typing import Any
 import attrs
 
 from dynevent import descriptions
-from dynevent.conformance import probing, runner
 from dynevent.conformance.judge.trace import TraceWriter
-from dynevent.conformance.probe_cases import Case, CaseFinding
-from dynevent.conformance.probing import Exchange, Link, Options
+from dynevent.conformance.probe import runner as probe_runner
+from dynevent.conformance.probe.cases import Case, CaseFinding
+from dynevent.conformance.probe.runner import Exchange, Link, Options
 from dynevent.conformance.records import InvalidRecord, input_to_json, output_from_json
+from dynevent.conformance.vectors import runner as vectors_runner
 from dynevent.errors import DeadlinePassed, ImplementationError
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
@@ -287,7 +288,7 @@ class DriverServer:
     must take."""
 
     def __init__(
-        self, implementation: runner.Implementation, fleet: str, robot: str, config: ServeConfig
+        self, implementation: vectors_runner.Implementation, fleet: str, robot: str, config: ServeConfig
     ) -> None:
         self.implementation = implementation
         self.broken: str | None = None
@@ -326,7 +327,7 @@ def probe_in_process(
     config: ServeConfig | None = None,
     *,
     stepper: Stepper | None = None,
-    implementation: runner.Implementation | None = None,
+    implementation: vectors_runner.Implementation | None = None,
     wall: Callable[[], float] = time.monotonic,
 ) -> tuple[int, list[CaseFinding]]:
     """Run ``cases`` against the machine as serve runs ``config``'s robot (or ``stepper``, or
@@ -337,7 +338,7 @@ def probe_in_process(
     # the deadline runs from the server found: an implementation's reset and first begin are within it
     began = wall()
     ends_at = began + options.deadline
-    if isinstance(implementation, runner.ExternalImplementation):
+    if isinstance(implementation, vectors_runner.ExternalImplementation):
         implementation.time_left = lambda: ends_at - wall()  # no request waits past the deadline
     server = None
     if implementation is not None:
@@ -347,13 +348,13 @@ def probe_in_process(
         link = InProcessLink(
             config, robot=options.robot, trace=trace, stepper=stepper, wall=wall, ends_at=ends_at
         )
-        findings = probing.run_cases(link, options, cases, say)
+        findings = probe_runner.run_cases(link, options, cases, say)
         took = link.real_time() - began
     finally:
         trace.close()
-    code, findings = probing.conclude(findings, trace.text(), options, say)
+    code, findings = probe_runner.conclude(findings, trace.text(), options, say)
     if server is not None and server.broken is not None:
         say(f"the implementation broke the driver protocol at {server.broken}")
         code = max(code, 1)
-    say(probing.took(took, options, simulated=link.clock()))
+    say(probe_runner.took(took, options, simulated=link.clock()))
     return code, findings
