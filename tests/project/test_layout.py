@@ -143,10 +143,15 @@ def _conformance_part(module: str) -> str:
 CONFORMANCE = [(module, path) for module, path in _modules() if _part(module) == "conformance"]
 
 
+#: Former paths the package keeps for its users, each importing only the module it now names.
+FORMER_PATHS = {"dynevent.conformance.driver": "vectors"}  # `python -m` of 0.1.0's reference driver
+
+
 @pytest.mark.parametrize(("module", "path"), CONFORMANCE, ids=[module for module, _ in CONFORMANCE])
 def test_conformances_parts_import_one_way(module: str, path: Path) -> None:
     own = _conformance_part(module)
-    allowed = CONFORMANCE_PARTS[own] | {own, ""}
+    former = {FORMER_PATHS[module]} if module in FORMER_PATHS else set()
+    allowed = CONFORMANCE_PARTS[own] | {own, ""} | former
     wrong = sorted(
         name
         for name in _imports(module, path)
@@ -377,3 +382,16 @@ def test_the_ros_package_is_a_binding_only() -> None:
     live = SRC / "tools" / "live"
     bodies = {path.name: path.read_text(encoding="utf-8") for path in live.glob("*.py")}
     assert {name for name, text in bodies.items() if "\\033[" in text or "\\x1b[" in text} == set()
+
+
+def test_the_reference_drivers_former_path_still_runs_it() -> None:
+    """0.1.0 documented ``python -m dynevent.conformance.driver``: implementations' scripts run it."""
+    import subprocess
+    import sys
+
+    hello = subprocess.run(
+        [sys.executable, "-m", "dynevent.conformance.driver"], input='{"op":"hello"}\n', capture_output=True,
+        text=True, timeout=60, check=False,
+    )  # fmt: skip
+    assert hello.returncode == 0, hello.stderr
+    assert '"protocol":1' in hello.stdout, hello.stdout
