@@ -31,7 +31,7 @@ from dynevent.server.holder import RobotServer
 from dynevent.server.machine import State
 from dynevent.sim.config import CategorySpec, ServeConfig, machine_config
 from dynevent.testing.broken import DEFECTS, broken_stepper
-from dynevent.wire.vocab import Compatibility
+from dynevent.wire.vocab import Compatibility, EventType
 from probe_expected import BROKEN, JUDGED_IN_PROCESS, RMF_ROS2_FAILS, UNSEEN_BY_CASES
 
 #: serve as the DDS tests run it: brief children that log often, the first run at the seq wrap.
@@ -776,6 +776,52 @@ def test_a_late_subscriber_that_hears_the_status_after_the_timeout_is_no_failure
         assert latched.verdict is verdict, (after, latched)
         if verdict is Verdict.MISSING:
             assert latched.seen.startswith(probe_runner.LATE.format(timeout=OPTIONS.timeout)), latched.seen
+
+
+class _LateCancelLink(InProcessLink):
+    """The in-process link that delivers every second CANCEL goal ``lag`` seconds late to the server (a
+    lossy link sends a lost request again, late), or, ``forged``, answers it refused at once without
+    the server seeing it: a server that refuses a CANCEL while the child it names runs."""
+
+    def __init__(self, lag: float, *, forged: bool = False) -> None:
+        self.lag, self.forged, self.cancels = lag, forged, 0
+        super().__init__(CONFIG)
+
+    def deliver(self, exchange: probe_runner.Exchange) -> None:
+        if exchange.goal.event_type != EventType.CANCEL:
+            return super().deliver(exchange)
+        self.cancels += 1
+        if self.cancels % 2:
+            return super().deliver(exchange)
+        if self.forged:
+            return self.hear_response(exchange, False)
+        later = self.now + round(self.lag * 1_000_000_000)
+        return self._at(later, lambda: InProcessLink.deliver(self, exchange))
+
+
+@pytest.mark.spec("R9.3", "R4.13")
+def test_a_cancel_that_reaches_the_server_after_the_child_ended_is_no_failure_of_the_server() -> None:
+    """Two CANCELs of the running child, the second delivered after the first had ended the child:
+    the server refuses it, rightly (R4.13), and the probe heard the child end before that refusal, so
+    ``cancel.both_answered`` is not run, saying why; a refusal heard while the child still ran fails."""
+    options = attrs.evolve(OPTIONS, deadline=1000)
+
+    def verdict(link: InProcessLink) -> CaseFinding:
+        findings = probe_runner.run_cases(link, options, list(CASES), lambda _: None)
+        return {finding.case.id: finding for finding in findings}["cancel.both_answered"]
+
+    assert verdict(_LateCancelLink(0.0)).verdict is Verdict.PASS
+    late = verdict(_LateCancelLink(1.0))
+    assert late.verdict is Verdict.MISSING, late
+    assert late.seen == probe_runner.REFUSED_AFTER_END.format(child=_child_of(late)), late.seen
+    refused = verdict(_LateCancelLink(0.0, forged=True))
+    assert refused.verdict is Verdict.FAIL and refused.seen == "a CANCEL not accepted", refused
+
+
+def _child_of(finding: CaseFinding) -> int:
+    """The id of the child a finding's notes say its NEXT ran."""
+    sent = next(line for line in finding.messages if line.startswith("sent NEXT"))
+    return int(re.search(r" id=(\d+)", sent).group(1))  # type: ignore[union-attr]
 
 
 #: Channels lagging one another by up to 3 s, each mix once: children of 3 to 6 s, longer than the lag

@@ -147,6 +147,7 @@ class RosLink(Link):
         accepted = bool(handle is not None and handle.accepted)
         if accepted:
             exchange.handle = handle
+            exchange.accepted_at = handle.stamp.sec * 1_000_000_000 + handle.stamp.nanosec
         self.hear_response(exchange, accepted)
         if accepted:
             handle.get_result_async().add_done_callback(lambda done: self._on_result(exchange, done))

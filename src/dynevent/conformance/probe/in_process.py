@@ -223,16 +223,21 @@ class InProcessLink(Link):
         exchange = Exchange(goal, self)
         self._exchanges[exchange.uuid] = exchange
         self.sent("goal", goal_uuid=exchange.uuid, message=goal)
-        outputs = self.step(ins.GoalRequested(goal_uuid=exchange.uuid, goal=goal, now=self.now))
+        self.deliver(exchange)
+        return exchange
+
+    def deliver(self, exchange: Exchange) -> None:
+        """The server receives ``exchange``'s goal, now (a link whose requests lag calls it later)."""
+        outputs = self.step(ins.GoalRequested(goal_uuid=exchange.uuid, goal=exchange.goal, now=self.now))
         if self.cut_off:  # no response heard: the server was not asked, or not waited for
-            return exchange
+            return
         accepted = any(isinstance(output, outs.GoalAccepted) for output in outputs)
         self._drain()
+        exchange.accepted_at = self.now if accepted else None
         self.hear_response(exchange, accepted)
         if accepted:  # handed over for execution at once, as rclpy's handle_accepted does
             self.step(ins.GoalStarted(goal_uuid=exchange.uuid, now=self.now))
             self._drain()
-        return exchange
 
     def cancel(self, exchange: Exchange, timeout: float) -> bool | None:
         self.sent("cancel_request", goal_uuid=exchange.uuid)

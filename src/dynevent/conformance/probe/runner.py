@@ -97,6 +97,17 @@ class Exchange:
         self.feedback: list[Feedback] = []
         self.answers: list[tuple[GoalStatus, Result]] = []
         self.handle: Any = None  # the transport's handle on the goal, once accepted
+        #: where among everything the link heard its response came, and its first answer (1 the first
+        #: message heard), and how many statuses had come before its response: the order the probe
+        #: heard things in, which a lossy link may make another than the server's
+        self.response_heard: int | None = None
+        self.answer_heard: int | None = None
+        self.statuses_before_response = 0
+        #: when it was sent and its response came, on the link's clock (s), and when the server
+        #: accepted it by the server's own clock (ns since the epoch), where the transport says
+        self.sent_at = link.clock()
+        self.response_at: float | None = None
+        self.accepted_at: int | None = None
         self._link = link
         link.made.append(self)
 
@@ -209,10 +220,12 @@ class Link:
         self._heard("begin", lambda: self.begins.append(begin), message=begin)
 
     def hear_response(self, exchange: Exchange, accepted: bool) -> None:
-        self._heard(
-            "goal_response", lambda: setattr(exchange, "accepted", accepted),
-            goal_uuid=exchange.uuid, accepted=accepted,
-        )  # fmt: skip
+        def update() -> None:
+            exchange.accepted = accepted
+            exchange.response_heard, exchange.statuses_before_response = self.heard, len(self.statuses)
+            exchange.response_at = self.clock()
+
+        self._heard("goal_response", update, goal_uuid=exchange.uuid, accepted=accepted)
 
     def hear_feedback(self, exchange: Exchange, feedback: Feedback) -> None:
         self._heard(
@@ -220,10 +233,12 @@ class Link:
         )
 
     def hear_answer(self, exchange: Exchange, status: GoalStatus, result: Result) -> None:
-        self._heard(
-            "result", lambda: exchange.answers.append((status, result)),
-            goal_uuid=exchange.uuid, status=status, message=result,
-        )  # fmt: skip
+        def update() -> None:
+            exchange.answers.append((status, result))
+            if exchange.answer_heard is None:
+                exchange.answer_heard = self.heard
+
+        self._heard("result", update, goal_uuid=exchange.uuid, status=status, message=result)
 
     def hear_cancel_response(self, exchange: Exchange, accepted: bool) -> None:
         self._heard("cancel_response", lambda: None, goal_uuid=exchange.uuid, accepted=accepted)
@@ -753,6 +768,12 @@ OVERWRITTEN = (
 ENDED_FIRST = (
     "child {child} had ended when the goal reached the server (its statuses say so): the status the "
     "probe went by came late (a lagging link; children that take longer let the case run)"
+)
+#: Why ``cancel.both_answered`` is not run when a CANCEL was refused only after the child's end was heard.
+REFUSED_AFTER_END = (
+    "a CANCEL of child {child} was refused after the probe heard the child end: it may have reached the "
+    "server after that end (a lossy link sends a lost request again, late), where the refusal is right "
+    "(R4.13); the case needs both CANCELs to reach the server while the child runs"
 )
 #: Why a case whose awaited message came after ``--timeout`` is not run: the link, not the server.
 LATE = "not run to its end: what it waited for came after --timeout's {timeout:g} s; raise --timeout"
@@ -1303,6 +1324,11 @@ def _cancel_both_answered(probe: Probe, case: Case) -> CaseFinding:
         running.answered(probe.timeout)
         probe.note(f"the NEXT: {_describe_answer(running)}")
         if not all(cancel.accepted for cancel in cancels):
+            refused = [cancel for cancel in cancels if cancel.accepted is False]
+            ended_by = [running, *(cancel for cancel in cancels if cancel.accepted)]
+            late = all(_heard_after_end(probe, cancel, ended_by, child_id) for cancel in refused)
+            if late and any(_outlived(probe, cancel, child_id) for cancel in ended_by[1:]):
+                return CaseFinding(case, Verdict.MISSING, seen=REFUSED_AFTER_END.format(child=child_id))
             absent = any(cancel.accepted is None for cancel in cancels)
             return CaseFinding(
                 case, Verdict.FAIL, expected=expected, seen="a CANCEL not accepted", absent=absent
@@ -1320,6 +1346,44 @@ def _cancel_both_answered(probe: Probe, case: Case) -> CaseFinding:
             return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen,
                            divergence="D1" if idle == wrong else None)  # fmt: skip
         return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
+
+
+def _heard_after_end(probe: Probe, refused: Exchange, ended_by: list[Exchange], child_id: int) -> bool:
+    """Whether ``refused``'s refusal came after the probe had heard child ``child_id`` end: an answer
+    to one of ``ended_by``, or a status without the child after one with it running.  Heard in that
+    order, the refused goal may have reached the server after the end, where refusing it is right.  A
+    refusal heard before every sign of the end is read as given while the child ran (a correct server
+    sends the end's answers and status before any refusal that follows it: all of them would have had
+    to come later than it)."""
+    heard = refused.response_heard
+    if heard is None:
+        return False
+    if any(other.answer_heard is not None and other.answer_heard < heard for other in ended_by):
+        return True
+    return _end_of(probe.link.history()[: refused.statuses_before_response], child_id) is not None
+
+
+def _outlived(probe: Probe, cancel: Exchange, child_id: int) -> bool:
+    """Whether child ``child_id`` ran on at the server, after it accepted ``cancel``, for longer than
+    ``cancel``'s round trip (by the server's stamps: its acceptance and the status that shows the
+    end): a goal sent with ``cancel`` over a link as prompt for it would have come while the child
+    ran.  A server that ends the child as it accepts the CANCEL (D1's defect) leaves no such time."""
+    if cancel.accepted_at is None or cancel.response_at is None:
+        return False
+    probe.link.wait(lambda: _end_of(probe.link.history(), child_id) is not None, probe.timeout)
+    history = probe.link.history()
+    end = _end_of(history, child_id)
+    round_trip = round((cancel.response_at - cancel.sent_at) * 1_000_000_000)
+    return end is not None and _instant(history[end]) - cancel.accepted_at > round_trip
+
+
+def _end_of(history: list[DynamicEventStatus], child_id: int) -> int | None:
+    """Where in ``history`` the first status comes that shows child ``child_id`` no longer running
+    after one that showed it running; None where none has come."""
+    running = [machine.runs_a_child(status) and status.id == child_id for status in history]
+    if True not in running:
+        return None
+    return next((n for n in range(running.index(True), len(history)) if not running[n]), None)
 
 
 def _aborted_with(exchange: Exchange, failure: Failure) -> bool:
