@@ -4,7 +4,7 @@ They pin what tests/client/test_client.py left loose: the edge checks and their
 errors, keyword-only construction, the ``KIND`` names that traces record, the
 defaults of the state and output classes, the resolvable type hints, the
 uint32 serial-number order of seqs, and the exact sentences of local
-refusals and outcomes (users read them in loopback timelines and logs).
+refusals and outcomes (users read them in simulated sessions' timelines and logs).
 """
 
 from __future__ import annotations
@@ -152,7 +152,7 @@ _KINDS: list[tuple[type[Any], str]] = [
 
 @pytest.mark.parametrize(("cls", "kind"), _KINDS, ids=[kind for _, kind in _KINDS])
 def test_kind_names_of_inputs_and_outputs(cls: type[Any], kind: str) -> None:
-    # the names the loopback timeline and traces record
+    # the names the simulated session's timeline and traces record
     assert kind == cls.KIND
 
 
@@ -944,7 +944,7 @@ def _wrapped_adapter_run() -> tuple[ClientState, machine.State, machine.ServerCo
 
 
 def test_client_knows_the_child_runs_after_an_adapter_id_wrap() -> None:
-    # Found by tests/test_loopback.py::test_client_and_server_agree (config adapter_ids,
+    # Found by tests/tools/test_simulated_session.py::test_client_and_server_agree (config adapter_ids,
     # begin event_id 2**64 - 2), which fails on this example once Hypothesis draws it.
     state, server, config = _wrapped_adapter_run()
     cancel = client.request_cancel(state, now=0)

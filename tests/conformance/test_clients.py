@@ -13,7 +13,7 @@ from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.server.machine import ServerConfig, State
-from dynevent.tools import loopback
+from dynevent.tools.demo.simulated_session import Adapter, ChildScript, Options, SimulatedSession
 from dynevent.wire._fields import SECOND
 from dynevent.wire.messages import Goal
 from dynevent.wire.vocab import ClientViolation, EventType
@@ -206,17 +206,17 @@ def test_the_grace_period_is_checked() -> None:
 @pytest.mark.spec("R22.2", "R22.4", "R22.5", "R22.6")
 @pytest.mark.parametrize("seed", range(40))
 def test_the_client_machine_never_breaks_a_client_rule(seed: int) -> None:
-    """Random sessions of the client machine against the server machine, over a loopback whose
-    messages take up to 0.2 s (under the grace period): the judge finds nothing."""
+    """Random sessions of the client machine against the server machine, over a simulated network
+    whose messages take up to 0.2 s (under the grace period): the judge finds nothing."""
     rng = random.Random(seed)
     judge = ClientJudge("tinyRobot", "r1", grace=0.5, config=CONFIG)
     server = machine.step(
         State.new("tinyRobot", "r1"), ins.Begin(description="{}", event_id=5, now=SECOND), CONFIG
     ).state
-    session = loopback.Loopback(
+    session = SimulatedSession(
         cl.ClientState.new(f"{seed:016x}"), server, CONFIG,
-        adapter=loopback.Adapter(default=loopback.ChildScript(finish_after=rng.uniform(0.1, 2))),
-        options=loopback.Options(delay=(0, 0.2)), seed=seed, now=SECOND,
+        adapter=Adapter(default=ChildScript(finish_after=rng.uniform(0.1, 2))),
+        options=Options(delay=(0, 0.2)), seed=seed, now=SECOND,
     )  # fmt: skip
     original = session._server_step
 

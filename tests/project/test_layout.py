@@ -143,14 +143,25 @@ def _conformance_part(module: str) -> str:
 CONFORMANCE = [(module, path) for module, path in _modules() if _part(module) == "conformance"]
 
 
-#: Former paths the package keeps for its users, each importing only the module it now names.
-FORMER_PATHS = {"dynevent.conformance.driver": "vectors"}  # `python -m` of 0.1.0's reference driver
+#: Former paths the package keeps for 0.1.0's users, each importing only the module it now names.
+FORMER_PATHS = {
+    "dynevent.conformance.driver": "dynevent.conformance.vectors.driver",  # `python -m` of the driver
+    "dynevent.tools.loopback": "dynevent.tools.demo.simulated_session",  # docs/client.md's session
+}
+
+
+def test_a_former_path_imports_only_the_module_it_now_names() -> None:
+    paths = dict(_modules())
+    for module, now in FORMER_PATHS.items():
+        imported = _imports(module, paths[module])
+        assert now in MODULES and now in imported, (module, now)
+        assert all(name == now or name.startswith(f"{now}.") for name in imported), (module, sorted(imported))
 
 
 @pytest.mark.parametrize(("module", "path"), CONFORMANCE, ids=[module for module, _ in CONFORMANCE])
 def test_conformances_parts_import_one_way(module: str, path: Path) -> None:
     own = _conformance_part(module)
-    former = {FORMER_PATHS[module]} if module in FORMER_PATHS else set()
+    former = {_conformance_part(FORMER_PATHS[module])} if module in FORMER_PATHS else set()
     allowed = CONFORMANCE_PARTS[own] | {own, ""} | former
     wrong = sorted(
         name

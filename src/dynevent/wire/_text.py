@@ -1,4 +1,5 @@
-"""One-line renderings of goals, status messages and answers: one home for explain, check and the loopback."""
+"""One-line renderings of goals, status messages and answers: one home for explain, check and the
+simulated session."""
 
 from __future__ import annotations
 

@@ -6,7 +6,7 @@
   ``time.time()`` in seconds cannot slip in.
 - **A duration is seconds**, an int or a float, as ROS message fields
   (``stubborn_period``) and rclpy (``timeout_sec``) have them: a client's
-  ``timeout``, a loopback's delays and scripts, a server's settings, serve's
+  ``timeout``, a simulated session's delays and scripts, a server's settings, serve's
   configuration, every command line option.  A duration above
   :data:`MAX_DURATION` is refused as the likely nanoseconds it is
   (``timeout=60 * SECOND`` is 60 billion seconds).

@@ -1,4 +1,4 @@
-"""The loopback session, end-to-end outcomes, and the agreement of the client and server machines."""
+"""The simulated session, end-to-end outcomes, and the agreement of the client and server machines."""
 
 from __future__ import annotations
 
@@ -17,7 +17,14 @@ from dynevent.client import SECOND, ClientState, Outcome, OutcomeKind, Refused, 
 from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
-from dynevent.tools.loopback import Adapter, ChildScript, Loopback, Options, format_timeline, timeline_jsonl
+from dynevent.tools.demo.simulated_session import (
+    Adapter,
+    ChildScript,
+    Options,
+    SimulatedSession,
+    format_timeline,
+    timeline_jsonl,
+)
 from dynevent.wire.messages import Goal
 from dynevent.wire.vocab import Compatibility, DynamicState, EventType, IdPolicy, RejectReason, Status
 
@@ -37,9 +44,9 @@ def session(
     server: machine.State | None = None,
     scripts: tuple[ChildScript, ...] = (),
     **options: Any,
-) -> Loopback:
+) -> SimulatedSession:
     seed = options.pop("seed", 0)
-    return Loopback(
+    return SimulatedSession(
         ClientState.new(PREFIX),
         server if server is not None else machine.State.new("tinyRobot", "tinyRobot1"),
         config,
@@ -49,7 +56,7 @@ def session(
     )
 
 
-def started(lb: Loopback, event_id: int = 5) -> Loopback:
+def started(lb: SimulatedSession, event_id: int = 5) -> SimulatedSession:
     lb.begin('{"category": "patrol"}', event_id=event_id)
     lb.run()
     return lb
@@ -59,7 +66,7 @@ def view(state: ClientState | machine.State) -> tuple[DynamicState, int, int]:
     return (state.phase, state.seq, state.current_id)
 
 
-def outcome_kinds(lb: Loopback) -> list[tuple[int, OutcomeKind]]:
+def outcome_kinds(lb: SimulatedSession) -> list[tuple[int, OutcomeKind]]:
     return [(outcome.goal.event_type, outcome.kind) for outcome in lb.outcomes]
 
 
@@ -164,7 +171,7 @@ def test_options_and_scripts_check_their_values() -> None:
         Options(start_delay=(-1, 1))
     with pytest.raises(ValueError, match=r"Options.delay: .* is this nanoseconds\?"):
         Options(delay=(1_000_000, 3_000_000))  # 1 to 3 ms, in nanoseconds: refused, not taken as days
-    with pytest.raises(ValueError, match=r"Loopback.advance.duration"):
+    with pytest.raises(ValueError, match=r"SimulatedSession.advance.duration"):
         started(session()).advance(SECOND)
     with pytest.raises(ValueError, match="probability"):
         Options(drop_feedback=1.5)
@@ -447,14 +454,14 @@ def note_event(text: str) -> None:
 
 
 class Agreement:
-    """Drives a loopback and checks the agreement of the two machines at every moment it applies."""
+    """Drives a simulated session and checks the agreement of the two machines at every moment it applies."""
 
-    def __init__(self, lb: Loopback) -> None:
+    def __init__(self, lb: SimulatedSession) -> None:
         self.lb = lb
         self.sent: list[str] = []
         lb.on_send = self.on_send
 
-    def on_send(self, lb: Loopback, send: SendGoal) -> None:
+    def on_send(self, lb: SimulatedSession, send: SendGoal) -> None:
         self.sent.append(send.goal_uuid)
         if lb.quiescent:  # (a) the server in the state the client modelled accepts the goal
             decision = machine.accept(lb.server, send.goal, lb.config)
@@ -561,7 +568,7 @@ def test_client_and_server_agree(
     seed: int,
 ) -> None:
     server = attrs.evolve(machine.State.new("tinyRobot", "tinyRobot1"), seq=initial_seq)
-    lb = Loopback(
+    lb = SimulatedSession(
         ClientState.new(PREFIX, categories=CATEGORIES),
         server,
         CONFIGS[config],
@@ -589,7 +596,7 @@ def test_client_and_server_agree(
 
 
 def test_agreement_example_with_a_race_and_a_timeout() -> None:
-    lb = Loopback(
+    lb = SimulatedSession(
         ClientState.new(PREFIX, categories=CATEGORIES),
         machine.State.new("f", "r"),
         CONFIG,

@@ -1,4 +1,5 @@
-"""``dynevent demo``: one robot's scripted session, client machine to server machine, over the loopback.
+"""``dynevent demo``: one robot's scripted session, client machine to server machine, in a
+simulated session (:mod:`dynevent.tools.demo.simulated_session`).
 
 The session walks through the protocol's main paths, in order:
 
@@ -37,7 +38,13 @@ from dynevent.conformance.records import rule_validator
 from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
-from dynevent.tools.loopback import Adapter, ChildScript, Loopback, Options, TimelineEvent
+from dynevent.tools.demo.simulated_session import (
+    Adapter,
+    ChildScript,
+    Options,
+    SimulatedSession,
+    TimelineEvent,
+)
 from dynevent.wire import _json
 from dynevent.wire.messages import Goal
 from dynevent.wire.vocab import EventType, Failure, Status
@@ -82,7 +89,7 @@ _WHO = {"client": "C", "client->server": "C->S", "server->client": "S->C", "adap
 
 _LEGEND = (
     "How to read it:",
-    "  time   simulated seconds since the start; messages take 1 to 4 ms on the loopback",
+    "  time   simulated seconds since the start; messages take 1 to 4 ms on the simulated network",
     "  C      an event of the client machine",
     "  A      an event between the robot's server machine and its fleet adapter",
     "  C->S   a goal from the client to the robot's server; S->C a message back",
@@ -94,7 +101,7 @@ _LEGEND = (
 
 
 def _readable(event: TimelineEvent) -> TimelineEvent:
-    """Name the position a tick reports (the loopback's summary of a tick is empty)."""
+    """Name the position a tick reports (the session's summary of a tick is empty)."""
     if event.kind == "tick" and not event.summary:
         record = event.record
         summary = f"at {record['map_name']} ({record['x']:g}, {record['y']:g})"
@@ -168,10 +175,10 @@ def summary(tagged: Sequence[tuple[int, TimelineEvent]]) -> list[str]:
 
 
 class _Script:
-    """The demo's chapters (:data:`STEPS`), played on one loopback session."""
+    """The demo's chapters (:data:`STEPS`), played on one simulated session."""
 
     def __init__(self, seed: int) -> None:
-        self.session = Loopback(
+        self.session = SimulatedSession(
             cl.ClientState.new("0123456789abcdef", categories=["go_to_place"]),
             machine.State.new("tinyRobot", "tinyRobot1"),
             _config(),
@@ -256,8 +263,8 @@ def run_demo(seed: int = 0, *, json_lines: bool = False) -> str:
             lines.append(_json.dumps(record) + "\n")
         return "".join(lines)
     parts = [
-        f"dynevent demo: robot tinyRobot/tinyRobot1, a client machine and a server machine over an\n"
-        f"in-process loopback (seed {seed})\n\n",
+        f"dynevent demo: robot tinyRobot/tinyRobot1, a client machine and a server machine in a\n"
+        f"simulated session (seed {seed})\n\n",
         "\n".join(_LEGEND) + "\n\n",
         f"{'time':>7}  {'who':<4}  {'event':<16}  what  => decision\n",
     ]
