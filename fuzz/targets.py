@@ -410,7 +410,7 @@ def _with_file(value: Any, call: Callable[[str], object]) -> object:
 def _send_request(value: Any) -> object:
     import argparse
 
-    from dynevent.tools.send_request import goal_request
+    from dynevent.tools.send import goal_request
 
     def ask(path: str) -> object:
         flags = {"place": None, "cancel": False, "end": False, "category": "go_to_place"}

@@ -128,11 +128,14 @@ def _unwritable(what: str, path: str, error: Exception) -> FileError:
     return FileError(what, path, f"cannot be written: {_reason(error)}")
 
 
-def check_writable(path: str, what: str, *, directory: bool = False) -> None:
+def check_writable(path: str | None, what: str, *, directory: bool = False) -> None:
     """Raise :class:`FileError` naming ``what`` unless a command can write ``path`` (a file; with
     ``directory``, a directory that holds its files, made if it is not there): tried, before the
     command's work starts, as the write would try it, and nothing left behind.  An existing file is
-    not changed; a FIFO or a device (``/dev/stdout``) is written as it comes."""
+    not changed; a FIFO or a device (``/dev/stdout``) is written as it comes.  None (an output the
+    command was not asked for) is nothing to check."""
+    if path is None:
+        return
     try:
         if directory:
             _try_directory(path)

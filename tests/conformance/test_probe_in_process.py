@@ -18,6 +18,7 @@ from typing import Any
 import attrs
 import pytest
 
+from dynevent import files
 from dynevent.conformance.judge import check_trace
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.conformance.probe import cases as probe_cases
@@ -53,9 +54,19 @@ def _probe(
         stepper = broken_stepper(server, defect)
     said: list[str] = []
     code, findings = probe_in_process(
-        attrs.evolve(OPTIONS, **options), list(CASES), said.append, config, stepper=stepper
+        attrs.evolve(OPTIONS, **options),
+        list(CASES),
+        said.append,
+        config,
+        write=files.write_text,
+        stepper=stepper,
     )
     return code, findings, "\n".join(said)
+
+
+def _unasked(path: str, text: str, flag: str) -> None:
+    """The report writer of a run that asks for no report: it is never called."""
+    raise AssertionError(f"{flag} {path}: written, though the run asked for no report")
 
 
 def _verdicts(findings: list[CaseFinding]) -> dict[str, str]:
@@ -129,7 +140,7 @@ def test_the_rmf_ros2_mode_fails_alike_on_both_in_process_links_as_probe_md_coun
     config = attrs.evolve(CONFIG, compatibility="rmf_ros2")
     server = DriverServer(InProcessImplementation(), "tinyRobot", "tinyRobot1", config)
     said: list[str] = []
-    _, driven = probe_in_process(OPTIONS, list(CASES), said.append, config, stepper=server)
+    _, driven = probe_in_process(OPTIONS, list(CASES), said.append, config, write=_unasked, stepper=server)
     assert server.broken is None
     assert _verdicts(driven) == _verdicts(loopback), "\n".join(said)
     summary = text.rstrip().splitlines()[-2]  # the last: what the run took
@@ -295,7 +306,7 @@ def test_a_driver_that_takes_no_state_object_is_probed_from_seq_0() -> None:
     server = DriverServer(stateless, "tinyRobot", "tinyRobot1", config)
     assert stateless.states == [None]
     said: list[str] = []
-    _, findings = probe_in_process(OPTIONS, list(CASES), said.append, config, stepper=server)
+    _, findings = probe_in_process(OPTIONS, list(CASES), said.append, config, write=_unasked, stepper=server)
     verdicts = _verdicts(findings)
     assert server.broken is None
     assert {case: verdict for case, verdict in verdicts.items() if verdict != "pass"} == {
@@ -363,7 +374,7 @@ def test_a_slow_server_is_left_when_the_deadline_passes_in_real_time() -> None:
 
     said: list[str] = []
     code, findings = probe_in_process(
-        attrs.evolve(OPTIONS, deadline=10), list(CASES), said.append, CONFIG, stepper=slow,
+        attrs.evolve(OPTIONS, deadline=10), list(CASES), said.append, CONFIG, write=_unasked, stepper=slow,
         wall=lambda: now[0],
     )  # fmt: skip
     assert all(when < 10 for when in asked) and now[0] <= 10 + 5, asked
@@ -419,7 +430,7 @@ def test_against_any_configuration_of_serve_the_cases_and_the_judge_agree(
     if rmf_ros2:
         known = probe_cases.KNOWN["rmf_ros2"]
         options = attrs.evolve(options, known=known, known_missing=probe_cases.KNOWN_MISSING["rmf_ros2"])
-    code, findings = probe_in_process(options, list(CASES), said.append, config)
+    code, findings = probe_in_process(options, list(CASES), said.append, config, write=_unasked)
     text = "\n".join(said)
     verdicts = _verdicts(findings)
     allowed = {"begin.seq_wrap": "missing", "feedback.log_seq": "info", "describe.query": "info"}
@@ -732,7 +743,7 @@ def test_responses_that_all_come_after_the_timeout_fail_no_case_not_even_the_las
     link = _LaggingLink(CONFIG, response=4.0)
     options = attrs.evolve(OPTIONS, deadline=1000)
     ran = probe_runner.run_cases(link, options, list(CASES), lambda _: None)
-    findings = probe_runner.conclude(ran, "", options, lambda _: None)[1]
+    findings = probe_runner.conclude(ran, "", options, lambda _: None, _unasked)[1]
     assert [finding for finding in findings if finding.verdict is Verdict.FAIL] == []
     late = [
         finding.case.id
@@ -771,7 +782,7 @@ def test_a_late_subscriber_that_hears_the_status_after_the_timeout_is_no_failure
     for after, verdict in ((1.0, Verdict.PASS), (5.0, Verdict.MISSING), (None, Verdict.FAIL)):
         link = _LateSubscriberLink(after)
         findings = probe_runner.run_cases(link, options, list(CASES), lambda _: None)
-        _, findings = probe_runner.conclude(findings, "", options, lambda _: None)
+        _, findings = probe_runner.conclude(findings, "", options, lambda _: None, _unasked)
         latched = {finding.case.id: finding for finding in findings}["status.latched"]
         assert latched.verdict is verdict, (after, latched)
         if verdict is Verdict.MISSING:
@@ -849,7 +860,7 @@ def test_over_a_link_whose_channels_lag_every_case_passes_and_the_judge_finds_no
     link = _LaggingLink(config, trace, **lags)  # the trace: the records as the probe hears them, lagged
     options = attrs.evolve(OPTIONS, timeout=10, deadline=5000)
     findings = probe_runner.run_cases(link, options, list(CASES), lambda _: None)
-    code, findings = probe_runner.conclude(findings, trace.text(), options, lambda _: None)
+    code, findings = probe_runner.conclude(findings, trace.text(), options, lambda _: None, _unasked)
     assert {finding.case.id: finding.verdict for finding in findings} == dict.fromkeys(
         (case.id for case in CASES), Verdict.PASS
     )
@@ -857,6 +868,20 @@ def test_over_a_link_whose_channels_lag_every_case_passes_and_the_judge_finds_no
     as_server = trace.text().replace(',"tap":"client"', "", 1)
     assert as_server != trace.text()
     assert check_trace(as_server).findings, "read in the server's order, the lagged trace is not clean"
+
+
+def test_the_probe_hands_its_reports_to_the_commands_writer_and_writes_no_file_itself(tmp_path: Path) -> None:
+    """The end of a run makes the JUnit and readable reports asked for and hands each, with its flag,
+    to the writer the command gives (dynevent.files.write_text): the probe opens no file itself."""
+    junit, report = tmp_path / "probe.xml", tmp_path / "report.html"
+    options = attrs.evolve(OPTIONS, junit=str(junit), report=str(report))
+    written: list[tuple[str, str, str]] = []
+    ran = [CaseFinding(case, Verdict.PASS) for case in CASES[:2]]
+    probe_runner.conclude(ran, "", options, lambda _: None, lambda *report: written.append(report))
+    assert [(path, flag) for path, _, flag in written] == [(str(junit), "--junit"), (str(report), "--report")]
+    assert ET.fromstring(written[0][1]).tag == "testsuites"
+    assert written[1][1].lstrip().lower().startswith("<!doctype html")
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.spec("R11.2", "R1.4")

@@ -406,3 +406,108 @@ def test_the_reference_drivers_former_path_still_runs_it() -> None:
     )  # fmt: skip
     assert hello.returncode == 0, hello.stderr
     assert '"protocol":1' in hello.stdout, hello.stdout
+
+
+#: The most lines the command line may hold: the grammar (every command's flags, with their help), and
+#: the dispatch to the command's module.  What a command does is in that module, not here.
+CLI_LINES = 600
+
+#: What the command line imports of dynevent: the names its grammar shows (the version, the docs'
+#: address, the modes and formats it offers as choices, the vectors' bound on --timeout) and the errors
+#: it turns into one line.  A command's module is imported by name only when the command runs.
+CLI_IMPORTS = frozenset(
+    {"dynevent", "dynevent.DOCS", "dynevent.__version__", "dynevent.wire.vocab",
+     "dynevent.wire.vocab.Compatibility", "dynevent.tools.diagram", "dynevent.tools.diagram.FORMATS",
+     "dynevent.conformance.vectors", "dynevent.conformance.vectors.MAX_TIMEOUT", "dynevent.errors",
+     "dynevent.errors.DyneventError", "dynevent.interrupts", "dynevent.interrupts.Interrupted"}
+)  # fmt: skip
+
+#: What dynevent/tools holds beside the commands' modules: the command line, the ROS bodies of the
+#: commands on a live graph, the one progress writer, and 0.1.0's path of the simulated session.
+TOOLS_BESIDE_COMMANDS = frozenset({"__init__", "cli", "live", "_progress", "loopback"})
+
+
+def test_the_command_line_parses_and_dispatches_only() -> None:
+    path = SRC / "tools" / "cli.py"
+    lines = len(path.read_text(encoding="utf-8").splitlines())
+    assert lines <= CLI_LINES, f"tools/cli.py holds {lines} lines"
+    assert _imports("dynevent.tools.cli", path) == CLI_IMPORTS
+    diagram = ast.parse((SRC / "tools" / "diagram.py").read_text(encoding="utf-8"))
+    tops = [node for node in diagram.body if isinstance(node, (ast.Import, ast.ImportFrom))]
+    assert {ast.unparse(node) for node in tops} == {"from __future__ import annotations", "import argparse"}
+
+
+def test_every_command_is_one_module_whose_run_the_command_line_calls() -> None:
+    import importlib
+    import inspect
+
+    from dynevent.tools import cli
+
+    tools = SRC / "tools"
+    entries = {path.stem for path in tools.glob("*.py")} | {
+        path.name for path in tools.iterdir() if (path / "__init__.py").is_file()
+    }
+    assert entries - TOOLS_BESIDE_COMMANDS == set(cli.COMMANDS)
+    for command in cli.COMMANDS:
+        run = importlib.import_module(f"dynevent.tools.{command}").run
+        assert list(inspect.signature(run).parameters) == ["args"], command
+    for module, path in _modules():  # a command shares only the ROS bodies and the progress writer
+        command = module.split(".")[2] if module.startswith("dynevent.tools.") else None
+        if command not in cli.COMMANDS:
+            continue
+        tools = {name.split(".")[2] for name in _imports(module, path) if name.startswith("dynevent.tools.")}
+        assert tools <= {command, "live", "_progress"}, f"{module} imports {sorted(tools)} of dynevent.tools"
+
+
+def _writes(source: str) -> list[str]:
+    """Where code opens a file to write it itself: ``open()`` or a path's ``open()`` in a mode that
+    writes, a path's ``write_text()`` or ``write_bytes()``, ``os.open()`` of anything but ``os.devnull``."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if not isinstance(node, ast.Call):
+            continue
+        func, text = node.func, ast.unparse(node)
+        given = [*node.args, *(keyword.value for keyword in node.keywords if keyword.arg == "mode")]
+        modes = [arg.value for arg in given if isinstance(arg, ast.Constant) and isinstance(arg.value, str)]
+        writes = any(set(mode) & set("wax+") for mode in modes if len(mode) <= 3)
+        if isinstance(func, ast.Name) and func.id == "open" and writes:
+            found.append(text)
+        elif isinstance(func, ast.Attribute) and func.attr == "open":
+            owner = ast.unparse(func.value)
+            if (owner == "os" and "os.devnull" not in text) or (owner != "os" and writes):
+                found.append(text)
+        elif (
+            isinstance(func, ast.Attribute)
+            and func.attr in ("write_text", "write_bytes")
+            and ast.unparse(func.value) != "files"
+        ):
+            found.append(text)
+    return found
+
+
+#: The modules that open files to write them themselves: the one writer of the files a command is
+#: given (dynevent.files), and the bag reader's copy of a compressed bag, unpacked in a temporary
+#: directory of its own (no path a user names).
+WRITERS = frozenset({"dynevent.files", "dynevent.bags.unpack"})
+
+
+def test_every_file_a_command_writes_goes_through_the_one_writer() -> None:
+    """A command's outputs (--junit, --report, --trace, --output) are checked before its work starts
+    and written by dynevent.files, whichever room makes their text: no other module opens a file to
+    write it."""
+    found = {
+        module: writes
+        for module, path in _modules()
+        if module not in WRITERS and (writes := _writes(path.read_text(encoding="utf-8")))
+    }
+    assert found == {}, found
+    assert _writes((SRC / "bags" / "unpack.py").read_text(encoding="utf-8"))  # the reader sees one
+    seen = (
+        "open(p, 'w')\nopen(p)\npath.open('xb')\npath.open('rb')\np.write_text(t)\n"
+        "files.write_text(p, t, f)\nos.open(p, os.O_WRONLY)\nos.open(os.devnull, os.O_WRONLY)\n"
+        "open(p, mode='a')\n"
+    )
+    assert _writes(seen) == [
+        "open(p, 'w')", "path.open('xb')", "p.write_text(t)", "os.open(p, os.O_WRONLY)", "open(p, mode='a')"
+    ]  # fmt: skip
+

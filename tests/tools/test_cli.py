@@ -267,7 +267,8 @@ def test_help_imports_no_protocol_module() -> None:
         "try:\n    cli.main(['--help'])\nexcept SystemExit:\n    pass\n"
         "heavy = sorted(m for m in sys.modules if m.startswith(('dynevent.server', 'dynevent.client', "
         "'dynevent.conformance', 'dynevent.bags', 'dynevent.sim', 'dynevent.tools.check', "
-        "'dynevent.tools.demo')))\n"
+        "'dynevent.tools.demo', 'dynevent.tools.explain', 'dynevent.tools.vectors', 'dynevent.tools.serve', "
+        "'dynevent.tools.send', 'dynevent.tools.probe', 'dynevent.tools.record', 'dynevent.tools.live')))\n"
         "print('HEAVY', heavy, 'attrs' in sys.modules)\n"
     )
     done = subprocess.run(

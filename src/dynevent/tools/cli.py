@@ -1,23 +1,27 @@
-"""The ``dynevent`` command line."""
+"""The ``dynevent`` command line: it parses, then calls one function, the ``run(args)`` of the command's
+own module, ``dynevent.tools.<command>`` (:data:`COMMANDS`), imported only then, so that ``dynevent
+--help`` stays quick; a command prints its own output and writes its files through
+:mod:`dynevent.files`.  What any command raises of dynevent's errors is one line here, never a
+traceback, and Ctrl-C or SIGTERM its exit status."""
 
 from __future__ import annotations
 
 import argparse
 import importlib
-import importlib.util
 import io
 import os
 import sys
-import time
 from collections.abc import Callable, Sequence
-from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from dynevent import DOCS, __version__
 from dynevent.tools.diagram import FORMATS
 from dynevent.wire.vocab import Compatibility
 
-__all__ = ["main"]
+if TYPE_CHECKING:
+    _Commands = argparse._SubParsersAction[argparse.ArgumentParser]
+
+__all__ = ["COMMANDS", "main"]
 
 _EPILOG = (
     "Exit status: 0 ok, 1 findings or failures (check: violations; explain: the goal is refused; "
@@ -29,17 +33,7 @@ _DESCRIPTION = (
 )
 
 
-def _lazy(module: str) -> Callable[[argparse.Namespace], int]:
-    """The ``_run`` of ``module`` (a dotted name), imported when the command runs: ``--help`` stays quick."""
-
-    def run(args: argparse.Namespace) -> int:
-        code: int = importlib.import_module(module)._run(args)
-        return code
-
-    return run
-
-
-def _add_demo_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def _add_demo_command(commands: _Commands) -> None:
     parser = commands.add_parser(
         "demo",
         help="run a scripted client/server session for one robot and print its timeline",
@@ -57,10 +51,9 @@ def _add_demo_command(commands: argparse._SubParsersAction[argparse.ArgumentPars
     parser.add_argument(
         "--seed", type=int, default=0, metavar="N", help="seed of the message delays and the race (0)"
     )
-    parser.set_defaults(run=_lazy("dynevent.tools.demo"))
 
 
-def _add_check_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def _add_check_command(commands: _Commands) -> None:
     parser = commands.add_parser(
         "check",
         help="check an observed trace of one robot, or a rosbag2 recording, against the protocol rules",
@@ -82,10 +75,9 @@ def _add_check_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         help="judge the server as the spec says (default), or as `dynevent serve --compatibility rmf_ros2` "
         "behaves: what is left is where it differs from that emulation (a trace's config record wins)",
     )  # fmt: skip
-    parser.set_defaults(run=_lazy("dynevent.tools.check"))
 
 
-def _add_explain_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def _add_explain_command(commands: _Commands) -> None:
     parser = commands.add_parser(
         "explain",
         help="would a robot in this state accept this goal? if not, why, and what to send instead",
@@ -123,73 +115,6 @@ def _add_explain_command(commands: argparse._SubParsersAction[argparse.ArgumentP
         help="judge as the spec says (standard, the default) or as rmf_ros2 does (accept, then abort)",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.set_defaults(run=_lazy("dynevent.tools.explain_command"))
-
-
-def _vectors(args: argparse.Namespace) -> int:
-    """``dynevent vectors``: run the conformance vectors; 0 all pass, 1 any fails, 2 bad input."""
-    from dynevent import files
-    from dynevent.conformance import vectors
-    from dynevent.errors import FileError
-    from dynevent.interrupts import interruptible
-    from dynevent.tools._progress import Progress
-    from dynevent.wire import _json
-
-    if args.files and not vectors.schema_validation_available():
-        print(
-            "dynevent vectors: note: jsonschema is not installed, so the files are checked by dynevent's "
-            "own reader only; pip install 'dynevent[vectors]' to validate them against the schema",
-            file=sys.stderr,
-        )
-    try:
-        loaded = vectors.load_vectors(args.files)
-    except vectors.InvalidVector as exc:
-        print(f"dynevent vectors: invalid vector file: {exc}", file=sys.stderr)
-        return 2
-    if not loaded:
-        print(f"dynevent vectors: no vector in {', '.join(args.files)}", file=sys.stderr)
-        return 2
-    chosen = vectors.select_vectors(loaded, args.filter)
-    if not chosen:
-        print(f"dynevent vectors: no vector matches {' or '.join(args.filter)}", file=sys.stderr)
-        return 2
-    implementation: vectors.InProcessImplementation | vectors.ExternalImplementation
-    try:
-        _check_writable("junit", args.junit)
-        if args.impl is None:
-            implementation = vectors.InProcessImplementation()
-        else:
-            implementation = vectors.ExternalImplementation(args.impl, timeout=args.timeout)
-    except (vectors.ImplementationError, FileError) as exc:
-        print(f"dynevent vectors: {exc}", file=sys.stderr)
-        return 2
-    progress = Progress("dynevent vectors", len(chosen))
-    outcomes: list[vectors.Outcome] = []
-    began = time.monotonic()
-    try:
-        with interruptible():  # Ctrl-C or SIGTERM, however inherited: the driver is ended as it stops
-            for outcome in vectors.run_vectors(chosen, implementation, max_failures=args.max_failures):
-                outcomes.append(outcome)
-                if args.json:  # as it is known: a run cut short keeps a line for each vector it ran
-                    progress.close()
-                    print(_json.dumps(vectors.outcome_record(outcome)), flush=True)
-                progress.update(len(outcomes), f"({len(outcomes)} of {len(chosen)}: {outcome.vector.name})")
-    finally:
-        progress.close()
-        implementation.close()
-    took = time.monotonic() - began
-    if args.junit is not None:
-        try:
-            files.write_text(args.junit, vectors.junit_xml(outcomes, implementation.name), "--junit")
-        except FileError as exc:
-            print(f"dynevent vectors: {exc}", file=sys.stderr)
-            return 2
-    if args.json:
-        print(_json.dumps(vectors.summary_record(outcomes, implementation.name, seconds=took)))
-    else:
-        print(vectors.format_report(outcomes, implementation.name))
-        print(vectors.took_line(took))
-    return 0 if all(outcome.passed for outcome in outcomes) else 1
 
 
 def _count(text: str) -> int:
@@ -216,7 +141,7 @@ def _timeout(text: str) -> float:
     return value
 
 
-def _add_vectors_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def _add_vectors_command(commands: _Commands) -> None:
     parser = commands.add_parser(
         "vectors",
         help="run the conformance vectors against an implementation",
@@ -259,17 +184,9 @@ def _add_vectors_command(commands: argparse._SubParsersAction[argparse.ArgumentP
         "-x", "--exitfirst", dest="max_failures", action="store_const", const=1, help="--max-failures 1"
     )
     parser.add_argument("--junit", metavar="FILE", help="also write the results to FILE as JUnit XML")
-    parser.set_defaults(run=_vectors)
 
 
-def _diagram(args: argparse.Namespace) -> int:
-    from dynevent.tools.diagram import render
-
-    print(render(args.format), end="")
-    return 0
-
-
-def _add_diagram_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def _add_diagram_command(commands: _Commands) -> None:
     parser = commands.add_parser(
         "diagram",
         help="print the server's phase diagram",
@@ -280,100 +197,9 @@ def _add_diagram_command(commands: argparse._SubParsersAction[argparse.ArgumentP
     parser.add_argument(
         "--format", choices=FORMATS, default="mermaid", help="mermaid (the default) or dot (Graphviz)"
     )
-    parser.set_defaults(run=_diagram)
 
 
-def _ros_module(command: str) -> Any:
-    """``dynevent.tools.live.<command>`` (over the ROS binding), or None after two lines on standard
-    error: what is missing, and how to get it (the setup script ships in the package:
-    ``dynevent/ros/setup/setup-ros-env.sh``)."""
-    try:
-        return importlib.import_module(f"dynevent.tools.live.{command}")
-    except ImportError as exc:
-        missing = (exc.name or "rclpy").split(".")[0]  # the package to install, not its submodule
-        if missing != "rclpy" and importlib.util.find_spec("rclpy") is None:
-            missing = "rclpy"  # the root of what is missing, whichever ROS package was imported first
-        script = Path(__file__).resolve().parent.parent / "ros" / "setup" / "setup-ros-env.sh"
-        print(
-            f"dynevent {command}: needs ROS 2 (rclpy, rmf_task_msgs); {missing} is not importable",
-            file=sys.stderr,
-        )
-        out = Path.cwd() / "build" / "ros"
-        print(
-            f"  get it, into this environment: bash {script} {sys.prefix} {out} && . {out}/env.sh",
-            file=sys.stderr,
-        )
-        return None
-
-
-def _say(line: str) -> None:
-    """Print one whole line at once: the live logs print from several threads."""
-    sys.stdout.write(line + "\n")
-    sys.stdout.flush()
-
-
-def _ros_command(command: str, check: Callable[[], Any], run: Callable[[Any, Any], int]) -> int:
-    """A ROS command: ``check()`` its own input first (a mistake there needs no ROS to be told), then
-    ``run(module, checked)`` with ``dynevent.tools.live.<command>``; a DyneventError is one line,
-    exit 2."""
-    from dynevent.errors import DyneventError
-
-    try:
-        checked = check()
-        module = _ros_module(command)
-        return 2 if module is None else int(run(module, checked))
-    except DyneventError as exc:
-        print(f"dynevent {command}: {exc}", file=sys.stderr)
-        return 2
-
-
-def _serve(args: argparse.Namespace) -> int:
-    from dynevent.errors import ServeError
-    from dynevent.sim.config import load_config
-
-    def check() -> Any:
-        if not 0 <= args.grace <= 3600:
-            raise ServeError(f"--grace: expected seconds from 0 to 3600 (got {args.grace})")
-        _check_writable("report", args.report)
-        config = load_config(
-            args.config, fleet=args.fleet, robots=args.robots or (), rebegin=args.rebegin,
-            first_seq=args.first_seq, compatibility=args.compatibility, shard=args.shard,
-        )  # fmt: skip
-        _check_writable("trace", args.trace, directory=len(config.served()) > 1)  # a file a robot
-        return config
-
-    def run(serve: Any, config: Any) -> int:
-        watch = serve.Watch(judge=not args.no_judge, grace=args.grace, report=args.report, trace=args.trace,
-                            introspection=args.introspection)  # fmt: skip
-        return int(serve.run(config, args.state, args.seconds, _say, watch, args.ros_args))
-
-    return _ros_command("serve", check, run)
-
-
-def _record(args: argparse.Namespace) -> int:
-    from dynevent.errors import RecordError
-
-    def check() -> None:
-        if args.seconds is not None and not 0 < args.seconds < 1e9:
-            raise RecordError(f"--seconds: expected positive seconds (got {args.seconds})")
-        if args.output and os.path.lexists(args.output):  # lexists: a path too long to stat is not there
-            raise RecordError(f"--output {args.output}: exists already (a bag is a new directory)")
-        if args.all and (args.fleet or args.robot):
-            named = "--fleet" if args.fleet else "--robot"
-            raise RecordError(f"--all: records every robot of every fleet, so {named} cannot narrow it")
-        _check_writable("output", args.output, directory=True)
-
-    def run(record: Any, _: None) -> int:
-        options = record.RecordOptions(
-            output=args.output, fleets=tuple(args.fleet or ()), robots=tuple(args.robot or ()),
-            seconds=args.seconds, ros_args=tuple(args.ros_args),
-        )  # fmt: skip
-        return int(record.run(options, _say))
-
-    return _ros_command("record", check, run)
-
-
-def _add_record_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def _add_record_command(commands: _Commands) -> None:
     parser = commands.add_parser(
         "record",
         help="record the Dynamic Event conversations of a live system into a rosbag2 bag (MCAP)",
@@ -395,10 +221,9 @@ def _add_record_command(commands: argparse._SubParsersAction[argparse.ArgumentPa
         "--all", action="store_true", help="every robot of every fleet, as they appear (the default)"
     )
     parser.add_argument("--seconds", type=float, metavar="SECONDS", help="stop after this long")
-    parser.set_defaults(run=_record)
 
 
-def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def _add_serve_command(commands: _Commands) -> None:
     parser = commands.add_parser(
         "serve",
         help="a Dynamic Event server for a fleet of simulated robots, over ROS 2",
@@ -472,160 +297,9 @@ def _add_serve_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
         help="write every step as a trace dynevent check reads: a file for one robot, a directory of "
         "ROBOT.jsonl for several",
     )  # fmt: skip
-    parser.set_defaults(run=_serve)
 
 
-def _send(args: argparse.Namespace) -> int:
-    from dynevent.errors import SendError
-    from dynevent.tools.send_request import goal_request
-
-    def check() -> tuple[Any, str, str]:
-        if not 0 < args.timeout < 1e6:
-            raise SendError(f"--timeout: expected positive seconds (got {args.timeout})")
-        _check_writable("trace", args.trace)
-        return goal_request(args)
-
-    def run(send: Any, goal: tuple[Any, str, str]) -> int:
-        event_type, category, description = goal
-        options = send.SendOptions(
-            fleet=args.fleet, robot=args.robot, event_type=event_type, category=category,
-            description=description, stubborn_period=args.stubbornness, timeout=args.timeout,
-            trace=args.trace, introspection=args.introspection, wait=args.wait, ros_args=tuple(args.ros_args),
-        )  # fmt: skip
-        return int(send.run(options, _say))
-
-    return _ros_command("send", check, run)
-
-
-def _check_writable(flag: str, path: str | None, *, directory: bool = False) -> None:
-    """Refuse, before the command's work starts, an output ``--flag PATH`` it could not write
-    (:func:`dynevent.files.check_writable`)."""
-    from dynevent import files
-
-    if path is not None:
-        files.check_writable(path, f"--{flag}", directory=directory)
-
-
-def _probe(args: argparse.Namespace) -> int:
-    from dynevent.conformance.probe import cases as probe_cases
-    from dynevent.errors import DyneventError, ProbeError
-
-    def check() -> list[probe_cases.Case]:
-        cases = probe_cases.select(args.cases)
-        if not cases:
-            raise ProbeError(f"--cases {' '.join(args.cases)}: no case matches (see dynevent probe --list)")
-        for flag in ("timeout", "server_wait", "deadline"):
-            if not 0 < getattr(args, flag) < 1e6:
-                raise ProbeError(
-                    f"--{flag.replace('_', '-')}: expected positive seconds (got {getattr(args, flag)})"
-                )
-        if not 0 <= args.stubborn_minimum < 1e6:
-            raise ProbeError(f"--stubborn-minimum: expected seconds from 0 (got {args.stubborn_minimum})")
-        for flag in ("junit", "report", "trace"):
-            _check_writable(flag, getattr(args, flag))
-        return cases
-
-    if args.list:
-        try:
-            sys.stdout.write(probe_cases.format_list(check()))
-        except DyneventError as exc:
-            print(f"dynevent probe: {exc}", file=sys.stderr)
-            return 2
-        return 0
-
-    def options(options_type: Any) -> Any:
-        known = args.known or ""
-        return options_type(
-            fleet=args.fleet, robot=args.robot, place=args.place[0] if args.place else None,
-            more_places=tuple(args.place[1:]) if args.place else (), category=args.category,
-            timeout=args.timeout, begin_command=args.begin_command,
-            known=probe_cases.KNOWN.get(known, frozenset()), trace=args.trace,
-            stubborn_minimum=args.stubborn_minimum, introspection=args.introspection,
-            allow_missing=tuple(args.allow_missing), server_wait=args.server_wait,
-            ros_args=tuple(args.ros_args), known_missing=probe_cases.KNOWN_MISSING.get(known, frozenset()),
-            junit=args.junit, report=args.report, deadline=args.deadline,
-        )  # fmt: skip
-
-    if args.loopback or args.impl:
-        return _probe_in_process(args, check, options)
-
-    def run(probe: Any, cases: list[probe_cases.Case]) -> int:
-        return int(probe.main(options(probe.Options), cases, _say))
-
-    return _ros_command("probe", check, run)
-
-
-def _probe_in_process(
-    args: argparse.Namespace, check: Callable[[], Any], options: Callable[[Any], Any]
-) -> int:
-    """``dynevent probe --loopback`` (dynevent's own machine as ``dynevent serve`` would run the robot:
-    ``--config``, ``--compatibility``, ``--first-seq``) or ``--impl CMD`` (an implementation behind the
-    driver protocol, configured the same), on simulated time, with no ROS."""
-    from dynevent.conformance.probe import in_process
-    from dynevent.errors import DyneventError, ProbeError
-
-    try:
-        cases = check()
-        for flag, given in (("--impl", args.loopback and args.impl), ("--introspection", args.introspection),
-                            ("--ros-args", args.ros_args)):  # fmt: skip
-            if given:
-                mode = "--loopback" if args.loopback else "--impl"
-                raise ProbeError(f"{flag}: not with {mode}, which runs in this process, without ROS")
-        config, chosen = _in_process_options(args, options)
-        if not args.impl:
-            return in_process.probe_in_process(chosen, cases, _say, config)[0]
-        return _probe_implementation(args, chosen, cases, config)
-    except DyneventError as exc:
-        print(f"dynevent probe: {exc}", file=sys.stderr)
-        return 2
-
-
-def _in_process_options(args: argparse.Namespace, options: Callable[[Any], Any]) -> tuple[Any, Any]:
-    """The served configuration and the probe's options for ``--loopback`` and ``--impl``: the robot
-    starts at the seq wrap unless ``--first-seq`` or the ``--config`` file says where; the places, the
-    configured ones (the simulated map takes any place when none is configured); the least stubborn
-    period, the configured machine's."""
-    import attrs
-
-    from dynevent.conformance.probe import in_process
-    from dynevent.conformance.probe import runner as probe_runner
-    from dynevent.sim.config import load_config, machine_config
-
-    first_seq = args.first_seq
-    if first_seq is None and args.config is None:
-        first_seq = 2**32 - 1
-    config = load_config(
-        args.config, fleet=args.fleet, robots=[args.robot], compatibility=args.compatibility,
-        first_seq=first_seq,
-    )  # fmt: skip
-    chosen = attrs.evolve(
-        options(probe_runner.Options), stubborn_minimum=machine_config(config).stubborn_minimum
-    )
-    if chosen.place is None:
-        named = [str(place) for place in config.places or () if place is not None]
-        if config.places is None:
-            named = list(in_process.PLACES)
-        if named:
-            chosen = attrs.evolve(chosen, place=named[0], more_places=tuple(named[1:3]))
-    return config, chosen
-
-
-def _probe_implementation(args: argparse.Namespace, chosen: Any, cases: Any, config: Any) -> int:
-    """``--impl CMD``: the driver started (given at least the runner's START_TIMEOUT), probed, closed."""
-    from dynevent.conformance.probe import in_process
-    from dynevent.conformance.vectors.runner import MAX_TIMEOUT, ExternalImplementation
-    from dynevent.interrupts import interruptible
-
-    implementation = ExternalImplementation(args.impl, timeout=min(args.timeout, MAX_TIMEOUT))
-    try:
-        with interruptible():  # Ctrl-C or SIGTERM, however inherited: the driver is ended as it stops
-            _say(f"implementation: {implementation.name}")
-            return in_process.probe_in_process(chosen, cases, _say, config, implementation=implementation)[0]
-    finally:
-        implementation.close()
-
-
-def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def _add_probe_command(commands: _Commands) -> None:
     parser = commands.add_parser(
         "probe",
         help="test a live Dynamic Event server over ROS 2, case by case, against docs/spec.md",
@@ -694,7 +368,6 @@ def _add_probe_command(commands: argparse._SubParsersAction[argparse.ArgumentPar
     )  # fmt: skip
     _add_probe_outputs(parser)
     _add_loopback_arguments(parser)
-    parser.set_defaults(run=_probe)
 
 
 def _add_probe_outputs(parser: argparse.ArgumentParser) -> None:
@@ -743,7 +416,7 @@ def _add_loopback_arguments(parser: argparse.ArgumentParser) -> None:
     )  # fmt: skip
 
 
-def _add_send_command(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def _add_send_command(commands: _Commands) -> None:
     parser = commands.add_parser(
         "send",
         help="send one Dynamic Event goal to a robot over ROS 2 and print what becomes of it",
@@ -803,7 +476,6 @@ def _add_send_command(commands: argparse._SubParsersAction[argparse.ArgumentPars
         help="publish the action's service events (ROS 2 introspection, with contents), so that a "
         "recording holds the goals and their answers (docs/recordings.md)",
     )  # fmt: skip
-    parser.set_defaults(run=_send)
 
 
 #: The commands that run rclpy, and so take ROS 2's own arguments after ``--ros-args``.
@@ -841,19 +513,32 @@ class _Parser(argparse.ArgumentParser):
             (file or sys.stderr).write(message)
 
 
+#: Every command, in the order ``dynevent --help`` lists them, and what adds its flags; each runs as
+#: the ``run(args)`` of its own module, ``dynevent.tools.<command>``.
+COMMANDS: dict[str, Callable[[_Commands], None]] = {
+    "demo": _add_demo_command,
+    "check": _add_check_command,
+    "explain": _add_explain_command,
+    "diagram": _add_diagram_command,
+    "vectors": _add_vectors_command,
+    "serve": _add_serve_command,
+    "send": _add_send_command,
+    "probe": _add_probe_command,
+    "record": _add_record_command,
+}
+
+
+def _run(args: argparse.Namespace) -> int:
+    """The command's one function, imported now: ``dynevent.tools.<command>.run(args)``."""
+    return int(importlib.import_module(f"dynevent.tools.{args.command}").run(args))
+
+
 def _command(argv: Sequence[str] | None) -> int:
     parser: argparse.ArgumentParser = _Parser(prog="dynevent", description=_DESCRIPTION, epilog=_EPILOG)
     parser.add_argument("--version", action="version", version=f"dynevent {__version__}")
     commands = parser.add_subparsers(dest="command")
-    _add_demo_command(commands)
-    _add_check_command(commands)
-    _add_explain_command(commands)
-    _add_diagram_command(commands)
-    _add_vectors_command(commands)
-    _add_serve_command(commands)
-    _add_send_command(commands)
-    _add_probe_command(commands)
-    _add_record_command(commands)
+    for add in COMMANDS.values():
+        add(commands)
     for stream in (
         sys.stdout,
         sys.stderr,
@@ -874,7 +559,7 @@ def _command(argv: Sequence[str] | None) -> int:
     from dynevent.interrupts import Interrupted
 
     try:
-        result: int = args.run(args)
+        result = _run(args)
     except KeyboardInterrupt:
         return 130  # Ctrl-C: the command stops, without a traceback
     except Interrupted as stop:  # a command that held something closed it as this passed

@@ -1,11 +1,14 @@
-"""The server machine's phase diagram, drawn from :data:`dynevent.server.machine.TRANSITIONS`.
+"""``dynevent diagram``: the server machine's phase diagram, drawn from
+:data:`dynevent.server.machine.TRANSITIONS`.
 
 docs/spec.md embeds the Mermaid form; the test suite checks it is up to date.
 """
 
 from __future__ import annotations
 
-__all__ = ["FORMATS", "render"]
+import argparse
+
+__all__ = ["FORMATS", "render", "run"]
 
 #: The diagram formats :func:`render` can write.
 FORMATS = ("mermaid", "dot")
@@ -52,3 +55,9 @@ def render(fmt: str = "mermaid") -> str:
     if fmt == "dot":
         return _dot()
     raise ValueError(f"diagram format {fmt!r} is none of {', '.join(FORMATS)}")
+
+
+def run(args: argparse.Namespace) -> int:
+    """``dynevent diagram``: print the diagram in ``--format``; 0."""
+    print(render(args.format), end="")
+    return 0

@@ -331,14 +331,15 @@ def probe_in_process(
     say: Callable[[str], None],
     config: ServeConfig | None = None,
     *,
+    write: probe_runner.ReportWriter,
     stepper: Stepper | None = None,
     implementation: vectors_runner.Implementation | None = None,
     wall: Callable[[], float] = time.monotonic,
 ) -> tuple[int, list[CaseFinding]]:
     """Run ``cases`` against the machine as serve runs ``config``'s robot (or ``stepper``, or
-    ``implementation`` behind the driver protocol), judge every record of the exchange, write the
-    reports ``options`` asks for, and say last what the run took (on ``wall``, and in simulated
-    time); the exit status and the findings."""
+    ``implementation`` behind the driver protocol), judge every record of the exchange, hand the
+    reports ``options`` asks for to ``write`` (the command's writer), and say last what the run took
+    (on ``wall``, and in simulated time); the exit status and the findings."""
     config = ServeConfig() if config is None else config
     # the deadline runs from the server found: an implementation's reset and first begin are within it
     began = wall()
@@ -357,7 +358,7 @@ def probe_in_process(
         took = link.real_time() - began
     finally:
         trace.close()
-    code, findings = probe_runner.conclude(findings, trace.text(), options, say)
+    code, findings = probe_runner.conclude(findings, trace.text(), options, say, write)
     if server is not None and server.broken is not None:
         say(f"the implementation broke the driver protocol at {server.broken}")
         code = max(code, 1)

@@ -32,12 +32,10 @@ from typing import Any
 
 import attrs
 
-from dynevent import files
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.conformance.probe import cases as probe_cases
 from dynevent.conformance.probe.cases import Case, CaseFinding, Verdict
 from dynevent.conformance.vectors.report import took_line
-from dynevent.errors import FileError, ProbeError
 from dynevent.server import machine
 from dynevent.wire._fields import U32_MAX, U64_MAX, id_not_after, seq_after
 from dynevent.wire._text import goal_text, status_text
@@ -57,6 +55,7 @@ __all__ = [
     "Link",
     "Options",
     "Probe",
+    "ReportWriter",
     "conclude",
     "implemented",
     "run_cases",
@@ -1599,14 +1598,23 @@ def _ready(
     return options
 
 
+#: How the command writes a report ``--junit`` or ``--report`` asks for: ``write(path, text, flag)``, as
+#: :func:`dynevent.files.write_text` does (the probe produces the text; the command writes the file).
+ReportWriter = Callable[[str, str, str], None]
+
+
 def conclude(
-    findings: list[CaseFinding], trace: str, options: Options, say: Callable[[str], None]
+    findings: list[CaseFinding],
+    trace: str,
+    options: Options,
+    say: Callable[[str], None],
+    write: ReportWriter,
 ) -> tuple[int, list[CaseFinding]]:
     """The end of a run: the judge over every record of the exchange (``trace``, the trace's text)
     fails the cases whose own records show a finding on their rules
     (:func:`~dynevent.conformance.probe.cases.judge_verdicts`), the findings and the judge's own
-    section said, the JUnit and readable reports written where asked; the exit status and the
-    findings.  A report that cannot be written raises :class:`~dynevent.errors.ProbeError`."""
+    section said, the JUnit and readable reports handed to ``write`` where asked; the exit status and
+    the findings.  What ``write`` raises (a :class:`~dynevent.errors.FileError`) passes on."""
     findings, judged = probe_cases.judge_verdicts(trace, findings, options.known)
     say(probe_cases.format_findings(findings, judged).rstrip("\n"))
     server = f"{options.fleet}/{options.robot}"
@@ -1619,10 +1627,7 @@ def conclude(
     ]  # fmt: skip
     for flag, path, text in outputs:
         if path:
-            try:
-                files.write_text(path, text(), f"--{flag}")
-            except FileError as exc:
-                raise ProbeError(str(exc)) from None
+            write(path, text(), f"--{flag}")
     return probe_cases.exit_status(findings, judged), findings
 
 

@@ -21,10 +21,12 @@ from dynevent.tools._progress import Progress
 from dynevent.wire import _json
 from dynevent.wire.vocab import Compatibility
 
-__all__ = ["BAG_SUFFIXES", "bag_records", "format_bag"]
+__all__ = ["BAG_SUFFIXES", "bag_records", "format_bag", "run"]
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
+    """``dynevent check TRACE``: judge the trace or recording and print the findings; 0 clean, 1 findings,
+    2 unreadable input."""
     source = args.trace
     compatibility = Compatibility(getattr(args, "compatibility", None) or Compatibility.STANDARD)
     if source != "-" and (os.path.isdir(source) or source.endswith(BAG_SUFFIXES)):

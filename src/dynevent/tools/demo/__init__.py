@@ -49,7 +49,7 @@ from dynevent.wire import _json
 from dynevent.wire.messages import Goal
 from dynevent.wire.vocab import EventType, Failure, Status
 
-__all__ = ["STEPS", "WIDTH", "mermaid", "run_demo", "session_events", "summary"]
+__all__ = ["STEPS", "WIDTH", "mermaid", "run", "run_demo", "session_events", "summary"]
 
 _SECOND = cl.SECOND  # instants (event.time) are nanoseconds; durations below are seconds
 
@@ -319,7 +319,8 @@ def _mermaid_text(text: str) -> str:
     return text if len(text) <= 90 else text[:87] + "..."
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
+    """``dynevent demo``: print the session for ``--seed``, as a timeline, JSON lines or Mermaid; 0."""
     if args.mermaid:
         print(mermaid(args.seed), end="")
     else:

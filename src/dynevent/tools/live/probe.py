@@ -1,12 +1,13 @@
 """``dynevent probe`` over ROS 2: the probe's cases (:mod:`dynevent.conformance.probe.runner`) run against
 a live server through the ROS binding's link (:class:`dynevent.ros.probe.RosLink`), with a progress
-line on a terminal, the findings printed and the reports written; Ctrl-C or SIGTERM stops it, with
-the findings of the cases that ended."""
+line on a terminal, the findings printed and the reports written (:func:`dynevent.files.write_text`);
+Ctrl-C or SIGTERM stops it, with the findings of the cases that ended."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
 
+from dynevent import files
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.conformance.probe import cases as probe_cases
 from dynevent.conformance.probe import runner as probe_runner
@@ -42,7 +43,7 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
     if ran is None:
         return probe_cases.EXIT_USAGE
     findings, took = ran
-    status = probe_runner.conclude(findings, trace.text(), options, say)[0]
+    status = probe_runner.conclude(findings, trace.text(), options, say, files.write_text)[0]
     say(probe_runner.took(took, options))  # its bound, checkable
     return status
 

@@ -1,20 +1,41 @@
-"""``dynevent send``'s goal, read from its flags without ROS 2.
-
-So that ``dynevent send`` checks its own input, and says what is wrong with
-it, before it needs rclpy.
-"""
+"""``dynevent send``: its goal read from its flags without ROS 2 (so that a mistake there is told
+before rclpy is needed), then sent over it (:mod:`dynevent.tools.live.send`)."""
 
 from __future__ import annotations
 
 import argparse
 import json
+from typing import Any
 
 from dynevent import files
 from dynevent.errors import FileError, SendError, short_repr
+from dynevent.tools.live import run_over_ros, say
 from dynevent.wire import _json
 from dynevent.wire.vocab import EventType
 
-__all__ = ["goal_request"]
+__all__ = ["goal_request", "run"]
+
+
+def run(args: argparse.Namespace) -> int:
+    """``dynevent send``: send the goal and print what becomes of it; 0 it succeeded, 1 it did not, 2 bad
+    usage or no server."""
+
+    def check() -> tuple[EventType, str, str]:
+        if not 0 < args.timeout < 1e6:
+            raise SendError(f"--timeout: expected positive seconds (got {args.timeout})")
+        files.check_writable(args.trace, "--trace")
+        return goal_request(args)
+
+    def send(live: Any, goal: tuple[EventType, str, str]) -> int:
+        event_type, category, description = goal
+        options = live.SendOptions(
+            fleet=args.fleet, robot=args.robot, event_type=event_type, category=category,
+            description=description, stubborn_period=args.stubbornness, timeout=args.timeout,
+            trace=args.trace, introspection=args.introspection, wait=args.wait, ros_args=tuple(args.ros_args),
+        )  # fmt: skip
+        return int(live.run(options, say))
+
+    return run_over_ros("send", check, send)
 
 
 def goal_request(args: argparse.Namespace) -> tuple[EventType, str, str]:

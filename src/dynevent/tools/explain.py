@@ -17,7 +17,7 @@ from dynevent.errors import DyneventError, FileError, InvalidMessage, shown_path
 from dynevent.wire import _json
 from dynevent.wire.messages import DynamicEventStatus, Goal
 
-__all__ = ["MAX_INPUT_BYTES"]
+__all__ = ["MAX_INPUT_BYTES", "run"]
 
 
 class _ArgumentError(DyneventError):
@@ -70,7 +70,8 @@ def _parse_categories(text: str | None) -> tuple[str, ...] | None:
     return names
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
+    """``dynevent explain``: say whether the robot accepts the goal; 0 accepted, 1 refused, 2 bad input."""
     try:
         stdin_taken: list[str] = []
         status = _parse_message(
