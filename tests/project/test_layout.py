@@ -9,6 +9,7 @@ lazy import that crosses a layer the wrong way fails here as a module-level one 
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -511,3 +512,59 @@ def test_every_file_a_command_writes_goes_through_the_one_writer() -> None:
         "open(p, 'w')", "path.open('xb')", "p.write_text(t)", "os.open(p, os.O_WRONLY)", "open(p, mode='a')"
     ]  # fmt: skip
 
+
+ARCHITECTURE = SRC.parents[1] / "docs" / "architecture.md"
+
+
+def _floors() -> dict[str, int]:
+    """Each room's floor: 1 for a room that may import none, else one above the highest it may."""
+    floors: dict[str, int] = {}
+
+    def floor(room: str) -> int:
+        if room not in floors:
+            floors[room] = 1 + max((floor(below) for below in ALLOWED[room]), default=0)
+        return floors[room]
+
+    for room in ALLOWED:
+        floor(room)
+    return floors
+
+
+def _architecture_rows(text: str) -> dict[str, tuple[int, frozenset[str], str]]:
+    """docs/architecture.md's table of rooms: each room's floor, what it may import, what it must never
+    know."""
+    rows = {}
+    for line in text.splitlines():
+        cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
+        if len(cells) == 4 and cells[0].startswith("`") and cells[1].isdigit():
+            may = frozenset(name.strip("` ") for name in cells[2].split(",") if "`" in name)
+            rows[cells[0].strip("`")] = (int(cells[1]), may, cells[3])
+    return rows
+
+
+def test_the_architecture_page_names_every_room_with_its_floor_and_what_it_may_import() -> None:
+    """docs/architecture.md cannot fall behind the package: every room under src/dynevent is a row of
+    its table, with the floor its imports give and exactly the rooms it may import."""
+    rows = _architecture_rows(ARCHITECTURE.read_text(encoding="utf-8"))
+    rooms = {_part(module) for module, _ in _modules()} - {"", "__main__"}
+    assert set(rows) == rooms
+    floors = _floors()
+    for room, (floor, may, never) in rows.items():
+        assert may == ALLOWED[room], (room, sorted(may), sorted(ALLOWED[room]))
+        assert floor == floors[room], (room, floor, floors[room])
+        assert never, room
+    text = ARCHITECTURE.read_text(encoding="utf-8")
+    drawn = {
+        int(floor): {word for word in rest.split() if word in rooms}
+        for floor, rest in re.findall(r"^floor +(\d+) +(.*)$", text, re.MULTILINE)
+    }
+    assert drawn == {
+        floor: {room for room in rooms if floors[room] == floor} for floor in set(floors.values())
+    } | {max(floors.values()) + 1: set()}  # the drawing's top floor: __main__
+    for name in re.findall(r"`(test_\w+)`", text):
+        assert name in globals(), f"docs/architecture.md names {name}, which is no test here"
+    made = "| `wire` | 2 | `errors` | a state |\n| `files` | 3 | `errors`, `wire` | what a file means |\n"
+    assert _architecture_rows(made) == {
+        "wire": (2, frozenset({"errors"}), "a state"),
+        "files": (3, frozenset({"errors", "wire"}), "what a file means"),
+    }
