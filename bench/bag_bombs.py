@@ -1,7 +1,7 @@
 """What ``dynevent check`` takes to refuse a compressed bomb, each in a process of its own.
 
 Run ``python bench/bag_bombs.py`` from a virtual environment with the ``bags`` extra (and the test
-extra's helpers: it builds the bombs with ``tests/bag_bombs.py``).  Each row is one recording whose
+extra's helpers: it builds the bombs with ``tests/support/bag_bombs.py``).  Each row is one recording whose
 compressed bytes unpack to 2 GiB (a storage file, a message, an MCAP chunk), checked by
 ``python -m dynevent check`` in a fresh process: its wall time, its peak resident memory (the
 process's ``ru_maxrss``, the interpreter and rosbags included), its exit status and its one line.
@@ -25,8 +25,8 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests")]  # run as a script: bench and th
 
 from rosbags.rosbag2 import CompressionMode, StoragePlugin  # noqa: E402
 
-from bag_bombs import BOMB, bag, lz4_zeros, mcap, packed_messages, storage_file, zstd_zeros  # noqa: E402
 from bench.check_bags import run_check  # noqa: E402
+from support.bag_bombs import BOMB, bag, lz4_zeros, mcap, packed_messages, storage_file, zstd_zeros  # noqa: E402
 
 
 def _file_bomb(storage: StoragePlugin) -> Callable[[Path], Path]:

@@ -1,5 +1,6 @@
-"""``dynevent check BAG`` without ROS: rosbag2 recordings written by rosbags' own writer (not
-dynevent's code), in both storage formats, judged per robot at the bag time of each message.
+"""The bag reader (``dynevent check BAG`` without ROS): rosbag2 recordings written by rosbags' own
+writer (tests/support/recordings.py), in both storage formats, judged per robot at the bag time of each
+message.  (What the command prints of them is tests/tools/check's.)
 
 (The messages are built from the type store the reader uses; tests/ros/test_ros_bags.py writes them
 with ROS's own serialisation instead, which holds the reader's message definitions to ROS's.)
@@ -14,196 +15,36 @@ import sqlite3
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 
-from dynevent.bags.reader import HOLD, BagReport, _definitions, _stored_name, check_bag, typestore
+from dynevent.bags.reader import HOLD, BagReport, check_bag
 from dynevent.errors import BagError
-
-STORE = typestore()
-DEFINITIONS = _definitions()
-#: A type hash for the topics' metadata (the reader does not use it).
-UNHASHED = "RIHS01_" + "0" * 64
-FLEET, ROBOT = "tinyRobot", "r1"
-ACTION = f"/rmf/dynamic_event/command/{FLEET}/{ROBOT}"
-STATUS_TOPIC = f"/rmf/dynamic_event/status/{FLEET}/{ROBOT}"
-BEGIN_TOPIC = f"/rmf/dynamic_event/begin/{FLEET}/{ROBOT}"
-SECOND = 10**9
-T0 = 1_700_000_000 * SECOND
-
-
-def _type(name: str) -> Any:
-    return STORE.types[name]
-
-
-def _time(ns: int) -> Any:
-    return _type("builtin_interfaces/msg/Time")(sec=ns // SECOND, nanosec=ns % SECOND)
-
-
-def _uuid(n: int) -> Any:
-    return _type("unique_identifier_msgs/msg/UUID")(uuid=np.array([n] * 16, dtype=np.uint8))
-
-
-class Conversation:
-    """A robot's messages as a rosbag2 recording holds them: (topic, type, bag time, message)."""
-
-    def __init__(self) -> None:
-        self.messages: list[tuple[str, str, int, Any]] = []
-        self.now = T0
-        self.calls = 0  # get_result calls
-
-    def at(self, topic: str, msgtype: str, message: Any) -> Conversation:
-        self.now += SECOND // 10
-        self.messages.append((topic, msgtype, self.now, message))
-        return self
-
-    def status(self, seq: int, phase: int, status: str, event_id: int) -> Conversation:
-        message = _type("rmf_task_msgs/msg/DynamicEventStatus")(
-            dynamic_event_seq=seq, dynamic_state=phase, status=status, id=event_id, time=_time(self.now)
-        )
-        return self.at(STATUS_TOPIC, "rmf_task_msgs/msg/DynamicEventStatus", message)
-
-    def begin(self, seq: int = 1, topic: str = BEGIN_TOPIC) -> Conversation:
-        message = _type("rmf_task_msgs/msg/DynamicEventDescription")(
-            fleet=FLEET, robot=ROBOT, dynamic_event_seq=seq, description="{}", start_time=_time(self.now)
-        )
-        return self.at(topic, "rmf_task_msgs/msg/DynamicEventDescription", message)
-
-    def _event(
-        self, service: str, kind: int, call: int, request: Any = None, response: Any = None
-    ) -> Conversation:
-        """A service event as ROS 2 introspection records it: a request event carries the request, a
-        response event the response alone, the two paired by the client's GID and ``call``."""
-        name = {"send_goal": "DynamicEvent_SendGoal", "get_result": "DynamicEvent_GetResult"}[service]
-        info = _type("service_msgs/msg/ServiceEventInfo")(
-            event_type=kind,
-            stamp=_time(self.now),
-            client_gid=np.zeros(16, dtype=np.uint8),
-            sequence_number=call,
-        )
-        msgtype = f"rmf_task_msgs/action/{name}_Event"
-        event = _type(msgtype)(
-            info=info,
-            request=[] if request is None else [request],
-            response=[] if response is None else [response],
-        )
-        return self.at(f"{ACTION}/_action/{service}/_service_event", msgtype, event)
-
-    def goal(
-        self, n: int, *, accepted: bool = True, seq: int = 1, event_type: int = 1, goal_id: int = 0
-    ) -> Conversation:
-        goal = _type("rmf_task_msgs/action/DynamicEvent_Goal")(
-            dynamic_event_seq=seq, event_type=event_type, category="go_to_place" if event_type == 1 else "",
-            description='"pantry"' if event_type == 1 else "", id=goal_id, stubborn_period=0.0,
-        )  # fmt: skip
-        request = _type("rmf_task_msgs/action/DynamicEvent_SendGoal_Request")(goal_id=_uuid(n), goal=goal)
-        response = _type("rmf_task_msgs/action/DynamicEvent_SendGoal_Response")(
-            accepted=accepted, stamp=_time(0)
-        )
-        self._event("send_goal", 1, n, request=request)
-        return self._event("send_goal", 2, n, response=response)
-
-    def feedback(self, n: int, status: str, event_id: int, logs: tuple[int, ...] = ()) -> Conversation:
-        entries = [
-            _type("rmf_task_msgs/msg/LogEntry")(
-                seq=seq,
-                tier="info",
-                unix_millis_time=(self.now + SECOND // 10) // 1_000_000,
-                text="a log line",
-            )  # stamped when the message is, as the server stamps it
-            for seq in logs
-        ]
-        feedback = _type("rmf_task_msgs/action/DynamicEvent_Feedback")(
-            status=status, id=event_id, logs=entries
-        )
-        message = _type("rmf_task_msgs/action/DynamicEvent_FeedbackMessage")(
-            goal_id=_uuid(n), feedback=feedback
-        )
-        return self.at(
-            f"{ACTION}/_action/feedback", "rmf_task_msgs/action/DynamicEvent_FeedbackMessage", message
-        )
-
-    def goal_statuses(self, *goals: tuple[int, int]) -> Conversation:
-        """The action's goal status array: (goal, action_msgs/GoalStatus status) for each goal it holds."""
-        items = [
-            _type("action_msgs/msg/GoalStatus")(
-                goal_info=_type("action_msgs/msg/GoalInfo")(goal_id=_uuid(n), stamp=_time(T0)), status=code
-            )
-            for n, code in goals
-        ]
-        message = _type("action_msgs/msg/GoalStatusArray")(status_list=items)
-        return self.at(f"{ACTION}/_action/status", "action_msgs/msg/GoalStatusArray", message)
-
-    def ask(self, n: int) -> Conversation:
-        """A client asks for goal ``n``'s answer (the server holds the call until the answer)."""
-        request = _type("rmf_task_msgs/action/DynamicEvent_GetResult_Request")(goal_id=_uuid(n))
-        self.calls += 1
-        return self._event("get_result", 1, self.calls, request=request)
-
-    def result(self, n: int, goal_status: int, status: str, event_id: int) -> Conversation:
-        request = _type("rmf_task_msgs/action/DynamicEvent_GetResult_Request")(goal_id=_uuid(n))
-        result = _type("rmf_task_msgs/action/DynamicEvent_Result")(
-            execution_failure="", status=status, id=event_id
-        )
-        response = _type("rmf_task_msgs/action/DynamicEvent_GetResult_Response")(
-            status=goal_status, result=result
-        )
-        self.calls += 1
-        self._event("get_result", 1, self.calls, request=request)
-        return self._event("get_result", 2, self.calls, response=response)
-
-    def write(self, path: Path, storage: StoragePlugin) -> Path:
-        writer = Writer(path, version=9, storage_plugin=storage)
-        with writer:
-            connections: dict[str, Any] = {}
-            for topic, msgtype, time, message in self.messages:
-                if topic not in connections:
-                    # the definition as rosbag2 keeps it (rosbags generates one for "msg" types only)
-                    text = DEFINITIONS.get(msgtype, "")
-                    connections[topic] = writer.add_connection(topic, msgtype, msgdef=text, rihs01=UNHASHED)
-                writer.write(
-                    connections[topic], time, STORE.serialize_cdr(message, _stored_name(STORE, msgtype))
-                )
-        return path
-
-    def cancel(self, n: int, kind: int, clock: int = 0) -> Conversation:
-        """An action-level cancel of goal ``n`` as a client's introspection records it (``kind`` 0: the
-        request sent, 3: the response received, accepted), stamped by a clock ``clock`` ns ahead."""
-        info = _type("service_msgs/msg/ServiceEventInfo")(
-            event_type=kind, stamp=_time(self.now + SECOND // 10 + clock),
-            client_gid=np.ones(16, dtype=np.uint8), sequence_number=1,
-        )  # fmt: skip
-        goal_info = _type("action_msgs/msg/GoalInfo")(goal_id=_uuid(n), stamp=_time(0))
-        request = _type("action_msgs/srv/msg/CancelGoal_Request")(goal_info=goal_info)
-        response = _type("action_msgs/srv/msg/CancelGoal_Response")(
-            return_code=0, goals_canceling=[goal_info]
-        )
-        event = _type("action_msgs/srv/msg/CancelGoal_Event")(
-            info=info, request=[request] if kind == 0 else [], response=[response] if kind == 3 else []
-        )
-        return self.at(
-            f"{ACTION}/_action/cancel_goal/_service_event", "action_msgs/srv/CancelGoal_Event", event
-        )
-
-
-SUCCEEDED, ABORTED = 4, 6
-
-
-def _clean(between: Any = None) -> Conversation:
-    """A run: begin, a NEXT that runs its child to the end, FINISHED; ``between(run)`` adds messages
-    after the NEXT's answer."""
-    run = Conversation().begin().status(1, 1, "standby", 0)
-    run.goal(1, goal_id=1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
-    run.result(1, SUCCEEDED, "completed", 1)
-    if between is not None:
-        between(run)
-    run.status(1, 1, "standby", 1)
-    run.goal(2, event_type=3).result(2, SUCCEEDED, "completed", 0).status(1, 0, "uninitialized", 0)
-    return run
-
-
-STORAGES = [StoragePlugin.MCAP, StoragePlugin.SQLITE3]
+from support.recordings import (
+    ABORTED,
+    ACTION,
+    BEGIN_TOPIC,
+    CANCELED,
+    CANCELING,
+    EXECUTING,
+    FLEET,
+    ROBOT,
+    SECOND,
+    STATUS_TOPIC,
+    STORAGES,
+    STORE,
+    SUCCEEDED,
+    T0,
+    UNHASHED,
+    Conversation,
+    check_command,
+    clean_run,
+    partial_clean_run,
+    ros_time,
+    ros_type,
+    ros_uuid,
+    topics_alone,
+)
 
 
 def _robot(report: BagReport) -> Any:
@@ -213,7 +54,7 @@ def _robot(report: BagReport) -> Any:
 
 @pytest.mark.parametrize("storage", STORAGES, ids=["mcap", "sqlite3"])
 def test_a_clean_recording_is_clean_in_both_storage_formats(tmp_path: Path, storage: StoragePlugin) -> None:
-    report = check_bag(_clean().write(tmp_path / "bag", storage))
+    report = check_bag(clean_run().write(tmp_path / "bag", storage))
     robot = _robot(report)
     assert report.clean and robot.report is not None and robot.report.records == 12
     assert robot.absent == ()
@@ -236,7 +77,7 @@ def test_each_broken_conversation_is_found_at_its_bag_time_and_rule(
     missing.status(1, 1, "standby", 1)  # the child ended: its NEXT's answer, asked for, never came
     at_unanswered = missing.now
     missing.now += 2 * SECOND  # and the recording goes on
-    missing.at("/chatter", "builtin_interfaces/msg/Time", _time(5))
+    missing.at("/chatter", "builtin_interfaces/msg/Time", ros_time(5))
     cases = {
         "stale": (stale, at_stale, "R4.2"),
         "running": (stale_running, at_running, "R2.2"),
@@ -269,7 +110,7 @@ def test_an_answer_no_client_asked_for_is_not_missing_and_a_goal_status_shows_an
     shown.goal(1, goal_id=1).ask(1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
     shown.goal_statuses((1, SUCCEEDED)).status(1, 1, "standby", 1)  # the get_result response was lost
     shown.now += 2 * SECOND
-    shown.at("/chatter", "builtin_interfaces/msg/Time", _time(5))
+    shown.at("/chatter", "builtin_interfaces/msg/Time", ros_time(5))
     assert check_bag(shown.write(tmp_path / "shown", StoragePlugin.MCAP)).clean
     stopped = Conversation().begin().status(1, 1, "standby", 0)
     stopped.goal(1, goal_id=1).ask(1).feedback(1, "underway", 1).status(1, 2, "underway", 1)
@@ -307,7 +148,7 @@ def test_a_goal_whose_request_the_bag_lost_begins_the_judgement_anew(tmp_path: P
         time for topic, _, time, m in clean.messages if topic.endswith("feedback") and m.feedback.id == 2
     )
     assert robot.lost == ((first_feedback, "02" * 16),)
-    done = _check("--json", str(tmp_path / "clean"))
+    done = check_command("--json", str(tmp_path / "clean"))
     rows = [json.loads(line) for line in done.stdout.splitlines()]
     assert done.returncode == 0 and [row for row in rows if row["type"] == "lost_request"] == [
         {"type": "lost_request", "file": str(tmp_path / "clean"), "robot": f"{FLEET}/{ROBOT}",
@@ -332,9 +173,9 @@ def test_a_goal_whose_response_the_bag_lost_is_read_as_accepted_from_its_feedbac
         if response:
             talk.goal(1, goal_id=1)
         else:  # the request event alone
-            request = _type("rmf_task_msgs/action/DynamicEvent_SendGoal_Request")(
-                goal_id=_uuid(1),
-                goal=_type("rmf_task_msgs/action/DynamicEvent_Goal")(
+            request = ros_type("rmf_task_msgs/action/DynamicEvent_SendGoal_Request")(
+                goal_id=ros_uuid(1),
+                goal=ros_type("rmf_task_msgs/action/DynamicEvent_Goal")(
                     dynamic_event_seq=1,
                     event_type=1,
                     category="go_to_place",
@@ -353,7 +194,7 @@ def test_a_goal_whose_response_the_bag_lost_is_read_as_accepted_from_its_feedbac
     assert robot.report.clean, robot.report.findings
     assert robot.unheard == ((feedback, "01" * 16),) and robot.lost == ()
     assert _robot(check_bag(run().write(tmp_path / "whole", StoragePlugin.MCAP))).unheard == ()
-    done = _check(str(tmp_path / "lossy"))
+    done = check_command(str(tmp_path / "lossy"))
     assert done.returncode == 0 and f"the bag lacks the response to goal {'01' * 16}" in done.stdout
     refused = Conversation().begin().status(1, 1, "standby", 0).goal(1, accepted=False, goal_id=1)
     robot = _robot(
@@ -365,36 +206,12 @@ def test_a_goal_whose_response_the_bag_lost_is_read_as_accepted_from_its_feedbac
 def test_a_second_different_answer_is_found_and_the_same_answer_twice_is_not(tmp_path: Path) -> None:
     """A client that asks twice for a result gets the same answer twice: one answer.  A different
     second answer to the same goal is a double answer."""
-    same = _clean(lambda run: run.result(1, SUCCEEDED, "completed", 1))
+    same = clean_run(lambda run: run.result(1, SUCCEEDED, "completed", 1))
     assert check_bag(same.write(tmp_path / "same", StoragePlugin.MCAP)).clean
-    double = _clean(lambda run: run.result(1, ABORTED, "failed", 1))
+    double = clean_run(lambda run: run.result(1, ABORTED, "failed", 1))
     report = check_bag(double.write(tmp_path / "double", StoragePlugin.MCAP))
     findings = _robot(report).report.findings
     assert findings and findings[0].rule == "R19.1", findings
-
-
-EXECUTING, CANCELING, CANCELED = 2, 3, 5
-
-
-def _topics(run: Conversation) -> Conversation:
-    """The conversation as a recording without introspection holds it: its topics alone."""
-    run.messages = [item for item in run.messages if "_service_event" not in item[0]]
-    return run
-
-
-def _partial_clean() -> Conversation:
-    """Two runs as their topics show them: a NEXT whose child logs and ends, with the action's goal
-    statuses; a run ended by FINISHED; a second run's NEXT cancelled through the action."""
-    run = Conversation().begin().status(1, 1, "standby", 0)
-    run.goal(1, goal_id=1).goal_statuses((1, EXECUTING)).feedback(1, "underway", 1, logs=(0,))
-    run.status(1, 2, "underway", 1).feedback(1, "completed", 1, logs=(1, 2)).status(1, 2, "completed", 1)
-    run.goal_statuses((1, SUCCEEDED)).status(1, 1, "standby", 1)
-    run.goal_statuses((1, SUCCEEDED), (2, EXECUTING)).goal_statuses((1, SUCCEEDED), (2, SUCCEEDED))
-    run.status(1, 0, "uninitialized", 0).begin(2).status(2, 1, "standby", 7)
-    run.goal_statuses((3, EXECUTING)).feedback(3, "underway", 8, logs=(5,)).status(2, 2, "underway", 8)
-    run.goal_statuses((3, CANCELED)).status(2, 1, "standby", 8)
-    run.now += 5 * SECOND  # the robot waits
-    return run.status(2, 1, "underway", 8)  # a stubborn wait, say: the run's id stays
 
 
 @pytest.mark.spec("R2.2", "R19.3", "R6.2", "R3.1", "R7.1", "R7.3", "R19.1", "R19.2")
@@ -404,14 +221,14 @@ def test_a_recording_without_goals_is_judged_from_its_topics_alone(
 ) -> None:
     """Only the topics (begin, status, feedback, the goal statuses): the robot is a partial view,
     the absent channels named, and what the topics show by themselves judged; never a false finding."""
-    report = check_bag(_topics(_partial_clean()).write(tmp_path / "bag", storage))
+    report = check_bag(topics_alone(partial_clean_run()).write(tmp_path / "bag", storage))
     robot = _robot(report)
     assert robot.partial and report.clean, robot.report.findings
-    assert robot.report.records == len(_topics(_partial_clean()).messages)
+    assert robot.report.records == len(topics_alone(partial_clean_run()).messages)
     assert robot.absent == (
         "goals and their responses (send_goal introspection)", "answers (get_result introspection)"
     )  # fmt: skip
-    statuses = _clean()
+    statuses = clean_run()
     statuses.messages = [item for item in statuses.messages if item[0] == STATUS_TOPIC]
     robot = _robot(check_bag(statuses.write(tmp_path / "statuses", storage)))
     assert robot.partial and robot.report.clean and robot.channels == ("status",)
@@ -423,7 +240,7 @@ def _partial_cases() -> dict[str, tuple[Conversation, int, str, str]]:
     cases = {}
 
     def case(name: str, run: Conversation, at: int, violation: tuple[str, str]) -> None:
-        cases[name] = (_topics(run), at, *violation)
+        cases[name] = (topics_alone(run), at, *violation)
 
     def running(child: int = 1) -> Conversation:
         run = Conversation().begin().status(1, 1, "standby", 0).goal_statuses((1, EXECUTING))
@@ -490,7 +307,7 @@ def test_what_a_partial_view_cannot_tell_is_no_finding(tmp_path: Path) -> None:
     for seq in (1, 2, 3):  # the fleet-wide topic's latched begins, published long before
         message = Conversation().begin(seq, topic="/rmf/dynamic_event/begin").messages[0]
         replayed = message[3]
-        replayed.start_time = _time(T0 - (10 - seq) * 60 * SECOND)
+        replayed.start_time = ros_time(T0 - (10 - seq) * 60 * SECOND)
         run.at(message[0], message[1], replayed)
     run.status(3, 1, "standby", 0)  # its latched status
     run.goal_statuses((1, EXECUTING)).feedback(1, "underway", 4).status(3, 2, "underway", 4)
@@ -506,12 +323,12 @@ def test_what_a_partial_view_cannot_tell_is_no_finding(tmp_path: Path) -> None:
 
 
 def test_the_fleet_wide_begin_topic_stands_for_a_robots_own(tmp_path: Path) -> None:
-    run = _clean()
+    run = clean_run()
     fleet_wide = Conversation().begin(topic="/rmf/dynamic_event/begin")
     run.messages[0] = (fleet_wide.messages[0][0], *run.messages[0][1:])
     report = check_bag(run.write(tmp_path / "bag", StoragePlugin.MCAP))
     assert report.clean and _robot(report).report.records == 12
-    both = _clean()
+    both = clean_run()
     both.messages.insert(1, (fleet_wide.messages[0][0], *both.messages[0][1:]))  # the same begin twice
     assert check_bag(both.write(tmp_path / "both", StoragePlugin.MCAP)).clean
 
@@ -528,7 +345,7 @@ def test_bags_that_cannot_be_read_are_said_in_one_line(tmp_path: Path) -> None:
     garbage.write_bytes(b"\x89MCAP0\r\n" + b"\x00" * 64)
     with pytest.raises(BagError, match=r"garbage.mcap: not a readable rosbag2 recording"):
         check_bag(garbage)
-    whole = _clean().write(tmp_path / "whole", StoragePlugin.MCAP)
+    whole = clean_run().write(tmp_path / "whole", StoragePlugin.MCAP)
     data = next(whole.glob("*.mcap")).read_bytes()
     cut = tmp_path / "cut.mcap"
     cut.write_bytes(data[: len(data) // 2])
@@ -537,7 +354,7 @@ def test_bags_that_cannot_be_read_are_said_in_one_line(tmp_path: Path) -> None:
 
 
 def test_a_bag_of_yaml_aliases_is_refused_before_it_is_composed(tmp_path: Path) -> None:
-    bag = _clean().write(tmp_path / "laughs", StoragePlugin.MCAP)
+    bag = clean_run().write(tmp_path / "laughs", StoragePlugin.MCAP)
     metadata = (bag / "metadata.yaml").read_text(encoding="utf-8")
     laughs = "\n".join(
         [f"a0: &a0 [{', '.join(['lol'] * 10)}]"]
@@ -557,7 +374,7 @@ def test_a_bag_of_yaml_aliases_is_refused_before_it_is_composed(tmp_path: Path) 
 def test_a_bag_whose_files_are_not_regular_is_refused_without_reading(
     tmp_path: Path, storage: StoragePlugin
 ) -> None:
-    bag = _clean().write(tmp_path / "bag", storage)
+    bag = clean_run().write(tmp_path / "bag", storage)
     stored = next(path for path in bag.iterdir() if path.name != "metadata.yaml")
     stored.unlink()
     os.mkfifo(stored)  # a reader that opened it would wait for a writer for ever
@@ -574,7 +391,7 @@ def test_a_bag_whose_files_are_not_regular_is_refused_without_reading(
 
 
 def test_a_db3_whose_time_is_text_is_a_located_error(tmp_path: Path) -> None:
-    bag = _clean().write(tmp_path / "bag", StoragePlugin.SQLITE3)
+    bag = clean_run().write(tmp_path / "bag", StoragePlugin.SQLITE3)
     database = next(bag.glob("*.db3"))
     with contextlib.closing(sqlite3.connect(database)) as connection:
         connection.execute("UPDATE messages SET timestamp = 'soon' WHERE id = 2")
@@ -629,7 +446,7 @@ def test_what_a_correct_server_may_be_recorded_doing_is_no_finding(tmp_path: Pat
 def test_a_lost_request_keeps_the_goals_whose_responses_are_to_come(tmp_path: Path) -> None:
     """Client 1's NEXT A is lost to the recorder; client 2's NEXT B, sent as A starts, is refused busy
     after the loss is noticed: B's response finds its goal in the judgement begun anew."""
-    goal = _type("rmf_task_msgs/action/DynamicEvent_Goal")(
+    goal = ros_type("rmf_task_msgs/action/DynamicEvent_Goal")(
         dynamic_event_seq=1,
         event_type=1,
         category="go_to_place",
@@ -638,10 +455,12 @@ def test_a_lost_request_keeps_the_goals_whose_responses_are_to_come(tmp_path: Pa
         stubborn_period=0.0,
     )
     run = Conversation().begin().status(1, 1, "standby", 0)
-    request = _type("rmf_task_msgs/action/DynamicEvent_SendGoal_Request")(goal_id=_uuid(2), goal=goal)
+    request = ros_type("rmf_task_msgs/action/DynamicEvent_SendGoal_Request")(goal_id=ros_uuid(2), goal=goal)
     run._event("send_goal", 0, 2, request=request)  # B sent (client 2's introspection)
     run.status(1, 2, "underway", 1).feedback(1, "underway", 1)  # A runs: its request was lost
-    response = _type("rmf_task_msgs/action/DynamicEvent_SendGoal_Response")(accepted=False, stamp=_time(0))
+    response = ros_type("rmf_task_msgs/action/DynamicEvent_SendGoal_Response")(
+        accepted=False, stamp=ros_time(0)
+    )
     run._event("send_goal", 3, 2, response=response)  # B refused
     run.now += 2 * SECOND
     robot = _robot(check_bag(run.status(1, 2, "underway", 1).write(tmp_path / "bag", StoragePlugin.MCAP)))
@@ -650,7 +469,7 @@ def test_a_lost_request_keeps_the_goals_whose_responses_are_to_come(tmp_path: Pa
 
 def test_introspection_without_contents_is_a_partial_view(tmp_path: Path) -> None:
     """send_goal introspection in METADATA mode records events without the goals: a partial view."""
-    run = _topics(_partial_clean())
+    run = topics_alone(partial_clean_run())
     for call in (1, 2):
         run._event("send_goal", 1, call)
     robot = _robot(check_bag(run.write(tmp_path / "bag", StoragePlugin.MCAP)))
@@ -666,10 +485,10 @@ def test_other_readers_decode_a_bag_from_the_definitions_it_holds(tmp_path: Path
     for a reader that has never seen the interface files: rosbags decodes every topic from them
     alone, and Foxglove's ROS 2 decoder (ROS's own parser) every topic whose type a ``.msg`` can
     name, to the same values."""
-    from bag_readers import read_with_foxglove, read_with_rosbags
     from dynevent.bags.reader import message_definition
+    from support.bag_readers import read_with_foxglove, read_with_rosbags
 
-    run = _topics(_partial_clean())
+    run = topics_alone(partial_clean_run())
     run.goal(9, goal_id=9).result(9, SUCCEEDED, "completed", 9)
     bag = tmp_path / "bag"
     with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
@@ -702,60 +521,9 @@ def test_other_readers_decode_a_bag_from_the_definitions_it_holds(tmp_path: Path
 
 def test_a_bag_of_other_topics_has_no_robot(tmp_path: Path) -> None:
     other = Conversation()
-    other.at("/chatter", "builtin_interfaces/msg/Time", _time(5))
+    other.at("/chatter", "builtin_interfaces/msg/Time", ros_time(5))
     report = check_bag(other.write(tmp_path / "bag", StoragePlugin.MCAP))
     assert report.robots == () and report.messages == 0 and report.other == 1
-
-
-def _check(*args: str) -> Any:
-    import subprocess
-    import sys
-
-    command = [sys.executable, "-m", "dynevent", "check", *args]
-    return subprocess.run(command, check=False, capture_output=True, text=True, timeout=60)
-
-
-def test_dynevent_check_reads_a_bag_directory_or_file_and_exits_0_1_or_2(tmp_path: Path) -> None:
-    clean = _clean().write(tmp_path / "clean", StoragePlugin.MCAP)
-    done = _check(str(clean))
-    assert done.returncode == 0, done.stderr
-    assert (
-        done.stdout.splitlines()[-1] == f"{clean}: 1 robot(s), 1 judged in full, 14 messages, no violations"
-    )
-    stale = Conversation().begin().status(1, 1, "standby", 0).goal(1, seq=0, event_type=3)
-    bag = stale.write(tmp_path / "stale", StoragePlugin.SQLITE3)
-    storage = next(bag.glob("*.db3"))
-    done = _check(str(storage))
-    assert done.returncode == 1
-    assert done.stdout.startswith(
-        f"{storage}: tinyRobot/r1 @ {stale.now // SECOND}.{stale.now % SECOND:09d}: R4.2 "
-    )
-    done = _check("--json", str(bag))
-    rows = [json.loads(line) for line in done.stdout.splitlines()]
-    assert [row["type"] for row in rows] == ["violation", "partial_view", "summary"]
-    assert rows[0]["rule"] == "R4.2" and rows[0]["robot"] == "tinyRobot/r1"
-    (tmp_path / "notabag").mkdir()
-    done = _check(str(tmp_path / "notabag"))
-    assert done.returncode == 2 and "Traceback" not in done.stderr
-    assert done.stderr.strip().endswith("not a rosbag2 recording: a bag directory holds a metadata.yaml")
-    other = Conversation().at("/chatter", "builtin_interfaces/msg/Time", _time(5))
-    done = _check(str(other.write(tmp_path / "other", StoragePlugin.MCAP)))
-    assert done.returncode == 2 and done.stderr.strip().endswith(
-        "nothing to check: no message on a Dynamic Event name (1 other message)"
-    ), done.stderr
-    for storage in STORAGES:  # an empty bag, and one whose Dynamic Event topics hold no message
-        empty = Conversation().write(tmp_path / f"empty-{storage.name}", storage)
-        done = _check(str(empty))
-        assert done.returncode == 2 and done.stderr.strip().endswith(
-            "nothing to check: no message on a Dynamic Event name (0 other messages)"
-        ), done.stderr
-        silent = tmp_path / f"silent-{storage.name}"
-        with Writer(silent, version=9, storage_plugin=storage) as writer:
-            writer.add_connection(
-                STATUS_TOPIC, "rmf_task_msgs/msg/DynamicEventStatus", msgdef="", rihs01=UNHASHED
-            )
-        done = _check(str(silent))
-        assert done.returncode == 2 and "nothing to check: no message on a Dynamic Event name" in done.stderr
 
 
 def _received(run: Conversation, order: list[int]) -> None:
@@ -787,12 +555,12 @@ def test_the_servers_stamps_order_what_a_recorder_received_out_of_order(
     INACTIVE status that FINISHED's start published comes before FINISHED's request, response and
     answer events.  The stamps the server put on them (within ``SKEW`` of the bag time) give back its
     order; stamps of another clock (simulated time) are not used, and the bag's order stands."""
-    run = _clean()
+    run = clean_run()
     _received(run, [*range(9), 13, 9, 10, 11, 12])
     tail = ["goal", "goal_response", "result", "status"]
     assert _passed(monkeypatch, run.write(tmp_path / "bag", StoragePlugin.MCAP))[-4:] == tail
     assert check_bag(tmp_path / "bag").clean
-    run.messages[9][3].time = _time(5 * SECOND)  # the INACTIVE status, stamped by another clock
+    run.messages[9][3].time = ros_time(5 * SECOND)  # the INACTIVE status, stamped by another clock
     passed = _passed(monkeypatch, run.write(tmp_path / "unstamped", StoragePlugin.MCAP))
     assert passed[-4:] == ["goal", "status", "goal_response", "result"]  # the status at its bag time
 
@@ -803,12 +571,12 @@ def test_a_goal_goes_before_what_names_it_and_a_response_needs_its_goal(
     """Two hosts' clocks: the NEXT's request event is stamped after its response and the feedback;
     the goal goes first, then its response by its own stamp, as the server sent them.  A response
     whose request the bag lost is left out, never unreadable."""
-    run = _clean()
+    run = clean_run()
     _received(run, [0, 1, 2, 4, 3, 5])  # the request's stamp after the feedback's
-    run.messages[2][3].info.stamp = _time(run.messages[3][2] + SECOND // 20)
+    run.messages[2][3].info.stamp = ros_time(run.messages[3][2] + SECOND // 20)
     passed = _passed(monkeypatch, run.write(tmp_path / "skewed", StoragePlugin.MCAP))
     assert passed[:5] == ["begin", "status", "goal", "goal_response", "feedback"], passed
-    lost = _clean()
+    lost = clean_run()
     del lost.messages[2]  # the NEXT's request event
     report = check_bag(lost.write(tmp_path / "lost", StoragePlugin.MCAP))
     assert _robot(report).report is not None  # judged: a finding where its child is unexplained
@@ -820,14 +588,14 @@ def test_a_goal_received_after_its_starts_status_and_feedback_goes_before_them(
     """Seen over DDS under load: the NEXT's request and response events reach the recorder after the
     RUNNING status and the feedback its start published.  The request goes by its own stamp, before
     the status, though a record naming it (the feedback) was received first."""
-    run = _clean()
+    run = clean_run()
     _received(run, [0, 1, 5, 4, 2, 3])  # the status, the feedback, then the request and response
     at = run.messages[2][2]  # the status's bag time: the server stamped the three just before it
     run.messages[4][3].info.stamp, run.messages[5][3].info.stamp = (
-        _time(at - 3_000_000),
-        _time(at - 2_000_000),
+        ros_time(at - 3_000_000),
+        ros_time(at - 2_000_000),
     )
-    run.messages[2][3].time = _time(at - 1_000_000)
+    run.messages[2][3].time = ros_time(at - 1_000_000)
     passed = _passed(monkeypatch, run.write(tmp_path / "bag", StoragePlugin.MCAP))
     assert passed[:3] == ["begin", "status", "goal"], passed
     assert check_bag(tmp_path / "bag").clean
@@ -844,7 +612,7 @@ def test_feedback_received_between_its_childs_end_and_its_answer_is_read_as_sent
     run.status(1, 1, "standby", 1)
     ended = run.now  # the step that answered the goal and published this status
     run.feedback(1, "underway", 1).result(1, SUCCEEDED, "completed", 1)
-    run.messages[-1][3].info.stamp = _time(ended + 1_000_000)  # the answer, sent in that step
+    run.messages[-1][3].info.stamp = ros_time(ended + 1_000_000)  # the answer, sent in that step
     run.now += 2 * SECOND
     robot = _robot(check_bag(run.status(1, 1, "standby", 1).write(tmp_path / "bag", StoragePlugin.MCAP)))
     assert robot.report.clean, robot.report.findings
@@ -855,11 +623,11 @@ def test_feedback_received_after_its_goals_answer_is_read_as_sent_before_it(tmp_
     last feedback after its answer, and cannot tell that from late sending; within ``HOLD`` (a lossy
     link sends a lost message again seconds later) it is read as sent before the answer.  Longer
     after the answer it is a finding (R19.1)."""
-    late = _clean(lambda run: run.feedback(1, "underway", 1))
+    late = clean_run(lambda run: run.feedback(1, "underway", 1))
     assert check_bag(late.write(tmp_path / "late", StoragePlugin.MCAP)).clean
-    lossy = _clean(lambda run: (setattr(run, "now", run.now + 3 * SECOND), run.feedback(1, "underway", 1)))
+    lossy = clean_run(lambda run: (setattr(run, "now", run.now + 3 * SECOND), run.feedback(1, "underway", 1)))
     assert check_bag(lossy.write(tmp_path / "lossy", StoragePlugin.MCAP)).clean
-    later = _clean(
+    later = clean_run(
         lambda run: (setattr(run, "now", run.now + HOLD + 2 * SECOND), run.feedback(1, "underway", 1))
     )
     findings = _robot(check_bag(later.write(tmp_path / "later", StoragePlugin.MCAP))).report.findings
@@ -883,29 +651,6 @@ def test_feedback_a_lossy_link_delivered_out_of_order_goes_by_its_logs_time(tmp_
     lossy = run()
     _received(lossy, [*range(6), 7, 8, 6, *range(9, len(lossy.messages))])  # log 1 came after log 3
     assert check_bag(lossy.write(tmp_path / "lossy", StoragePlugin.MCAP)).clean
-
-
-def test_a_robot_without_goals_in_an_introspected_recording_is_said_to_have_had_none(tmp_path: Path) -> None:
-    """Introspection was on (another robot's goals are in the bag): a robot whose goals the bag does not
-    hold had none, and the line says so instead of calling the recording short of introspection."""
-    run = _clean()
-    other = f"/rmf/dynamic_event/status/{FLEET}/idle"
-    message = _type("rmf_task_msgs/msg/DynamicEventStatus")(
-        dynamic_event_seq=0, dynamic_state=0, status="uninitialized", id=0, time=_time(run.now)
-    )
-    bag = run.at(other, "rmf_task_msgs/msg/DynamicEventStatus", message).write(
-        tmp_path / "two", StoragePlugin.MCAP
-    )
-    done = _check(str(bag))
-    assert done.returncode == 0, done.stdout + done.stderr
-    lines = [line for line in done.stdout.splitlines() if f"{FLEET}/idle" in line]
-    assert lines == [
-        f"{bag}: {FLEET}/idle: this robot had no goals in the recording (the action's introspection was on): "
-        "judged from its topics alone",
-        f"{bag}: {FLEET}/idle: 1 records, no violations",
-    ], done.stdout
-    alone = _topics(_partial_clean()).write(tmp_path / "topics", StoragePlugin.MCAP)
-    assert "partial view, judged from its topics alone" in _check(str(alone)).stdout
 
 
 def test_each_topic_is_read_as_its_robot_and_channel_and_no_other_is() -> None:

@@ -19,7 +19,10 @@ from pathlib import Path
 import pytest
 from rosbags.rosbag2 import CompressionMode, StoragePlugin
 
-from bag_bombs import (
+from dynevent.bags import unpack
+from dynevent.bags.reader import check_bag
+from dynevent.errors import BagError
+from support.bag_bombs import (
     BOMB,
     bag,
     lz4_zeros,
@@ -29,9 +32,6 @@ from bag_bombs import (
     storage_file,
     zstd_zeros,
 )
-from dynevent.bags import unpack
-from dynevent.bags.reader import check_bag
-from dynevent.errors import BagError
 
 STORAGES = {"mcap": StoragePlugin.MCAP, "sqlite3": StoragePlugin.SQLITE3}
 #: What a refused bomb is called.

@@ -12,24 +12,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from client_scenario import (
-    CONFIG,
-    INACTIVE,
-    PREFIX,
-    RUNNING,
-    U32,
-    U64,
-    WAITING,
-    answer,
-    begin,
-    feed,
-    only_outcome,
-    refused,
-    running,
-    sent,
-    status,
-    waiting,
-)
 from dynevent import client
 from dynevent.client import (
     SECOND,
@@ -63,6 +45,24 @@ from dynevent.wire.vocab import (
     GoalStatus,
     RejectReason,
     Status,
+)
+from support.client_scenario import (
+    CONFIG,
+    INACTIVE,
+    PREFIX,
+    RUNNING,
+    U32,
+    U64,
+    WAITING,
+    answer,
+    begin,
+    feed,
+    only_outcome,
+    refused,
+    running,
+    sent,
+    status,
+    waiting,
 )
 
 # --------------------------------------------------------------------------- construction

@@ -16,21 +16,6 @@ from typing import Any
 
 import pytest
 
-from client_scenario import (
-    INACTIVE,
-    PREFIX,
-    RUNNING,
-    U32,
-    U64,
-    WAITING,
-    answer,
-    begin,
-    feed,
-    running,
-    sent,
-    status,
-    waiting,
-)
 from dynevent import client
 from dynevent.client import (
     SECOND,
@@ -67,6 +52,21 @@ from dynevent.server import outputs as outs
 from dynevent.server.inputs import NOW_RANGE
 from dynevent.wire.messages import DynamicEventStatus, Feedback, Goal, Result
 from dynevent.wire.vocab import EventType, GoalStatus, RejectReason
+from support.client_scenario import (
+    INACTIVE,
+    PREFIX,
+    RUNNING,
+    U32,
+    U64,
+    WAITING,
+    answer,
+    begin,
+    feed,
+    running,
+    sent,
+    status,
+    waiting,
+)
 
 UUID = "a" * 32
 

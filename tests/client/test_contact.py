@@ -7,7 +7,6 @@ import itertools
 
 import pytest
 
-from client_scenario import RUNNING, answer, feed, status, waiting
 from dynevent import client
 from dynevent.client import (
     ASK_AGAIN_LONGEST,
@@ -25,6 +24,7 @@ from dynevent.client import (
     Tick,
 )
 from dynevent.wire.vocab import GoalStatus
+from support.client_scenario import RUNNING, answer, feed, status, waiting
 
 
 def _sent(state: client.ClientState) -> tuple[client.ClientState, str]:

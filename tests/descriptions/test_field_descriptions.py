@@ -36,7 +36,7 @@ from dynevent.server import inputs, machine
 from dynevent.server import outputs as outs
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import DynamicState, EventType, RejectReason
-from field_cases import EVERYDAY_GO_TO_PLACE, EVERYDAY_PERFORM_ACTION
+from support.field_cases import EVERYDAY_GO_TO_PLACE, EVERYDAY_PERFORM_ACTION
 
 FIELD = Path(__file__).resolve().parents[1] / "data" / "field-schemas"
 FIELD_SCHEMAS = {path.stem: json.loads(path.read_text()) for path in FIELD.glob("*.json")}

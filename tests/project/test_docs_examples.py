@@ -28,7 +28,7 @@ from pathlib import Path
 
 import pytest
 
-from doc_sessions import CONSOLE, sessions
+from support.doc_sessions import CONSOLE, sessions
 
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"

@@ -197,7 +197,7 @@ def _read_by_others(bag: Path) -> None:
     names no type an action derives), to the same messages."""
     from rosbags.rosbag2 import Reader
 
-    from bag_readers import read_with_foxglove, read_with_rosbags
+    from support.bag_readers import read_with_foxglove, read_with_rosbags
 
     with Reader(bag) as reader:
         counts = {connection.topic: connection.msgcount for connection in reader.connections}

@@ -18,7 +18,7 @@ from ros_support import Child, Graph, child_env, finish, wait_for
 
 from dynevent import client as cl
 from dynevent.ros import DynamicEventClient
-from field_cases import EVERYDAY_GO_TO_PLACE, EVERYDAY_PERFORM_ACTION
+from support.field_cases import EVERYDAY_GO_TO_PLACE, EVERYDAY_PERFORM_ACTION
 
 ROBOT = "fieldRobot"
 

@@ -22,7 +22,7 @@ from dynevent.conformance.judge import check_trace
 from dynevent.conformance.judge.trace import Finding
 from dynevent.conformance.probe.cases import CASES
 from dynevent.ros.probe import VOLATILE, RosLink
-from probe_expected import BROKEN, RMF_ROS2_FAILS, UNSEEN_BY_CASES
+from support.probe_expected import BROKEN, RMF_ROS2_FAILS, UNSEEN_BY_CASES
 
 #: The last seq before the wrap: serve starts there, so that the probe sees the seq wrap (R3.2).
 LAST_SEQ = 2**32 - 1
@@ -58,7 +58,7 @@ def _probe(robot: str, *args: str) -> subprocess.CompletedProcess[str]:
             robot,
             "--place",
             "pantry",
-            "lounge",  # the in-process probe's places too (tests/probe_expected.py holds both)
+            "lounge",  # the in-process probe's places too (tests/support/probe_expected.py holds both)
             "--timeout",
             "5",
             *args,

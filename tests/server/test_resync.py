@@ -12,7 +12,7 @@ from dynevent.server import machine, resync
 from dynevent.server.machine import UNKNOWN_GOAL, QueuedGoal, State
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import DynamicState, EventType, Status
-from scenario import deferred, running, stubborn, u, waiting
+from support.scenario import deferred, running, stubborn, u, waiting
 
 FRESH = State.new("fleet", "robot")
 

@@ -21,7 +21,7 @@ from dynevent.server.outputs import AnswerGoal
 from dynevent.server.store import InvalidStore, StateStore
 from dynevent.wire.messages import Result
 from dynevent.wire.vocab import GoalStatus
-from scenario import CONFIG, next_goal, running, u, waiting
+from support.scenario import CONFIG, next_goal, running, u, waiting
 
 
 def _digest(path: Path) -> str:

@@ -26,7 +26,7 @@ from dynevent.server.machine import (
     any_description,
 )
 from dynevent.wire.vocab import DynamicState
-from scenario import (
+from support.scenario import (
     CONFIG,
     FLEET,
     ROBOT,

@@ -19,7 +19,7 @@ from dynevent.server.machine import (
 from dynevent.tools.diagram import render
 from dynevent.wire.messages import DynamicEventStatus, Time
 from dynevent.wire.vocab import DynamicState, RejectReason
-from scenario import (
+from support.scenario import (
     INACTIVE,
     RUNNING,
     SUCCEEDED,

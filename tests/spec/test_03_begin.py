@@ -15,7 +15,7 @@ from dynevent.server.holder import RobotServer
 from dynevent.server.machine import State
 from dynevent.wire.messages import DynamicEventDescription, Time
 from dynevent.wire.vocab import RejectReason
-from scenario import (
+from support.scenario import (
     CONFIG,
     DESC,
     FLEET,

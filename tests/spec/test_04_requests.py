@@ -26,7 +26,7 @@ from dynevent.server.machine import (
 from dynevent.wire.description import MAX_DESCRIPTION_BYTES, EventDescription
 from dynevent.wire.messages import Goal
 from dynevent.wire.vocab import EventType, IdPolicy, RejectReason
-from scenario import (
+from support.scenario import (
     ANY_TEXT,
     CANCEL_ID,
     CATEGORIES,

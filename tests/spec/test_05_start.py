@@ -14,7 +14,7 @@ from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.wire.messages import Goal
-from scenario import (
+from support.scenario import (
     ADAPTER,
     RACE,
     RUNNING,

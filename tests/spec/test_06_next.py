@@ -23,7 +23,7 @@ from dynevent.server.machine import (
 )
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import DynamicState, EventType, RejectReason
-from scenario import (
+from support.scenario import (
     ADAPTER,
     ANY_TEXT,
     CONFIG,

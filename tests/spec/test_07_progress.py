@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.holder import Execution
-from scenario import (
+from support.scenario import (
     ANY_TEXT,
     CHILD_STATUSES,
     RUNNING,

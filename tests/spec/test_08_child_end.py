@@ -11,7 +11,7 @@ from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.holder import Execution, RobotServer
 from dynevent.wire.vocab import GoalStatus, Status
-from scenario import (
+from support.scenario import (
     ABORTED,
     CANCELED,
     CHILD_STATUSES,

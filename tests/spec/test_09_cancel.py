@@ -11,7 +11,7 @@ import pytest
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.holder import Execution
-from scenario import (
+from support.scenario import (
     ABORTED,
     CANCEL_ID,
     CANCELED,

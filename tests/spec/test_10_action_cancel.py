@@ -12,7 +12,7 @@ from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.holder import Execution
 from dynevent.server.machine import QueuedGoal
-from scenario import (
+from support.scenario import (
     ABORTED,
     CANCELED,
     NOT_RUNNING,

@@ -8,7 +8,7 @@ from __future__ import annotations
 import pytest
 
 from dynevent.server import outputs as outs
-from scenario import (
+from support.scenario import (
     INACTIVE,
     RACE,
     SUCCEEDED,

@@ -16,7 +16,7 @@ from dynevent.server.machine import (
     ServerConfig,
     Stubbornness,
 )
-from scenario import (
+from support.scenario import (
     CONFIG,
     SUCCEEDED,
     T0,

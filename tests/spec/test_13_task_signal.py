@@ -10,7 +10,7 @@ import pytest
 from dynevent.server import inputs as ins
 from dynevent.server import outputs as outs
 from dynevent.server.holder import Execution
-from scenario import (
+from support.scenario import (
     ABORTED,
     CANCELED,
     INACTIVE,

@@ -13,7 +13,7 @@ from dynevent.server.machine import (
     ServerConfig,
     any_description,
 )
-from scenario import (
+from support.scenario import (
     INACTIVE,
     RUNNING,
     WAITING,

@@ -9,7 +9,7 @@ import pytest
 
 from dynevent.server import outputs as outs
 from dynevent.wire.messages import DescriptionResponse
-from scenario import (
+from support.scenario import (
     DESC,
     Run,
     deferred,

@@ -20,7 +20,7 @@ from dynevent.server.machine import (
 )
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import Compatibility, DynamicState, EventType, IdPolicy, RejectReason
-from scenario import (
+from support.scenario import (
     CANCEL_ID,
     CATEGORIES,
     CONFIG,

@@ -18,7 +18,7 @@ from dynevent.server.machine import State
 from dynevent.testing import DEFAULT_CONFIG, input_sequences
 from dynevent.wire.messages import Result
 from dynevent.wire.vocab import DynamicState, GoalStatus
-from scenario import (
+from support.scenario import (
     T0,
     next_goal,
     running,

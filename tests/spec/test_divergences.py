@@ -24,7 +24,7 @@ from dynevent.server import outputs as outs
 from dynevent.server.machine import ServerConfig, State, status_message
 from dynevent.wire.messages import DescriptionResponse
 from dynevent.wire.vocab import Compatibility, IdPolicy, RejectReason
-from scenario import (
+from support.scenario import (
     ABORTED,
     ANY_TEXT,
     CANCEL_ID,

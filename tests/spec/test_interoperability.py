@@ -18,7 +18,7 @@ from dynevent.server.machine import ServerConfig, State, any_description, status
 from dynevent.wire import _json
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReason
-from scenario import CONFIG, RMF_ROS2, next_goal, running, s, u, waiting
+from support.scenario import CONFIG, RMF_ROS2, next_goal, running, s, u, waiting
 
 
 class OneShotClient:

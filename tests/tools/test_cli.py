@@ -15,9 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from doc_sessions import sessions
 from dynevent.tools import cli
 from dynevent.tools.diagram import render
+from support.doc_sessions import sessions
 
 ROOT = Path(__file__).resolve().parents[2]
 CLI_DOC = ROOT / "docs" / "cli.md"

@@ -81,8 +81,8 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("cancel_seen_late", "R9.1", "goal_status"): 1,
         ("response_seen_late", "R2.2", "status_mismatch"): 18,
     },
-    # the probe's calibration run (tests/conformance/test_probe_calibration.py): every case but the stubborn
-    # one, with the probe as it is now
+    # the probe's calibration run (tests/conformance/probe/test_probe_calibration.py): every case but the
+    # stubborn one, with the probe as it is now
     ("calibration", "standard"): {
         ("D1", "R4.6", "accepted_busy"): 1,
         ("D10", "R4.12", "accepted_stale_id"): 1,

@@ -6,7 +6,7 @@ that starts frees the robot at once.  Instead of waiting for the child to end
 same step, as if the child had already ended canceled, and the robot is
 WAITING again while the child is still winding down.
 
-``dynevent vectors --impl "python tests/broken_driver.py"`` must fail on the
+``dynevent vectors --impl "python tests/support/broken_driver.py"`` must fail on the
 vectors that check R9.3, with a diff naming the vector and the step.
 """
 

@@ -1,6 +1,6 @@
 """dynevent's own driver, misbehaving on purpose at one request (a test double for the runner).
 
-    python tests/misbehaving_driver.py MODE AT [--once FILE]
+    python tests/support/misbehaving_driver.py MODE AT [--once FILE]
 
 counts the requests it reads (``hello`` is request 1) and, at request ``AT``:
 

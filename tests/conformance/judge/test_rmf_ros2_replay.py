@@ -33,8 +33,8 @@ from dynevent.sim.config import ServeConfig, machine_config
 from dynevent.wire.messages import Goal
 from dynevent.wire.vocab import Compatibility, IdPolicy
 
-DATA = Path(__file__).resolve().parents[1] / "data" / "rmf_ros2"
-DOC = Path(__file__).resolve().parents[2] / "docs" / "divergences.md"
+DATA = Path(__file__).resolve().parents[2] / "data" / "rmf_ros2"
+DOC = Path(__file__).resolve().parents[3] / "docs" / "divergences.md"
 PLACES = ("dock", "hall", "pantry", "lounge", "lobby")  # lab/rmf_ros2/site/navgraph.yaml
 
 

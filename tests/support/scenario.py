@@ -1,6 +1,6 @@
 """A tiny harness for the spec section tests (``tests/spec/test_NN_*.py``).
 
-Not a test module: test files import it as ``from scenario import ...``
+Not a test module: test files import it as ``from support.scenario import ...``
 (``pythonpath`` in pyproject.toml puts ``tests/`` on ``sys.path``).
 
 A :class:`Run` holds one robot's state (``tinyRobot``/``r1``) and a

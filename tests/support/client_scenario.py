@@ -1,6 +1,6 @@
 """A tiny harness for the client tests (``tests/client/``): builders of inputs and states.
 
-Not a test module; ``pythonpath`` in pyproject.toml puts ``tests/`` on ``sys.path``.
+Not a test module: test files import it as ``from support.client_scenario import ...``.
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ rule by rule; these tests check the files against their JSON Schema, that
 every numbered rule is cited by at least one vector, that ``dynevent vectors``
 passes against dynevent in process and over the driver protocol, and that it
 fails, with a diff naming the vector and the step, against a deliberately
-broken driver (``tests/broken_driver.py``).
+broken driver (``tests/support/broken_driver.py``).
 """
 
 from __future__ import annotations
@@ -32,10 +32,10 @@ from dynevent.server.inputs import INPUT_TYPES
 from dynevent.server.outputs import OUTPUT_TYPES
 from dynevent.wire import _codec
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 SPEC = (ROOT / "docs" / "spec.md").read_text(encoding="utf-8")
 #: Section 22 says what clients must not send: its rules are the client judge's
-#: (tests/conformance/test_clients.py), not a server's, so no server vector cites them.
+#: (tests/conformance/judge/test_clients.py), not a server's, so no server vector cites them.
 CLIENT_RULES = re.findall(r"\*\*(R22\.\d+)\*\*", SPEC)
 RULES = [rule for rule in re.findall(r"\*\*(R\d+\.\d+)\*\*", SPEC) if rule not in CLIENT_RULES]
 VECTORS_FOLDER = resources.files("dynevent") / "conformance" / "vectors"
@@ -45,7 +45,7 @@ VECTOR_FILES = sorted(
     if entry.name.endswith(".json") and not entry.name.endswith(".schema.json")
 )
 PYTHON = sys.executable
-BROKEN_DRIVER = ROOT / "tests" / "broken_driver.py"
+BROKEN_DRIVER = ROOT / "tests" / "support" / "broken_driver.py"
 SUMMARY_LINE = re.compile(r"^(\d+) passed, (\d+) failed$", re.MULTILINE)
 #: The last line of a run: what it took.
 TOOK = re.compile(r"the run took \d+\.\d s")
@@ -469,7 +469,7 @@ def test_the_rule_table_counts_each_vector_once_per_rule(shipped: list[vectors.V
 
 def test_every_divergence_has_a_vector() -> None:
     """Each section of docs/divergences.md is shown by at least one vector that names it."""
-    text = (Path(__file__).resolve().parents[2] / "docs" / "divergences.md").read_text(encoding="utf-8")
+    text = (Path(__file__).resolve().parents[3] / "docs" / "divergences.md").read_text(encoding="utf-8")
     sections = set(re.findall(r"^## (D\d+)\.", text, flags=re.MULTILINE))
     assert sections, "docs/divergences.md lists no D-sections"
     covered = {item for vector in vectors.load_vectors() for item in vector.divergences}
@@ -546,7 +546,7 @@ def test_a_sequence_diff_marks_one_extra_output_alone() -> None:
 
 # --------------------------------------------------------------------------- a driver that misbehaves
 
-MISBEHAVING = ROOT / "tests" / "misbehaving_driver.py"
+MISBEHAVING = ROOT / "tests" / "support" / "misbehaving_driver.py"
 
 
 def _misbehaving(

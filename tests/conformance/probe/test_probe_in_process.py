@@ -33,7 +33,7 @@ from dynevent.server.machine import State
 from dynevent.sim.config import CategorySpec, ServeConfig, machine_config
 from dynevent.testing.broken import DEFECTS, broken_stepper
 from dynevent.wire.vocab import Compatibility, EventType
-from probe_expected import BROKEN, JUDGED_IN_PROCESS, RMF_ROS2_FAILS, UNSEEN_BY_CASES
+from support.probe_expected import BROKEN, JUDGED_IN_PROCESS, RMF_ROS2_FAILS, UNSEEN_BY_CASES
 
 #: serve as the DDS tests run it: brief children that log often, the first run at the seq wrap.
 LAST_SEQ = 2**32 - 1
@@ -146,7 +146,7 @@ def test_the_rmf_ros2_mode_fails_alike_on_both_in_process_links_as_probe_md_coun
     summary = text.rstrip().splitlines()[-2]  # the last: what the run took
     assert summary == f"{len(CASES) - len(RMF_ROS2_FAILS) - 1} pass, {len(RMF_ROS2_FAILS)} fail, 1 info"
     assert "\n".join(said).rstrip().splitlines()[-2] == summary
-    page = (Path(__file__).resolve().parents[2] / "docs" / "probe.md").read_text(encoding="utf-8")
+    page = (Path(__file__).resolve().parents[3] / "docs" / "probe.md").read_text(encoding="utf-8")
     assert f"`{summary}`" in " ".join(page.split()), "docs/probe.md gives another count"
 
 
@@ -240,7 +240,7 @@ def test_the_command_line_probes_in_process(tmp_path: Path) -> None:
 
 # --------------------------------------------------------------------------- over the driver protocol
 
-TESTS = Path(__file__).resolve().parent.parent
+SUPPORT = Path(__file__).resolve().parents[2] / "support"
 
 
 def _probe_impl(command: str, *args: str) -> subprocess.CompletedProcess[str]:
@@ -257,7 +257,7 @@ def test_an_implementation_behind_the_driver_protocol_is_probed_without_ros() ->
     assert own.returncode == 0, own.stdout + own.stderr
     assert own.stdout.startswith("implementation: dynevent "), own.stdout
     assert _took(own.stdout)[0].endswith(f"\n{len(CASES)} pass"), own.stdout
-    broken = _probe_impl(f"{sys.executable} {TESTS / 'broken_driver.py'}")
+    broken = _probe_impl(f"{sys.executable} {SUPPORT / 'broken_driver.py'}")
     assert broken.returncode == 1, broken.stdout + broken.stderr
     assert "cancel.both_answered (R9.3, R8.3, R19.1): fail" in broken.stdout, broken.stdout
 
@@ -318,7 +318,7 @@ def test_a_driver_that_takes_no_state_object_is_probed_from_seq_0() -> None:
 def test_an_implementation_that_breaks_the_protocol_ends_the_run_within_its_bound(mode: str) -> None:
     """A driver that stops answering, dies or answers garbage mid-run: the run ends (each request
     bounded by --timeout), the cases after it fail or are not run, and the line names where."""
-    command = f"{sys.executable} {TESTS / 'misbehaving_driver.py'} {mode} 40"
+    command = f"{sys.executable} {SUPPORT / 'misbehaving_driver.py'} {mode} 40"
     done = _probe_impl(command, "--timeout", "1")
     assert done.returncode == 1, done.stdout + done.stderr
     assert "the implementation broke the driver protocol at " in done.stdout, done.stdout
@@ -330,7 +330,7 @@ def test_a_hung_implementation_is_left_at_the_deadline_not_at_its_timeout() -> N
     hangs in waits what the deadline leaves, the run ends within a few seconds of it (it once took the
     whole timeout), the driver is ended, and the deadline's cut is no break of the protocol."""
     started = time.monotonic()
-    done = _probe_impl(f"{sys.executable} {TESTS / 'misbehaving_driver.py'} hang 12", "--timeout", "100",
+    done = _probe_impl(f"{sys.executable} {SUPPORT / 'misbehaving_driver.py'} hang 12", "--timeout", "100",
                        "--deadline", "3")  # fmt: skip
     took = time.monotonic() - started
     assert done.returncode == probe_cases.EXIT_NOT_RUN, done.stdout + done.stderr
@@ -347,7 +347,7 @@ def test_a_driver_hung_in_its_reset_is_left_at_the_deadline_too() -> None:
     """The deadline runs from the driver's hello: a driver that never answers its reset, under
     --timeout 100 and --deadline 3, ends the command within a few seconds of it, in one line."""
     started = time.monotonic()
-    done = _probe_impl(f"{sys.executable} {TESTS / 'misbehaving_driver.py'} hang 2", "--timeout", "100",
+    done = _probe_impl(f"{sys.executable} {SUPPORT / 'misbehaving_driver.py'} hang 2", "--timeout", "100",
                        "--deadline", "3")  # fmt: skip
     took = time.monotonic() - started
     assert done.returncode == probe_cases.EXIT_USAGE, done.stdout + done.stderr

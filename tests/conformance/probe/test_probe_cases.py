@@ -14,7 +14,7 @@ from dynevent.conformance.judge.trace import Finding as JudgeFinding
 from dynevent.conformance.probe import cases as probe_cases
 from dynevent.conformance.probe.cases import CASES, KNOWN, Case, CaseFinding, Verdict
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 SPEC_RULES = set(re.findall(r"\*\*(R\d+\.\d+)\*\*", (ROOT / "docs" / "spec.md").read_text(encoding="utf-8")))
 DIVERGENCES = set(
     re.findall(r"^## (D\d+)\.", (ROOT / "docs" / "divergences.md").read_text(encoding="utf-8"), re.M)
@@ -205,7 +205,7 @@ def test_docs_probe_lists_every_case_with_its_rules_and_divergences() -> None:
 
 # --------------------------------------------------------------------------- the judge beside the cases
 
-CLEAN = (Path(__file__).resolve().parents[2] / "docs" / "examples" / "clean-trace.jsonl").read_text("utf-8")
+CLEAN = (Path(__file__).resolve().parents[3] / "docs" / "examples" / "clean-trace.jsonl").read_text("utf-8")
 #: A feedback of NEXT 6 (goal ...01) sent again after its answer and the status that ended its child.
 LATE_FEEDBACK = (
     '{"time":103.5,"type":"feedback","goal_uuid":"00000000000000000000000000000001",'

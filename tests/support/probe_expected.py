@@ -1,5 +1,5 @@
 """What the probe's cases find against ``dynevent serve`` and its deliberately broken variants: the
-same over DDS (tests/ros/test_ros_probe.py) and in process (tests/conformance/test_probe_in_process.py).
+same over DDS (tests/ros/test_ros_probe.py) and in process (tests/conformance/probe/test_probe_in_process.py).
 Not a test module."""
 
 from __future__ import annotations

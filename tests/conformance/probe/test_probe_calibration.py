@@ -21,7 +21,7 @@ import pytest
 
 from dynevent.conformance.probe import cases as probe_cases
 
-DATA = Path(__file__).resolve().parents[1] / "data" / "rmf_ros2"
+DATA = Path(__file__).resolve().parents[2] / "data" / "rmf_ros2"
 RUNS = [DATA / name / "probe-known.txt" for name in ("calibration", "remeasure", "easy")]
 #: The cases the lab's runs on the full_control site leave out, and why (the EasyFullControl site's,
 #: ``easy``, runs every case).
