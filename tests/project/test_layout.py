@@ -4,6 +4,8 @@ below the command line, and nothing imports the command line but ``__main__``.
 
 Every import in ``src/dynevent`` (at module level or inside a function) is read from the source, so a
 lazy import that crosses a layer the wrong way fails here as a module-level one would.
+
+tests/ mirrors the package folder for folder, with the test helpers in one place (tests/support).
 """
 
 from __future__ import annotations
@@ -568,3 +570,95 @@ def test_the_architecture_page_names_every_room_with_its_floor_and_what_it_may_i
         "wire": (2, frozenset({"errors"}), "a state"),
         "files": (3, frozenset({"errors", "wire"}), "what a file means"),
     }
+
+
+# --------------------------------------------------------------------------- tests/ mirrors src/
+
+TESTS = SRC.parents[1] / "tests"
+
+#: The folders of tests/ that mirror nothing of the package, and what each holds instead.
+TESTS_OF_THEIR_OWN = {
+    "spec": "docs/spec.md section by section, one file a section, whatever module carries a rule out",
+    "project": "the project as a whole: this layout, the docs and their examples, errors, hostile input",
+    "net": "a site across hosts (network namespaces): the ROS binding and the commands between machines",
+    "support": "the helpers the tests share (no test here)",
+    "data": "the files the tests read: recordings, schemas, stores (no code)",
+}
+
+#: Where a module that is not a test may lie: the one place of the shared helpers, and beside the tests
+#: that run in environments of their own (ROS 2 over DDS, hosts), which start their helpers as scripts.
+HELPERS = ("support", "ros", "net")
+
+
+def _packages(src: Path) -> list[str]:
+    """The package's folders that hold modules, as paths below it (``conformance/probe``)."""
+    return sorted(
+        path.parent.relative_to(src).as_posix() for path in src.rglob("__init__.py") if path.parent != src
+    )
+
+
+def _unmirrored(src: Path, tests: Path) -> list[str]:
+    """The package's folders whose tests folder of the same path is missing or holds no test."""
+    return [package for package in _packages(src) if not any((tests / package).glob("test_*.py"))]
+
+
+def _foreign(src: Path, tests: Path) -> list[str]:
+    """The folders of tests/ that name neither a folder nor a module of the package at their path and
+    are none of :data:`TESTS_OF_THEIR_OWN` (nor inside one)."""
+    found = []
+    for folder in sorted(path for path in tests.rglob("*") if path.is_dir()):
+        relative = folder.relative_to(tests)
+        if relative.parts[0] in TESTS_OF_THEIR_OWN or "__pycache__" in relative.parts:
+            continue
+        if not ((src / relative / "__init__.py").exists() or (src / relative).with_suffix(".py").exists()):
+            found.append(relative.as_posix())
+    return found
+
+
+def _stray_helpers(tests: Path) -> list[str]:
+    """Modules of tests/ that are neither a test nor a conftest.py and lie outside :data:`HELPERS`; and
+    tests inside ``support``."""
+    found = []
+    for path in sorted(tests.rglob("*.py")):
+        relative = path.relative_to(tests)
+        test = path.name.startswith("test_") or path.name == "conftest.py"
+        home = relative.parts[0] if len(relative.parts) > 1 else ""
+        if (not test and home not in HELPERS) or (path.name.startswith("test_") and home == "support"):
+            found.append(relative.as_posix())
+    return found
+
+
+def test_every_folder_of_the_package_has_its_tests_at_the_same_path_under_tests() -> None:
+    """A maintainer finds a module's tests without a search: src/dynevent/conformance/probe's are in
+    tests/conformance/probe, src/dynevent/testing's in tests/testing (the binding's, ros, need ROS 2)."""
+    assert _unmirrored(SRC, TESTS) == []
+
+
+def test_every_folder_of_tests_mirrors_the_package_or_says_what_it_holds() -> None:
+    """tests/bt mirrors the module dynevent/bt.py; tests/spec, tests/project, tests/net, tests/support and
+    tests/data are the documented exceptions."""
+    assert _foreign(SRC, TESTS) == []
+
+
+def test_the_test_helpers_lie_in_one_place() -> None:
+    """No helper lies loose at the top of tests/ or in a folder of tests: the shared ones are in
+    tests/support (``from support.scenario import ...``), the ROS tests' and the hosts' beside them."""
+    assert _stray_helpers(TESTS) == []
+    assert (TESTS / "support" / "__init__.py").exists()
+
+
+def test_the_mirrors_reader_sees_a_missing_folder_a_foreign_one_and_a_loose_helper(tmp_path: Path) -> None:
+    """The checks are not blind: a package folder without tests, a tests folder that mirrors nothing,
+    a loose helper and a test among the helpers are each seen."""
+    src, tests = tmp_path / "src", tmp_path / "tests"
+    for name in ("a/__init__.py", "a/b/__init__.py", "c/__init__.py", "d.py", "__init__.py"):
+        (src / name).parent.mkdir(parents=True, exist_ok=True)
+        (src / name).write_text("")
+    made = ["a/test_a.py", "a/b/helper.py", "d/test_d.py", "e/test_e.py", "data/x/y.txt", "scenario.py"]
+    made += ["conftest.py", "support/test_s.py", "support/tool.py", "net/hosts.py"]
+    for name in made:
+        (tests / name).parent.mkdir(parents=True, exist_ok=True)
+        (tests / name).write_text("")
+    assert _unmirrored(src, tests) == ["a/b", "c"]
+    assert _foreign(src, tests) == ["e"]
+    assert _stray_helpers(tests) == ["a/b/helper.py", "scenario.py", "support/test_s.py"]
