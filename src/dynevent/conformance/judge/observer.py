@@ -116,7 +116,7 @@ class _Lookahead:
         return confirmed(found, self.upcoming)
 
 
-class _Replica:
+class _ServerReplica:
     """The server as the machine has it: its state, its configuration, the outputs it owes, the time,
     and what the trace leaves uncertain about it.  The only writer of all of them: the parts change
     them through its methods, each named for what the trace showed."""
@@ -323,7 +323,7 @@ class _Replica:
 class _Goals:
     """The goals the trace showed, and which of them are closed: the only book of them."""
 
-    def __init__(self, replica: _Replica) -> None:
+    def __init__(self, replica: _ServerReplica) -> None:
         self._replica = replica
         self._seen: dict[str, GoalSeen] = {}
         self._closed: collections.deque[str] = collections.deque()  # answered or refused, oldest first
@@ -427,20 +427,20 @@ class AnswerEvidence:
 
 
 @attrs.frozen
-class _Rooms:
+class _ObserverState:
     """What the parts judge against, each kept by its own room: the findings, the records ahead, the
     server as the machine has it, and the goals seen."""
 
     findings: _Findings
     ahead: _Lookahead
-    replica: _Replica
+    replica: _ServerReplica
     goals: _Goals
 
 
 class _Part:
     """One part of the observer: it reads the rooms and changes them through their methods alone."""
 
-    def __init__(self, rooms: _Rooms) -> None:
+    def __init__(self, rooms: _ObserverState) -> None:
         self.findings = rooms.findings
         self.ahead = rooms.ahead
         self.replica = rooms.replica
@@ -450,7 +450,7 @@ class _Part:
 class _Requests(_Part):
     """Goal requests, their responses and action-level cancels: the machine's ``accept``, compared."""
 
-    def __init__(self, rooms: _Rooms) -> None:
+    def __init__(self, rooms: _ObserverState) -> None:
         super().__init__(rooms)
         self.duplicates: set[str] = set()  # goal UUIDs requested again while open
 
@@ -620,7 +620,7 @@ class _Requests(_Part):
 class _Runs(_Part):
     """Begin and status messages: runs, their seq, the dynamic event's id and the status topic."""
 
-    def __init__(self, rooms: _Rooms, header: TraceHeader) -> None:
+    def __init__(self, rooms: _ObserverState, header: TraceHeader) -> None:
         super().__init__(rooms)
         self.names = (header.fleet, header.robot) if header.fleet or header.robot else None
         self.event_id_pending = False
@@ -831,7 +831,7 @@ def log_seq_faults(last: int | None, feedback: Feedback) -> list[tuple[str, str]
 class _Feedback(_Part):
     """Feedback: a child's start and progress, abduced, compared, and corrected when it disagrees."""
 
-    def __init__(self, rooms: _Rooms) -> None:
+    def __init__(self, rooms: _ObserverState) -> None:
         super().__init__(rooms)
         self.log_seq: int | None = None  # the robot's last log seq seen
 
@@ -1013,7 +1013,7 @@ class _Answers(_Part):
     """Terminal answers: the end of a goal, abduced or owed, compared with the machine's, and at the
     trace's end those never seen."""
 
-    def __init__(self, rooms: _Rooms) -> None:
+    def __init__(self, rooms: _ObserverState) -> None:
         super().__init__(rooms)
         self.last_end: tuple[int, Result] | None = None  # the last child end: its line and result
 
@@ -1167,14 +1167,14 @@ class _Answers(_Part):
 class _Observer:
     """Observer mode (see the module docs): each record goes to the part that reads its kind.
 
-    The parts judge against the rooms (:class:`_Rooms`), each the only keeper of what it holds, and
+    The parts judge against the rooms (:class:`_ObserverState`), each the only keeper of what it holds, and
     keep what only they need; none calls another.
     """
 
     def __init__(self, header: TraceHeader) -> None:
         findings, ahead = _Findings(), _Lookahead()
-        replica = _Replica(header, findings, ahead)
-        self.rooms = _Rooms(findings=findings, ahead=ahead, replica=replica, goals=_Goals(replica))
+        replica = _ServerReplica(header, findings, ahead)
+        self.rooms = _ObserverState(findings=findings, ahead=ahead, replica=replica, goals=_Goals(replica))
         self.requests = _Requests(self.rooms)
         self.runs = _Runs(self.rooms, header)
         self.feedback = _Feedback(self.rooms)
@@ -1215,7 +1215,7 @@ LOOKAHEAD = 2
 CLIENT_LOOKAHEAD = 64
 
 
-def _response_ahead(rooms: _Rooms, record: Record, window: Iterable[Record]) -> Record | None:
+def _response_ahead(rooms: _ObserverState, record: Record, window: Iterable[Record]) -> Record | None:
     """The response, among the records ahead, of the goal whose feedback or answer ``record`` is, when
     the goal awaits it, or of an accepted goal when ``record`` is a status; or the begin of the run
     whose status ``record`` is, when that run has not begun: a tap at a client sees the action's
@@ -1260,7 +1260,7 @@ def _late_feedback(state: State | None, status: DynamicEventStatus, ahead: list[
     return None
 
 
-def _lagged_ahead(rooms: _Rooms, record: Record, window: Iterable[Record]) -> Record | None:
+def _lagged_ahead(rooms: _ObserverState, record: Record, window: Iterable[Record]) -> Record | None:
     """At a client, whose channels lag one another (a lossy link): the record among those ahead that
     the server sent before ``record``, on another channel.  A goal's feedback before its answer (R19.1:
     nothing follows an answer); the INACTIVE status that ended a run before the next run's begin
@@ -1345,7 +1345,7 @@ class Checker:
             _response_next(rooms, record, window)
 
 
-def _response_next(rooms: _Rooms, goal: Record, window: collections.deque[Record]) -> None:
+def _response_next(rooms: _ObserverState, goal: Record, window: collections.deque[Record]) -> None:
     """At a client: the response to ``goal``, among the records ahead, goes next when the machine
     decides as it says in the state the goal's request found.  At the server a response follows its
     request at once; a client hears it late over a lagging link, after statuses the server published
