@@ -944,7 +944,7 @@ def _wrapped_adapter_run() -> tuple[ClientState, machine.State, machine.ServerCo
 
 
 def test_client_knows_the_child_runs_after_an_adapter_id_wrap() -> None:
-    # Found by tests/tools/test_simulated_session.py::test_client_and_server_agree (config adapter_ids,
+    # Found by tests/tools/demo/test_simulated_session.py::test_client_and_server_agree (config adapter_ids,
     # begin event_id 2**64 - 2), which fails on this example once Hypothesis draws it.
     state, server, config = _wrapped_adapter_run()
     cancel = client.request_cancel(state, now=0)

@@ -73,5 +73,5 @@ def test_the_sequence_diagram_is_mermaid_of_the_same_session(seed: int) -> None:
 def test_the_docs_show_the_demos_diagram() -> None:
     from pathlib import Path
 
-    page = (Path(__file__).resolve().parents[2] / "docs" / "demo.md").read_text(encoding="utf-8")
+    page = (Path(__file__).resolve().parents[3] / "docs" / "demo.md").read_text(encoding="utf-8")
     assert "```mermaid\n" + demo.mermaid(0) + "```" in page, "regenerate with: dynevent demo --mermaid"
