@@ -829,6 +829,40 @@ def test_a_cancel_that_reaches_the_server_after_the_child_ended_is_no_failure_of
     assert refused.verdict is Verdict.FAIL and refused.seen == "a CANCEL not accepted", refused
 
 
+class _LosingLink(InProcessLink):
+    """The in-process link that loses every feedback of the goals ``lose`` picks, log entries and all
+    (a reliable topic that keeps 10 messages, over a lossy link that repairs slowly)."""
+
+    def __init__(self, lose: Any) -> None:
+        self.lose = lose
+        super().__init__(CONFIG)
+
+    def hear_feedback(self, exchange: probe_runner.Exchange, feedback: Any) -> None:
+        if not self.lose(exchange.goal):
+            super().hear_feedback(exchange, feedback)
+
+
+@pytest.mark.spec("R7.3", "R12.2")
+def test_feedback_the_log_seqs_show_was_published_and_lost_is_no_failure_of_the_server() -> None:
+    """The clamp case's NEXT is answered and none of its feedback came: the log seqs heard after it
+    skip the entries its child logged, so the link lost them, and the case is not run, saying so.
+    Where no feedback came at all, nothing shows the server sent any: the failure stands."""
+    options = attrs.evolve(OPTIONS, deadline=1000)
+
+    def verdicts(link: InProcessLink) -> dict[str, CaseFinding]:
+        findings = probe_runner.run_cases(link, options, list(CASES), lambda _: None)
+        return {finding.case.id: finding for finding in findings}
+
+    clamp = verdicts(_LosingLink(lambda goal: goal.stubborn_period > 0))["stubborn.clamp_notice"]
+    assert clamp.verdict is Verdict.MISSING, clamp
+    first, last = re.search(r"skip seq (\d+) to (\d+)", clamp.seen).groups()  # type: ignore[union-attr]
+    assert clamp.seen.startswith(probe_runner.FEEDBACK_LOST.format(first=first, last=last)), clamp.seen
+    assert int(last) > int(first)  # the warning and the child's progress, each an entry of its own
+    silent = verdicts(_LosingLink(lambda goal: True))
+    for case in ("next.runs_a_child", "stubborn.clamp_notice"):
+        assert silent[case].verdict is Verdict.FAIL, silent[case]
+
+
 def _child_of(finding: CaseFinding) -> int:
     """The id of the child a finding's notes say its NEXT ran."""
     sent = next(line for line in finding.messages if line.startswith("sent NEXT"))

@@ -105,6 +105,8 @@ class Exchange:
         #: when it was sent and its response came, on the link's clock (s), and when the server
         #: accepted it by the server's own clock (ns since the epoch), where the transport says
         self.sent_at = link.clock()
+        #: how many messages the link had heard when it was sent
+        self.sent_heard = link.heard
         self.response_at: float | None = None
         self.accepted_at: int | None = None
         self._link = link
@@ -149,6 +151,8 @@ class Link:
         self.heard = 0
         #: statuses the transport knows were published and not delivered (a gap in the writer's numbers)
         self.statuses_missed = 0
+        #: every log entry's seq heard in feedback, with where among what the link heard it came
+        self.log_seqs: list[tuple[int, int]] = []
         #: what the transport found wrong in how a topic (``"status"``, ``"begin"``) is offered, which
         #: no trace carries (DDS: a durability that a transient-local reader cannot match)
         self.offered: dict[str, str] = {}
@@ -227,9 +231,11 @@ class Link:
         self._heard("goal_response", update, goal_uuid=exchange.uuid, accepted=accepted)
 
     def hear_feedback(self, exchange: Exchange, feedback: Feedback) -> None:
-        self._heard(
-            "feedback", lambda: exchange.feedback.append(feedback), goal_uuid=exchange.uuid, message=feedback
-        )
+        def update() -> None:
+            exchange.feedback.append(feedback)
+            self.log_seqs.extend((self.heard, entry.seq) for entry in feedback.logs)
+
+        self._heard("feedback", update, goal_uuid=exchange.uuid, message=feedback)
 
     def hear_answer(self, exchange: Exchange, status: GoalStatus, result: Result) -> None:
         def update() -> None:
@@ -499,16 +505,56 @@ class Probe:
         with no message from it?"""
         return self.timeouts_in_a_row >= SILENT_AFTER
 
+    def feedback_lost(self, exchange: Exchange) -> range | None:
+        """The log seqs the server numbered while ``exchange``'s child ran that never came, where the
+        feedback heard shows such a gap: between the highest seq heard before it was sent and the
+        lowest above that heard after its answer (a robot numbers its log entries one by one, R7.3).
+        Feedback published and lost on the way (a reliable topic keeps 10 messages: a lossy link
+        that repairs slowly loses older ones), rather than never sent."""
+        if exchange.answer_heard is None:
+            return None
+        seqs = self.link.log_seqs
+        before = [seq for heard, seq in seqs if heard <= exchange.sent_heard]
+        if not before:
+            return None
+        low = max(before)
+        after = [seq for heard, seq in seqs if heard > exchange.answer_heard and seq > low]
+        if not after:
+            return None
+        high, came = min(after), {seq for _, seq in seqs}
+        missing = [seq for seq in range(low + 1, high) if seq not in came]
+        return range(missing[0], missing[-1] + 1) if missing else None
+
     def late(self, finding: CaseFinding) -> CaseFinding:
         """A failure for a goal's response or answer that did not come within ``--timeout``
         (``absent``), seen again at the run's end: when every goal the case left unanswered has had
         its response and, accepted, its answer since, they came late (a slow or lossy link), and the
-        case is not run, with which bound to raise, rather than failed.  A status or feedback that
-        never came stays the server's failure."""
-        if not (finding.absent and finding.verdict is Verdict.FAIL and self.came_late(finding)):
+        case is not run, with which bound to raise, rather than failed; so too when what never came is
+        feedback the log seqs heard show was published (:meth:`feedback_lost`).  A status, or
+        feedback nothing shows was sent, that never came stays the server's failure."""
+        if not (finding.absent and finding.verdict is Verdict.FAIL):
             return finding
-        why = f"{LATE.format(timeout=self.options.timeout)} ({finding.seen})"
-        return attrs.evolve(finding, verdict=Verdict.MISSING, seen=why, absent=False)
+        lost = self._feedback_lost_in(finding)
+        if lost is not None:
+            why = FEEDBACK_LOST.format(first=lost[0], last=lost[-1])
+        elif self.came_late(finding):
+            why = LATE.format(timeout=self.options.timeout)
+        else:
+            return finding
+        return attrs.evolve(finding, verdict=Verdict.MISSING, seen=f"{why} ({finding.seen})", absent=False)
+
+    def _feedback_lost_in(self, finding: CaseFinding) -> range | None:
+        """The log seqs lost on the way while a goal of ``finding``'s case ran, where every goal the
+        case left unanswered has come whole since but for that feedback (:meth:`feedback_lost`)."""
+        lost = None
+        for exchange in self.unanswered.get(finding.case.id, []):
+            if _complete(exchange):
+                continue
+            gap = self.feedback_lost(exchange) if exchange.accepted and exchange.answers else None
+            if gap is None:
+                return None
+            lost = lost or gap
+        return lost
 
     def came_late(self, finding: CaseFinding) -> bool:
         """Whether what ``finding``'s case waited for in vain has come since: its goals' responses,
@@ -773,6 +819,11 @@ REFUSED_AFTER_END = (
     "a CANCEL of child {child} was refused after the probe heard the child end: it may have reached the "
     "server after that end (a lossy link sends a lost request again, late), where the refusal is right "
     "(R4.13); the case needs both CANCELs to reach the server while the child runs"
+)
+#: Why a case that lacked a goal's feedback is not run when the log seqs heard show it published and lost.
+FEEDBACK_LOST = (
+    "feedback published while its child ran never came: the log entries heard skip seq {first} to {last} "
+    "(a reliable topic keeps its last 10 messages, and a lossy link that repairs slowly loses older ones)"
 )
 #: Why a case whose awaited message came after ``--timeout`` is not run: the link, not the server.
 LATE = "not run to its end: what it waited for came after --timeout's {timeout:g} s; raise --timeout"
