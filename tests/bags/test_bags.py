@@ -203,6 +203,62 @@ def test_a_goal_whose_response_the_bag_lost_is_read_as_accepted_from_its_feedbac
     assert [finding.code for finding in robot.report.findings] == ["feedback_not_running"]
 
 
+def _request_alone(talk: Conversation, n: int, goal_id: int) -> Conversation:
+    """Goal ``n``'s request event, its response event lost on the way to the recorder."""
+    request = ros_type("rmf_task_msgs/action/DynamicEvent_SendGoal_Request")(
+        goal_id=ros_uuid(n),
+        goal=ros_type("rmf_task_msgs/action/DynamicEvent_Goal")(
+            dynamic_event_seq=1, event_type=1, category="go_to_place", description='"pantry"', id=goal_id,
+            stubborn_period=0.0,
+        ),
+    )  # fmt: skip
+    return talk._event("send_goal", 1, n, request=request)
+
+
+@pytest.mark.spec("R2.2", "R6.2")
+def test_a_goal_whose_response_the_bag_lost_is_read_as_accepted_from_the_status_that_runs_its_child(
+    tmp_path: Path,
+) -> None:
+    """The status that shows a child running can come before the feedback: a server runs only the
+    child of a NEXT it accepted, so a goal whose response the bag lost is read as accepted there, where
+    the bag holds the server's records of its goals.  A RUNNING status no pending goal explains is
+    still found."""
+    talk = _request_alone(Conversation().begin().status(1, 1, "standby", 0), 1, 1).status(1, 2, "underway", 1)
+    running = talk.now
+    talk.ask(1).feedback(1, "underway", 1).result(1, SUCCEEDED, "completed", 1).status(1, 1, "standby", 1)
+    robot = _robot(check_bag(talk.write(tmp_path / "lossy", StoragePlugin.MCAP)))
+    assert robot.report.clean, robot.report.findings
+    assert robot.unheard == ((running, "01" * 16),)
+    other = _request_alone(Conversation().begin().status(1, 1, "standby", 0), 1, 1)
+    other.status(1, 2, "underway", 7)
+    robot = _robot(check_bag(other.write(tmp_path / "other", StoragePlugin.MCAP)))
+    assert [finding.code for finding in robot.report.findings] == ["status_mismatch"], robot.report.findings
+
+
+@pytest.mark.spec("R2.2")
+def test_a_status_a_lossy_link_delivered_seconds_late_goes_by_the_servers_stamp(tmp_path: Path) -> None:
+    """A recorder on a lossy link received the status that showed the child running seconds late, in
+    one burst with the status of the child's end, which the server stamped before that burst came: the
+    server stamps a status as it publishes it (R2.2), so each is judged where its stamp puts it (up to
+    ``HOLD`` back), and the child's RUNNING is not read after its end."""
+
+    def status(phase: int, text: str, stamp: int) -> Any:
+        return ros_type("rmf_task_msgs/msg/DynamicEventStatus")(
+            dynamic_event_seq=1, dynamic_state=phase, status=text, id=1, time=ros_time(stamp)
+        )
+
+    talk = Conversation().begin().status(1, 1, "standby", 0).goal(1, goal_id=1)
+    started = talk.now
+    talk.ask(1).feedback(1, "underway", 1)
+    talk.now += 5 * SECOND  # the child runs; the status that showed it is on its way again
+    burst = talk.now + SECOND // 10
+    talk.at(STATUS_TOPIC, "rmf_task_msgs/msg/DynamicEventStatus", status(2, "underway", started))
+    talk.at(STATUS_TOPIC, "rmf_task_msgs/msg/DynamicEventStatus", status(1, "standby", burst - SECOND // 20))
+    talk.result(1, SUCCEEDED, "completed", 1)
+    robot = _robot(check_bag(talk.write(tmp_path / "late", StoragePlugin.MCAP)))
+    assert robot.report.clean, robot.report.findings
+
+
 def test_a_second_different_answer_is_found_and_the_same_answer_twice_is_not(tmp_path: Path) -> None:
     """A client that asks twice for a result gets the same answer twice: one answer.  A different
     second answer to the same goal is a double answer."""

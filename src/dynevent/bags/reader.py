@@ -66,7 +66,7 @@ from dynevent.errors import (
     short_repr,
 )
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
-from dynevent.wire.vocab import Compatibility, GoalStatus
+from dynevent.wire.vocab import Compatibility, DynamicState, EventType, GoalStatus
 
 __all__ = [
     "HIDDEN_SUFFIXES",
@@ -472,13 +472,19 @@ class _Robot:
         self.lost: list[tuple[int, str]] = []
         self.unheard: list[tuple[int, str]] = []
         self._arrived = 0
+        self._began: int | None = None  # the bag time of the robot's first message
+        self._server_introspects = False  # the bag holds the server's own records of its goal service
         self._logged_last = 0  # the latest time a feedback's logs carried so far
         self.keep = keep  # keep every record passed on, in ``kept`` (bag_records)
         self.kept: list[Record] = []
 
     def take(self, channel: str, time: int, message: Any) -> None:
         self.channels.add(channel)
-        stamp = _stamp(channel, message, time)
+        if self._began is None:
+            self._began = time
+        # nothing goes before the robot's first message: a status latched for a late subscriber comes
+        # at once, published before the recording began
+        stamp = max(_stamp(channel, message, time), self._began)
         call: tuple[str, bytes, int] | None = None
         try:
             if channel in _SERVICES:
@@ -486,6 +492,8 @@ class _Robot:
                 if message is None:
                     return
                 call = message[3]
+                if channel == SEND_GOAL and message[0] in (_REQUEST_RECEIVED, _RESPONSE_SENT):
+                    self._server_introspects = True
                 if channel == GET_RESULT and message[2] is None:
                     _remember(self._asked, uuid_from_ros(message[1].goal_id), None)
             for record in _RECORDS[channel](time, message):
@@ -599,6 +607,9 @@ class _Robot:
             self.unheard_response(record)
         elif record.kind == "status":
             self._last_status = record
+            started = self._started_by(record.message)
+            if started is not None:
+                self.unheard_response(record, started)
         if record.kind == "goal":
             _remember(self._requested, record.goal_uuid, None)
             self._goals[record.goal_uuid] = record
@@ -654,14 +665,33 @@ class _Robot:
             self._judge.push(item)
         _remember(self._requested, record.goal_uuid, None)  # what follows of it is the new judgement's
 
-    def unheard_response(self, record: Record) -> None:
+    def _started_by(self, status: Any) -> str | None:
+        """The goal awaiting its response whose child ``status`` shows running: a NEXT of the status's
+        run that names the child's id, else the first of that run that lets the server name it (id 0).
+        A server shows a child running only once it accepted and started its NEXT.  Only where the bag
+        holds the server's own records of its goals: a response recorded by a client alone is stamped
+        as it arrives, after the statuses the server published on accepting the goal."""
+        if status.dynamic_state != DynamicState.RUNNING or not self._server_introspects:
+            return None
+        run = status.dynamic_event_seq
+        nexts = [
+            (uuid, goal.message) for uuid, goal in self._goals.items()
+            if goal.message.event_type == EventType.NEXT and goal.message.dynamic_event_seq == run
+        ]  # fmt: skip
+        named = [uuid for uuid, goal in nexts if goal.id == status.id]
+        unnamed = [uuid for uuid, goal in nexts if goal.id == 0]
+        return next(iter(named or unnamed), None)
+
+    def unheard_response(self, record: Record, uuid: str | None = None) -> None:
         """``record`` is the feedback or answer of a goal whose request the bag holds and whose response
-        it lacks: a server feeds back and answers only a goal it accepted, so the response was accepted,
-        and lost on its way to the recorder (a lossy link: a service event a writer's short history let
-        go before it was sent again).  It is read as accepted, here, and said."""
-        self._goals.pop(record.goal_uuid)
-        self.unheard.append((record.time, record.goal_uuid))
-        time, uuid = record.time, record.goal_uuid
+        it lacks (or the status that shows goal ``uuid``'s child running): a server feeds back,
+        answers and runs the child of only a goal it accepted, so the response was accepted, and lost
+        on its way to the recorder (a lossy link: a service event a writer's short history let go
+        before it was sent again).  It is read as accepted, here, and said."""
+        uuid = record.goal_uuid if uuid is None else uuid
+        self._goals.pop(uuid)
+        self.unheard.append((record.time, uuid))
+        time = record.time
         response = Record(line=record.line, kind="goal_response", time=time, goal_uuid=uuid, accepted=True)
         if self.keep:
             self.kept.append(response)
@@ -717,7 +747,9 @@ HOLD = 10_000_000_000
 
 
 def _stamp(channel: str, message: Any, time: int) -> int:
-    """The time the server stamped on a message, when it is within :data:`SKEW` of the bag time.  A
+    """The time the server stamped on a message, when it is within :data:`SKEW` of the bag time (a
+    status: up to :data:`HOLD` before it, since a server stamps a status as it publishes it, R2.2, and
+    a lossy link may deliver it that late).  A
     service event a client published (its request sent, its response received) has the client's
     clock, which may be another host's: its bag time is used.  (A feedback's logs' time orders it among
     feedback alone: :func:`_logged`.)"""
@@ -730,7 +762,8 @@ def _stamp(channel: str, message: Any, time: int) -> int:
     if stamped is None:
         return time
     nanoseconds = int(stamped.sec) * 1_000_000_000 + int(stamped.nanosec)
-    return nanoseconds if abs(nanoseconds - time) <= SKEW else time
+    earliest = HOLD if channel == "status" else SKEW
+    return nanoseconds if -earliest <= nanoseconds - time <= SKEW else time
 
 
 def _logged(record: Record) -> int:

@@ -111,7 +111,7 @@ def format_bag(bag: Any) -> str:
                          "judged anew from the status before it")  # fmt: skip
         for time, uuid in robot.unheard:
             lines.append(f"{where} @ {_bag_time(time)}: the bag lacks the response to goal {uuid}: "
-                         "read as accepted from its feedback or answer")  # fmt: skip
+                         "read as accepted from its feedback, answer or running child")  # fmt: skip
         if robot.refused:
             lines.append(f"{where}: {robot.refused} message(s) the mirrors refuse, not judged")
         count = len(robot.report.findings)
