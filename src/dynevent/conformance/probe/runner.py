@@ -389,6 +389,27 @@ def _ran_a_child(exchange: Exchange) -> bool:
     )
 
 
+def _feedback_lost(link: Link, exchange: Exchange) -> range | None:
+    """The log seqs the server numbered while ``exchange``'s child ran that never came, where the
+    feedback heard shows such a gap: between the highest seq heard before it was sent and the
+    lowest above that heard after its answer (a robot numbers its log entries one by one, R7.3).
+    Feedback published and lost on the way (a reliable topic keeps 10 messages: a lossy link
+    that repairs slowly loses older ones), rather than never sent."""
+    if exchange.answer_heard is None:
+        return None
+    seqs = link.log_seqs
+    before = [seq for heard, seq in seqs if heard <= exchange.sent_heard]
+    if not before:
+        return None
+    low = max(before)
+    after = [seq for heard, seq in seqs if heard > exchange.answer_heard and seq > low]
+    if not after:
+        return None
+    high, came = min(after), {seq for _, seq in seqs}
+    missing = [seq for seq in range(low + 1, high) if seq not in came]
+    return range(missing[0], missing[-1] + 1) if missing else None
+
+
 def _describe_goal(goal: Goal) -> str:
     return f"sent {goal_text(goal)}"
 
@@ -505,36 +526,15 @@ class Probe:
         with no message from it?"""
         return self.timeouts_in_a_row >= SILENT_AFTER
 
-    def feedback_lost(self, exchange: Exchange) -> range | None:
-        """The log seqs the server numbered while ``exchange``'s child ran that never came, where the
-        feedback heard shows such a gap: between the highest seq heard before it was sent and the
-        lowest above that heard after its answer (a robot numbers its log entries one by one, R7.3).
-        Feedback published and lost on the way (a reliable topic keeps 10 messages: a lossy link
-        that repairs slowly loses older ones), rather than never sent."""
-        if exchange.answer_heard is None:
-            return None
-        seqs = self.link.log_seqs
-        before = [seq for heard, seq in seqs if heard <= exchange.sent_heard]
-        if not before:
-            return None
-        low = max(before)
-        after = [seq for heard, seq in seqs if heard > exchange.answer_heard and seq > low]
-        if not after:
-            return None
-        high, came = min(after), {seq for _, seq in seqs}
-        missing = [seq for seq in range(low + 1, high) if seq not in came]
-        return range(missing[0], missing[-1] + 1) if missing else None
-
     def late(self, finding: CaseFinding) -> CaseFinding:
         """A failure for a goal's response or answer that did not come within ``--timeout``
         (``absent``), seen again at the run's end: when every goal the case left unanswered has had
         its response and, accepted, its answer since, they came late (a slow or lossy link), and the
-        case is not run, with which bound to raise, rather than failed; so too when what never came is
-        feedback the log seqs heard show was published (:meth:`feedback_lost`).  A status, or
-        feedback nothing shows was sent, that never came stays the server's failure."""
+        case is not run, with which bound to raise, rather than failed; so too for feedback the log
+        seqs show was sent (:func:`_feedback_lost`).  Else what never came is the server's failure."""
         if not (finding.absent and finding.verdict is Verdict.FAIL):
             return finding
-        lost = self._feedback_lost_in(finding)
+        lost = _feedback_lost_in(self, finding)
         if lost is not None:
             why = FEEDBACK_LOST.format(first=lost[0], last=lost[-1])
         elif self.came_late(finding):
@@ -542,19 +542,6 @@ class Probe:
         else:
             return finding
         return attrs.evolve(finding, verdict=Verdict.MISSING, seen=f"{why} ({finding.seen})", absent=False)
-
-    def _feedback_lost_in(self, finding: CaseFinding) -> range | None:
-        """The log seqs lost on the way while a goal of ``finding``'s case ran, where every goal the
-        case left unanswered has come whole since but for that feedback (:meth:`feedback_lost`)."""
-        lost = None
-        for exchange in self.unanswered.get(finding.case.id, []):
-            if _complete(exchange):
-                continue
-            gap = self.feedback_lost(exchange) if exchange.accepted and exchange.answers else None
-            if gap is None:
-                return None
-            lost = lost or gap
-        return lost
 
     def came_late(self, finding: CaseFinding) -> bool:
         """Whether what ``finding``'s case waited for in vain has come since: its goals' responses,
@@ -833,6 +820,20 @@ _NEEDS_OF_WAIT = {"status": ("run", "place", "child")}
 
 #: How often a wait for a running child looks whether its NEXT was answered first (seconds).
 _LOOK_AGAIN = 0.2
+
+
+def _feedback_lost_in(probe: Probe, finding: CaseFinding) -> range | None:
+    """The log seqs lost on the way while a goal of ``finding``'s case ran, where every goal the
+    case left unanswered has come whole since but for that feedback (:func:`_feedback_lost`)."""
+    lost = None
+    for exchange in probe.unanswered.get(finding.case.id, []):
+        if _complete(exchange):
+            continue
+        gap = _feedback_lost(probe.link, exchange) if exchange.accepted and exchange.answers else None
+        if gap is None:
+            return None
+        lost = lost or gap
+    return lost
 
 
 # -------------------------------------------------------------------- the cases
