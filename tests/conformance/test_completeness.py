@@ -1,0 +1,74 @@
+"""Completeness, measured: every check of the machine, switched off one at a time by the test kit
+(:mod:`dynevent.testing.switched_off`), must be caught by the vectors and by the probe.
+
+The checks are enrolled from the machine itself (its request checks' table, and every rule its
+source names as a value), so that a check added to the machine is measured without a word written
+here."""
+
+from __future__ import annotations
+
+import pytest
+
+from dynevent.conformance import vectors
+from dynevent.conformance.records import config_from_json, input_from_json
+from dynevent.conformance.vectors.driver import state_from_json
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.server import outputs as outs
+from dynevent.testing import switched_off as kit
+from dynevent.wire.messages import Goal
+
+
+def _rules_the_vectors_meet() -> set[str]:
+    """The rule of every output and refusal the machine gives over every vector."""
+    met: set[str] = set()
+    for vector in vectors.load_vectors():
+        config = config_from_json(vector.config)
+        state = state_from_json(vector.fleet, vector.robot, vector.state)
+        for step in vector.steps:
+            state, outputs = machine.step(state, input_from_json(step.input), config)
+            for output in outputs:
+                met.add(output.rule)
+                if isinstance(output, outs.GoalRejected):
+                    met.add(output.rejection.rule)
+    return met
+
+
+def test_every_check_of_the_machine_is_switched_off_by_the_kit() -> None:
+    assert kit.check_rules() == tuple(check.rule for check in machine.REQUEST_CHECKS)
+    enrolled = [item.rule for item in kit.switches()]
+    assert enrolled == [*kit.check_rules(), *kit.step_rules()]
+    assert len(set(enrolled)) == len(enrolled)
+    # every rule an output of the machine names is enrolled (what reading the source must not miss)
+    assert _rules_the_vectors_meet() - set(enrolled) == set()
+    assert {"R2.3", "R5.2", "R8.4", "R18.4"} <= set(kit.step_rules())  # an output's, a decision's, an edge's
+
+
+def test_a_check_added_to_the_machines_table_is_enrolled(monkeypatch: pytest.MonkeyPatch) -> None:
+    added = machine.RequestCheck("R4.99", machine.REQUEST_CHECKS[0].reason, frozenset({1}), lambda *_: None)
+    monkeypatch.setattr(machine, "REQUEST_CHECKS", (*machine.REQUEST_CHECKS, added))
+    assert kit.check_rules()[-1] == "R4.99"
+    assert "R4.99" in [item.rule for item in kit.switches()]
+
+
+def test_a_switch_holds_only_while_the_server_steps() -> None:
+    names = ("step", "REQUEST_CHECKS", "_STANDARD_WALKS", "_RMF_ROS2_WALKS", "_DEFERRED", "_BY_CLASS",
+             "_DESCRIPTION_CHECKS", "_ACCEPTANCES", "race_lost", "next_seq")  # fmt: skip
+    before = {name: getattr(machine, name) for name in names}
+    config = machine.ServerConfig(categories={"go_to_place": machine.any_description})
+    state = machine.State.new("fleet", "robot")
+    stale = Goal(dynamic_event_seq=7, event_type=3)
+    begin = ins.Begin(description="{}", event_id=1, now=0)
+    with kit.switched_off("R4.2"):
+        assert machine.accept(state, stale, config).rule == "R4.3"  # the next check refuses it
+    with kit.switched_off("R2.3"):
+        assert [output.KIND for output in machine.step(state, begin, config).outputs] == ["publish_begin"]
+    assert {name: getattr(machine, name) for name in names} == before
+    assert machine.accept(state, stale, config).rule == "R4.2"
+    assert [output.KIND for output in machine.step(state, begin, config).outputs][-1] == "publish_status"
+
+
+def test_each_switch_says_what_the_server_does_instead() -> None:
+    for item in kit.switches():
+        assert item.how and item.kind in ("request check", "step"), item
+        assert (item.rule in kit.DECISIONS) == (item.kind == "step" and "dropped" not in item.how), item
