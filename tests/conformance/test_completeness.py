@@ -7,9 +7,14 @@ here."""
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import pytest
 
+from completeness import LINKS, measure, table
 from dynevent.conformance import vectors
+from dynevent.conformance.probe.cases import LIVE_CANNOT_SHOW
 from dynevent.conformance.records import config_from_json, input_from_json
 from dynevent.conformance.vectors.driver import state_from_json
 from dynevent.server import inputs as ins
@@ -72,3 +77,49 @@ def test_each_switch_says_what_the_server_does_instead() -> None:
     for item in kit.switches():
         assert item.how and item.kind in ("request check", "step"), item
         assert (item.rule in kit.DECISIONS) == (item.kind == "step" and "dropped" not in item.how), item
+
+
+# ------------------------------------------------------------------ what catches each
+
+
+def test_every_check_switched_off_is_caught_by_the_vectors_and_by_the_probe_on_each_link_or_said_why() -> (
+    None
+):
+    """The vectors catch every check switched off; the probe catches it on the in-process link and over
+    the driver protocol, or the case list says why no live exchange shows it (and says so of no
+    check it catches)."""
+    measured = measure()
+    assert [item.rule for item in measured] == [item.rule for item in kit.switches()]
+    assert [item.rule for item in measured if item.vector is None] == []
+    unexplained = [
+        item.rule
+        for item in measured
+        if not all(item.probe[link][1] for link in LINKS) and item.rule not in LIVE_CANNOT_SHOW
+    ]
+    assert unexplained == [], "caught by no case on some link, and no reason in cases.LIVE_CANNOT_SHOW"
+    stale = [item.rule for item in measured if item.rule in LIVE_CANNOT_SHOW and item.probe["in process"][1]]
+    assert stale == [], "caught by the probe, yet cases.LIVE_CANNOT_SHOW says no live exchange shows it"
+    assert set(LIVE_CANNOT_SHOW) <= {item.rule for item in measured}
+
+
+def test_r8_4_switched_off_fails_the_case_of_its_rule_rather_than_leaving_cases_not_run() -> None:
+    """A server that publishes no status at a child's end: the case of R8.4 fails, naming it."""
+    (item,) = [item for item in measure() if item.rule == "R8.4"]
+    assert item.probe["in process"] == ("standard", ("next.status_after_child",))
+
+
+DOC = Path(__file__).resolve().parents[2] / "docs" / "conformance.md"
+BEGIN, END = "<!-- the table of completeness: begin -->", "<!-- the table of completeness: end -->"
+
+
+def test_docs_conformance_prints_the_table_of_completeness() -> None:
+    """docs/conformance.md's table is :func:`completeness.table`; ``DYNEVENT_UPDATE_COMPLETENESS=1``
+    rewrites it."""
+    text = DOC.read_text(encoding="utf-8")
+    before, _, rest = text.partition(BEGIN + "\n")
+    _, _, after = rest.partition(END)
+    fresh = before + BEGIN + "\n" + table(LIVE_CANNOT_SHOW) + END + after
+    if os.environ.get("DYNEVENT_UPDATE_COMPLETENESS") == "1":
+        DOC.write_text(fresh, encoding="utf-8")
+    how = "DYNEVENT_UPDATE_COMPLETENESS=1 pytest tests/conformance/test_completeness.py"
+    assert BEGIN in text and END in text and text == fresh, f"docs/conformance.md's table is stale: {how}"

@@ -970,7 +970,13 @@ def _id_stale(probe: Probe, case: Case) -> CaseFinding:
 
 
 def _status_after_child(probe: Probe, case: Case) -> CaseFinding:
-    status = probe.waiting()
+    try:
+        status = probe.waiting()
+    except _TimedOut:  # no WAITING status: it fails here when a child's end never published one
+        unpublished = _end_unpublished(probe, case)
+        if unpublished is None:
+            raise
+        return unpublished
     goal = probe.next_goal(status)
     exchange = probe.send(goal)
     if not exchange.answers:
@@ -992,6 +998,23 @@ def _status_after_child(probe: Probe, case: Case) -> CaseFinding:
     divergence = "D2" if after.dynamic_state == DynamicState.RUNNING else None
     return CaseFinding(case, Verdict.FAIL, expected=f"WAITING, standby, id {child}",
                    seen=f"status {status_text(after)}", divergence=divergence)  # fmt: skip
+
+
+def _end_unpublished(probe: Probe, case: Case) -> CaseFinding | None:
+    """R8.4's failure when the latest status still shows running a child whose NEXT (an earlier case's)
+    was answered with its end; None otherwise."""
+    latest = probe.link.status
+    if latest is None or not machine.runs_a_child(latest):
+        return None
+    for exchange in reversed(probe._nexts):
+        answer = exchange.answer
+        if answer is not None and not answer[1].execution_failure and answer[1].id == latest.id:
+            return CaseFinding(
+                case, Verdict.FAIL, expected=f"WAITING, standby, id {latest.id}",
+                seen=f"child {latest.id} was answered {answer[1].status!r}; the status still says "
+                f"{status_text(latest)}", absent=True,
+            )  # fmt: skip
+    return None
 
 
 def _busy(probe: Probe, case: Case) -> CaseFinding:

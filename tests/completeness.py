@@ -1,0 +1,148 @@
+"""Completeness, measured: each check of the machine switched off (dynevent.testing.switched_off),
+run against the vectors and the probe's in-process links; what catches it.  Shared by
+tests/conformance/test_completeness.py and the table docs/conformance.md prints.  Not a test module."""
+
+from __future__ import annotations
+
+import functools
+
+import attrs
+
+from dynevent.conformance.probe.cases import CASES, KNOWN, KNOWN_MISSING, Verdict
+from dynevent.conformance.probe.in_process import probe_in_process
+from dynevent.conformance.probe.runner import Options
+from dynevent.conformance.vectors import InProcessImplementation, Vector, load_vectors, run_vectors
+from dynevent.server import inputs as ins
+from dynevent.server import machine
+from dynevent.server import outputs as outs
+from dynevent.server.holder import RobotServer
+from dynevent.sim.config import CategorySpec, ServeConfig, machine_config
+from dynevent.testing import switched_off as kit
+
+#: serve as the probe's own tests run it: brief children that log often, the first run at the seq wrap.
+CONFIG = ServeConfig(
+    categories={"go_to_place": CategorySpec(duration=0.5, report_every=0.1)}, rebegin=0.3, first_seq=2**32 - 1
+)
+OPTIONS = Options(fleet="tinyRobot", robot="tinyRobot1", place="pantry", more_places=("lounge",), timeout=3)
+#: The probe's links measured here: the machine stepped in process (``--loopback``), and the same
+#: machine behind the driver protocol (``--impl``), each in both compatibility modes.
+LINKS = ("in process", "driver")
+MODES = ("standard", "rmf_ros2")
+
+
+@attrs.frozen
+class Measured:
+    """What caught one switched-off check: the first vector that fails (those that cite its rule run
+    first); whether the probe's exchange reached it (a step where the server did other than the
+    machine); per probe link the cases that fail in the first mode where any does (``"the judge"``
+    when only the judge over every record found it), with that mode; empty: not caught."""
+
+    switch: kit.Switch
+    vector: str | None
+    reached: bool
+    probe: dict[str, tuple[str, tuple[str, ...]]]
+
+    @property
+    def rule(self) -> str:
+        return self.switch.rule
+
+
+def _probe(rule: str, link: str, mode: str) -> tuple[bool, tuple[str, ...]]:
+    """Whether the probe's exchange over ``link`` in ``mode`` reached the check (a step where the
+    switched-off server did other than the machine), and the cases that caught it."""
+    config = attrs.evolve(CONFIG, compatibility=mode)
+    options = OPTIONS
+    if mode == "rmf_ros2":  # what rmf_ros2 mode fails on by design is known: the rest is caught
+        options = attrs.evolve(options, known=KNOWN["rmf_ros2"], known_missing=KNOWN_MISSING["rmf_ros2"])
+    reached = [link == "driver"]
+    if link == "driver":
+        implementation = kit.switched_off_implementation(InProcessImplementation(), rule)
+        code, findings = probe_in_process(
+            options, list(CASES), lambda _: None, config, implementation=implementation
+        )
+    else:
+        first = config.first_state(options.robot)
+        server = RobotServer(options.fleet, options.robot, machine_config(config), first)
+        switched = kit.switched_off_stepper(server.step, rule)
+
+        def stepper(event: ins.Input) -> tuple[outs.Output, ...]:
+            before = server.state
+            outputs = switched(event)
+            if not reached[0]:
+                transition = machine.step(before, event, server.config)  # the machine, as it is
+                reached[0] = (transition.state, transition.outputs) != (server.state, outputs)
+            return outputs
+
+        code, findings = probe_in_process(options, list(CASES), lambda _: None, config, stepper=stepper)
+    if code != 1:  # passed, or only cases not run (exit 3): no case named what broke
+        return reached[0], ()
+    failed = tuple(f.case.id for f in findings if f.verdict is Verdict.FAIL and not f.known)
+    return reached[0], failed or ("the judge",)
+
+
+def _first_vector(rule: str, vectors: list[Vector]) -> str | None:
+    ordered = sorted(vectors, key=lambda vector: rule not in vector.rules)
+    implementation = kit.switched_off_implementation(InProcessImplementation(), rule)
+    for outcome in run_vectors(ordered, implementation, max_failures=1):
+        if outcome.failure is not None:
+            return outcome.vector.name
+    return None
+
+
+def _caught_by_probe(rule: str) -> tuple[bool, dict[str, tuple[str, tuple[str, ...]]]]:
+    """Whether the probe's exchange reached ``rule`` switched off, in either mode; and per link, the
+    first mode in which the probe caught it and the cases.  The driver link runs once, in the mode the
+    in-process link caught it in (else the standard mode), and only where the in-process exchange
+    reached the check (else the driver link's exchange, the same, cannot catch it)."""
+    reached_any = False
+    caught: dict[str, tuple[str, tuple[str, ...]]] = {link: ("", ()) for link in LINKS}
+    for mode in MODES:
+        reached, cases = _probe(rule, "in process", mode)
+        reached_any = reached_any or reached
+        if cases:
+            caught["in process"] = (mode, cases)
+            break
+    if reached_any:
+        mode = caught["in process"][0] or "standard"
+        cases = _probe(rule, "driver", mode)[1]
+        caught["driver"] = (mode, cases) if cases else ("", ())
+    return reached_any, caught
+
+
+@functools.cache
+def measure() -> tuple[Measured, ...]:
+    """Every check of the machine, switched off, against the vectors and each probe link."""
+    vectors = load_vectors()
+    return tuple(
+        Measured(switch, _first_vector(switch.rule, vectors), *_caught_by_probe(switch.rule))
+        for switch in kit.switches()
+    )
+
+
+def _cases(caught: tuple[str, tuple[str, ...]]) -> str:
+    mode, cases = caught
+    if not cases:
+        return "no"
+    shown = ", ".join(f"`{case}`" if "." in case else case for case in cases[:2])
+    more = f" (+{len(cases) - 2})" if len(cases) > 2 else ""
+    return shown + more + (f" ({mode})" if mode != "standard" else "")
+
+
+def table(reasons: dict[str, str]) -> str:
+    """docs/conformance.md's table of completeness, a row a check."""
+    lines = [
+        "| rule | switched off | vectors: first to catch it | probe in process | probe over the driver | "
+        "why no live exchange shows it |",
+        "|---|---|---|---|---|---|",
+    ]
+    for measured in measure():
+        cells = [
+            measured.rule,
+            measured.switch.how,
+            f"`{measured.vector}`" if measured.vector else "no",
+            _cases(measured.probe["in process"]),
+            _cases(measured.probe["driver"]),
+            reasons.get(measured.rule, ""),
+        ]
+        lines.append("| " + " | ".join(cell.replace("|", "\\|") for cell in cells) + " |")
+    return "\n".join(lines) + "\n"
