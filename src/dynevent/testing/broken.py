@@ -23,7 +23,7 @@ from dynevent.server import outputs as outs
 from dynevent.server.holder import RobotServer
 from dynevent.wire.vocab import DynamicState, EventType, GoalStatus, RejectReason, Status, Tier
 
-__all__ = ["DEFECTS", "Defect", "broken_stepper"]
+__all__ = ["DEFECTS", "Defect", "broken_stepper", "patched"]
 
 #: A rewrite of one output: the goals' event types by UUID, what the server has done so far (a
 #: dictionary the rewrite keeps its own notes in), and the output; None drops it.
@@ -164,7 +164,9 @@ DEFECTS: dict[str, Defect] = {
 
 
 @contextlib.contextmanager
-def _patched(patches: Mapping[str, Callable[..., Any]]) -> Iterator[None]:
+def patched(patches: Mapping[str, Any]) -> Iterator[None]:
+    """The machine's module attributes named in ``patches`` replaced while the block runs, then put
+    back (one thread)."""
     saved = {name: getattr(machine, name) for name in patches}
     for name, function in patches.items():
         setattr(machine, name, function)
@@ -185,7 +187,7 @@ def broken_stepper(server: RobotServer, defect: str) -> Callable[[ins.Input], tu
     def step(event: ins.Input) -> tuple[outs.Output, ...]:
         if isinstance(event, (ins.GoalRequested, ins.GoalSubmitted)):
             types[event.goal_uuid] = event.goal.event_type
-        with _patched(broken.patches):
+        with patched(broken.patches):
             outputs = server.step(event)
         if broken.rewrite is None:
             return outputs

@@ -32,6 +32,7 @@ from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.server.machine import RequestCheck, ServerConfig, State, Transition
+from dynevent.testing.broken import patched
 
 __all__ = [
     "DECISIONS",
@@ -278,14 +279,8 @@ def switched_off(rule: str) -> Iterator[None]:
             return Transition(transition.state, tuple(output for output in changed if output is not None))
 
         patches["step"] = rewritten
-    saved = {name: getattr(machine, name) for name in patches}
-    for name, value in patches.items():
-        setattr(machine, name, value)
-    try:
+    with patched(patches):
         yield
-    finally:
-        for name, value in saved.items():
-            setattr(machine, name, value)
 
 
 def switched_off_stepper(
