@@ -12,7 +12,6 @@ from pathlib import Path
 
 import pytest
 
-from completeness import LINKS, measure, table
 from dynevent.conformance import vectors
 from dynevent.conformance.probe.cases import LIVE_CANNOT_SHOW
 from dynevent.conformance.records import config_from_json, input_from_json
@@ -22,6 +21,7 @@ from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.testing import switched_off as kit
 from dynevent.wire.messages import Goal
+from support.completeness import LINKS, measure, table
 
 
 def _rules_the_vectors_meet() -> set[str]:
