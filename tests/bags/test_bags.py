@@ -259,6 +259,24 @@ def test_a_status_a_lossy_link_delivered_seconds_late_goes_by_the_servers_stamp(
     assert robot.report.clean, robot.report.findings
 
 
+@pytest.mark.spec("R11.1", "R5.2")
+def test_a_finished_whose_answer_came_after_the_next_runs_begin_ended_its_run(tmp_path: Path) -> None:
+    """A recorder on a lossy link received the answers of a run's last NEXT and of its FINISHED after
+    the next run's begin (the client's records of them, stamped as they came): the INACTIVE status
+    is the FINISHED's doing, which a binding starts as it accepts it, not a task cancel that left the
+    FINISHED queued to lose the race at the next begin."""
+    talk = Conversation().begin(seq=1).status(1, 1, "standby", 1)
+    talk.goal(1, goal_id=2).status(1, 2, "underway", 2).ask(1).feedback(1, "underway", 2)
+    talk.now += 5 * SECOND
+    talk.status(1, 1, "standby", 2).goal(2, event_type=3).ask(2).status(1, 0, "uninitialized", 0)
+    talk.now += SECOND // 2
+    talk.begin(seq=2).status(2, 1, "standby", 1)
+    talk.now += 2 * SECOND
+    talk.result(1, SUCCEEDED, "completed", 2).result(2, SUCCEEDED, "completed", 1)
+    robot = _robot(check_bag(talk.write(tmp_path / "late", StoragePlugin.MCAP)))
+    assert robot.report.clean, robot.report.findings
+
+
 def test_a_second_different_answer_is_found_and_the_same_answer_twice_is_not(tmp_path: Path) -> None:
     """A client that asks twice for a result gets the same answer twice: one answer.  A different
     second answer to the same goal is a double answer."""

@@ -587,7 +587,7 @@ class _Robot:
         """The observer, for a robot whose goals the bag holds; else the judge of what its topics show."""
         if self._judge is None:
             header = TraceHeader(fleet=self.fleet, robot=self.robot, compatibility=self.compatibility)
-            self._judge = Checker(header) if self.judged else PartialJudge(header, SKEW)
+            self._judge = Checker(header, apart=True) if self.judged else PartialJudge(header, SKEW)
         return self._judge
 
     def _pass(self, record: Record) -> None:
@@ -655,7 +655,7 @@ class _Robot:
         self._before.append(attrs.evolve(report, findings=kept))
         self.lost.append((record.time, record.goal_uuid))
         self._judge = Checker(
-            TraceHeader(fleet=self.fleet, robot=self.robot, compatibility=self.compatibility)
+            TraceHeader(fleet=self.fleet, robot=self.robot, compatibility=self.compatibility), apart=True
         )
         statuses = [index for index, item in enumerate(pending) if item.kind == "status"]
         seed = pending[statuses[-1]] if statuses else self._last_status  # the lost goal's start, or later

@@ -620,9 +620,12 @@ class _Requests(_Part):
 class _Runs(_Part):
     """Begin and status messages: runs, their seq, the dynamic event's id and the status topic."""
 
-    def __init__(self, rooms: _ObserverState, header: TraceHeader) -> None:
+    def __init__(self, rooms: _ObserverState, header: TraceHeader, *, apart: bool = False) -> None:
         super().__init__(rooms)
         self.names = (header.fleet, header.robot) if header.fleet or header.robot else None
+        # the records were seen away from the server (a client, a recorder on the network): a step's
+        # answers may come after its status, on another channel
+        self.apart = apart
         self.event_id_pending = False
         self.begin_seen = False
         # the trace opened with a begin: a tap at a client may have read it latched, long after it
@@ -736,13 +739,19 @@ class _Runs(_Part):
         # client may see the status first, so a candidate whose answers the next records show wins
         ahead = self.ahead.answers()
         found: tuple[State, list[Owed]] | None = None
-        best = (-1, True)
+        best = (-1, False, True)
         for events in [*candidates(self.replica.st, record, self.replica.now), *self.ended_child()]:
             state, owed = self.replica.simulate(events)
             published = [item.output for item in owed if isinstance(item.output, outs.PublishStatus)]
             if not published or not same_status(published[-1].message, message):
                 continue
-            rank = (len(_answers(owed) & ahead), not any(item.channel.startswith("goal:") for item in owed))
+            # seen apart, a goal's start beats a task signal whose answers are all that come sooner
+            signal = self.apart and any(isinstance(event, _TASK_SIGNALS) for event in events)
+            rank = (
+                len(_answers(owed) & ahead),
+                not signal,
+                not any(item.channel.startswith("goal:") for item in owed),
+            )
             if rank > best:
                 found, best = (state, owed), rank
         if found is None:
@@ -808,6 +817,10 @@ def _answers(owed: Iterable[Owed]) -> set[tuple[str, str]]:
 
 
 _STATUS_VALUES = frozenset(status.value for status in Status)
+#: The inputs from the task, which no client sees: seen apart from the server, a status they and a
+#: goal's start both explain is read as the goal's start (a binding starts a goal as soon as it
+#: accepts it), though the goal's answer has not come yet (a lossy link delivers it later).
+_TASK_SIGNALS = (ins.TaskCancel, ins.TaskKill)
 
 
 def log_seq_faults(last: int | None, feedback: Feedback) -> list[tuple[str, str]]:
@@ -1171,12 +1184,12 @@ class _Observer:
     keep what only they need; none calls another.
     """
 
-    def __init__(self, header: TraceHeader) -> None:
+    def __init__(self, header: TraceHeader, *, apart: bool = False) -> None:
         findings, ahead = _Findings(), _Lookahead()
         replica = _ServerReplica(header, findings, ahead)
         self.rooms = _ObserverState(findings=findings, ahead=ahead, replica=replica, goals=_Goals(replica))
         self.requests = _Requests(self.rooms)
-        self.runs = _Runs(self.rooms, header)
+        self.runs = _Runs(self.rooms, header, apart=apart or header.tap == "client")
         self.feedback = _Feedback(self.rooms)
         self.answers = _Answers(self.rooms)
         self._handlers: dict[str, Callable[[Record], None]] = {
@@ -1291,11 +1304,13 @@ def _lagged_ahead(rooms: _ObserverState, record: Record, window: Iterable[Record
 class Checker:
     """The observer fed one record at a time (:meth:`push`), for a reader that interleaves the
     records of several robots (a bag); :meth:`finish` gives the report.  It holds
-    :data:`LOOKAHEAD` records, whatever the length of what it reads."""
+    :data:`LOOKAHEAD` records, whatever the length of what it reads.  ``apart``: the records were
+    seen away from the server (a recorder on the network), so a step's answers may come after its
+    status, as at a client's tap."""
 
-    def __init__(self, header: TraceHeader, source: str = "<trace>") -> None:
+    def __init__(self, header: TraceHeader, source: str = "<trace>", *, apart: bool = False) -> None:
         self.source = source
-        self._observer = _Observer(header)
+        self._observer = _Observer(header, apart=apart)
         self._window: collections.deque[Record] = collections.deque()
         self._count = 0
         self._client = header.tap == "client"
