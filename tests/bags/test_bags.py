@@ -277,6 +277,31 @@ def test_a_finished_whose_answer_came_after_the_next_runs_begin_ended_its_run(tm
     assert robot.report.clean, robot.report.findings
 
 
+@pytest.mark.spec("R3.4", "R11.1")
+def test_a_finished_whose_inactive_status_the_next_run_took_over_ended_its_run(tmp_path: Path) -> None:
+    """The status topic keeps one message: a run's INACTIVE lost on the way to a recorder on a lossy
+    link is taken over by the next run's status before it is sent again.  A begin that comes while a
+    FINISHED of the active run is accepted and unanswered is read as after that FINISHED ended the
+    run; without such a FINISHED, a begin while the run is active is still found (R3.4)."""
+
+    def run(finished: bool) -> Conversation:
+        talk = Conversation().begin(seq=1).status(1, 1, "standby", 1)
+        talk.goal(1, goal_id=2).status(1, 2, "underway", 2).ask(1).feedback(1, "underway", 2)
+        talk.result(1, SUCCEEDED, "completed", 2).status(1, 1, "standby", 2)
+        if finished:
+            talk.goal(2, event_type=3).ask(2)  # its INACTIVE never came
+        talk.now += SECOND // 2
+        talk.begin(seq=2).status(2, 1, "standby", 1)
+        talk.now += 2 * SECOND
+        return talk.result(2, SUCCEEDED, "completed", 1) if finished else talk
+
+    robot = _robot(check_bag(run(True).write(tmp_path / "lost", StoragePlugin.MCAP)))
+    assert robot.report.clean, robot.report.findings
+    robot = _robot(check_bag(run(False).write(tmp_path / "active", StoragePlugin.MCAP)))
+    found = [finding.code for finding in robot.report.findings]
+    assert found == ["begin_while_active"], robot.report.findings
+
+
 def test_a_second_different_answer_is_found_and_the_same_answer_twice_is_not(tmp_path: Path) -> None:
     """A client that asks twice for a result gets the same answer twice: one answer.  A different
     second answer to the same goal is a double answer."""

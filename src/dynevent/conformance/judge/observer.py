@@ -658,6 +658,8 @@ class _Runs(_Part):
                 Violation.BEGIN_AFTER_SHUTDOWN, f"begin of run {message.dynamic_event_seq}", "nothing"
             )
             state = resync.serving(state)
+        if state.active and self.apart and state is self.replica.st:
+            state = self.finished_unseen(state)
         if state.active:
             self.findings.flag(
                 Violation.BEGIN_WHILE_ACTIVE,
@@ -767,6 +769,21 @@ class _Runs(_Part):
             f"status {status_text(message)}",
             f"{status_text(current)}, the state's status",
         )
+
+    def finished_unseen(self, state: State) -> State:
+        """Seen apart from the server, a new run's begin while a FINISHED of the active run is
+        accepted and not yet started: the FINISHED started and ended the run, and the INACTIVE status
+        it published was taken over on its way by the next run's (the status topic keeps one
+        message).  Its answer stays owed; ``state`` as the run's end left it."""
+        for queued in state.queued:
+            if queued.goal.event_type != EventType.FINISHED or queued.goal.dynamic_event_seq != state.seq:
+                continue
+            start = ins.GoalStarted(goal_uuid=queued.goal_uuid, now=self.replica.now)
+            ended, owed = self.replica.simulate([start])
+            if not ended.active:
+                self.replica.commit(ended, [item for item in owed if item.channel != "status"])
+                return ended
+        return state
 
     def ended_child(self) -> list[list[ins.Input]]:
         """A child's end whose answer the next records show, after the starts of none, one, ... of the
