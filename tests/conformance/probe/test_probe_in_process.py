@@ -863,6 +863,39 @@ def test_feedback_the_log_seqs_show_was_published_and_lost_is_no_failure_of_the_
         assert silent[case].verdict is Verdict.FAIL, silent[case]
 
 
+class _DeafLink(InProcessLink):
+    """The in-process link that never delivers the response to an action-level cancel of a goal
+    already answered; ``missed`` statuses its transport knows were published and never delivered."""
+
+    def __init__(self, missed: int) -> None:
+        super().__init__(CONFIG)
+        self.statuses_missed = missed
+
+    def cancel(self, exchange: probe_runner.Exchange, timeout: float) -> bool | None:
+        if exchange.answers:
+            self.sent("cancel_request", goal_uuid=exchange.uuid)
+            return None
+        return super().cancel(exchange, timeout)
+
+
+@pytest.mark.spec("R10.5", "R19.1")
+def test_what_never_came_over_a_link_that_lost_messages_is_no_verdict_on_the_server() -> None:
+    """A cancel response that never came fails its case over a link that lost nothing; over one whose
+    transport shows it lost messages during the run, the case is not run, saying so."""
+    options = attrs.evolve(OPTIONS, deadline=1000)
+
+    def answered(missed: int) -> CaseFinding:
+        findings = probe_runner.run_cases(_DeafLink(missed), options, list(CASES), lambda _: None)
+        return {finding.case.id: finding for finding in findings}["action.cancel_answered"]
+
+    clean = answered(0)
+    assert clean.verdict is Verdict.FAIL and clean.seen == "no cancel response", clean
+    lossy = answered(2)
+    assert lossy.verdict is Verdict.MISSING, lossy
+    lost = "2 status(es) published and never delivered"
+    assert lossy.seen == f"{probe_runner.LOSSY.format(lost=lost)} (no cancel response)", lossy.seen
+
+
 def _child_of(finding: CaseFinding) -> int:
     """The id of the child a finding's notes say its NEXT ran."""
     sent = next(line for line in finding.messages if line.startswith("sent NEXT"))

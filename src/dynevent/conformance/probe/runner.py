@@ -812,6 +812,11 @@ FEEDBACK_LOST = (
     "feedback published while its child ran never came: the log entries heard skip seq {first} to {last} "
     "(a reliable topic keeps its last 10 messages, and a lossy link that repairs slowly loses older ones)"
 )
+#: Why a case that waited in vain is not run over a link that lost or delayed messages during the run.
+LOSSY = (
+    "what it waited for never came, over a link that lost messages during the run ({lost}): no verdict "
+    "on the server (probe it over a link that loses none)"
+)
 #: Why a case whose awaited message came after ``--timeout`` is not run: the link, not the server.
 LATE = "not run to its end: what it waited for came after --timeout's {timeout:g} s; raise --timeout"
 #: Which cases a kind of wait that timed out stops: no status heard stops every case that needs an
@@ -1635,7 +1640,28 @@ def run_cases(
     if pending and not probe.past_deadline:
         link.wait(lambda: all(probe.came_late(finding) for finding in pending), probe.timeout)
     findings[:] = [probe.late(finding) for finding in findings]
+    lost = _losses(probe.link, findings)
+    if lost is not None:  # what never came is no verdict over a link that lost messages
+        findings[:] = [
+            attrs.evolve(finding, verdict=Verdict.MISSING, seen=f"{LOSSY.format(lost=lost)} ({finding.seen})",
+                         absent=False)
+            if finding.absent and finding.verdict is Verdict.FAIL else finding
+            for finding in findings
+        ]  # fmt: skip
     return findings
+
+
+def _losses(link: Link, findings: list[CaseFinding]) -> str | None:
+    """What shows the link lost or delayed the server's messages during the run: statuses its writer
+    numbered that never came, and cases whose messages came after ``--timeout`` or were lost."""
+    seen = []
+    if link.statuses_missed:
+        seen.append(f"{link.statuses_missed} status(es) published and never delivered")
+    prefixes = (LATE.split("{", 1)[0], FEEDBACK_LOST.split("{", 1)[0])
+    late = sum(1 for finding in findings if finding.seen.startswith(prefixes))
+    if late:
+        seen.append(f"{late} case(s) whose messages came late or were lost")
+    return "; ".join(seen) or None
 
 
 def _ready(
