@@ -302,6 +302,25 @@ def test_a_finished_whose_inactive_status_the_next_run_took_over_ended_its_run(t
     assert found == ["begin_while_active"], robot.report.findings
 
 
+@pytest.mark.spec("R19.1", "R8.2")
+def test_feedback_sent_again_late_goes_before_its_answer_and_the_feedback_logged_after_it(
+    tmp_path: Path,
+) -> None:
+    """A lossy link delivered a child's feedback again after the child's answer and after the next
+    child's feedback, which the server logged later: it goes before both, by the earlier of the two
+    places (read after the next child's feedback, it was feedback after its goal's answer)."""
+    talk = Conversation().begin().status(1, 1, "standby", 1)
+    talk.goal(1, goal_id=2).status(1, 2, "underway", 2).ask(1).feedback(1, "underway", 2, logs=(1,))
+    sent = talk.now  # the feedback the link loses, and sends again later
+    talk.status(1, 1, "standby", 2).result(1, SUCCEEDED, "completed", 2)
+    talk.goal(2, goal_id=3).status(1, 2, "underway", 3).ask(2).feedback(2, "underway", 3, logs=(3,))
+    talk.feedback(1, "underway", 2, logs=(2,))
+    late = talk.messages[-1][3].feedback.logs[0]
+    late.unix_millis_time = (sent + SECOND // 20) // 1_000_000  # logged before the child's end
+    robot = _robot(check_bag(talk.write(tmp_path / "late", StoragePlugin.MCAP)))
+    assert robot.report.clean, robot.report.findings
+
+
 def test_a_second_different_answer_is_found_and_the_same_answer_twice_is_not(tmp_path: Path) -> None:
     """A client that asks twice for a result gets the same answer twice: one answer.  A different
     second answer to the same goal is a double answer."""

@@ -536,12 +536,13 @@ class _Robot:
         answer = self._waiting_answers.get(record.goal_uuid) if record.kind == "feedback" else None
         logged = _logged(record) if record.kind == "feedback" else 0
         overtaken = self._logged_after(logged) if logged else None
-        if overtaken is not None:
+        if overtaken is not None or answer is not None:
             # feedback received after feedback the server logged later (a lossy link sent it again,
-            # after those): it goes before them, by its logs' time
-            key: tuple[int, float] = (overtaken[0], overtaken[1] - 0.5)
-        elif answer is not None:
-            key = (answer[0], answer[1] - 0.5)
+            # after those) goes before them, by its logs' time; received while its answer waits, it
+            # goes before that answer; the earlier of the two where both hold
+            key: tuple[int, float] = min(
+                (item[0], item[1] - 0.5) for item in (overtaken, answer) if item is not None
+            )
         elif record.goal_uuid and record.kind not in _OPENING:
             key = (max(stamp, self._last.get(record.goal_uuid, stamp)), float(self._arrived))
         else:  # a goal's request and response go by their own stamps: what names it goes after them
