@@ -15,10 +15,12 @@ import sqlite3
 from pathlib import Path
 from typing import Any
 
+import attrs
 import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 
 from dynevent.bags.reader import HOLD, BagReport, check_bag
+from dynevent.conformance.judge.divergences import label
 from dynevent.errors import BagError
 from support.recordings import (
     ABORTED,
@@ -415,6 +417,15 @@ def test_each_broken_conversation_a_partial_view_shows_is_found_at_its_bag_time_
     assert [(finding.line, finding.rule, finding.code) for finding in robot.report.findings] == [
         (at, rule, code)
     ], robot.report.findings
+
+
+def test_a_status_still_running_after_its_answer_is_labelled_as_d2_from_its_values(tmp_path: Path) -> None:
+    """The status a partial view finds still showing an answered goal's child is D2 of
+    docs/divergences.md, read from the finding's values: its words may change."""
+    run, _, _, _ = _partial_cases()["stale_running"]
+    (finding,) = _robot(check_bag(run.write(tmp_path / "stale", StoragePlugin.MCAP))).report.findings
+    assert finding.detail == "answered" and label(finding) == "D2"
+    assert label(attrs.evolve(finding, message="", expected="")) == "D2"
 
 
 def test_what_a_partial_view_cannot_tell_is_no_finding(tmp_path: Path) -> None:

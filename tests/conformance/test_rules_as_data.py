@@ -146,6 +146,10 @@ def test_race_lost_says_how() -> None:
     busy = Goal(dynamic_event_seq=1, event_type=3)
     assert machine.race_lost(state, busy, config) == "event 2 holds the running slot"
     assert machine.race_lost(state, Goal(dynamic_event_seq=1, event_type=2, id=2), config) == ""
+    # the same as a value, for a reader that sorts races by why they were lost (never by the words)
+    assert machine.race_loss(state, stale, config) is machine.RaceLoss.SEQ
+    assert machine.race_loss(state, busy, config) is machine.RaceLoss.SLOT
+    assert machine.race_loss(state, Goal(dynamic_event_seq=1, event_type=2, id=2), config) is None
 
 
 @pytest.mark.parametrize("name", sorted(name for name in machine.__all__ if name.endswith("_RULE")))

@@ -28,6 +28,7 @@ names; :data:`HANDLERS` resolves the names once, at import, at the bottom of the
 
 from __future__ import annotations
 
+import enum
 import math
 import typing
 from collections.abc import Callable, Iterator, Mapping
@@ -102,6 +103,7 @@ __all__ = [
     "Edge",
     "Position",
     "QueuedGoal",
+    "RaceLoss",
     "RequestCheck",
     "RunningGoal",
     "ServerConfig",
@@ -120,6 +122,7 @@ __all__ = [
     "next_child_id",
     "next_seq",
     "phase_of",
+    "race_loss",
     "race_lost",
     "reported_id",
     "robot_waits",
@@ -915,20 +918,46 @@ def _on_goal_submitted(state: State, event: ins.GoalSubmitted, config: ServerCon
     return _start_goal(state, _replace_state(state, queued=(*state.queued, found)), found, event.now, config)
 
 
-def race_lost(state: State, goal: Goal, config: ServerConfig) -> str:
-    """How an accepted ``goal`` that starts in ``state`` lost the race, in words; ``""`` if it did not (R5.2).
+class RaceLoss(str, enum.Enum):
+    """Why an accepted goal that starts lost the race (R5.2), the checks in the order :func:`race_loss`
+    makes them."""
+
+    SEQ = "seq"  # another run began
+    ENDED = "ended"  # the dynamic event ended
+    SLOT = "slot"  # another goal took the running slot
+    ID = "id"  # (id policy ``goal``) another NEXT used its id
+
+
+def race_loss(state: State, goal: Goal, config: ServerConfig) -> RaceLoss | None:
+    """Why an accepted ``goal`` that starts in ``state`` lost the race; None if it did not (R5.2).
 
     The world may change between a goal's acceptance and its start: another
     run began, the dynamic event ended, another goal took the running slot, or
     (id policy ``goal``) another NEXT used its id.
     """
     if goal.dynamic_event_seq != state.seq:
-        return f"its seq {goal.dynamic_event_seq} is no longer the run's seq {state.seq}"
+        return RaceLoss.SEQ
     if not state.active:
-        return "no dynamic event is active any more"
+        return RaceLoss.ENDED
     if state.running is not None and goal.event_type != _CANCEL:
-        return f"event {state.running.child_id} holds the running slot"
+        return RaceLoss.SLOT
     if goal.event_type == _NEXT and _stale(state, goal, config):
+        return RaceLoss.ID
+    return None
+
+
+def race_lost(state: State, goal: Goal, config: ServerConfig) -> str:
+    """How an accepted ``goal`` that starts in ``state`` lost the race, in words (:func:`race_loss`);
+    ``""`` if it did not (R5.2)."""
+    loss = race_loss(state, goal, config)
+    if loss is RaceLoss.SEQ:
+        return f"its seq {goal.dynamic_event_seq} is no longer the run's seq {state.seq}"
+    if loss is RaceLoss.ENDED:
+        return "no dynamic event is active any more"
+    if loss is RaceLoss.SLOT:
+        assert state.running is not None
+        return f"event {state.running.child_id} holds the running slot"
+    if loss is RaceLoss.ID:
         return f"its id {goal.id} is no longer above {state.last_id}, the highest id used"
     return ""
 

@@ -11,15 +11,18 @@ check, or a finding the page does not list, fails here.
 from __future__ import annotations
 
 import collections
+import functools
 import re
 from pathlib import Path
 
+import attrs
 import pytest
 
 pytest.importorskip("rosbags", reason="the bags extra (rosbags) reads the recordings")
 
 from dynevent.bags.reader import check_bag
 from dynevent.conformance.judge.divergences import OPEN_ITEMS, label
+from dynevent.conformance.judge.trace import Finding
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "rmf_ros2"
 DOC = Path(__file__).resolve().parents[3] / "docs" / "divergences.md"
@@ -193,12 +196,15 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
 }
 
 
-def _found(name: str, compatibility: str) -> collections.Counter[tuple[str, str, str]]:
+@functools.cache
+def _findings(name: str, compatibility: str) -> tuple[Finding, ...]:
     report = check_bag(DATA / name, compatibility=compatibility)
+    return tuple(finding for robot in report.robots for finding in robot.report.findings)
+
+
+def _found(name: str, compatibility: str) -> collections.Counter[tuple[str, str, str]]:
     return collections.Counter(
-        (label(finding), finding.rule, finding.code)
-        for robot in report.robots
-        for finding in robot.report.findings
+        (label(finding), finding.rule, finding.code) for finding in _findings(name, compatibility)
     )
 
 
@@ -207,6 +213,14 @@ def test_check_finds_exactly_what_the_divergences_page_lists(name: str, compatib
     found = _found(name, compatibility)
     assert all(label != "?" for label, _, _ in found), f"a finding no D-number explains: {found}"
     assert dict(found) == EXPECTED[name, compatibility]
+
+
+@pytest.mark.parametrize(("name", "compatibility"), sorted(EXPECTED))
+def test_a_label_reads_the_findings_values_never_its_words(name: str, compatibility: str) -> None:
+    """A D-number is attached where its rule is checked: rewording the judge's sentences moves no label."""
+    for finding in _findings(name, compatibility):
+        reworded = attrs.evolve(finding, message="reworded", expected="reworded too")
+        assert label(reworded) == label(finding), finding
 
 
 def test_every_label_is_a_d_number_of_the_page_that_names_its_recording() -> None:

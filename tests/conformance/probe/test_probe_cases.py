@@ -13,6 +13,7 @@ from dynevent.conformance.judge import divergences
 from dynevent.conformance.judge.trace import Finding as JudgeFinding
 from dynevent.conformance.probe import cases as probe_cases
 from dynevent.conformance.probe.cases import CASES, KNOWN, Case, CaseFinding, Verdict
+from dynevent.wire.messages import DynamicEventStatus
 
 ROOT = Path(__file__).resolve().parents[3]
 SPEC_RULES = set(re.findall(r"\*\*(R\d+\.\d+)\*\*", (ROOT / "docs" / "spec.md").read_text(encoding="utf-8")))
@@ -289,8 +290,12 @@ def test_a_seq_that_skips_is_the_judges_finding_and_a_clean_exchange_has_none() 
 
 
 def test_an_open_item_of_the_judge_is_uncertain_and_does_not_fail_the_run() -> None:
-    seen, expected = "status RUNNING seq=1 id=6 underway", "WAITING seq=1 id=5 standby"
-    finding = JudgeFinding(line=3, rule="R2.2", code="status_mismatch", message=seen, expected=expected)
+    seen = DynamicEventStatus(dynamic_event_seq=1, dynamic_state=2, status="underway", id=6)
+    owed = DynamicEventStatus(dynamic_event_seq=1, dynamic_state=1, status="standby", id=5)
+    finding = JudgeFinding(
+        line=3, rule="R2.2", code="status_mismatch", message="status RUNNING seq=1 id=6 underway",
+        expected="WAITING seq=1 id=5 standby", seen=seen, owed=owed,
+    )  # fmt: skip
     item = probe_cases.Judged("next.runs_a_child", finding, divergences.label(finding))
     assert item.label == "response_seen_late" and item.uncertain and not item.counts
     assert probe_cases.exit_status([], [item]) == probe_cases.EXIT_OK

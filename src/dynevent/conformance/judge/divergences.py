@@ -13,13 +13,20 @@ from __future__ import annotations
 import re
 
 from dynevent.conformance.judge.replay import Difference
-from dynevent.conformance.judge.trace import Finding
-from dynevent.wire.vocab import Status
+from dynevent.conformance.judge.trace import Answer, Finding
+from dynevent.server.machine import RaceLoss
+from dynevent.wire.messages import DynamicEventStatus, Goal
+from dynevent.wire.vocab import DynamicState, EventType, Failure, GoalStatus, Status
 
 __all__ = ["OPEN_ITEMS", "label", "label_difference"]
 
-# the status texts the judge's sentences quote
+# the statuses of a child and of a goal the labels read
 _CANCELED, _COMPLETED = Status.CANCELED.value, Status.COMPLETED.value
+_ABORTED, _SUCCEEDED, _CANCELED_GOAL = (
+    GoalStatus.ABORTED.value,
+    GoalStatus.SUCCEEDED.value,
+    GoalStatus.CANCELED.value,
+)
 
 #: Open items: findings that are check's own misreading of what a recording does not hold.
 OPEN_ITEMS: frozenset[str] = frozenset(
@@ -47,75 +54,114 @@ OPEN_ITEMS: frozenset[str] = frozenset(
 def label(finding: Finding) -> str:
     """The D-number (or open item, :data:`OPEN_ITEMS`) a finding of rmf_ros2's stands for: the
     divergence of docs/divergences.md the deployed server's recordings showed it as; ``?`` for one
-    no recording showed."""
-    rule, code, message, expected = finding.rule, finding.code, finding.message, finding.expected
-    if code == "log_seq":
-        return "D9"
-    if code == "child_id":
-        return "D10"
-    if code == "clamp_not_reported":
-        return "D11"
-    if code == "status_mismatch" and re.search(r"status WAITING seq=\d+ id=0 uninitialized", message):
-        return "D26"
-    if code == "status_mismatch" and re.search(r"status WAITING seq=\d+ id=\d+ canceled", message):
-        return "cancel_seen_late" if expected.startswith("RUNNING") else "D28"
-    if code == "status_mismatch" and "status RUNNING" in message and expected.startswith("WAITING"):
-        return "response_seen_late"
-    if code == "status_mismatch" and "status INACTIVE" in message and _CANCELED in expected:
-        return "task_signal_unseen"
+    no recording showed.  Decided from the finding's rule, code and values (what it saw, what the
+    machine owed, its detail: :class:`~dynevent.conformance.judge.trace.Finding`), never its words."""
+    rule, code, detail = finding.rule, finding.code, finding.detail
+    seen, owed = finding.seen, finding.owed
+    if code in _BY_CODE:
+        return _BY_CODE[code]
+    if code == "status_mismatch" and isinstance(seen, DynamicEventStatus):
+        return _status_label(seen, owed if isinstance(owed, DynamicEventStatus) else None, detail)
+    if code in ("goal_status", "result") and isinstance(seen, Answer) and isinstance(owed, Answer):
+        return _answer_label(rule, code, seen, owed)
     if rule == "R3.4" and code == "begin_while_active":
         return "task_signal_unseen"
-    if code == "status_mismatch" and "still, after goal" in message and _COMPLETED in message:
-        return "D2"
-    if code in ("accepted_cancel_idle", "accepted_cancel_id_mismatch"):
-        return "D8"
-    if code == "accepted_stale_id":
-        return "D10"
-    if rule == "R10.3" and code == "cancel_response":
+    # the same refusal as D31's R10.3 where the judge still held the NEXT queued when its cancel came
+    # (its start's records read after the cancel's): the cancel refused, the NEXT answered at its
+    # child's end
+    if rule in ("R10.3", "R10.1") and code == "cancel_response":
         return "D31"
-    # the same refusal where the judge still held the NEXT queued when its cancel came (its start's
-    # records read after the cancel's): the cancel refused, the NEXT answered at its child's end
-    if rule == "R10.1" and code in ("cancel_response", "goal_status"):
+    if code == "feedback_not_running" and detail == "event_ended":
+        return "D30"
+    # a CANCEL frees the robot before its child ends (D1): the next NEXT is accepted and its child
+    # starts while check still holds the cancelled one running
+    if code == "race_not_lost" and detail == RaceLoss.SLOT.value:
+        return "D1"
+    if code == "race_not_lost" and detail == RaceLoss.ID.value:
+        return "D10"  # the adapter's own numbering made the NEXT's id stale while it waited
+    if code == "accepted_inactive" and isinstance(seen, Goal) and seen.event_type == EventType.FINISHED:
+        return "finished_seen_late"
+    return "?"
+
+
+#: The labels a finding's code alone decides.
+_BY_CODE = {
+    "log_seq": "D9",
+    "child_id": "D10",
+    "clamp_not_reported": "D11",
+    "accepted_cancel_idle": "D8",
+    "accepted_cancel_id_mismatch": "D8",
+    "accepted_stale_id": "D10",
+    "accepted_busy": "D1",
+    "accepted_uninitialized_event_type": "D7",
+    "accepted_unknown_event_type": "D7",
+}
+
+
+def _status_label(seen: DynamicEventStatus, owed: DynamicEventStatus | None, detail: str) -> str:
+    """The label of a status that is not the one the machine's state has (``owed``, where known)."""
+    phase, held = seen.dynamic_state, owed is not None and owed.dynamic_state == DynamicState.RUNNING
+    if phase == DynamicState.WAITING and seen.id == 0 and seen.status == Status.UNINITIALIZED.value:
+        return "D26"
+    if phase == DynamicState.WAITING and seen.status == _CANCELED:
+        return "cancel_seen_late" if held else "D28"
+    if phase == DynamicState.RUNNING and owed is not None and owed.dynamic_state == DynamicState.WAITING:
+        return "response_seen_late"
+    if phase == DynamicState.INACTIVE and owed is not None and owed.status == _CANCELED:
+        return "task_signal_unseen"
+    if detail == "answered" and seen.status == _COMPLETED:
+        return "D2"  # the status still shows the child whose goal was answered
+    if phase == DynamicState.INACTIVE and owed is not None and owed.status == _COMPLETED:
+        return "D30"
+    # a CANCEL frees the robot before its child ends (D1): the next child runs, or the robot says
+    # WAITING, while check still holds the cancelled one running
+    moved = owed is not None and (seen.dynamic_event_seq, seen.id) != (owed.dynamic_event_seq, owed.id)
+    if held and phase == DynamicState.RUNNING and moved:
+        return "D1"
+    if held and phase == DynamicState.WAITING and seen.status == Status.STANDBY.value:
+        return "D1"
+    return "?"
+
+
+def _answer_label(rule: str, code: str, seen: Answer, owed: Answer) -> str:
+    """The label of a goal's answer that is not the one the machine owes (``owed``)."""
+    if rule == "R10.1" and code == "goal_status":
         return "D31"
-    # and where the cancel's callback stopped the child at once: the NEXT answered aborted `canceled`
+    # where the cancel's callback stopped the child at once: the NEXT answered aborted `canceled`
     # before the cancel's refusal was read (the EasyFullControl site)
     if (
         rule == "R8.2"
         and code == "goal_status"
-        and "answered aborted: canceled" in message
-        and expected.startswith("canceled: canceled")
+        and _plain(seen) == (_ABORTED, _CANCELED)
+        and _plain(owed) == (_CANCELED_GOAL, _CANCELED)
     ):
         return "D31"
-    if code == "status_mismatch" and "status INACTIVE" in message and _COMPLETED in expected:
-        return "D30"
-    if code == "feedback_not_running" and "whose event has ended" in message:
-        return "D30"
-    # a CANCEL frees the robot before its child ends (D1): the next NEXT is accepted and its child
-    # starts while check still holds the cancelled one running, and the robot says WAITING meanwhile
-    if code == "accepted_busy" or (code == "race_not_lost" and "holds the running slot" in expected):
-        return "D1"
-    running = re.search(r"status RUNNING seq=(\d+) id=(\d+)", message)
-    held = re.match(r"RUNNING seq=(\d+) id=(\d+)", expected)
-    if code == "status_mismatch" and running and held and running.groups() != held.groups():
-        return "D1"
-    if code == "status_mismatch" and re.search(r"status WAITING seq=\d+ id=\d+ standby", message) and held:
-        return "D1"
-    if code == "race_not_lost" and "is no longer above" in expected:
-        return "D10"  # the adapter's own numbering made the NEXT's id stale while it waited
-    if rule == "R9.1" and code == "goal_status" and "succeeded: canceled" in message and "idle" in expected:
+    idle = seen.status == _ABORTED and _failure(seen) == Failure.IDLE_CANCEL.value
+    owed_idle = _failure(owed) == Failure.IDLE_CANCEL.value
+    if rule == "R9.1" and code == "goal_status" and _plain(seen) == (_SUCCEEDED, _CANCELED) and owed_idle:
         return "cancel_seen_late"  # the child's end read before the CANCEL, which then looked idle
-    if code in ("accepted_uninitialized_event_type", "accepted_unknown_event_type"):
-        return "D7"
-    idle = "aborted: 'an idle dynamic event cannot be cancelled'"
-    if rule == "R9.2" and code == "result" and idle in message and "does not match" in expected:
+    if rule == "R9.2" and code == "result" and idle and _failure(owed) == Failure.CANCEL_ID.value:
         return "answer_seen_late"
-    if rule == "R8.3" and code == "goal_status" and idle in message:
+    if rule == "R8.3" and code == "goal_status" and idle:
         return "D1"  # the second of two CANCELs found the robot freed by the first, and idle
-    if code == "accepted_inactive" and message.startswith("FINISHED"):
-        return "finished_seen_late"
-    if rule == "R5.2" and code == "goal_status" and "succeeded: completed id=0" in message:
+    if (
+        rule == "R5.2"
+        and code == "goal_status"
+        and _plain(seen) == (_SUCCEEDED, _COMPLETED)
+        and not seen.result.id
+    ):
         return "finished_seen_late"  # a FINISHED's answer (id 0), the FINISHED read after the run ended
     return "?"
+
+
+def _plain(answer: Answer) -> tuple[str, str] | None:
+    """An answer without an execution failure: its goal status and its result's status."""
+    return None if answer.result.execution_failure else (answer.status, answer.result.status)
+
+
+def _failure(answer: Answer) -> str:
+    """The first line of an answer's execution failure."""
+    return answer.result.execution_failure.split("\n", 1)[0]
 
 
 def label_difference(difference: Difference) -> tuple[str, ...]:

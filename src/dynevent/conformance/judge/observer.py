@@ -25,9 +25,11 @@ from dynevent.conformance.judge.abduction import (
     simulate,
 )
 from dynevent.conformance.judge.trace import (
+    Answer,
     Finding,
     Record,
     Report,
+    Shown,
     TraceHeader,
     Unreadable,
 )
@@ -73,15 +75,33 @@ class _Findings:
         """The record of ``line`` is being judged."""
         self._line = line
 
-    def flag(self, violation: Violation, message: str, expected: str) -> None:
-        """Report ``violation`` on the current line."""
-        self.differs(violation.rule, violation.code, message, expected)
+    def flag(
+        self, violation: Violation, message: str, expected: str, *, seen: Shown | None = None,
+        owed: Shown | None = None, detail: str = "",
+    ) -> None:  # fmt: skip
+        """Report ``violation`` on the current line; ``seen``, ``owed`` and ``detail``: the finding's
+        values (see :class:`Finding`)."""
+        self.differs(violation.rule, violation.code, message, expected, seen=seen, owed=owed, detail=detail)
 
-    def differs(self, rule: str, code: str, message: str, expected: str, line: int | None = None) -> None:
+    def differs(
+        self, rule: str, code: str, message: str, expected: str, line: int | None = None, *,
+        seen: Shown | None = None, owed: Shown | None = None, detail: str = "",
+    ) -> None:  # fmt: skip
         """Report an output that differs from the machine's, under the rule of the machine's output, on
         the current line or ``line``."""
         at = self._line if line is None else line
-        self._found.append(Finding(line=at, rule=rule, code=code, message=message, expected=expected))
+        self._found.append(
+            Finding(
+                line=at,
+                rule=rule,
+                code=code,
+                message=message,
+                expected=expected,
+                seen=seen,
+                owed=owed,
+                detail=detail,
+            )
+        )
 
     def all(self) -> tuple[Finding, ...]:
         return tuple(self._found)
@@ -522,6 +542,7 @@ class _Requests(_Part):
                 f"accepted_{decision.reason.value}",
                 f"{goal_text(goal)} accepted",
                 f"rejected: {decision.reason.value} ({decision.text})",
+                seen=goal,
             )
             self.replica.resync(resync.queued(self.replica.st, record.goal_uuid, goal))
             return
@@ -768,6 +789,8 @@ class _Runs(_Part):
             Violation.STATUS_MISMATCH,
             f"status {status_text(message)}",
             f"{status_text(current)}, the state's status",
+            seen=message,
+            owed=current,
         )
 
     def finished_unseen(self, state: State) -> State:
@@ -994,11 +1017,14 @@ class _Feedback(_Part):
             _, owed = self.replica.simulate([ins.GoalStarted(goal_uuid=uuid, now=self.replica.now)])
             answer = next((item for item in owed if isinstance(item.output, outs.AnswerGoal)), None)
             if answer is not None and failure_of(answer.output) is Failure.RACE:
-                race = machine.race_lost(state, goal, self.replica.config_for(goal))
+                config = self.replica.config_for(goal)
+                loss = machine.race_loss(state, goal, config)
                 self.findings.flag(
                     Violation.RACE_NOT_LOST,
                     f"{label}: its NEXT ({goal_text(goal)}) started a child",
-                    f"aborted: {Failure.RACE.value!r}, as {race}",
+                    f"aborted: {Failure.RACE.value!r}, as {machine.race_lost(state, goal, config)}",
+                    seen=goal,
+                    detail=loss.value if loss is not None else "",
                 )
             elif answer is not None and isinstance(answer.output, outs.AnswerGoal):
                 expected = answer_text(answer.output.status.value, answer.output.result, first_line=True)
@@ -1014,6 +1040,9 @@ class _Feedback(_Part):
                 "feedback_not_running",
                 f"{label}, whose event has ended",
                 answer_text(pending.output.status.value, pending.output.result, first_line=True),
+                seen=feedback,
+                owed=Answer(pending.output.status.value, pending.output.result),
+                detail="event_ended",
             )
             return
         kind = EventType(goal.event_type).name if goal.event_type <= 3 else f"event_type {goal.event_type}"
@@ -1143,25 +1172,35 @@ class _Answers(_Part):
             return  # an end read from a status alone: the answer was owed, its content is not known
         label = f"goal {record.goal_uuid} answered {answer_text(record.status, result, first_line=True)}"
         want = answer_text(output.status.value, expected, first_line=True)
+        seen_answer, owed_answer = Answer(record.status, result), Answer(output.status.value, expected)
         seen = self.goals.get(record.goal_uuid)
         early = {record.status, output.status.value} == {GoalStatus.ABORTED.value, GoalStatus.CANCELED.value}
         if early and seen is not None and seen.line == 0:
             pass  # a goal from before the trace: whether it was cancelled through the action is not known
         elif record.status != output.status.value:
-            self.findings.differs(owed.rule, "goal_status", label, f"{want} ({owed.rule})")
+            self.findings.differs(
+                owed.rule, "goal_status", label, f"{want} ({owed.rule})", seen=seen_answer, owed=owed_answer
+            )
         elif owed.rule == machine.FINISHED_RULE and self.replica.event_id_unknown:
             self.replica.learn_event_id_from_finished(observed.id)
         elif expected.id != observed.id:
             rule = result_rule(owed.rule)
             self.findings.differs(
-                rule, "result_id", f"{label}: the result id does not match", f"{want} ({rule})"
+                rule,
+                "result_id",
+                f"{label}: the result id does not match",
+                f"{want} ({rule})",
+                seen=seen_answer,
+                owed=owed_answer,
             )
         elif (first_line(expected.execution_failure), expected.status) != (
             first_line(observed.execution_failure),
             observed.status,
         ):
             rule = result_rule(owed.rule)
-            self.findings.differs(rule, "result", label, f"{want} ({rule})")
+            self.findings.differs(
+                rule, "result", label, f"{want} ({rule})", seen=seen_answer, owed=owed_answer
+            )
 
     def unexplained_answer(self, record: Record, seen: GoalSeen) -> None:
         uuid = record.goal_uuid

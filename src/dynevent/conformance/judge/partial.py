@@ -122,9 +122,22 @@ class PartialJudge:
         """The report.  An answered goal whose check is not due yet (the bag ends first) is not judged."""
         return Report(source=self.source, records=self.records, findings=tuple(self.findings))
 
-    def _flag(self, line: int, violation: Violation, message: str, expected: str) -> None:
+    def _flag(
+        self, line: int, violation: Violation, message: str, expected: str, *,
+        seen: DynamicEventStatus | None = None, owed: DynamicEventStatus | None = None, detail: str = "",
+    ) -> None:  # fmt: skip
+        rule, code = violation.rule, violation.code
         self.findings.append(
-            Finding(line=line, rule=violation.rule, code=violation.code, message=message, expected=expected)
+            Finding(
+                line=line,
+                rule=rule,
+                code=code,
+                message=message,
+                expected=expected,
+                seen=seen,
+                owed=owed,
+                detail=detail,
+            )
         )
 
     # ------------------------------------------------------------------ the status and begin topics
@@ -149,6 +162,8 @@ class PartialJudge:
                     Violation.STATUS_MISMATCH,
                     f"status {status_text(message)}",
                     f"{status_text(described)}: no dynamic event is active",
+                    seen=message,
+                    owed=described,
                 )
         previous, active = self.status, message.dynamic_state != DynamicState.INACTIVE
         if previous is not None:
@@ -333,4 +348,6 @@ class PartialJudge:
             "was answered",
             "the status of the child's end: WAITING (R8.4), or INACTIVE when the "
             "task was cancelled or killed (R13.4)",
+            seen=status,
+            detail="answered",
         )

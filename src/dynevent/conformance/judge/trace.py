@@ -8,7 +8,7 @@ import math
 import threading
 import time
 from collections.abc import Iterable, Iterator
-from typing import Any, TextIO
+from typing import Any, TextIO, TypeAlias
 
 import attrs
 
@@ -86,16 +86,39 @@ class Record:
     reason: RejectReason | None = None
 
 
+@attrs.frozen
+class Answer:
+    """A goal's terminal answer as values: its goal ``status`` (``succeeded``, ``aborted`` or
+    ``canceled``) and its ``result``."""
+
+    status: str
+    result: Result
+
+
+#: What a finding saw, or what the machine owed in its place, as a value.
+Shown: TypeAlias = "DynamicEventStatus | Goal | Feedback | Answer"
+
+
 @attrs.frozen(kw_only=True)
 class Finding:
     """One protocol violation: the trace ``line``, the docs/spec.md ``rule``, a short ``code``, what was
-    seen (``message``) and what the rules expect (``expected``)."""
+    seen (``message``) and what the rules expect (``expected``).
+
+    The same as values, for a reader that sorts findings (never by their words): ``seen``, the
+    status, goal, feedback or answer the finding is about; ``owed``, the status the machine's state
+    has or the answer it owes in its place, where it has one; ``detail``, a short name for the
+    circumstance where one code covers several (the :class:`~dynevent.server.machine.RaceLoss` of a
+    race not lost, ``event_ended`` for feedback of a goal whose event has ended, ``answered`` for a
+    status that still shows a child whose goal was answered).  :meth:`to_dict` gives the words."""
 
     line: int
     rule: str
     code: str
     message: str
     expected: str
+    seen: Shown | None = None
+    owed: Shown | None = None
+    detail: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """The finding as plain JSON values."""
