@@ -12,6 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from dynevent.server import inputs as ins
+from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.server.holder import Execution
 from support.scenario import (
@@ -156,6 +157,21 @@ def test_log_seq_belongs_to_the_robot() -> None:
     run.submit(u(3), next_goal(2, 8))
     assert run.progress("underway", log="b")[0] == outs.Log(entry=entry(3, "info", T0, "b"))
     assert run.state.log_seq == 4
+
+
+@pytest.mark.spec("R7.3")
+def test_the_one_reading_of_log_seqs_on_the_wire() -> None:
+    """R7.3 as every reader of entries reads it (machine.log_seq_fault: the judge, the probe, the
+    model): one up after an entry of the same started child; after any other, forward in uint32
+    serial order, by any step (entries made while no child runs are on no feedback)."""
+    fault = machine.log_seq_fault
+    assert fault(None, 7, same_child=True) == ""  # the first entry seen
+    assert fault(7, 8, same_child=True) == fault(2**32 - 1, 0, same_child=True) == ""
+    assert fault(7, 9, same_child=True) == "skips"
+    assert fault(7, 9, same_child=False) == fault(7, 7 + 2**31 - 1, same_child=False) == ""
+    assert fault(7, 7, same_child=False) == "repeats"
+    assert fault(7, 6, same_child=False) == fault(7, 7 + 2**31, same_child=False) == "backwards"
+    assert machine.next_log_seq(2**32 - 1) == 0
 
 
 @pytest.mark.spec("R7.3")

@@ -59,7 +59,7 @@ from dynevent.server.state import (
     reported_id,
 )
 from dynevent.wire import _json
-from dynevent.wire._fields import SECOND, U32_MAX, U64_MAX, copier, fast_init, maker, replacer
+from dynevent.wire._fields import SECOND, U32_MAX, U64_MAX, copier, fast_init, maker, replacer, seq_after
 from dynevent.wire.messages import (
     DescriptionResponse,
     DynamicEventDescription,
@@ -119,7 +119,9 @@ __all__ = [
     "could_refuse_first",
     "fresh_id",
     "listed_errors",
+    "log_seq_fault",
     "next_child_id",
+    "next_log_seq",
     "next_seq",
     "phase_of",
     "race_loss",
@@ -1051,7 +1053,7 @@ def _start_next(
             f"{config.stubborn_minimum:g} s will be used"
         )
         entry = _log_entry(log_seq, text, "warning", now)
-        log_seq = (log_seq + 1) & U32_MAX  # R7.3
+        log_seq = next_log_seq(log_seq)  # R7.3
         outputs.append(outs.Log(entry=entry, rule="R12.2"))
         logs = (entry,)
     if state.interrupted:  # the child's start is deferred
@@ -1110,6 +1112,30 @@ def _start_child(
 # ------------------------------------------------- §7 child progress and logs
 
 
+def next_log_seq(seq: int) -> int:
+    """The log seq after ``seq``: one up, modulo 2**32 (R7.3)."""
+    return (seq + 1) & U32_MAX
+
+
+def log_seq_fault(last: int | None, seq: int, *, same_child: bool) -> str:
+    """What is wrong with an entry numbered ``seq`` after the robot's entry ``last`` (None: none seen),
+    as R7.3 reads wherever entries are seen: ``"repeats"``, ``"backwards"``, ``"skips"`` or ``""``.
+
+    Every entry takes the next log seq, and the feedback carries every entry made while a started
+    child runs: an entry after one of the same started child (``same_child``; every entry, to a
+    reader of the machine's ``Log`` outputs) takes the seq one up.  After any other (another child's,
+    or one made while no child ran) it comes after it in uint32 serial order, maybe more than one up:
+    entries made while no child runs, a task signal's (R13.1), are on no feedback.
+    """
+    if last is None or seq == next_log_seq(last):
+        return ""
+    if seq == last:
+        return "repeats"
+    if not seq_after(seq, last):
+        return "backwards"
+    return "skips" if same_child else ""
+
+
 def _log_entry(seq: int, text: str, tier: str, now: int) -> LogEntry:
     """The log entry numbered ``seq`` (the robot's next LogEntry.seq, which wraps at 2**32, R7.3)."""
     return _make_log_entry(seq=seq, tier=tier, unix_millis_time=now // 1_000_000, text=text)
@@ -1127,7 +1153,7 @@ def _on_child_progress(state: State, event: ins.ChildProgress, config: ServerCon
         entry = _make_log_entry(
             seq=log_seq, tier=event.tier, unix_millis_time=event.now // 1_000_000, text=text
         )
-        log_seq = (log_seq + 1) & U32_MAX
+        log_seq = next_log_seq(log_seq)
         outputs.append(outs.Log(entry=entry, rule="R7.2"))
         logs = (entry,)
     status = event.status
@@ -1366,7 +1392,7 @@ def _on_task_signal(state: State, event: ins.TaskCancel | ins.TaskKill, config: 
     outputs: list[outs.Output] = []
     entry = _log_entry(state.log_seq, TASK_SIGNAL_LOGS[signal], "info", event.now)
     outputs.append(outs.Log(entry=entry, rule="R13.1"))
-    after = _replace_state(state, task_signal=signal, status=signal, log_seq=(state.log_seq + 1) & U32_MAX)
+    after = _replace_state(state, task_signal=signal, status=signal, log_seq=next_log_seq(state.log_seq))
     running = after.running
     if running is not None and running.started:
         outputs.append(

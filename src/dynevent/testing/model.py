@@ -14,7 +14,6 @@ from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.server.machine import ServerConfig
 from dynevent.testing.servers import ServerView
-from dynevent.wire._fields import U32_MAX
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import (
     Compatibility,
@@ -297,11 +296,12 @@ class _Children(_Model):
         elif isinstance(output, outs.PublishBegin):
             self._begin(output, event)
         elif isinstance(output, outs.Log):
+            # the model sees every entry made (R7.3): each takes the log seq, which goes one up
             if output.entry.seq != self.log_seq:
                 raise self._fail(
                     Violation.LOG_SEQ, f"LogEntry.seq {output.entry.seq}, expected {self.log_seq}"
                 )
-            self.log_seq = (self.log_seq + 1) & U32_MAX
+            self.log_seq = machine.next_log_seq(self.log_seq)
         elif isinstance(output, outs.DescriptionAnswer):
             response = output.response
             expected = (self.active, self.status, self.description, self.current_id)

@@ -192,6 +192,50 @@ def test_the_judge_fails_the_cases_whose_own_records_break_their_rules(defect: s
     assert all("R19.1" in finding.expected for finding in failed), failed
 
 
+def _log_seqs_step_by_two(event: ins.Input, server: RobotServer) -> tuple[outs.Output, ...]:
+    """``server``'s step, numbering its log entries 0, 2, 4, ...: each skips one seq (R7.3)."""
+
+    def doubled(entry: Any) -> Any:
+        return attrs.evolve(entry, seq=entry.seq * 2 % 2**32)
+
+    def rewritten(output: outs.Output) -> outs.Output:
+        if isinstance(output, outs.Log):
+            return attrs.evolve(output, entry=doubled(output.entry))
+        if isinstance(output, outs.PublishFeedback):
+            logs = tuple(doubled(entry) for entry in output.feedback.logs)
+            return attrs.evolve(output, feedback=attrs.evolve(output.feedback, logs=logs))
+        return output
+
+    return tuple(rewritten(output) for output in server.step(event))
+
+
+@pytest.mark.spec("R7.3")
+def test_log_seqs_that_step_by_two_are_judged_alike_by_the_probe_and_by_check(tmp_path: Path) -> None:
+    """R7.3 has one reading: the probe's case fails a server whose log seqs skip within a child, and
+    ``check`` on the probe's trace finds the same (the judge shows it as uncertain beside the cases: a
+    client cannot tell a skip from feedback lost on the way)."""
+    first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
+    server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG), first)
+    trace = tmp_path / "trace.jsonl"
+    said: list[str] = []
+    options = attrs.evolve(OPTIONS, trace=str(trace))
+    stepper = lambda event: _log_seqs_step_by_two(event, server)  # noqa: E731
+    code, findings = probe_in_process(
+        options, list(CASES), said.append, CONFIG, write=files.write_text, stepper=stepper
+    )
+    verdicts = _verdicts(findings)
+    assert verdicts["feedback.log_seq"] == "fail", "\n".join(said)
+    assert {case: verdict for case, verdict in verdicts.items() if verdict != "pass"} == {
+        "feedback.log_seq": "fail"
+    }, "\n".join(said)
+    assert code == probe_cases.EXIT_FAILED
+    assert ": uncertain: R7.3 log_seq: " in _judge_section("\n".join(said))
+    found = check_trace(trace.read_text("utf-8"), "t").findings
+    assert found and {(finding.rule, finding.code, finding.detail) for finding in found} == {
+        ("R7.3", "log_seq", "skips")
+    }
+
+
 def test_every_defect_of_the_kit_is_caught_in_process() -> None:
     assert set(DEFECTS) == set(BROKEN) | set(UNSEEN_BY_CASES) | set(JUDGED_IN_PROCESS)
 

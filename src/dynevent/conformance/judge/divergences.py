@@ -47,6 +47,9 @@ OPEN_ITEMS: frozenset[str] = frozenset(
         # a client records an answer when it arrives: a CANCEL's answer aborted 'idle', given while no
         # child ran, is read after a later NEXT's child started, and looks as if it named another child
         "answer_seen_late",
+        # a client records the feedback that reaches it: one lost on the way leaves its child's log
+        # seqs skipping (R7.3), as a server that skips them does
+        "feedback_lost",
     }
 )
 
@@ -58,6 +61,8 @@ def label(finding: Finding) -> str:
     machine owed, its detail: :class:`~dynevent.conformance.judge.trace.Finding`), never its words."""
     rule, code, detail = finding.rule, finding.code, finding.detail
     seen, owed = finding.seen, finding.owed
+    if code == "log_seq" and detail == "skips":
+        return "feedback_lost"
     if code in _BY_CODE:
         return _BY_CODE[code]
     if code == "status_mismatch" and isinstance(seen, DynamicEventStatus):

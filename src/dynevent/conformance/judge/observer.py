@@ -46,7 +46,7 @@ from dynevent.server.machine import (
     State,
     state_from_status,
 )
-from dynevent.wire._fields import U32_MAX, id_not_after, seq_after
+from dynevent.wire._fields import U32_MAX, id_not_after
 from dynevent.wire._text import answer_text, goal_text, status_text
 from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Feedback, Goal, Result
 from dynevent.wire.vocab import (
@@ -863,22 +863,45 @@ _STATUS_VALUES = frozenset(status.value for status in Status)
 _TASK_SIGNALS = (ins.TaskCancel, ins.TaskKill)
 
 
-def log_seq_faults(last: int | None, feedback: Feedback) -> list[tuple[str, str]]:
-    """What is wrong with the log seqs of ``feedback`` after the robot's last one, ``last`` (R7.3): each
-    entry takes the robot's next log seq, so each is above the one before, in uint32 serial order
-    (entries logged while no goal runs are not on the wire: a gap is no fault)."""
-    faults = []
-    for entry in feedback.logs:
-        if last is not None and not seq_after(entry.seq, last):
-            how = "repeats" if entry.seq == last else "goes backwards"
-            faults.append(
-                (
-                    f"LogEntry.seq {entry.seq} after {last}: the log seq {how}",
-                    f"a LogEntry.seq above {last}: every entry takes the robot's next log seq",
-                )
+class LogSeqs:
+    """The robot's last log entry seen on feedback, and whose it was: what R7.3 judges the next entry
+    against (:func:`machine.log_seq_fault`)."""
+
+    def __init__(self) -> None:
+        self.seq: int | None = None
+        self.child: tuple[str, int] | None = None  # the goal and id of the started child it came with
+
+    def faults(self, goal_uuid: str, feedback: Feedback) -> list[tuple[str, str, str]]:
+        """What is wrong with the log seqs of ``feedback``, to goal ``goal_uuid``: each fault's kind
+        (see :func:`machine.log_seq_fault`), what was seen and what was expected."""
+        child = (goal_uuid, feedback.id) if feedback.status != Status.QUEUED.value else None
+        faults = []
+        for entry in feedback.logs:
+            last = self.seq
+            fault = machine.log_seq_fault(
+                last, entry.seq, same_child=child is not None and child == self.child
             )
-        last = entry.seq
-    return faults
+            if fault == "skips":
+                faults.append(
+                    (
+                        fault,
+                        f"LogEntry.seq {entry.seq} after {last} in the feedback of child {feedback.id}: "
+                        "the log seq skips",
+                        f"LogEntry.seq {machine.next_log_seq(last or 0)}: the feedback carries every entry "
+                        "made while a child runs, and each takes the robot's next log seq",
+                    )
+                )
+            elif fault:
+                how = "repeats" if fault == "repeats" else "goes backwards"
+                faults.append(
+                    (
+                        fault,
+                        f"LogEntry.seq {entry.seq} after {last}: the log seq {how}",
+                        f"a LogEntry.seq above {last}: every entry takes the robot's next log seq",
+                    )
+                )
+            self.seq, self.child = entry.seq, child
+        return faults
 
 
 class _Feedback(_Part):
@@ -886,17 +909,12 @@ class _Feedback(_Part):
 
     def __init__(self, rooms: _ObserverState) -> None:
         super().__init__(rooms)
-        self.log_seq: int | None = None  # the robot's last log seq seen
-
-    def check_logs(self, feedback: Feedback) -> None:
-        for message, expected in log_seq_faults(self.log_seq, feedback):
-            self.findings.flag(Violation.LOG_SEQ, message, expected)
-        if feedback.logs:
-            self.log_seq = feedback.logs[-1].seq
+        self.log_seqs = LogSeqs()
 
     def on_feedback(self, record: Record) -> None:
         feedback: Feedback = record.message
-        self.check_logs(feedback)
+        for fault, message, expected in self.log_seqs.faults(record.goal_uuid, feedback):
+            self.findings.flag(Violation.LOG_SEQ, message, expected, seen=feedback, detail=fault)
         uuid = record.goal_uuid
         seen = self.goals.bind_unknown(uuid)
         label = f"feedback {feedback.status} id={feedback.id} for goal {uuid}"

@@ -38,7 +38,7 @@ import collections
 import attrs
 
 from dynevent.conformance.judge.abduction import same_status
-from dynevent.conformance.judge.observer import log_seq_faults
+from dynevent.conformance.judge.observer import LogSeqs
 from dynevent.conformance.judge.trace import Finding, Record, Report, TraceHeader
 from dynevent.errors import InvalidMessage
 from dynevent.server import inputs as ins
@@ -97,7 +97,7 @@ class PartialJudge:
         self.status: DynamicEventStatus | None = None  # the latest status
         self.top_id: int | None = None  # the highest id the statuses of the current run showed
         self.begin: DynamicEventDescription | None = None  # the latest live begin
-        self.log_seq: int | None = None
+        self.log_seqs = LogSeqs()  # the robot's last log entry seen
         self.goals: collections.OrderedDict[str, _Goal] = collections.OrderedDict()
         self.latest = 0  # the order of the goal whose feedback came first most lately
         self.due: collections.deque[_Due] = collections.deque()
@@ -124,7 +124,8 @@ class PartialJudge:
 
     def _flag(
         self, line: int, violation: Violation, message: str, expected: str, *,
-        seen: DynamicEventStatus | None = None, owed: DynamicEventStatus | None = None, detail: str = "",
+        seen: DynamicEventStatus | Feedback | None = None, owed: DynamicEventStatus | None = None,
+        detail: str = "",
     ) -> None:  # fmt: skip
         rule, code = violation.rule, violation.code
         self.findings.append(
@@ -251,10 +252,8 @@ class PartialJudge:
 
     def _feedback(self, record: Record) -> None:
         feedback: Feedback = record.message
-        for message, expected in log_seq_faults(self.log_seq, feedback):
-            self._flag(record.line, Violation.LOG_SEQ, message, expected)
-        if feedback.logs:
-            self.log_seq = feedback.logs[-1].seq
+        for fault, message, expected in self.log_seqs.faults(record.goal_uuid, feedback):
+            self._flag(record.line, Violation.LOG_SEQ, message, expected, seen=feedback, detail=fault)
         uuid, goal = record.goal_uuid, self._goal(record.goal_uuid)
         label = f"feedback {feedback.status} id={feedback.id} for goal {uuid}"
         if goal.order == 0:
