@@ -305,7 +305,7 @@ def _add_probe_command(commands: _Commands) -> None:
         help="test a live Dynamic Event server over ROS 2, case by case, against docs/spec.md",
         description="Point at a fleet and robot on a live ROS 2 graph and run the probe's cases as a "
         "client would (raw goals, the status and begin topics): each case cites the rules it tests and "
-        "ends pass, non-strict, fail (with the D-number when docs/divergences.md records that way of "
+        "ends pass, fail (with the D-number when docs/divergences.md records that way of "
         "breaking it), info or missing.  --list prints the cases without ROS; --loopback runs them "
         "without ROS against dynevent's own machine, as dynevent serve would run the robot, and --impl "
         "against an implementation behind the conformance driver protocol.  Exit status: 0 every "

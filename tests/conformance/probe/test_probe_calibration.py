@@ -32,7 +32,7 @@ def _left_out(run: Path) -> set[str]:
     return set() if run.parent.name == "easy" else set(LEFT_OUT)
 
 
-VERDICT = r"(?P<verdict>pass|fail|info|non-strict|known \((?P<d>D\d+)\)|missing \(allowed\)|missing)"
+VERDICT = r"(?P<verdict>pass|fail|info|known \((?P<d>D\d+)\)|missing \(allowed\)|missing)"
 LINE = re.compile(r"^(?P<case>[a-z]+\.[a-z0-9_]+) +" + VERDICT + "  +")
 
 

@@ -236,6 +236,37 @@ def test_log_seqs_that_step_by_two_are_judged_alike_by_the_probe_and_by_check(tm
     }
 
 
+@pytest.mark.spec("R12.2")
+def test_a_clamp_warning_in_a_later_feedback_fails_the_case_by_its_own_script() -> None:
+    """The start feedback carries the warning of a clamped stubborn period (R12.2), a MUST: a server
+    that sends it with the next feedback fails ``stubborn.clamp_notice`` by the case's script, which
+    says where the warning came, as the judge finds on the case's records (no ``non-strict``)."""
+    first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
+    server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG), first)
+    held: list[Any] = []
+
+    def later(output: outs.Output) -> outs.Output:
+        if not isinstance(output, outs.PublishFeedback):
+            return output
+        logs = output.feedback.logs
+        if any(entry.tier == "warning" for entry in logs) and not held:
+            held.extend(logs)
+            logs = ()
+        elif held:
+            logs, held[:] = (*held, *logs), []
+        return attrs.evolve(output, feedback=attrs.evolve(output.feedback, logs=logs))
+
+    def stepper(event: ins.Input) -> tuple[outs.Output, ...]:
+        return tuple(later(output) for output in server.step(event))
+
+    clamp = [case for case in CASES if case.id == "stubborn.clamp_notice"]
+    said: list[str] = []
+    code, (finding,) = probe_in_process(OPTIONS, clamp, said.append, CONFIG, write=_unasked, stepper=stepper)
+    assert (finding.verdict, finding.seen) == (Verdict.FAIL, "the warning came with feedback 2"), said
+    assert code == probe_cases.EXIT_FAILED
+    assert set(Verdict) == {Verdict.PASS, Verdict.FAIL, Verdict.INFO, Verdict.MISSING}
+
+
 def test_every_defect_of_the_kit_is_caught_in_process() -> None:
     assert set(DEFECTS) == set(BROKEN) | set(UNSEEN_BY_CASES) | set(JUDGED_IN_PROCESS)
 

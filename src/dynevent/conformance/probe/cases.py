@@ -9,10 +9,10 @@ process, through the driver protocol, or over DDS with :mod:`dynevent.ros.probe`
 cases, lists them, and reports findings (a table, JUnit XML) and the exit
 status, so that ``dynevent probe --list`` needs no ROS.
 
-Verdicts, as the Autobahn testsuite grades: ``pass``; ``non-strict`` (a
-SHOULD-level difference the spec allows); ``fail`` (a rule broken); ``info``
-(behaviour the spec leaves open); ``missing`` (the case could not be
-reached, e.g. no run began in time).  A failure whose way of breaking
+Verdicts: ``pass``; ``fail`` (a rule broken); ``info`` (behaviour the spec
+leaves open); ``missing`` (the case could not be reached, e.g. no run began
+in time).  No case checks a SHOULD of the spec, so there is no verdict for a
+difference it allows.  A failure whose way of breaking
 docs/divergences.md records for rmf_ros2 names its D-number; with
 ``--known rmf_ros2`` such a failure is shown as ``known`` and does not fail
 the run.
@@ -69,7 +69,6 @@ class Verdict(enum.Enum):
     """What became of one case."""
 
     PASS = "pass"
-    NON_STRICT = "non-strict"
     FAIL = "fail"
     INFO = "info"
     MISSING = "missing"
@@ -206,7 +205,7 @@ def judge_verdicts(
         if (
             case.trace_shows_failure
             and mine
-            and scripted.verdict in (Verdict.PASS, Verdict.NON_STRICT, Verdict.INFO)
+            and scripted.verdict in (Verdict.PASS, Verdict.INFO)
         ):
             first = mine[0].finding
             divergence = mine[0].label if mine[0].label.startswith("D") else None
@@ -422,7 +421,7 @@ def format_findings(findings: Sequence[CaseFinding], judged: Sequence[Judged] = 
         f"{finding.case.id:{width}}  {_label(finding):14}  {finding.case.title}" for finding in findings
     ]
     for finding in findings:
-        if finding.verdict in (Verdict.FAIL, Verdict.MISSING, Verdict.NON_STRICT):
+        if finding.verdict in (Verdict.FAIL, Verdict.MISSING):
             lines.append("")
             lines.append(f"{finding.case.id} ({', '.join(finding.case.rules)}): {_label(finding)}")
             if finding.verdict is Verdict.MISSING:
@@ -596,7 +595,7 @@ def _cell(text: str) -> str:
 _STYLE = (
     "body{font-family:sans-serif;margin:2em;max-width:70em}table{border-collapse:collapse}"
     "td,th{border:1px solid #ccc;padding:.3em .6em;text-align:left}pre{background:#f6f6f6;padding:.6em}"
-    ".pass{background:#dfd}.fail{background:#fdd}.known{background:#ffd}.missing,.non-strict,.info{background:#eef}"
+    ".pass{background:#dfd}.fail{background:#fdd}.known{background:#ffd}.missing,.info{background:#eef}"
 )
 
 

@@ -572,7 +572,7 @@ class Probe:
             else:
                 continue
             self.note(f"{what} within {self.timeout:g} s (R19.1)")
-            if finding.verdict in (Verdict.PASS, Verdict.NON_STRICT, Verdict.INFO):
+            if finding.verdict in (Verdict.PASS, Verdict.INFO):
                 return CaseFinding(
                     finding.case, Verdict.FAIL, expected="every accepted goal answered exactly once (R19.1)",
                     seen=what, absent="no answer" in what,
@@ -1386,8 +1386,8 @@ def _clamp_notice(probe: Probe, case: Case) -> CaseFinding:
     if not warnings:
         return CaseFinding(case, Verdict.FAIL, expected=expected, seen="no warning: the clamp is silent",
                        divergence="D11")  # fmt: skip
-    if warnings[0][0] != 0:
-        return CaseFinding(case, Verdict.NON_STRICT, expected=expected,
+    if warnings[0][0] != 0:  # R12.2: the start feedback carries it
+        return CaseFinding(case, Verdict.FAIL, expected=expected,
                        seen=f"the warning came with feedback {warnings[0][0] + 1}")  # fmt: skip
     return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
