@@ -9,6 +9,7 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 import xml.etree.ElementTree as ET
@@ -517,6 +518,43 @@ def test_against_any_configuration_of_serve_the_cases_and_the_judge_agree(
     recorded = {case: f"known ({number})" for case, number in RMF_ROS2_FAILS.items()}
     assert all(allowed.get(case) == verdict or recorded.get(case) == verdict for case, verdict in odd.items())
     assert code == 0, text
+
+
+@settings(max_examples=8, deadline=None)
+@given(config=_serve_configs(), defect=st.sampled_from(sorted(DEFECTS)))
+def test_against_a_broken_server_of_any_configuration_the_cases_and_the_judge_agree(
+    config: ServeConfig, defect: str
+) -> None:
+    """Against a server of the test kit's broken ones (standard mode), whatever the children's pace,
+    the re-begins and the first run: the run fails, and the judge, over the probe's trace, finds
+    something (if only an uncertain finding) in the own records of every case that failed by what it
+    saw there (not by a message that never came, and where a trace shows the failure); no case whose
+    own records hold a counted finding of the judge on its rules passes (judge_verdicts)."""
+    config = attrs.evolve(config, compatibility=Compatibility.STANDARD)
+    spec = config.categories["go_to_place"]
+    timeout = spec.duration + spec.report_every + config.rebegin + 1.0
+    first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=(config.first_seq - 1) % 2**32)
+    stepper = broken_stepper(RobotServer("tinyRobot", "tinyRobot1", machine_config(config), first), defect)
+    said: list[str] = []
+    with tempfile.TemporaryDirectory() as folder:
+        trace = Path(folder) / "trace.jsonl"
+        options = attrs.evolve(OPTIONS, timeout=timeout, deadline=10 * timeout * len(CASES), trace=str(trace))
+        code, findings = probe_in_process(
+            options, list(CASES), said.append, config, write=_unasked, stepper=stepper
+        )
+        text = trace.read_text("utf-8")
+    assert code == probe_cases.EXIT_FAILED, "\n".join(said)
+    judged = probe_cases.judge_exchange(text, [])
+    for finding in findings:
+        case = finding.case
+        if finding.verdict is Verdict.FAIL and not finding.absent and case.trace_shows_failure:
+            assert any(item.case == case.id for item in judged), (finding, "\n".join(said))
+        rules = {*case.rules, "R19.1"}
+        mine = [
+            item for item in judged if item.case == case.id and item.counts and item.finding.rule in rules
+        ]
+        if mine and case.trace_shows_failure:
+            assert finding.verdict is not Verdict.PASS, (finding, mine)
 
 
 def test_a_server_that_starts_children_without_end_cannot_fill_the_link() -> None:
