@@ -1009,6 +1009,41 @@ def test_what_never_came_over_a_link_that_lost_messages_is_no_verdict_on_the_ser
     assert lossy.seen == f"{probe_runner.LOSSY.format(lost=lost)} (no cancel response)", lossy.seen
 
 
+class _LateNextLink(InProcessLink):
+    """The in-process link that delivers the NEXT of ``next.status_after_child`` to the server
+    ``lag`` seconds late, and that of ``next.id_zero`` one second late (a lossy link)."""
+
+    LAGS = {"next.status_after_child": None, "next.id_zero": 1.0}
+
+    def __init__(self, lag: float) -> None:
+        self.lag, self.case = lag, ""
+        super().__init__(CONFIG)
+
+    def mark(self, text: str) -> None:
+        self.case = text.removeprefix("case ")
+        super().mark(text)
+
+    def deliver(self, exchange: probe_runner.Exchange) -> None:
+        if exchange.goal.event_type != EventType.NEXT or self.case not in self.LAGS:
+            return super().deliver(exchange)
+        lag = self.LAGS[self.case] or self.lag
+        later = self.now + round(lag * 1_000_000_000)
+        return self._at(later, lambda: InProcessLink.deliver(self, exchange))
+
+
+@pytest.mark.spec("R4.6", "R6.2")
+def test_a_case_an_earlier_cases_late_goal_took_effect_during_is_no_failure_of_the_server() -> None:
+    """``next.status_after_child``'s NEXT reaches the server after that case gave up on it, and runs
+    its child while ``next.id_zero``'s NEXT arrives, which the server refuses as busy (R4.6), rightly:
+    the earlier goal was accepted during the case, so the case is not run, saying so."""
+    options = attrs.evolve(OPTIONS, deadline=1000)
+    findings = probe_runner.run_cases(_LateNextLink(3.6), options, list(CASES), lambda _: None)
+    zero = {finding.case.id: finding for finding in findings}["next.id_zero"]
+    assert zero.verdict is Verdict.MISSING, zero
+    assert zero.seen.startswith(probe_runner.EARLIER_CAME.split("{", 1)[0]), zero.seen
+    assert zero.seen.endswith("(rejected)"), zero.seen
+
+
 def _child_of(finding: CaseFinding) -> int:
     """The id of the child a finding's notes say its NEXT ran."""
     sent = next(line for line in finding.messages if line.startswith("sent NEXT"))

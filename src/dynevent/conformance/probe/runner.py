@@ -483,7 +483,7 @@ class Probe:
         self.cut_short = False
         self.link.mark(f"case {case.id}")
         started = self.link.clock()
-        heard = self.link.heard
+        heard, earlier = self.link.heard, [made for made in self.link.made if made.accepted is None]
         timed_out = False
         try:
             if case.needs in ("child", "place") and self.options.place is None:
@@ -492,21 +492,21 @@ class Probe:
         except _Unreachable as exc:
             finding = CaseFinding(case, Verdict.MISSING, seen=str(exc))
             timed_out = isinstance(exc, _TimedOut)
-        # what the case's verdict lacked, before the waits below: the run's end sees whether it came late
+        # what the verdict lacked, before the waits below: the run's end sees whether it came late
         self.unanswered[case.id] = [exchange for exchange in self.exchanges if not _complete(exchange)]
         finding = self._answered_once(finding)
         # the server had less than --timeout, or was not heard to the end: not its failure
         if (finding.absent and self.cut_short) or self.link.cut_off:
             why = f"{CUT_SHORT.format(deadline=self.options.deadline)} ({finding.seen})"
             finding = CaseFinding(case, Verdict.MISSING, seen=why)
+        finding = _unless_earlier_came(finding, earlier, heard)
         # silent: the case waited out the timeout and the server sent nothing at all meanwhile
         silent = (timed_out or finding.absent) and self.link.heard == heard
         self.timeouts_in_a_row = self.timeouts_in_a_row + 1 if silent else 0
         return self._settled(finding, started)
 
     def _settled(self, finding: CaseFinding, started: float) -> CaseFinding:
-        """The finding with the case's messages and time, and whether --known or --allow-missing
-        expected its failure or its absence."""
+        """The finding with the case's messages, time, and whether --known or --allow-missing expect it."""
         case = finding.case
         missing = finding.verdict is Verdict.MISSING
         return attrs.evolve(
@@ -812,6 +812,11 @@ FEEDBACK_LOST = (
     "feedback published while its child ran never came: the log entries heard skip seq {first} to {last} "
     "(a reliable topic keeps its last 10 messages, and a lossy link that repairs slowly loses older ones)"
 )
+#: Why a case that failed by what it saw is not run when an earlier case's goal took effect meanwhile.
+EARLIER_CAME = (
+    "an earlier case's goal ({goal}), whose response had not come when this case began, was accepted "
+    "during it (a lossy link delivered it late): what this case saw may be its doing"
+)
 #: Why a case that waited in vain is not run over a link that lost or delayed messages during the run.
 LOSSY = (
     "what it waited for never came, over a link that lost messages during the run ({lost}): no verdict "
@@ -825,6 +830,17 @@ _NEEDS_OF_WAIT = {"status": ("run", "place", "child")}
 
 #: How often a wait for a running child looks whether its NEXT was answered first (seconds).
 _LOOK_AGAIN = 0.2
+
+
+def _unless_earlier_came(finding: CaseFinding, earlier: list[Exchange], heard: int) -> CaseFinding:
+    """A case failed by what it saw, while a goal an earlier case sent, whose response had not come
+    when this one began, was accepted meanwhile: that goal reached the server late (a lossy link sent
+    it again), and what this case saw may be its doing, so the case is not run, saying so."""
+    came = [made for made in earlier if made.accepted and (made.response_heard or 0) > heard]
+    if finding.verdict is not Verdict.FAIL or finding.absent or not came:
+        return finding
+    why = EARLIER_CAME.format(goal=goal_text(came[0].goal))
+    return attrs.evolve(finding, verdict=Verdict.MISSING, seen=f"{why} ({finding.seen})")
 
 
 def _feedback_lost_in(probe: Probe, finding: CaseFinding) -> range | None:
