@@ -978,11 +978,16 @@ def test_feedback_the_log_seqs_show_was_published_and_lost_is_no_failure_of_the_
 
 class _DeafLink(InProcessLink):
     """The in-process link that never delivers the response to an action-level cancel of a goal
-    already answered; ``missed`` statuses its transport knows were published and never delivered."""
+    already answered, nor a FINISHED to the server; ``missed`` statuses its transport knows were
+    published and never delivered."""
 
     def __init__(self, missed: int) -> None:
         super().__init__(CONFIG)
         self.statuses_missed = missed
+
+    def deliver(self, exchange: probe_runner.Exchange) -> None:
+        if exchange.goal.event_type != EventType.FINISHED or exchange.goal.dynamic_event_seq != LAST_SEQ:
+            super().deliver(exchange)
 
     def cancel(self, exchange: probe_runner.Exchange, timeout: float) -> bool | None:
         if exchange.answers:
@@ -997,16 +1002,17 @@ def test_what_never_came_over_a_link_that_lost_messages_is_no_verdict_on_the_ser
     transport shows it lost messages during the run, the case is not run, saying so."""
     options = attrs.evolve(OPTIONS, deadline=1000)
 
-    def answered(missed: int) -> CaseFinding:
+    def verdicts(missed: int) -> dict[str, CaseFinding]:
         findings = probe_runner.run_cases(_DeafLink(missed), options, list(CASES), lambda _: None)
-        return {finding.case.id: finding for finding in findings}["action.cancel_answered"]
+        return {finding.case.id: finding for finding in findings}
 
-    clean = answered(0)
-    assert clean.verdict is Verdict.FAIL and clean.seen == "no cancel response", clean
-    lossy = answered(2)
-    assert lossy.verdict is Verdict.MISSING, lossy
-    lost = "2 status(es) published and never delivered"
-    assert lossy.seen == f"{probe_runner.LOSSY.format(lost=lost)} (no cancel response)", lossy.seen
+    clean, lossy = verdicts(0), verdicts(2)
+    lost = probe_runner.LOSSY.format(lost="2 status(es) published and never delivered")
+    unheard = (("action.cancel_answered", "no cancel response"), ("finished.ends_the_run", "no response"))
+    for case, seen in unheard:
+        assert clean[case].verdict is Verdict.FAIL and clean[case].seen == seen, clean[case]
+        assert lossy[case].verdict is Verdict.MISSING, lossy[case]
+        assert lossy[case].seen == f"{lost} ({seen})", lossy[case].seen
 
 
 class _LateNextLink(InProcessLink):

@@ -1149,7 +1149,9 @@ def _finished(probe: Probe, case: Case) -> CaseFinding:
     expected = "succeeded, completed; then INACTIVE"
     answer = exchange.answer
     if answer is None or (answer[0], answer[1].status) != (GoalStatus.SUCCEEDED, _COMPLETED):
-        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=_describe_answer(exchange))
+        absent = answer is None and exchange.accepted is not False  # no response, or no answer yet
+        seen = _describe_answer(exchange)
+        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, absent=absent)
     seq = status.dynamic_event_seq
     missed = probe.link.statuses_missed
     if not probe.link.wait_seen(
