@@ -302,6 +302,22 @@ def test_an_open_item_of_the_judge_is_uncertain_and_does_not_fail_the_run() -> N
     assert "uncertain" in item.line() and "(1 uncertain)" in probe_cases.judged_summary([item])
 
 
+@pytest.mark.spec("R19.1")
+def test_what_the_judge_finds_in_a_case_the_link_kept_from_running_is_uncertain() -> None:
+    """A case not run because the link lost, delayed or reordered its messages: the judge's findings
+    in its records may be the link's doing, and are reported uncertain, failing no run; the same
+    findings in a case not run for another reason still count."""
+    by_link = attrs.evolve(_finding("next.runs_a_child", probe_cases.Verdict.MISSING), by_link=True)
+    verdicts, judged = probe_cases.judge_verdicts(_late_feedback(), [by_link])
+    assert verdicts == [by_link] and [item.finding.code for item in judged] == ["after_answer"]
+    assert judged[0].uncertain and not judged[0].counts, judged
+    assert probe_cases.exit_status(verdicts, judged) == probe_cases.EXIT_NOT_RUN
+    other = _finding("next.runs_a_child", probe_cases.Verdict.MISSING)
+    verdicts, judged = probe_cases.judge_verdicts(_late_feedback(), [other])
+    assert [item.counts for item in judged] == [True]
+    assert probe_cases.exit_status(verdicts, judged) == probe_cases.EXIT_FAILED
+
+
 @pytest.mark.spec("R19.1", "R7.3")
 def test_a_case_whose_own_records_break_its_rules_fails_with_the_judges_finding() -> None:
     """judge_verdicts: the judge decides a case its script passed when the case's own records break

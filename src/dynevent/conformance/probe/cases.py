@@ -112,6 +112,9 @@ class CaseFinding:
     seconds: float = 0.0
     absent: bool = False  # the failure is a message that did not come within the timeout
     expected_missing: bool = False  # missing, as --allow-missing or --known said it may be
+    #: not run because the link lost, delayed or reordered what the case sent or waited for: what the
+    #: judge finds in its records may be the link's doing, and is reported, uncertain
+    by_link: bool = False
 
 
 @attrs.frozen
@@ -126,10 +129,11 @@ class Judged:
     finding: JudgeFinding
     label: str
     known: bool = False
+    by_link: bool = False  # it lies in the records of a case the link kept from running
 
     @property
     def uncertain(self) -> bool:
-        return self.label in divergences.OPEN_ITEMS
+        return self.label in divergences.OPEN_ITEMS or self.by_link
 
     @property
     def counts(self) -> bool:
@@ -191,7 +195,11 @@ def judge_verdicts(
     finding, its divergence and whether ``known`` covers it, whatever its script saw; an uncertain
     finding (an open item of the judge) fails no case.  The findings, and what the judge found that
     no case's verdict says: the section beside the cases."""
-    judged = judge_exchange(text, findings, known)
+    disturbed = {finding.case.id for finding in findings if finding.by_link}
+    judged = [
+        attrs.evolve(item, by_link=True) if item.case in disturbed else item
+        for item in judge_exchange(text, findings, known)
+    ]
     taken: set[int] = set()
     verdicts = []
     for scripted in findings:

@@ -529,9 +529,8 @@ class Probe:
     def late(self, finding: CaseFinding) -> CaseFinding:
         """A failure for a goal's response or answer that did not come within ``--timeout``
         (``absent``), seen again at the run's end: when every goal the case left unanswered has had
-        its response and, accepted, its answer since, they came late (a slow or lossy link), and the
-        case is not run, with which bound to raise, rather than failed; so too for feedback the log
-        seqs show was sent (:func:`_feedback_lost`).  Else what never came is the server's failure."""
+        its response and, accepted, its answer since (or the log seqs show its feedback was sent,
+        :func:`_feedback_lost`), the link was slow or lossy: the case is not run, saying so."""
         if not (finding.absent and finding.verdict is Verdict.FAIL):
             return finding
         lost = _feedback_lost_in(self, finding)
@@ -541,7 +540,8 @@ class Probe:
             why = LATE.format(timeout=self.options.timeout)
         else:
             return finding
-        return attrs.evolve(finding, verdict=Verdict.MISSING, seen=f"{why} ({finding.seen})", absent=False)
+        return attrs.evolve(finding, verdict=Verdict.MISSING, seen=f"{why} ({finding.seen})", absent=False,
+                            by_link=True)  # fmt: skip
 
     def came_late(self, finding: CaseFinding) -> bool:
         """Whether what ``finding``'s case waited for in vain has come since: its goals' responses,
@@ -840,7 +840,7 @@ def _unless_earlier_came(finding: CaseFinding, earlier: list[Exchange], heard: i
     if finding.verdict is not Verdict.FAIL or finding.absent or not came:
         return finding
     why = EARLIER_CAME.format(goal=goal_text(came[0].goal))
-    return attrs.evolve(finding, verdict=Verdict.MISSING, seen=f"{why} ({finding.seen})")
+    return attrs.evolve(finding, verdict=Verdict.MISSING, seen=f"{why} ({finding.seen})", by_link=True)
 
 
 def _feedback_lost_in(probe: Probe, finding: CaseFinding) -> range | None:
@@ -1083,7 +1083,7 @@ def _unless_ended_first(
         return finding
     probe.note(f"the server's statuses: child {child_id} ended at {_instant(end)}, the goal took effect "
                f"at {_instant(effect)}")  # fmt: skip
-    return CaseFinding(finding.case, Verdict.MISSING, seen=ENDED_FIRST.format(child=child_id))
+    return CaseFinding(finding.case, Verdict.MISSING, seen=ENDED_FIRST.format(child=child_id), by_link=True)
 
 
 def _instant(status: DynamicEventStatus) -> int:
@@ -1161,9 +1161,8 @@ def _finished(probe: Probe, case: Case) -> CaseFinding:
     ):
         later = [s for s in probe.link.history()[since:] if seq_after(s.dynamic_event_seq, seq)]
         if later and probe.link.statuses_missed > missed:  # the next run's took the INACTIVE's place
-            return CaseFinding(
-                case, Verdict.MISSING, seen=OVERWRITTEN.format(seq=seq, later=later[0].dynamic_event_seq)
-            )
+            why = OVERWRITTEN.format(seq=seq, later=later[0].dynamic_event_seq)
+            return CaseFinding(case, Verdict.MISSING, seen=why, by_link=True)
         return CaseFinding(case, Verdict.FAIL, expected=expected, seen="no INACTIVE status", absent=True)
     return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
@@ -1427,7 +1426,8 @@ def _cancel_both_answered(probe: Probe, case: Case) -> CaseFinding:
             ended_by = [running, *(cancel for cancel in cancels if cancel.accepted)]
             late = all(_heard_after_end(probe, cancel, ended_by, child_id) for cancel in refused)
             if late and any(_outlived(probe, cancel, child_id) for cancel in ended_by[1:]):
-                return CaseFinding(case, Verdict.MISSING, seen=REFUSED_AFTER_END.format(child=child_id))
+                why = REFUSED_AFTER_END.format(child=child_id)
+                return CaseFinding(case, Verdict.MISSING, seen=why, by_link=True)
             absent = any(cancel.accepted is None for cancel in cancels)
             return CaseFinding(
                 case, Verdict.FAIL, expected=expected, seen="a CANCEL not accepted", absent=absent
@@ -1664,7 +1664,7 @@ def run_cases(
     if lost is not None:  # what never came is no verdict over a link that lost messages
         findings[:] = [
             attrs.evolve(finding, verdict=Verdict.MISSING, seen=f"{LOSSY.format(lost=lost)} ({finding.seen})",
-                         absent=False)
+                         absent=False, by_link=True)
             if finding.absent and finding.verdict is Verdict.FAIL else finding
             for finding in findings
         ]  # fmt: skip
