@@ -37,10 +37,10 @@ def _verdicts(junit: Path) -> dict[str, str]:
 
 @pytest.mark.skipif(
     os.environ.get("DYNEVENT_NET_LOSS") != "1",
-    reason="opt-in (DYNEVENT_NET_LOSS=1) until #51 item 4 is done: at 10% the probe's verdicts now hold, "
-    "but check on the bag may read feedback a lossy link delivered after the status of its child's end "
-    "as sent after that end (R8.2), which a bag cannot tell from rmf_ros2's own D30; at 30% the judge "
-    "may still count findings in cases whose goals the link delayed within --timeout",
+    reason="opt-in (DYNEVENT_NET_LOSS=1) until #51 item 4 is done: the probe's verdicts and serve's client "
+    "judge held at 10% and 30% in the latest runs, but check on the bag may read feedback a lossy link "
+    "delivered after the status of its child's end as sent after that end (R8.2: a bag cannot tell it from "
+    "rmf_ros2's own D30) at 10% now and then, and at 30% misreads more late messages",
 )
 @pytest.mark.spec("R19.1", "R8.2", "R5.2")
 @pytest.mark.parametrize("loss", [10, 30])
@@ -80,5 +80,7 @@ def test_loss_gives_no_false_verdict(ros_site: Callable[..., RosSite], loss: int
     assert check.returncode == 0, check.output
     serve.stop()
     assert "client judgement" in serve.output, serve.output
-    judged = serve.wait_line("client judgement", 1)
-    assert "no finding" in judged, serve.output
+    # the prober breaks the rules on purpose; the driver of the other robot is a correct client
+    lines = serve.output.splitlines()
+    driven = [line for line in lines if "tinyRobot/driven" in line and "client judge:" in line]
+    assert driven == [], serve.output
