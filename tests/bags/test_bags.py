@@ -12,6 +12,7 @@ import contextlib
 import json
 import os
 import sqlite3
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -783,6 +784,69 @@ def test_feedback_a_lossy_link_delivered_out_of_order_goes_by_its_logs_time(tmp_
     lossy = run()
     _received(lossy, [*range(6), 7, 8, 6, *range(9, len(lossy.messages))])  # log 1 came after log 3
     assert check_bag(lossy.write(tmp_path / "lossy", StoragePlugin.MCAP)).clean
+
+
+#: A bag recorded across hosts at 10% loss (tests/data/lossy/README.md): a child's start feedback and
+#: its last log's feedback, lost on the recorder's link, came again after the status of the child's end.
+LATE_FEEDBACK = Path(__file__).resolve().parents[1] / "data" / "lossy" / "late_feedback"
+
+
+def _copy(source: Path, target: Path, sent_at: Callable[[str, int, int | None], int | None]) -> Path:
+    """The bag at ``source`` written again at ``target`` by the recorder's writer, each message's
+    publish time ``sent_at(topic, bag time, its publish time)``."""
+    from rosbags.rosbag2 import Reader
+
+    from dynevent.bags.sent import open_writer, publish_times
+
+    sent = publish_times(str(source), sorted(source.glob("*.mcap")))
+    with Reader(source) as reader, open_writer(target) as writer:
+        added = {
+            item.id: writer.add_connection(
+                item.topic, item.msgtype, msgdef=item.msgdef.data, rihs01=item.digest or UNHASHED
+            )
+            for item in reader.connections
+        }
+        for connection, time, raw in reader.messages():
+            was = sent.get((connection.topic, time, hash(raw)))
+            writer.write_sent(added[connection.id], time, sent_at(connection.topic, time, was), raw)
+    return target
+
+
+@pytest.mark.spec("R8.2")
+def test_feedback_a_lossy_link_delivered_after_its_childs_end_goes_by_when_sent(tmp_path: Path) -> None:
+    """A bag from ``dynevent record`` holds when each message was sent (MCAP's publish time): the
+    feedback a lossy link delivered after its child's end (and after the goal status that showed the
+    goal succeeded) is read where it was sent, and no finding.  The same bag without publish times
+    cannot tell it from feedback sent after the end (R8.2); feedback sent after the end is found."""
+    assert check_bag(LATE_FEEDBACK).clean
+    unknown = check_bag(_copy(LATE_FEEDBACK, tmp_path / "unknown", lambda topic, time, sent: None))
+    late = _copy(LATE_FEEDBACK, tmp_path / "late", lambda topic, time, sent: None if sent is None else time)
+    for report in (unknown, check_bag(late)):
+        robot = next(robot for robot in report.robots if robot.robot == "probed")
+        findings = [(finding.rule, finding.code) for finding in robot.report.findings]
+        assert findings == [("R8.2", "feedback_not_running")] * 2, robot.report.findings
+
+
+def test_the_recorders_writer_keeps_each_messages_publish_time_beside_its_log_time(tmp_path: Path) -> None:
+    """What ``dynevent record`` writes: an MCAP bag whose message records hold the publish time given
+    (across chunks: more than one chunk's worth of messages), which rosbags and other readers still
+    read as a bag, and whose messages without a publish time hold the log time twice."""
+    from rosbags.rosbag2 import Reader
+
+    from dynevent.bags.sent import publish_times
+
+    run = Conversation()
+    for seq in range(3000):  # over 1 MiB: more than one chunk
+        run.status(1, 1, "standby " + "x" * 400, seq % 5)
+        if seq % 2:
+            run.sent_at(run.now - 1000 - seq)
+    bag = run.write(tmp_path / "bag", StoragePlugin.MCAP)
+    files = sorted(bag.glob("*.mcap"))
+    found = publish_times(str(bag), files)
+    with Reader(bag) as reader:
+        stored = [(connection.topic, time, hash(raw)) for connection, time, raw in reader.messages()]
+    assert len(stored) == 3000
+    assert found == {key: key[1] - 1000 - seq for seq, key in enumerate(stored) if seq % 2}
 
 
 def test_each_topic_is_read_as_its_robot_and_channel_and_no_other_is() -> None:

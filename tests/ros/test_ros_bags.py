@@ -283,7 +283,7 @@ def test_the_recorder_keeps_when_each_message_arrived_not_when_it_got_to_it() ->
     """A recorder that falls behind (a busy machine) takes what DDS holds for it in a burst: each
     message is still written with the time the middleware received it, so the bag keeps the order
     and the spacing of what happened, which the judge reads (a burst once made the judge read a
-    CANCEL's answer before the feedback that named its child)."""
+    CANCEL's answer before the feedback that named its child), and with the time it was sent."""
     import time
 
     from dynevent.ros.qos import latched
@@ -294,12 +294,14 @@ def test_the_recorder_keeps_when_each_message_arrived_not_when_it_got_to_it() ->
     class Times:  # rosbags' writer, as far as the recorder uses it: the time each message is written at
         def __init__(self) -> None:
             self.times: list[int] = []
+            self.sent: list[int | None] = []
 
         def add_connection(self, topic: str, msgtype: str, **details: Any) -> str:
             return topic
 
-        def write(self, connection: str, time: int, data: bytes) -> None:
+        def write_sent(self, connection: str, time: int, sent: int | None, data: bytes) -> None:
             self.times.append(time)
+            self.sent.append(sent)
 
     recording, robot = Session("dynevent_recorder", own_context=True), Session("tinyRobot1", own_context=True)
     try:
@@ -313,10 +315,12 @@ def test_the_recorder_keeps_when_each_message_arrived_not_when_it_got_to_it() ->
         while subscription.get_publisher_count() == 0 and time.monotonic() < deadline:
             time.sleep(0.05)
         assert subscription.get_publisher_count() == 1
-        sent = []
+        sent, published = [], []
         for seq in range(1, 6):  # the recorder's executor does not run yet: it has fallen behind
+            before = time.time_ns()
             publisher.publish(DynamicEventStatus(dynamic_event_seq=seq, dynamic_state=1, status="standby"))
             sent.append(time.time_ns())
+            published.append((before, sent[-1]))
             time.sleep(0.2)
         recording.start()  # and now takes all five at once
         while len(writer.times) < 5 and time.monotonic() < deadline:
@@ -327,6 +331,10 @@ def test_the_recorder_keeps_when_each_message_arrived_not_when_it_got_to_it() ->
         # milliseconds apart
         spread, sent_spread = writer.times[-1] - writer.times[0], sent[-1] - sent[0]
         assert spread > sent_spread / 2, (spread, sent_spread, writer.times)
+        # and each with the time its publisher sent it (the bag's publish time: dynevent.bags.sent)
+        assert all(
+            before <= stamp <= after for (before, after), stamp in zip(published, writer.sent, strict=True)
+        ), (published, writer.sent)
     finally:
         recording.close()
         robot.close()

@@ -23,6 +23,7 @@ import numpy as np
 from rosbags.rosbag2 import StoragePlugin, Writer
 
 from dynevent.bags.reader import _definitions, _stored_name, typestore
+from dynevent.bags.sent import open_writer
 
 STORE = typestore()
 DEFINITIONS = _definitions()
@@ -55,6 +56,7 @@ class Conversation:
         self.messages: list[tuple[str, str, int, Any]] = []
         self.now = T0
         self.calls = 0  # get_result calls
+        self.sent: dict[int, int] = {}  # id of a message: when its publisher sent it (the bag's publish time)
 
     def at(self, topic: str, msgtype: str, message: Any) -> Conversation:
         self.now += SECOND // 10
@@ -159,8 +161,16 @@ class Conversation:
         self._event("get_result", 1, self.calls, request=request)
         return self._event("get_result", 2, self.calls, response=response)
 
+    def sent_at(self, time: int) -> Conversation:
+        """The last message was sent at ``time`` (ns): an MCAP bag holds it as the publish time."""
+        self.sent[id(self.messages[-1][3])] = time
+        return self
+
     def write(self, path: Path, storage: StoragePlugin) -> Path:
-        writer = Writer(path, version=9, storage_plugin=storage)
+        """The bag: MCAP storage through the recorder's writer (publish times kept), SQLite through
+        rosbags' own."""
+        mcap = storage == StoragePlugin.MCAP
+        writer = open_writer(path) if mcap else Writer(path, version=9, storage_plugin=storage)
         with writer:
             connections: dict[str, Any] = {}
             for topic, msgtype, time, message in self.messages:
@@ -168,9 +178,11 @@ class Conversation:
                     # the definition as rosbag2 keeps it (rosbags generates one for "msg" types only)
                     text = DEFINITIONS.get(msgtype, "")
                     connections[topic] = writer.add_connection(topic, msgtype, msgdef=text, rihs01=UNHASHED)
-                writer.write(
-                    connections[topic], time, STORE.serialize_cdr(message, _stored_name(STORE, msgtype))
-                )
+                data = STORE.serialize_cdr(message, _stored_name(STORE, msgtype))
+                if mcap:
+                    writer.write_sent(connections[topic], time, self.sent.get(id(message)), data)
+                else:
+                    writer.write(connections[topic], time, data)
         return path
 
     def cancel(self, n: int, kind: int, clock: int = 0) -> Conversation:

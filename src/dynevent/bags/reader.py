@@ -43,7 +43,7 @@ from typing import Any, NamedTuple
 import attrs
 
 from dynevent import files
-from dynevent.bags import unpack
+from dynevent.bags import sent, unpack
 from dynevent.conformance.judge.observer import AnswerEvidence, Checker
 from dynevent.conformance.judge.partial import GOAL_STATUSES, PartialJudge
 from dynevent.conformance.judge.trace import Record, Report, TraceHeader
@@ -225,15 +225,18 @@ def _read(
     metadata = _vet(source, Path(path))
     with contextlib.ExitStack() as unpacked:
         with _storage(source, reader_errors):  # every chunk the library will unpack, vetted first
-            bag, budget = unpacked.enter_context(unpack.readable(source, Path(path), metadata))
-        return _judge(source, bag, budget, compatibility, keep)
+            bag = unpacked.enter_context(unpack.readable(source, Path(path), metadata))
+        return _judge(source, bag, compatibility, keep)
 
 
 def _judge(
-    source: str, bag: Path, budget: unpack.Budget | None, compatibility: Compatibility, keep: bool
+    source: str, readable: unpack.Readable, compatibility: Compatibility, keep: bool
 ) -> tuple[BagReport, dict[tuple[str, str], _Robot]]:
-    """Judge the bag the storage library reads at ``bag``; each message unpacked within ``budget``
-    when the bag's messages are compressed."""
+    """Judge the bag the storage library reads at ``readable.path``; each message unpacked within its
+    budget when the bag's messages are compressed, and ordered by when it was sent where the bag
+    says (:mod:`dynevent.bags.sent`)."""
+    bag, budget = readable.path, readable.budget
+    sent_at = sent.publish_times(source, readable.mcap)
     reader_type, reader_errors = _rosbags()
     robots: dict[tuple[str, str], _Robot] = {}
     messages = other = 0
@@ -261,7 +264,7 @@ def _judge(
                 item = next(stream, None)
             if item is None:
                 break
-            connection, time, _ = item
+            connection, time, raw = item
             if type(time) is not int:  # a SQLite column holds whatever a writer put there
                 raise BagError(
                     source, f"{connection.topic}: a message's time is {short_repr(time)}, not nanoseconds"
@@ -270,7 +273,8 @@ def _judge(
             robot, channel = routes[connection.id]
             message = _decode(store, _unpacked(item, budget, source), decode_as[connection.id], source)
             messages += 1
-            robot.take(channel, time, message)
+            sent_then = sent_at.get((connection.topic, time, hash(bytes(raw)))) if sent_at else None
+            robot.take(channel, time, message, sent_then)
         reports = tuple(robot.finish(source, end) for _, robot in sorted(robots.items()))
     except TraceError as exc:  # a record the observer cannot take, in the bag's order
         raise BagError(source, f"{exc.field} at bag time {exc.line}: {exc.problem}") from None
@@ -478,13 +482,15 @@ class _Robot:
         self.keep = keep  # keep every record passed on, in ``kept`` (bag_records)
         self.kept: list[Record] = []
 
-    def take(self, channel: str, time: int, message: Any) -> None:
+    def take(self, channel: str, time: int, message: Any, sent: int | None = None) -> None:
+        """A message received at bag ``time`` and, where the bag says, ``sent`` by its publisher then."""
         self.channels.add(channel)
         if self._began is None:
             self._began = time
         # nothing goes before the robot's first message: a status latched for a late subscriber comes
         # at once, published before the recording began
-        stamp = max(_stamp(channel, message, time), self._began)
+        stamp = max(_stamp(channel, message, time, sent), self._began)
+        sent_then = channel == FEEDBACK and stamp != time and sent == stamp
         call: tuple[str, bytes, int] | None = None
         try:
             if channel in _SERVICES:
@@ -509,7 +515,7 @@ class _Robot:
                     self._seen[key] = None
                     if len(self._seen) > _CALLS:
                         self._seen.popitem(last=False)
-                self._order(record, stamp)
+                self._order(record, stamp, sent_then)
         except InvalidMessage:
             self.refused += 1
 
@@ -522,19 +528,22 @@ class _Robot:
         later = [item for item in self._waiting if item[3].kind == "feedback" and _logged(item[3]) > stamp]
         return min(later) if later else None
 
-    def _order(self, record: Record, stamp: int) -> None:
+    def _order(self, record: Record, stamp: int, sent: bool = False) -> None:
         """Pass records on in the server's order: a recorder receives each topic in order, but not
         the topics in order with one another (a goal's request event may come after the status its
         start published).  Each record waits :data:`SKEW` of bag time, then goes in the order of the
         time the server stamped on it (a status's ``time``, a begin's ``start_time``, a service
-        event's ``stamp``; the bag time for feedback), ties in bag order.  The records of one goal
+        event's ``stamp``; for feedback, when it was sent where the bag says, else the bag time), ties
+        in bag order.  The records of one goal
         keep their own order: its answer goes after the feedback received before it, and feedback
         received while its answer waits is read as sent before it (the feedback topic and the
-        result service are two channels: a recorder cannot tell late delivery from late sending)."""
+        result service are two channels: a recorder cannot tell late delivery from late sending), unless
+        the bag says when the feedback was sent (``sent``): then it goes by that alone."""
         while self._waiting and self._waiting[0][0] <= record.time - HOLD:  # what is due goes first
             self._release()
-        answer = self._waiting_answers.get(record.goal_uuid) if record.kind == "feedback" else None
-        logged = _logged(record) if record.kind == "feedback" else 0
+        guess = record.kind == "feedback" and not sent  # when it was sent, read from what came around it
+        answer = self._waiting_answers.get(record.goal_uuid) if guess else None
+        logged = _logged(record) if guess else 0
         overtaken = self._logged_after(logged) if logged else None
         if overtaken is not None or answer is not None:
             # feedback received after feedback the server logged later (a lossy link sent it again,
@@ -543,6 +552,8 @@ class _Robot:
             key: tuple[int, float] = min(
                 (item[0], item[1] - 0.5) for item in (overtaken, answer) if item is not None
             )
+        elif sent:
+            key = (stamp, float(self._arrived))
         elif record.goal_uuid and record.kind not in _OPENING:
             key = (max(stamp, self._last.get(record.goal_uuid, stamp)), float(self._arrived))
         else:  # a goal's request and response go by their own stamps: what names it goes after them
@@ -747,13 +758,14 @@ SKEW = 1_000_000_000
 HOLD = 10_000_000_000
 
 
-def _stamp(channel: str, message: Any, time: int) -> int:
+def _stamp(channel: str, message: Any, time: int, sent: int | None) -> int:
     """The time the server stamped on a message, when it is within :data:`SKEW` of the bag time (a
     status: up to :data:`HOLD` before it, since a server stamps a status as it publishes it, R2.2, and
-    a lossy link may deliver it that late).  A
-    service event a client published (its request sent, its response received) has the client's
-    clock, which may be another host's: its bag time is used.  (A feedback's logs' time orders it among
-    feedback alone: :func:`_logged`.)"""
+    a lossy link may deliver it that late).  A message with no stamp of its own (feedback, the goal
+    statuses) goes by the time the server sent it where the bag holds it (:mod:`dynevent.bags.sent`),
+    up to :data:`HOLD` before the bag time; else by the bag time.  A service event a client published
+    (its request sent, its response received) has the client's clock, which may be another host's:
+    its bag time is used.  (A feedback's logs' time orders it among feedback alone: :func:`_logged`.)"""
     if channel in _SERVICES and int(message.info.event_type) in (_REQUEST_SENT, _RESPONSE_RECEIVED):
         return time
     source = {"status": "time", "begin": "start_time"}.get(channel)
@@ -761,7 +773,7 @@ def _stamp(channel: str, message: Any, time: int) -> int:
         getattr(message, source, None) if source else getattr(getattr(message, "info", None), "stamp", None)
     )
     if stamped is None:
-        return time
+        return sent if sent is not None and -HOLD <= sent - time <= SKEW else time
     nanoseconds = int(stamped.sec) * 1_000_000_000 + int(stamped.nanosec)
     earliest = HOLD if channel == "status" else SKEW
     return nanoseconds if -earliest <= nanoseconds - time <= SKEW else time
@@ -795,13 +807,13 @@ class _FleetBegins:
         self.compatibility = compatibility
         self.keep = keep
 
-    def take(self, channel: str, time: int, message: Any) -> None:
+    def take(self, channel: str, time: int, message: Any, sent: int | None = None) -> None:
         key = (str(message.fleet), str(message.robot))
         robot = self.robots.get(key)
         if robot is None:
             robot = self.robots[key] = _Robot(*key, compatibility=self.compatibility, keep=self.keep)
         if not robot.own_begins:
-            robot.take(channel, time, message)
+            robot.take(channel, time, message, sent)
 
 
 def _status(time: int, message: Any) -> Iterator[Record]:

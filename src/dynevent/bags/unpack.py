@@ -31,11 +31,21 @@ import struct
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path, PurePath
-from typing import Any, BinaryIO
+from typing import Any, BinaryIO, NamedTuple
 
 from dynevent.errors import BagError
 
-__all__ = ["MAX_EXPANSION", "MAX_UNPACKED_BYTES", "Budget", "readable", "unpack_message", "vet_mcap"]
+__all__ = [
+    "MAGIC",
+    "MAX_EXPANSION",
+    "MAX_UNPACKED_BYTES",
+    "Budget",
+    "Readable",
+    "pieces",
+    "readable",
+    "unpack_message",
+    "vet_mcap",
+]
 
 #: The most bytes one MCAP chunk or one message unpacks to: a reader holds it whole (a chunk is
 #: 768 KiB in rosbag2's MCAP by default, or one message larger than that, a camera's image say).
@@ -48,11 +58,11 @@ _BOMB = "a compressed bomb, not a recording"
 _PIECE = 1024 * 1024
 
 #: MCAP's magic, and the opcodes read here (the MCAP specification, as rosbags reads them).
-_MAGIC = b"\x89MCAP0\r\n"
+MAGIC = b"\x89MCAP0\r\n"
 _FOOTER, _CHUNK, _CHUNK_INDEX, _SUMMARY_OFFSET = 0x02, 0x06, 0x08, 0x0E
 #: The footer record (opcode, length 20, summary start, summary offset start, CRC), then the magic.
 _FOOTER_HEAD = struct.pack("<BQ", _FOOTER, 20)
-_TAIL = len(_FOOTER_HEAD) + 20 + len(_MAGIC)
+_TAIL = len(_FOOTER_HEAD) + 20 + len(MAGIC)
 
 
 class Budget:
@@ -106,7 +116,7 @@ def _unpacking(stream: BinaryIO, compression: str) -> BinaryIO:
     return reader
 
 
-def _pieces(source: str, stream: BinaryIO, compression: str, limit: int, what: str) -> Iterator[bytes]:
+def pieces(source: str, stream: BinaryIO, compression: str, limit: int, what: str) -> Iterator[bytes]:
     """What ``stream`` unpacks to, piece by piece; a :class:`BagError` once it passes ``limit`` bytes
     (nothing past the limit is unpacked) or when it is not what ``compression`` says."""
     unpacked = 0
@@ -135,21 +145,24 @@ def unpack_message(source: str, data: bytes, what: str, budget: Budget) -> bytes
                 budget.take(len(unpacked), what)
                 return unpacked
     # a larger message, frames after the first, a frame that breaks off: piece by piece
-    unpacked = b"".join(_pieces(source, io.BytesIO(data), "zstd", MAX_UNPACKED_BYTES, what))
+    unpacked = b"".join(pieces(source, io.BytesIO(data), "zstd", MAX_UNPACKED_BYTES, what))
     budget.take(len(unpacked), what)
     return unpacked
 
 
 @contextlib.contextmanager
-def readable(source: str, path: Path, metadata: Any) -> Iterator[tuple[Path, Budget | None]]:
+def readable(source: str, path: Path, metadata: Any) -> Iterator[Readable]:
     """The bag at ``path`` (``metadata``: its metadata.yaml, parsed; None for a storage file alone) as
-    the storage library may read it, every chunk it will unpack vetted; and, for a bag whose messages
-    are compressed, the budget :func:`unpack_message` unpacks them within (None: they are not)."""
+    the storage library may read it, every chunk it will unpack vetted; for a bag whose messages are
+    compressed, the budget :func:`unpack_message` unpacks them within (None: they are not); and its
+    MCAP files, each vetted."""
     information = metadata.get("rosbag2_bagfile_information") if isinstance(metadata, dict) else None
     if not isinstance(information, dict):  # a storage file alone, or a bag the library refuses
         if path.suffix == ".mcap" and path.is_file():
             vet_mcap(source, path, Budget(source, path.stat().st_size))
-        yield path, None
+            yield Readable(path, None, (path,))
+            return
+        yield Readable(path, None, ())
         return
     names = information.get("relative_file_paths")
     names = names if isinstance(names, list) else []
@@ -158,17 +171,18 @@ def readable(source: str, path: Path, metadata: Any) -> Iterator[tuple[Path, Bud
     packed = mode in ("file", "message") and information.get("compression_format") == "zstd"
     mcap = information.get("storage_identifier") == "mcap"
     if not all(os.path.isfile(file) for file in stored):  # the library names the files missing
-        yield path, None
+        yield Readable(path, None, ())
         return
     budget = Budget(source, sum(file.stat().st_size for file in stored))
     if not packed:
         for file in stored if mcap else ():
             vet_mcap(source, file, budget)
-        yield path, None
+        yield Readable(path, None, tuple(stored) if mcap else ())
         return
     with tempfile.TemporaryDirectory(prefix="dynevent-bag-") as folder:
         view = Path(folder)
         unpacked = dict(information, compression_mode="", compression_format="")
+        targets = []
         for file in stored:
             if mode == "file":  # x.mcap.zstd unpacks to x.mcap, as rosbag2 names it
                 target = view / file.stem
@@ -178,12 +192,24 @@ def readable(source: str, path: Path, metadata: Any) -> Iterator[tuple[Path, Bud
                 target.symlink_to(file.resolve())
             if mcap:
                 vet_mcap(source, target, budget)
+                targets.append(target)
         if mode == "file":
             unpacked["relative_file_paths"] = [
                 PurePath(name).stem if isinstance(name, str) else name for name in names
             ]
         _write_metadata(view / "metadata.yaml", dict(metadata, rosbag2_bagfile_information=unpacked))
-        yield view, budget if mode == "message" else None
+        yield Readable(view, budget if mode == "message" else None, tuple(targets))
+
+
+class Readable(NamedTuple):
+    """A bag as the storage library may read it (:func:`readable`)."""
+
+    #: the bag (a folder with metadata.yaml, or a storage file alone)
+    path: Path
+    #: what its compressed messages may still unpack to (None: its messages are not compressed)
+    budget: Budget | None
+    #: its MCAP storage files, each vetted (MCAP's own records are read there: dynevent.bags.sent)
+    mcap: tuple[Path, ...]
 
 
 def _unpack_file(source: str, packed: Path, target: Path, budget: Budget) -> None:
@@ -192,7 +218,7 @@ def _unpack_file(source: str, packed: Path, target: Path, budget: Budget) -> Non
     try:
         with packed.open("rb") as stream, target.open("xb") as out:
             unpacked = 0
-            for piece in _pieces(source, stream, "zstd", budget.left, what):
+            for piece in pieces(source, stream, "zstd", budget.left, what):
                 out.write(piece)
                 unpacked += len(piece)
     except OSError as exc:
@@ -214,16 +240,16 @@ def vet_mcap(source: str, path: Path, budget: Budget) -> None:
     A file that is not MCAP, or that breaks off, is left to the library to refuse."""
     with path.open("rb") as stream:
         size = os.fstat(stream.fileno()).st_size
-        if size < len(_MAGIC) + _TAIL or stream.read(len(_MAGIC)) != _MAGIC:
+        if size < len(MAGIC) + _TAIL or stream.read(len(MAGIC)) != MAGIC:
             return
         footer_start = size - _TAIL
         stream.seek(footer_start)
         tail = stream.read(_TAIL)
-        if not tail.startswith(_FOOTER_HEAD) or not tail.endswith(_MAGIC):
+        if not tail.startswith(_FOOTER_HEAD) or not tail.endswith(MAGIC):
             return
         (summary_start,) = struct.unpack_from("<Q", tail, len(_FOOTER_HEAD))
         chunks: dict[int, _Declared] = {}
-        for offset, opcode, length in _records(stream, len(_MAGIC), summary_start or footer_start, size):
+        for offset, opcode, length in _records(stream, len(MAGIC), summary_start or footer_start, size):
             if opcode == _CHUNK:
                 chunks[offset] = _vet_chunk(source, stream, offset, length, budget)
         for offset, opcode, length in _records(stream, summary_start or size, size, size):
@@ -278,8 +304,8 @@ def _vet_chunk(source: str, stream: BinaryIO, offset: int, length: int, budget: 
             f"{what} declares {unpacked:,} bytes unpacked, more than {MAX_UNPACKED_BYTES:,}: {_BOMB}",
         )
     budget.take(unpacked, what)
-    pieces = _pieces(source, io.BytesIO(stream.read(packed)), compression, unpacked, what)
-    found = sum(len(piece) for piece in pieces)
+    unpacking = pieces(source, io.BytesIO(stream.read(packed)), compression, unpacked, what)
+    found = sum(len(piece) for piece in unpacking)
     if found != unpacked:
         raise BagError(source, f"{what} unpacks to {found:,} bytes, not the {unpacked:,} it declares")
     return compression, packed, unpacked

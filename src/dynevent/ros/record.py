@@ -7,7 +7,7 @@ the fleet-wide begin topic, the action's feedback and goal status topics and,
 where introspection is on at a server or client, the action's service event
 topics (send_goal, get_result, cancel_goal), which carry the goals and their
 answers (docs/recordings.md).  Each message is written as it arrives,
-serialised as received, with its receive time, into an MCAP bag in the
+serialised as received, with its receive time and the time its publisher sent it, into an MCAP bag in the
 rosbag2 layout (``metadata.yaml`` beside it), which ``ros2 bag`` and other
 rosbag2 readers open and ``dynevent check`` judges.
 """
@@ -49,7 +49,8 @@ _UNHASHED = "RIHS01_" + "0" * 64
 
 class Recorder:
     """Subscribes to the Dynamic Event topics of the robots ``wanted(fleet, robot)`` names and writes
-    every message into ``writer`` (rosbags' rosbag2 writer, open); :meth:`discover` finds new topics."""
+    every message into ``writer`` (:func:`dynevent.bags.sent.open_writer`'s, open); :meth:`discover`
+    finds new topics."""
 
     def __init__(
         self, node: Any, writer: Any, wanted: Callable[[str, str], bool], say: Callable[[str], None] = print
@@ -135,11 +136,14 @@ class Recorder:
         # when the middleware received it, not when the executor got to it: a recorder that falls
         # behind (a busy machine) takes messages in bursts, and the bag's order must still be theirs
         now = info.get("received_timestamp") or time.time_ns()
+        # and when its publisher sent it (DDS's source timestamp): the bag's publish time, which tells
+        # a message a lossy link delivered late from one sent late (dynevent.bags.sent)
+        sent = info.get("source_timestamp") or None
         with self._lock:
             connection = self._connections.get(topic)
             if connection is None:  # after close
                 return
-            self.writer.write(connection, now, data)
+            self.writer.write_sent(connection, now, sent, data)
             self.messages += 1
             self.bytes += len(data)
 

@@ -210,11 +210,7 @@ def judge_verdicts(
             if item.case == case.id and not item.uncertain and item.finding.rule in rules
         ]  # fmt: skip
         finding = scripted
-        if (
-            case.trace_shows_failure
-            and mine
-            and scripted.verdict in (Verdict.PASS, Verdict.INFO)
-        ):
+        if case.trace_shows_failure and mine and scripted.verdict in (Verdict.PASS, Verdict.INFO):
             first = mine[0].finding
             divergence = mine[0].label if mine[0].label.startswith("D") else None
             said = [

@@ -41,7 +41,9 @@ class RecordOptions:
 def run(args: RecordOptions, say: Callable[[str], None]) -> int:
     """Record until SIGINT, SIGTERM or ``--seconds``; 0, or 2 when the bag cannot be written."""
     try:
-        from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
+        from rosbags.rosbag2 import WriterError
+
+        from dynevent.bags.sent import open_writer
     except ImportError:
         raise MissingExtra("bags", "rosbags", "writes rosbag2 recordings") from None
     output = Path(args.output or time.strftime("dynevent_%Y_%m_%d-%H_%M_%S"))
@@ -53,7 +55,7 @@ def run(args: RecordOptions, say: Callable[[str], None]) -> int:
         return (not fleets or fleet in fleets) and (not robots or robot in robots)
 
     try:
-        writer = Writer(output, version=9, storage_plugin=StoragePlugin.MCAP)
+        writer = open_writer(output)
         writer.open()
     except (OSError, WriterError) as exc:
         raise RecordError(f"--output {output}: cannot write: {exc}") from None
