@@ -315,6 +315,56 @@ def test_a_status_topic_offered_volatile_is_named_and_still_heard() -> None:
         server_side.close()
 
 
+@pytest.mark.spec("R1.4")
+def test_the_server_is_found_once_its_status_publisher_is_matched_too() -> None:
+    """Over a lossy link the action server and the status publisher are discovered apart, seconds
+    apart: the probe's link finds the server only once its status reader is matched too (a status it
+    is not matched to cannot come, and R1.4 would be judged on discovery), and within its bound finds
+    a server that has no status publisher at all."""
+    import threading
+
+    from rclpy.action import ActionServer
+    from ros_support import Graph
+
+    from dynevent.ros import convert
+    from dynevent.ros.qos import latched
+    from dynevent.wire.names import action_name, status_topic
+
+    server_side, probe_side = Graph(), Graph()
+    try:
+        server_side.node(
+            "statusless_server",
+            lambda node: ActionServer(
+                node, convert.DynamicEvent, action_name("tinyRobot", "late1"), lambda goal: None
+            ),
+        )
+        link = probe_side.node("late_probe", lambda node: RosLink(node, "tinyRobot", "late1"))
+        assert link.wait_for_server(2.0)  # no status publisher: found all the same, within the bound
+        published = threading.Event()
+        found: list[int] = []
+
+        def find() -> None:
+            found.append(link.wait_for_server(60.0))
+            found.append(link._subscriptions[0].get_publisher_count())
+            found.append(published.is_set())
+
+        finder = threading.Thread(target=find)
+        finder.start()
+        time.sleep(1.0)
+        published.set()
+        server_side.node(
+            "late_status",
+            lambda node: node.create_publisher(
+                convert.RosStatus, status_topic("tinyRobot", "late1"), latched(1)
+            ),
+        )
+        finder.join(60.0)
+        assert found == [True, 1, True]
+    finally:
+        probe_side.close()
+        server_side.close()
+
+
 #: What the probe's own work may add to the waits that bound a run, in seconds: the bounds below are the
 #: probe's own clock of its run, from the server found to the last case's end (the line "the run
 #: took"), never the time a process takes to start and close, which depends on the machine.

@@ -902,6 +902,40 @@ def test_a_late_subscriber_that_hears_the_status_after_the_timeout_is_no_failure
             assert latched.seen.startswith(probe_runner.LATE.format(timeout=OPTIONS.timeout)), latched.seen
 
 
+class _LateFirstStatusLink(InProcessLink):
+    """The in-process link that delivers the robot's first status ``after`` seconds late (a lossy link
+    repairs a latched sample late), or never, and every later one as it comes."""
+
+    def __init__(self, after: float | None) -> None:
+        self.after, self.held = after, False
+        super().__init__(CONFIG)
+
+    def hear_status(self, status: Any) -> None:
+        if self.held or self.statuses:
+            return super().hear_status(status)
+        self.held = True
+        if self.after is not None:
+            self._at(
+                self.now + round(self.after * 1_000_000_000), lambda: InProcessLink.hear_status(self, status)
+            )
+        return None
+
+
+@pytest.mark.spec("R1.4")
+def test_a_first_status_that_comes_after_the_timeout_is_no_failure_of_the_server() -> None:
+    """The robot's status reaches the probe after ``--timeout`` (3 s) and the wait of status.latched
+    (both waits: 6 s), but within the run's last wait: the link was slow, the case is not run, saying
+    so.  A status that never comes fails it (R1.4)."""
+    options = attrs.evolve(OPTIONS, deadline=1000)
+    for after, verdict in ((7.0, Verdict.MISSING), (None, Verdict.FAIL)):
+        findings = probe_runner.run_cases(_LateFirstStatusLink(after), options, list(CASES), lambda _: None)
+        _, findings = probe_runner.conclude(findings, "", options, lambda _: None, _unasked)
+        latched = {finding.case.id: finding for finding in findings}["status.latched"]
+        assert latched.verdict is verdict, (after, latched)
+        if verdict is Verdict.MISSING:
+            assert latched.seen.startswith(probe_runner.LATE.format(timeout=OPTIONS.timeout)), latched.seen
+
+
 class _LateCancelLink(InProcessLink):
     """The in-process link that delivers every second CANCEL goal ``lag`` seconds late to the server (a
     lossy link sends a lost request again, late), or, ``forged``, answers it refused at once without

@@ -864,7 +864,9 @@ def _status_latched(probe: Probe, case: Case) -> CaseFinding:
         probe.note(f"the status topic is {offered}")
         return CaseFinding(case, Verdict.FAIL, expected=expected, seen=f"the status topic is {offered}")
     if probe.link.wait_status(lambda status: True, probe.timeout) is None:
-        # a server with no transient-local status (a volatile one never matches this subscriber)
+        # a server with no transient-local status (a volatile one never matches this subscriber), or a
+        # lossy link that delivers it later
+        probe.heard_later[case.id] = lambda: bool(probe.link.statuses)
         seen = f"no status within {probe.timeout:g} s"
         return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, absent=True)
     heard = probe.link.late_subscriber()
