@@ -73,6 +73,30 @@ def test_a_switch_holds_only_while_the_server_steps() -> None:
     assert [output.KIND for output in machine.step(state, begin, config).outputs][-1] == "publish_status"
 
 
+def test_the_unwarned_clamp_holds_for_a_goal_a_binding_submits_as_for_one_started() -> None:
+    """R12.2 switched off: no warning in the start feedback, whether the goal starts in its own step or
+    in the step that submits it (request and start in one, as the ROS binding steps it)."""
+    config = machine.ServerConfig(categories={"go_to_place": machine.any_description}, stubborn_minimum=2.0)
+    state = machine.step(machine.State.new("fleet", "robot"), ins.Begin(description="{}", event_id=1, now=0),
+                         config).state  # fmt: skip
+    goal = Goal(dynamic_event_seq=state.seq, event_type=1, category="go_to_place", description="{}", id=2,
+                stubborn_period=0.01)  # fmt: skip
+    submitted = ins.GoalSubmitted(goal_uuid="a" * 32, goal=goal, now=1)
+
+    def warned() -> list[str]:
+        outputs = machine.step(state, submitted, config).outputs
+        return [
+            entry.text
+            for out in outputs
+            if isinstance(out, outs.PublishFeedback)
+            for entry in out.feedback.logs
+        ]
+
+    assert len(warned()) == 1
+    with kit.switched_off("R12.2"):
+        assert warned() == []
+
+
 def test_each_switch_says_what_the_server_does_instead() -> None:
     for item in kit.switches():
         assert item.how and item.kind in ("request check", "step"), item

@@ -183,7 +183,7 @@ def _unwarned_clamp(event: ins.Input, output: outs.Output) -> outs.Output | None
     if (
         isinstance(output, outs.PublishFeedback)
         and output.feedback.logs
-        and isinstance(event, ins.GoalStarted)
+        and isinstance(event, (ins.GoalStarted, ins.GoalSubmitted))  # a binding's start comes submitted
     ):
         return attrs.evolve(output, feedback=attrs.evolve(output.feedback, logs=()))
     return output
