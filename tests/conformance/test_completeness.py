@@ -21,7 +21,7 @@ from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.testing import switched_off as kit
 from dynevent.wire.messages import Goal
-from support.completeness import LINKS, measure, table
+from support.completeness import DDS_ADDED, DDS_CANNOT_SHOW, LINKS, OVER_DDS, dds_cases, measure, table
 
 
 def _rules_the_vectors_meet() -> set[str]:
@@ -130,6 +130,20 @@ def test_r8_4_switched_off_fails_the_case_of_its_rule_rather_than_leaving_cases_
     """A server that publishes no status at a child's end: the case of R8.4 fails, naming it."""
     (item,) = [item for item in measure() if item.rule == "R8.4"]
     assert item.probe["in process"] == ("standard", ("next.status_after_child",))
+
+
+def test_the_record_of_the_probe_over_dds_holds_every_check_the_probe_catches_in_process() -> None:
+    """tests/ros/test_ros_completeness.py holds OVER_DDS to what DDS shows; here it is held to the
+    in-process measurement: a row per check caught in process, each caught by cases it runs (or the
+    judge) or said why not, and every reason and added case for such a check only."""
+    measured = {item.rule: item for item in measure() if item.probe["in process"][1]}
+    assert list(OVER_DDS) == list(measured), "OVER_DDS: a row per check caught in process, in order"
+    for rule, caught in OVER_DDS.items():
+        assert (not caught) == (rule in DDS_CANNOT_SHOW), rule
+        ran = dds_cases(measured[rule])
+        assert caught == ("the judge",) or set(caught) <= set(ran), (rule, caught, ran)
+    assert set(DDS_CANNOT_SHOW) | set(DDS_ADDED) <= set(OVER_DDS)
+    assert all(cases and why for cases, why in DDS_ADDED.values())
 
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "conformance.md"
