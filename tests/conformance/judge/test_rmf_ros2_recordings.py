@@ -87,7 +87,7 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
     # the probe's calibration run (tests/conformance/probe/test_probe_calibration.py): every case but the
     # stubborn one, with the probe as it is now
     ("calibration", "standard"): {
-        ("D1", "R4.6", "accepted_busy"): 1,
+        ("D30", "R4.6", "accepted_busy"): 1,
         ("D10", "R4.12", "accepted_stale_id"): 1,
         ("D10", "R5.2", "race_not_lost"): 1,
         ("D10", "R6.2", "child_id"): 13,
@@ -104,7 +104,7 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("response_seen_late", "R2.2", "status_mismatch"): 24,
     },
     ("calibration", "rmf_ros2"): {
-        ("D1", "R4.6", "accepted_busy"): 1,
+        ("D30", "R4.6", "accepted_busy"): 1,
         ("D1", "R8.3", "goal_status"): 1,
         ("D26", "R2.2", "status_mismatch"): 2,
         ("D30", "R2.2", "status_mismatch"): 1,

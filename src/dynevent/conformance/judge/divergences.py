@@ -63,6 +63,10 @@ def label(finding: Finding) -> str:
     seen, owed = finding.seen, finding.owed
     if code == "log_seq" and detail == "skips":
         return "feedback_lost"
+    # a goal accepted while a child runs: a FINISHED ends the run under the child (D30); a NEXT finds
+    # the robot freed by a CANCEL before the child's end (D1)
+    if code == "accepted_busy":
+        return "D30" if isinstance(seen, Goal) and seen.event_type == EventType.FINISHED else "D1"
     if code in _BY_CODE:
         return _BY_CODE[code]
     if code == "status_mismatch" and isinstance(seen, DynamicEventStatus):
@@ -84,7 +88,10 @@ def label(finding: Finding) -> str:
         return "D1"
     if code == "race_not_lost" and detail == RaceLoss.ID.value:
         return "D10"  # the adapter's own numbering made the NEXT's id stale while it waited
-    if code == "accepted_inactive" and isinstance(seen, Goal) and seen.event_type == EventType.FINISHED:
+    # a FINISHED accepted after another FINISHED of its run was answered: the run had ended (R4.3), and
+    # no record read late explains it
+    finished = isinstance(seen, Goal) and seen.event_type == EventType.FINISHED
+    if code == "accepted_inactive" and finished and detail != "run_ended":
         return "finished_seen_late"
     return "?"
 
@@ -97,7 +104,6 @@ _BY_CODE = {
     "accepted_cancel_idle": "D8",
     "accepted_cancel_id_mismatch": "D8",
     "accepted_stale_id": "D10",
-    "accepted_busy": "D1",
     "accepted_uninitialized_event_type": "D7",
     "accepted_unknown_event_type": "D7",
 }

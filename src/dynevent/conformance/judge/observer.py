@@ -348,6 +348,7 @@ class _Goals:
         self._seen: dict[str, GoalSeen] = {}
         self._closed: collections.deque[str] = collections.deque()  # answered or refused, oldest first
         self._forgotten = False  # a closed goal was let go
+        self._finished_seq: int | None = None  # the run the latest FINISHED answered succeeded ended
 
     def __len__(self) -> int:
         return len(self._seen)
@@ -385,6 +386,11 @@ class _Goals:
         self._seen[uuid] = seen
         return seen
 
+    def ended_run(self, goal: Goal) -> bool:
+        """Whether a FINISHED of ``goal``'s run was answered succeeded before ``goal`` came: that run
+        had ended, and its end does not wait on ``goal`` to explain it."""
+        return goal.dynamic_event_seq == self._finished_seq
+
     def displace(self, uuids: Iterable[str]) -> None:
         """The server no longer runs these goals as the state says: their answers are not judged."""
         for uuid in uuids:
@@ -399,6 +405,8 @@ class _Goals:
         if seen is None:
             return
         if seen.answered == record.line:
+            if seen.goal.event_type == EventType.FINISHED and record.status == GoalStatus.SUCCEEDED.value:
+                self._finished_seq = seen.goal.dynamic_event_seq
             seen.close()
             self._close(record.goal_uuid)
         elif record.kind == "goal_response" and seen.responded and not seen.accepted:
@@ -537,12 +545,14 @@ class _Requests(_Part):
                 self.replica.commit(*self.replica.simulate([event]))
             return
         if isinstance(decision, outs.Rejected):  # accepted, but the rules refuse it
+            ended = decision.reason is RejectReason.INACTIVE and self.goals.ended_run(goal)
             self.findings.differs(
                 decision.rule,
                 f"accepted_{decision.reason.value}",
                 f"{goal_text(goal)} accepted",
                 f"rejected: {decision.reason.value} ({decision.text})",
                 seen=goal,
+                detail="run_ended" if ended else "",
             )
             self.replica.resync(resync.queued(self.replica.st, record.goal_uuid, goal))
             return
