@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import ast
+import os
 import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -373,3 +375,82 @@ def test_a_late_record_of_a_goal_belongs_to_the_case_that_sent_it() -> None:
     verdicts, judged = probe_cases.judge_verdicts(text, cases)
     assert [finding.verdict for finding in verdicts] == [probe_cases.Verdict.FAIL, probe_cases.Verdict.PASS]
     assert judged == []
+
+
+# ------------------------------------------------------------------ the inventory of scripted failures
+
+RUNNER = ROOT / "src" / "dynevent" / "conformance" / "probe" / "runner.py"
+
+
+def _causes(node: ast.expr) -> list[str]:
+    """The causes a ``_fails`` call's argument may take: a string, or a choice between strings."""
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        return [node.value]
+    if isinstance(node, ast.IfExp):
+        return [*_causes(node.body), *_causes(node.orelse)]
+    raise AssertionError(f"runner.py:{node.lineno}: a cause _fails takes is not written as a string")
+
+
+def test_no_case_fails_but_through_the_judge_or_what_a_trace_cannot_carry() -> None:
+    """The runner fails a case in one place, ``_fails``, for a cause of cases.UNTRACEABLE (what a trace
+    cannot carry) or of cases.NOT_YET_JUDGED (the checks left to move to the judge, each with why);
+    every other failure is the judge's (judge_verdicts).  Every listed cause is used, and the two
+    lists are apart."""
+    tree = ast.parse(RUNNER.read_text(encoding="utf-8"))
+    fails = [node for node in ast.walk(tree) if isinstance(node, ast.FunctionDef) and node.name == "_fails"]
+    assert len(fails) == 1
+    inside = {id(node) for node in ast.walk(fails[0])}
+    compared = {
+        id(side)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Compare)
+        for side in (node.left, *node.comparators)
+    }
+    made = [
+        node.lineno
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Attribute) and node.attr == "FAIL" and id(node) not in inside | compared
+        and not _in_tuple_compare(tree, node)
+    ]  # fmt: skip
+    assert made == [], f"runner.py sets a fail verdict outside _fails, on lines {made}"
+    used = [
+        cause
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "_fails"
+        for cause in _causes(node.args[1])
+    ]
+    listed = set(probe_cases.UNTRACEABLE) | set(probe_cases.NOT_YET_JUDGED)
+    assert set(used) <= listed, set(used) - listed
+    assert set(used) == listed, f"listed and never used: {listed - set(used)}"
+    assert not set(probe_cases.UNTRACEABLE) & set(probe_cases.NOT_YET_JUDGED)
+    assert "judge" not in listed
+    # the count of checks left to the script (docs/probe.md says what they are)
+    assert sum(cause in probe_cases.NOT_YET_JUDGED for cause in used) == 13
+
+
+def _in_tuple_compare(tree: ast.Module, attribute: ast.Attribute) -> bool:
+    """Whether ``attribute`` is an element of a tuple a comparison reads (``verdict in (PASS, FAIL)``)."""
+    return any(
+        isinstance(node, ast.Compare)
+        and any(isinstance(side, ast.Tuple) and attribute in side.elts for side in node.comparators)
+        for node in ast.walk(tree)
+    )
+
+
+PROBE_DOC = ROOT / "docs" / "probe.md"
+CAUSES = (
+    "<!-- the causes a script fails a case for: begin -->",
+    "<!-- the causes a script fails a case for: end -->",
+)
+
+
+def test_docs_probe_lists_the_causes_a_script_fails_a_case_for() -> None:
+    """docs/probe.md prints cases.causes_text; ``DYNEVENT_UPDATE_CAUSES=1`` rewrites it."""
+    text = PROBE_DOC.read_text(encoding="utf-8")
+    before, _, rest = text.partition(CAUSES[0] + "\n")
+    _, _, after = rest.partition(CAUSES[1])
+    fresh = before + CAUSES[0] + "\n" + probe_cases.causes_text() + CAUSES[1] + after
+    if os.environ.get("DYNEVENT_UPDATE_CAUSES") == "1":
+        PROBE_DOC.write_text(fresh, encoding="utf-8")
+    how = "DYNEVENT_UPDATE_CAUSES=1 pytest tests/conformance/probe/test_probe_cases.py"
+    assert all(marker in text for marker in CAUSES) and text == fresh, f"docs/probe.md's list is stale: {how}"

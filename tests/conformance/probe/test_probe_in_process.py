@@ -32,6 +32,7 @@ from dynevent.server import outputs as outs
 from dynevent.server.holder import RobotServer
 from dynevent.server.machine import State
 from dynevent.sim.config import CategorySpec, ServeConfig, machine_config
+from dynevent.testing import switched_off
 from dynevent.testing.broken import DEFECTS, broken_stepper
 from dynevent.wire.vocab import Compatibility, EventType
 from support.probe_expected import BROKEN, JUDGED_IN_PROCESS, RMF_ROS2_FAILS, UNSEEN_BY_CASES
@@ -162,6 +163,41 @@ def test_a_broken_server_is_caught_by_the_case_of_the_rule_it_breaks(defect: str
     assert _verdicts(findings) == expected, text
 
 
+def _switched_off(rule: str) -> tuple[int, list[CaseFinding], str]:
+    """The probe in process against serve with the machine's check of ``rule`` switched off."""
+    server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG), CONFIG.first_state("tinyRobot1"))
+    said: list[str] = []
+    stepper = switched_off.switched_off_stepper(server.step, rule)
+    code, findings = probe_in_process(
+        OPTIONS, list(CASES), said.append, CONFIG, write=_unasked, stepper=stepper
+    )
+    return code, findings, "\n".join(said)
+
+
+@pytest.mark.parametrize(
+    "server",
+    [
+        *(f"defect {name}" for name in sorted(DEFECTS)),
+        *(f"off {item.rule}" for item in switched_off.switches()),
+    ],
+)
+def test_every_failure_is_the_judges_or_one_a_trace_cannot_carry(server: str) -> None:
+    """Against every broken server of the kit and every check switched off: a case fails by the judge's
+    finding on its own records, filed under one of the case's rules (or R19.1), or by its script for a
+    cause of cases.UNTRACEABLE, or one of cases.NOT_YET_JUDGED; never otherwise."""
+    kind, name = server.split(" ", 1)
+    _, findings, text = _probe(defect=name) if kind == "defect" else _switched_off(name)
+    for finding in findings:
+        if finding.verdict is not Verdict.FAIL:
+            continue
+        if finding.cause == "judge":
+            rule = re.search(r"\((R\d+\.\d+)\)$", finding.expected)
+            assert rule is not None and rule[1] in {*finding.case.rules, "R19.1"}, (finding, text)
+        else:
+            assert finding.cause in {*probe_cases.UNTRACEABLE, *probe_cases.NOT_YET_JUDGED}, (finding, text)
+            assert finding.absent == (finding.cause == "timeout"), finding
+
+
 @pytest.mark.spec("R3.1")
 @pytest.mark.parametrize("defect", list(UNSEEN_BY_CASES))
 def test_the_judge_over_every_record_finds_what_no_case_looks_for(tmp_path: Path, defect: str) -> None:
@@ -238,10 +274,10 @@ def test_log_seqs_that_step_by_two_are_judged_alike_by_the_probe_and_by_check(tm
 
 
 @pytest.mark.spec("R12.2")
-def test_a_clamp_warning_in_a_later_feedback_fails_the_case_by_its_own_script() -> None:
+def test_a_clamp_warning_in_a_later_feedback_fails_the_case_by_the_judges_finding() -> None:
     """The start feedback carries the warning of a clamped stubborn period (R12.2), a MUST: a server
-    that sends it with the next feedback fails ``stubborn.clamp_notice`` by the case's script, which
-    says where the warning came, as the judge finds on the case's records (no ``non-strict``)."""
+    that sends it with the next feedback fails ``stubborn.clamp_notice`` by what the judge finds on the
+    case's records (no ``non-strict``); the case's messages say where the warning came."""
     first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
     server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG), first)
     held: list[Any] = []
@@ -263,7 +299,9 @@ def test_a_clamp_warning_in_a_later_feedback_fails_the_case_by_its_own_script() 
     clamp = [case for case in CASES if case.id == "stubborn.clamp_notice"]
     said: list[str] = []
     code, (finding,) = probe_in_process(OPTIONS, clamp, said.append, CONFIG, write=_unasked, stepper=stepper)
-    assert (finding.verdict, finding.seen) == (Verdict.FAIL, "the warning came with feedback 2"), said
+    assert (finding.verdict, finding.cause, finding.case.rules) == (Verdict.FAIL, "judge", ("R12.2",)), said
+    assert finding.seen.startswith("the judge: ") and "carries no warning" in finding.seen, finding
+    assert any("feedback 2: warning" in message for message in finding.messages), finding.messages
     assert code == probe_cases.EXIT_FAILED
     assert set(Verdict) == {Verdict.PASS, Verdict.FAIL, Verdict.INFO, Verdict.MISSING}
 

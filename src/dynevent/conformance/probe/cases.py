@@ -45,10 +45,13 @@ __all__ = [
     "KNOWN",
     "KNOWN_MISSING",
     "LIVE_CANNOT_SHOW",
+    "NOT_YET_JUDGED",
+    "UNTRACEABLE",
     "Case",
     "CaseFinding",
     "Judged",
     "Verdict",
+    "causes_text",
     "exit_status",
     "format_findings",
     "format_list",
@@ -115,6 +118,14 @@ class CaseFinding:
     #: not run because the link lost, delayed or reordered what the case sent or waited for: what the
     #: judge finds in its records may be the link's doing, and is reported, uncertain
     by_link: bool = False
+    #: why a failure: ``"judge"`` (the judge's finding on the case's records, :func:`judge_verdicts`),
+    #: or what the case's own script saw that a trace cannot carry (a key of :data:`UNTRACEABLE`,
+    #: or of :data:`NOT_YET_JUDGED`); empty where nothing failed it (kept where the link then made
+    #: the case not run)
+    cause: str = ""
+    #: why a failure the judge finds in the case's records may be the link's doing (an earlier case's
+    #: goal, sent before this case began, was accepted during it): then the case is not run, saying so
+    doubt: str = ""
 
 
 @attrs.frozen
@@ -189,41 +200,64 @@ def judge_exchange(text: str, findings: Sequence[CaseFinding], known: Iterable[s
 def judge_verdicts(
     text: str, findings: Sequence[CaseFinding], known: Iterable[str] = ()
 ) -> tuple[list[CaseFinding], list[Judged]]:
-    """The cases' verdicts with the judge's (:func:`judge_exchange`, over the probe's trace ``text``):
-    a case carried out whose own records hold a finding of the judge on one of its rules, or on
-    R19.1 (every goal answered exactly once, which each case holds its goals to), fails with that
-    finding, its divergence and whether ``known`` covers it, whatever its script saw; an uncertain
-    finding (an open item of the judge) fails no case.  The findings, and what the judge found that
-    no case's verdict says: the section beside the cases."""
+    """The cases' verdicts, the judge's (:func:`judge_exchange`, over the probe's trace ``text``): a
+    case carried out whose own records hold a finding of the judge on one of its rules, or on R19.1
+    (every goal answered exactly once, which each case holds its goals to), fails with that finding
+    (``cause`` ``"judge"``), its divergence and whether ``known`` covers it; a case's script fails it
+    only for what a trace cannot carry (:data:`UNTRACEABLE`).  An uncertain finding (an open item of
+    the judge) fails no case; a case whose ``doubt`` says the link may have caused what the judge
+    found is not run, saying so, and its findings are uncertain.  The findings, and what the judge
+    found that no case's verdict says: the section beside the cases."""
+    judged = judge_exchange(text, findings, known)
+
+    def mine_of(scripted: CaseFinding, items: list[Judged]) -> list[Judged]:
+        case = scripted.case
+        if not case.trace_shows_failure or scripted.verdict not in (Verdict.PASS, Verdict.INFO):
+            return []
+        rules = {*case.rules, "R19.1"}
+        return [
+            item
+            for item in items
+            if item.case == case.id and not item.uncertain and item.finding.rule in rules
+        ]
+
     disturbed = {finding.case.id for finding in findings if finding.by_link}
-    judged = [
-        attrs.evolve(item, by_link=True) if item.case in disturbed else item
-        for item in judge_exchange(text, findings, known)
-    ]
+    disturbed |= {finding.case.id for finding in findings if finding.doubt and mine_of(finding, judged)}
+    judged = [attrs.evolve(item, by_link=True) if item.case in disturbed else item for item in judged]
     taken: set[int] = set()
     verdicts = []
     for scripted in findings:
-        case = scripted.case
-        rules = {*case.rules, "R19.1"}
-        mine = [
-            item for item in judged
-            if item.case == case.id and not item.uncertain and item.finding.rule in rules
-        ]  # fmt: skip
         finding = scripted
-        if case.trace_shows_failure and mine and scripted.verdict in (Verdict.PASS, Verdict.INFO):
+        if scripted.doubt and scripted.case.id in disturbed and not scripted.by_link:
+            finding = attrs.evolve(
+                scripted, verdict=Verdict.MISSING, seen=f"{scripted.doubt} (the judge found: "
+                f"{_first_of(scripted, judged)})", by_link=True,
+            )  # fmt: skip
+        elif mine := mine_of(scripted, judged):
             first = mine[0].finding
             divergence = mine[0].label if mine[0].label.startswith("D") else None
             said = [
                 f"the judge: {item.finding.rule} {item.finding.code}: {item.finding.message}" for item in mine
             ]
+            rule = f"({first.rule})"
+            expected = first.expected if first.expected.endswith(rule) else f"{first.expected} {rule}"
             finding = attrs.evolve(
-                scripted, verdict=Verdict.FAIL, expected=f"{first.expected} ({first.rule})",
+                scripted, verdict=Verdict.FAIL, expected=expected,
                 seen=f"the judge: {first.message}", divergence=divergence, known=mine[0].known,
-                messages=(*scripted.messages, *said),
+                messages=(*scripted.messages, *said), cause="judge",
             )  # fmt: skip
             taken.update(id(item) for item in mine)
         verdicts.append(finding)
     return verdicts, [item for item in judged if id(item) not in taken]
+
+
+def _first_of(scripted: CaseFinding, judged: Sequence[Judged]) -> str:
+    """The first of the judge's findings on ``scripted``'s rules in its own records, in a few words."""
+    rules = {*scripted.case.rules, "R19.1"}
+    for item in judged:
+        if item.case == scripted.case.id and item.finding.rule in rules:
+            return f"{item.finding.rule} {item.finding.code}"
+    return "-"
 
 
 #: Every case, in the order they run (the ones that end a run come last).
@@ -292,6 +326,55 @@ CASES: tuple[Case, ...] = (
     Case("begin.seq_wrap", "after run 4294967295 the next run is run 0, and a goal for 4294967295 is "
          "refused", ("R3.2", "R3.1", "R4.2")),
 )  # fmt: skip
+
+
+#: What a trace of the exchange cannot carry, for which a case's own script fails it beside the judge
+#: (every other failure is the judge's finding on the case's records, :func:`judge_verdicts`):
+#: docs/probe.md lists them.  tests/conformance/probe/test_probe_cases.py holds the runner to them.
+UNTRACEABLE: dict[str, str] = {
+    "timeout": "a message that did not come within --timeout: a trace has no clock, and shows a message "
+    "missing only where a later record proves it",
+    "transport": "how the transport offers a topic, and what a subscription made late received: a trace "
+    "records the messages of one subscription, not how topics are offered",
+    "configuration": "which categories, and which descriptions, the server takes: its configuration, "
+    "which a trace taken at a client lacks, so that the judge cannot tell a refused NEXT from one a "
+    "configuration refuses",
+    "query": "the description query's answer (R16): a service call, of which a trace holds no record",
+}
+
+#: Checks a case's script still makes by hand because the judge does not decide them as the case
+#: does yet, each with why: the work left before every verdict is the judge's or :data:`UNTRACEABLE`.
+NOT_YET_JUDGED: dict[str, str] = {
+    "child_ran": "the judge files a child's wrong id or answer under R8.1, R2.2 or R4.12 (the id it took "
+    "from the feedback), where next.id_zero, next.id_chosen, next.stateless_id and next.race cite R6.2, "
+    "R20.1 and R5.2: the case's rules and the judge's must first agree",
+    "two_nexts": "next.race's reading of R5.2 and R4.16 (two children ran, or the NEXT that ran none was "
+    "answered other than aborted) is not yet held to the judge's: no server of the test kit breaks it "
+    "but by refusing both NEXTs (configuration) or by numbering the child wrong (child_ran)",
+    "status_after_end": "the judge reads a status that still shows a child after its answer as a "
+    "response recorded late (an open item of a view taken at a client), where the probe heard the "
+    "answer first and then waited for the status",
+    "cancel_end": "with R9.3 switched off (a CANCEL answered as it is accepted) the judge finds nothing "
+    "in cancel.running_child's records: it reads the CANCEL's early answer as the child's end",
+    "both_answered": "cancel.both_answered reads a refused second CANCEL against the server's stamps "
+    "(a lossy link may deliver it after the child's end), which the judge does not read",
+    "finished_refused": "the judge files a refused FINISHED of the active run under R4.16, the case "
+    "under R11.1",
+    "log_seq": "the judge reads a log seq that skips within a child as feedback lost on the way (an "
+    "open item, uncertain), and takes a tier it does not know as info",
+    "seq_wrap": "the judge files a run after the wrap whose begin never came under R2.2, the case under "
+    "R3.1 and R3.3",
+}
+
+
+def causes_text() -> str:
+    """The causes a case's script fails a case for, as docs/probe.md lists them: those of
+    :data:`UNTRACEABLE`, then those of :data:`NOT_YET_JUDGED`, a Markdown item each."""
+    lines = ["What a trace cannot carry:", ""]
+    lines += [f"- `{name}`: {why}." for name, why in UNTRACEABLE.items()]
+    lines += ["", f"Not yet the judge's ({len(NOT_YET_JUDGED)}):", ""]
+    lines += [f"- `{name}`: {why}." for name, why in NOT_YET_JUDGED.items()]
+    return "\n".join(lines) + "\n"
 
 
 _TASK_INPUT = "the input comes from the task or the robot (a {what}), never from a client: no probe sends it"

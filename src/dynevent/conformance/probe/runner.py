@@ -407,6 +407,26 @@ def _feedback_lost(link: Link, exchange: Exchange) -> range | None:
     return range(missing[0], missing[-1] + 1) if missing else None
 
 
+def _fails(case: Case, cause: str, expected: str, seen: str, *, divergence: str | None = None) -> CaseFinding:
+    """The one way a case's script fails it: for what a trace cannot carry (``cause`` a key of
+    :data:`~dynevent.conformance.probe.cases.UNTRACEABLE`; ``"timeout"``, a message that did not come
+    in time, marks the finding ``absent``), or for a check the judge does not decide as the case does
+    yet (:data:`~dynevent.conformance.probe.cases.NOT_YET_JUDGED`).  Every other failure is the
+    judge's, over the case's records (:func:`~dynevent.conformance.probe.cases.judge_verdicts`)."""
+    if cause not in probe_cases.UNTRACEABLE and cause not in probe_cases.NOT_YET_JUDGED:
+        raise ValueError(f"cause: not a reason a script fails a case for (got {cause!r})")
+    return CaseFinding(
+        case, Verdict.FAIL, expected=expected, seen=seen, divergence=divergence, absent=cause == "timeout",
+        cause=cause,
+    )  # fmt: skip
+
+
+def _seen_by_script(case: Case, expected: str, seen: str) -> CaseFinding:
+    """A case whose script saw what the judge decides: the verdict is the judge's, over the case's
+    records (it passes when the judge finds nothing there); ``seen`` says what the script saw."""
+    return CaseFinding(case, Verdict.PASS, expected=expected, seen=seen)
+
+
 def _describe_goal(goal: Goal) -> str:
     return f"sent {goal_text(goal)}"
 
@@ -564,16 +584,12 @@ class Probe:
             goal = _describe_goal(exchange.goal).removeprefix("sent ")
             if exchange.accepted and not exchange.answered(self.timeout):
                 what = f"{goal} accepted, no answer"
-            elif len(exchange.answers) > 1:
-                what = f"{goal} answered {len(exchange.answers)} times"
-            else:
+            else:  # a goal answered twice is the judge's to find (R19.1), in the case's records
                 continue
             self.note(f"{what} within {self.timeout:g} s (R19.1)")
             if finding.verdict in (Verdict.PASS, Verdict.INFO):
-                return CaseFinding(
-                    finding.case, Verdict.FAIL, expected="every accepted goal answered exactly once (R19.1)",
-                    seen=what, absent="no answer" in what,
-                )  # fmt: skip
+                expected = "every accepted goal answered exactly once (R19.1)"
+                return _fails(finding.case, "timeout", expected, what)
         return finding
 
     def waiting(self) -> DynamicEventStatus:
@@ -700,20 +716,18 @@ class Probe:
                 return str(places[0])
         return None
 
-    def refused(self, case: Case, goal: Goal, divergence: str | None = None) -> CaseFinding:
-        """A case whose goal the spec refuses: pass when rejected.  Accepted and then aborted is the
-        way ``divergence`` breaks it, when given."""
+    def refused(self, case: Case, goal: Goal) -> CaseFinding:
+        """A case whose goal the spec refuses: the judge finds it accepted in the case's records (its
+        rule, its D-number); no response within the timeout is the script's failure.  A case whose
+        failure a trace does not show (a refusal the server's configuration decides) fails by the
+        script when the goal is accepted."""
         exchange = self.send(goal)
-        if exchange.accepted is False:
-            return CaseFinding(case, Verdict.PASS, expected="rejected", seen="rejected")
         if exchange.accepted is None:
-            return CaseFinding(case, Verdict.FAIL, expected="rejected", seen="no response", absent=True)
-        answer = exchange.answer
-        aborted = answer is not None and answer[0] is GoalStatus.ABORTED
-        return CaseFinding(
-            case, Verdict.FAIL, expected="rejected", seen=_describe_answer(exchange),
-            divergence=divergence if aborted else None,
-        )  # fmt: skip
+            return _fails(case, "timeout", "rejected", "no response")
+        seen = _describe_answer(exchange)
+        if exchange.accepted and not case.trace_shows_failure:
+            return _fails(case, "configuration", "rejected", seen)
+        return _seen_by_script(case, "rejected", seen)
 
     def _running_child(
         self, goal: Goal, status: DynamicEventStatus, exchange: Exchange
@@ -834,9 +848,13 @@ def _unless_earlier_came(finding: CaseFinding, earlier: list[Exchange], heard: i
     when this one began, was accepted meanwhile: that goal reached the server late (a lossy link sent
     it again), and what this case saw may be its doing, so the case is not run, saying so."""
     came = [made for made in earlier if made.accepted and (made.response_heard or 0) > heard]
-    if finding.verdict is not Verdict.FAIL or finding.absent or not came:
+    if finding.absent or not came:
         return finding
     why = EARLIER_CAME.format(goal=goal_text(came[0].goal))
+    if finding.verdict in (Verdict.PASS, Verdict.INFO):  # the judge's verdict meets the doubt
+        return attrs.evolve(finding, doubt=why)
+    if finding.verdict is not Verdict.FAIL:
+        return finding
     return attrs.evolve(finding, verdict=Verdict.MISSING, seen=f"{why} ({finding.seen})", by_link=True)
 
 
@@ -862,20 +880,17 @@ def _status_latched(probe: Probe, case: Case) -> CaseFinding:
     offered = probe.link.offered.get("status")
     if offered is not None:  # what the transport saw of the topic: no trace carries it
         probe.note(f"the status topic is {offered}")
-        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=f"the status topic is {offered}")
+        return _fails(case, "transport", expected, f"the status topic is {offered}")
     if probe.link.wait_status(lambda status: True, probe.timeout) is None:
         # a server with no transient-local status (a volatile one never matches this subscriber), or a
         # lossy link that delivers it later
         probe.heard_later[case.id] = lambda: bool(probe.link.statuses)
-        seen = f"no status within {probe.timeout:g} s"
-        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, absent=True)
+        return _fails(case, "timeout", expected, f"no status within {probe.timeout:g} s")
     heard = probe.link.late_subscriber()
     if probe.link.wait(heard.is_set, probe.timeout):
         return CaseFinding(case, Verdict.PASS, expected="a status", seen="a status")
     probe.heard_later[case.id] = heard.is_set  # a lossy link: matched, or delivered to, late
-    return CaseFinding(
-        case, Verdict.FAIL, expected=expected, seen=f"nothing within {probe.timeout:g} s", absent=True
-    )
+    return _fails(case, "timeout", expected, f"nothing within {probe.timeout:g} s")
 
 
 def _status_waiting(probe: Probe, case: Case) -> CaseFinding:
@@ -883,10 +898,9 @@ def _status_waiting(probe: Probe, case: Case) -> CaseFinding:
     seq = status.dynamic_event_seq
     begins = [begin.dynamic_event_seq for begin in probe.link.begins]
     probe.note(f"status {status_text(status)}; begins seen for runs {begins}")
-    if status.status != _STANDBY:
-        divergence = "D26" if status.status == Status.UNINITIALIZED.value else None
-        return CaseFinding(case, Verdict.FAIL, expected="WAITING, standby", seen=f"WAITING, {status.status}",
-                       divergence=divergence)  # fmt: skip
+    expected = "WAITING, standby, begun"
+    if status.status != _STANDBY:  # the judge finds the status the machine's state has not (R2.2)
+        return _seen_by_script(case, expected, f"WAITING, {status.status}")
     if seq not in begins:
         # the begin topic is another channel than the status's: over a lossy link, it may come later
         def begun() -> bool:
@@ -895,8 +909,8 @@ def _status_waiting(probe: Probe, case: Case) -> CaseFinding:
         if not probe.link.wait(begun, probe.timeout):
             probe.heard_later[case.id] = begun
             seen = f"begins for {begins} within {probe.timeout:g} s"
-            return CaseFinding(case, Verdict.FAIL, expected=f"a begin for run {seq}", seen=seen, absent=True)
-    return CaseFinding(case, Verdict.PASS, expected="WAITING, standby, begun", seen="so")
+            return _fails(case, "timeout", f"a begin for run {seq}", seen)
+    return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
 def _goal(status: DynamicEventStatus, event_type: int, **values: Any) -> Goal:
@@ -922,11 +936,11 @@ def _seq_future(probe: Probe, case: Case) -> CaseFinding:
 
 
 def _event_type_0(probe: Probe, case: Case) -> CaseFinding:
-    return probe.refused(case, _goal(probe.waiting(), 0), divergence="D7")
+    return probe.refused(case, _goal(probe.waiting(), 0))
 
 
 def _event_type_unknown(probe: Probe, case: Case) -> CaseFinding:
-    return probe.refused(case, _goal(probe.waiting(), 4), divergence="D7")
+    return probe.refused(case, _goal(probe.waiting(), 4))
 
 
 def _category_unknown(probe: Probe, case: Case) -> CaseFinding:
@@ -945,7 +959,7 @@ def _description_not_json(probe: Probe, case: Case) -> CaseFinding:
 
 def _cancel_idle(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
-    return probe.refused(case, _goal(status, EventType.CANCEL, id=status.id), divergence="D8")
+    return probe.refused(case, _goal(status, EventType.CANCEL, id=status.id))
 
 
 def _runs_a_child(probe: Probe, case: Case) -> CaseFinding:
@@ -953,29 +967,29 @@ def _runs_a_child(probe: Probe, case: Case) -> CaseFinding:
     goal = probe.next_goal(status)
     exchange = probe.send(goal)
     expected = f"accepted; feedback for id {goal.id}; succeeded, completed, id {goal.id}"
-    if not exchange.accepted:
-        seen = _describe_answer(exchange)
-        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, absent=exchange.accepted is None)
+    unrun = _not_run(case, exchange, expected)
+    if unrun is not None:
+        return unrun
     ids = sorted({feedback.id for feedback in exchange.feedback})
     probe.note(f"feedback: {len(exchange.feedback)} message(s), ids {ids}")
     answer = exchange.answer
     if answer is None:
-        return CaseFinding(
-            case,
-            Verdict.FAIL,
-            expected=expected,
-            seen=f"no answer within {probe.timeout:g} s",
-            absent=True,
-        )
-    status_, result = answer
-    if ids != [goal.id] or (status_, result.status, result.id) != (
-        GoalStatus.SUCCEEDED,
-        _COMPLETED,
-        goal.id,
-    ):
-        seen = f"feedback ids {ids}; {_describe_answer(exchange)}"
-        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, absent=not _complete(exchange))
-    return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
+        return _fails(case, "timeout", expected, f"no answer within {probe.timeout:g} s")
+    seen = f"feedback ids {ids}; {_describe_answer(exchange)}"
+    if not _complete(exchange):  # its start's feedback never came
+        return _fails(case, "timeout", expected, seen)
+    # the child's ids, its feedback and its answer: the judge's, on the case's records (R6.2, R7.1, R8.1)
+    return _seen_by_script(case, expected, seen)
+
+
+def _not_run(case: Case, exchange: Exchange, expected: str) -> CaseFinding | None:
+    """The failure of a NEXT that should have run a child and was not accepted: no response in time,
+    or refused, which only the server's configuration could explain (a trace lacks it); else None."""
+    if exchange.accepted is None:
+        return _fails(case, "timeout", expected, "no response")
+    if not exchange.accepted:
+        return _fails(case, "configuration", expected, _describe_answer(exchange))
+    return None
 
 
 def _id_stale(probe: Probe, case: Case) -> CaseFinding:
@@ -983,10 +997,7 @@ def _id_stale(probe: Probe, case: Case) -> CaseFinding:
     goal = probe.next_goal(status, goal_id=status.id)  # not above the run's highest id
     if status.id == 0:
         raise _Unreachable("the run's highest id is 0: no stale id exists")
-    finding = probe.refused(case, goal)
-    if finding.verdict is Verdict.FAIL and "succeeded" in finding.seen:
-        finding = attrs.evolve(finding, divergence="D10")  # the id was ignored and the child ran
-    return finding
+    return probe.refused(case, goal)
 
 
 def _status_after_child(probe: Probe, case: Case) -> CaseFinding:
@@ -1005,19 +1016,13 @@ def _status_after_child(probe: Probe, case: Case) -> CaseFinding:
     child = answer[1].id if answer is not None and answer[1].id else goal.id  # R8.1: the result names it
     after = probe.link.wait_status(lambda s: s.id == child and s.status != _UNDERWAY, probe.timeout)
     if after is None:
-        return CaseFinding(
-            case,
-            Verdict.FAIL,
-            expected=f"WAITING, id {child}",
-            seen="no status after the child",
-            absent=True,
-        )
+        return _fails(case, "timeout", f"WAITING, id {child}", "no status after the child")
     probe.note(f"status {status_text(after)}")
     if after.dynamic_state == DynamicState.WAITING and after.status == _STANDBY:
         return CaseFinding(case, Verdict.PASS, expected=f"WAITING, standby, id {child}", seen="so")
     divergence = "D2" if after.dynamic_state == DynamicState.RUNNING else None
-    return CaseFinding(case, Verdict.FAIL, expected=f"WAITING, standby, id {child}",
-                   seen=f"status {status_text(after)}", divergence=divergence)  # fmt: skip
+    return _fails(case, "status_after_end", f"WAITING, standby, id {child}", f"status {status_text(after)}",
+                  divergence=divergence)  # fmt: skip
 
 
 def _end_unpublished(probe: Probe, case: Case) -> CaseFinding | None:
@@ -1029,11 +1034,11 @@ def _end_unpublished(probe: Probe, case: Case) -> CaseFinding | None:
     for exchange in reversed(probe._nexts):
         answer = exchange.answer
         if answer is not None and not answer[1].execution_failure and answer[1].id == latest.id:
-            return CaseFinding(
-                case, Verdict.FAIL, expected=f"WAITING, standby, id {latest.id}",
-                seen=f"child {latest.id} was answered {answer[1].status!r}; the status still says "
-                f"{status_text(latest)}", absent=True,
-            )  # fmt: skip
+            seen = (
+                f"child {latest.id} was answered {answer[1].status!r}; the status still says "
+                + status_text(latest)
+            )
+            return _fails(case, "timeout", f"WAITING, standby, id {latest.id}", seen)
     return None
 
 
@@ -1051,8 +1056,6 @@ def _busy_finished(probe: Probe, case: Case) -> CaseFinding:
     with probe.child() as (_, child_id):
         status = probe.link.status or probe.any_status()
         finding = probe.refused(case, _goal(status, EventType.FINISHED))
-        if finding.verdict is Verdict.FAIL and "succeeded" in finding.seen:
-            finding = attrs.evolve(finding, divergence="D30")  # the run ended under the running child
         ended = status.dynamic_event_seq
         return _unless_ended_first(
             probe,
@@ -1065,11 +1068,12 @@ def _busy_finished(probe: Probe, case: Case) -> CaseFinding:
 def _unless_ended_first(
     probe: Probe, finding: CaseFinding, child_id: int, took_effect: Callable[[DynamicEventStatus], bool]
 ) -> CaseFinding:
-    """A goal sent while a status showed ``child_id`` running, and accepted where the spec refuses it:
-    when the server's own stamps show the child's end before the goal took effect (the status whose
-    ``time`` says the child ended, before the one that shows the goal's effect), the status the probe
-    went by was late (a lagging link) and the case is not run, with why, rather than failed."""
-    if finding.verdict is not Verdict.FAIL or not probe.exchanges or not probe.exchanges[-1].accepted:
+    """A goal sent while a status showed ``child_id`` running, and accepted where the spec refuses it
+    (which the judge then finds): when the server's own stamps show the child's end before the goal
+    took effect (the status whose ``time`` says the child ended, before the one that shows the goal's
+    effect), the status the probe went by was late (a lagging link) and the case is not run, with
+    why, rather than failed."""
+    if finding.verdict is Verdict.MISSING or not probe.exchanges or not probe.exchanges[-1].accepted:
         return finding
     probe.link.wait(lambda: any(took_effect(s) for s in probe.link.history()), probe.timeout)
     history = probe.link.history()
@@ -1094,7 +1098,7 @@ def _cancel_wrong_id(probe: Probe, case: Case) -> CaseFinding:
     with probe.child() as (_, child_id):
         status = probe.link.status or probe.any_status()
         other = _within_ids(child_id + 1000)
-        return probe.refused(case, _goal(status, EventType.CANCEL, id=other), divergence="D8")
+        return probe.refused(case, _goal(status, EventType.CANCEL, id=other))
 
 
 def _cancel_running_child(probe: Probe, case: Case) -> CaseFinding:
@@ -1107,14 +1111,11 @@ def _cancel_running_child(probe: Probe, case: Case) -> CaseFinding:
         probe.note(f"the NEXT: {_describe_answer(running)}")
         cancel_answer, next_answer = cancel.answer, running.answer
         if cancel_answer is None or next_answer is None:
-            return CaseFinding(
-                case, Verdict.FAIL, expected=expected, seen="a goal left without an answer", absent=True
-            )
-        if len(running.answers) != 1 or len(cancel.answers) != 1:
-            return CaseFinding(case, Verdict.FAIL, expected=expected, seen="a goal answered twice")
+            return _fails(case, "timeout", expected, "a goal left without an answer")
+        # a goal answered twice is the judge's (R19.1)
         if cancel_answer[0] is not GoalStatus.SUCCEEDED or next_answer[1].status != _CANCELED:
             seen = f"CANCEL {_describe_answer(cancel)}; NEXT {_describe_answer(running)}"
-            return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen)
+            return _fails(case, "cancel_end", expected, seen)
         return _status_after_cancel(probe, case, child_id, since)
 
 
@@ -1128,16 +1129,15 @@ def _status_after_cancel(probe: Probe, case: Case, child_id: int, since: int) ->
         return status.id == child_id and machine.robot_waits(status)
 
     if not probe.link.wait_seen(shows_the_end, since, probe.timeout):
-        return CaseFinding(
-            case, Verdict.FAIL, expected=expected, seen="no status after the child", absent=True
-        )
+        return _fails(case, "timeout", expected, "no status after the child")
     for after in filter(shows_the_end, probe.link.history()[since:]):
         if after.dynamic_state == DynamicState.WAITING and after.status == _STANDBY:
             continue
         probe.note(f"status {status_text(after)}")
         divergence = "D2" if after.dynamic_state == DynamicState.RUNNING else "D28"
-        seen = f"status {status_text(after)}"
-        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, divergence=divergence)
+        return _fails(
+            case, "status_after_end", expected, f"status {status_text(after)}", divergence=divergence
+        )
     return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
@@ -1149,8 +1149,7 @@ def _finished(probe: Probe, case: Case) -> CaseFinding:
     answer = exchange.answer
     if answer is None or (answer[0], answer[1].status) != (GoalStatus.SUCCEEDED, _COMPLETED):
         absent = answer is None and exchange.accepted is not False  # no response, or no answer yet
-        seen = _describe_answer(exchange)
-        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, absent=absent)
+        return _fails(case, "timeout" if absent else "finished_refused", expected, _describe_answer(exchange))
     seq = status.dynamic_event_seq
     missed = probe.link.statuses_missed
     if not probe.link.wait_seen(
@@ -1162,7 +1161,7 @@ def _finished(probe: Probe, case: Case) -> CaseFinding:
         if later and probe.link.statuses_missed > missed:  # the next run's took the INACTIVE's place
             why = OVERWRITTEN.format(seq=seq, later=later[0].dynamic_event_seq)
             return CaseFinding(case, Verdict.MISSING, seen=why, by_link=True)
-        return CaseFinding(case, Verdict.FAIL, expected=expected, seen="no INACTIVE status", absent=True)
+        return _fails(case, "timeout", expected, "no INACTIVE status")
     return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
@@ -1252,9 +1251,12 @@ def _ran_finding(probe: Probe, case: Case, exchange: Exchange, child_id: int, ex
     seen = _ran(exchange, child_id)
     if seen is None:
         return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
-    # seen in part (no response, no answer, or a child that ran without its start's feedback): the
-    # run's end tells a server that never sent the rest from a link that delivered it late
-    return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, absent=not _complete(exchange))
+    unrun = _not_run(case, exchange, expected) if exchange.accepted is not True else None
+    if unrun is not None:
+        return unrun
+    # seen in part (no answer, or a child that ran without its start's feedback): the run's end tells a
+    # server that never sent the rest from a link that delivered it late
+    return _fails(case, "child_ran" if _complete(exchange) else "timeout", expected, seen)
 
 
 def _numbered_by_server(finding: CaseFinding, exchange: Exchange, asked: int, above: int) -> CaseFinding:
@@ -1324,26 +1326,22 @@ def _race(probe: Probe, case: Case) -> CaseFinding:
     )
     ran = [exchange for exchange in exchanges if exchange.feedback]
     if len(ran) != 1:
-        absent = not all(_complete(exchange) for exchange in exchanges)  # a response or feedback to come
-        return CaseFinding(
-            case, Verdict.FAIL, expected=expected, seen=f"{len(ran)} of the NEXTs ran a child", absent=absent
-        )
+        count = f"{len(ran)} of the NEXTs ran a child"
+        if not all(_complete(exchange) for exchange in exchanges):  # a response or feedback to come
+            return _fails(case, "timeout", expected, count)
+        refused = all(exchange.accepted is False for exchange in exchanges)  # what a configuration decides
+        return _fails(case, "configuration" if refused else "two_nexts", expected, count)
     seen = _ran(ran[0], ran[0].goal.id)
     if seen is not None:
-        absent = not _complete(ran[0])
-        failed = CaseFinding(
-            case, Verdict.FAIL, expected=expected, seen=f"the child that ran: {seen}", absent=absent
+        failed = _fails(
+            case, "child_ran" if _complete(ran[0]) else "timeout", expected, f"the child that ran: {seen}"
         )
         return _numbered_by_server(failed, ran[0], ran[0].goal.id, status.id)
     other = exchanges[1] if ran[0] is exchanges[0] else exchanges[0]
     if other.accepted is None:
-        return CaseFinding(
-            case, Verdict.FAIL, expected=expected, seen="the other NEXT: no response", absent=True
-        )
+        return _fails(case, "timeout", expected, "the other NEXT: no response")
     if other.accepted and other.answer is not None and other.answer[0] is not GoalStatus.ABORTED:
-        return CaseFinding(
-            case, Verdict.FAIL, expected=expected, seen=f"the other NEXT: {_describe_answer(other)}"
-        )
+        return _fails(case, "two_nexts", expected, f"the other NEXT: {_describe_answer(other)}")
     return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")  # an unanswered other: R19.1 below
 
 
@@ -1365,7 +1363,7 @@ def _log_seq(probe: Probe, case: Case) -> CaseFinding:
         )
     tiers = sorted({entry.tier for entry in entries} - {tier.value for tier in Tier})
     if tiers:
-        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=f"tiers {tiers}")
+        return _fails(case, "log_seq", expected, f"tiers {tiers}")
     # R7.3 as the judge reads it: one up within a child, forward between children
     seqs = [(entry.seq, index > 0) for logs in children for index, entry in enumerate(logs)]
     pairs = itertools.pairwise(seqs)
@@ -1375,9 +1373,7 @@ def _log_seq(probe: Probe, case: Case) -> CaseFinding:
     seq = probe.link.status.dynamic_event_seq if probe.link.status else None
     same_as_run = all(entry.seq == seq for entry in entries)
     seen = "every entry's seq is the run's seq" if same_as_run else f"steps between entries {gaps}"
-    return CaseFinding(
-        case, Verdict.FAIL, expected=expected, seen=seen, divergence="D9" if same_as_run else None
-    )
+    return _fails(case, "log_seq", expected, seen, divergence="D9" if same_as_run else None)
 
 
 def _clamp_notice(probe: Probe, case: Case) -> CaseFinding:
@@ -1393,18 +1389,16 @@ def _clamp_notice(probe: Probe, case: Case) -> CaseFinding:
         f"a warning log entry in the first feedback (stubborn period {period:g} s, minimum {minimum:g} s)"
     )
     if not exchange.feedback:
-        seen = f"{_describe_answer(exchange)}, no feedback"
-        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen, absent=True)
+        return _fails(case, "timeout", expected, f"{_describe_answer(exchange)}, no feedback")
     warnings = [(i, entry) for i, feedback in enumerate(exchange.feedback) for entry in feedback.logs
                 if entry.tier == Tier.WARNING.value]  # fmt: skip
     for index, entry in warnings:
         probe.note(f"feedback {index + 1}: warning {entry.text!r}")
+    # a clamp not warned of in the start feedback (R12.2): the judge's, on the case's records
     if not warnings:
-        return CaseFinding(case, Verdict.FAIL, expected=expected, seen="no warning: the clamp is silent",
-                       divergence="D11")  # fmt: skip
-    if warnings[0][0] != 0:  # R12.2: the start feedback carries it
-        return CaseFinding(case, Verdict.FAIL, expected=expected,
-                       seen=f"the warning came with feedback {warnings[0][0] + 1}")  # fmt: skip
+        return _seen_by_script(case, expected, "no warning: the clamp is silent")
+    if warnings[0][0] != 0:
+        return _seen_by_script(case, expected, f"the warning came with feedback {warnings[0][0] + 1}")
     return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
@@ -1428,12 +1422,9 @@ def _cancel_both_answered(probe: Probe, case: Case) -> CaseFinding:
                 why = REFUSED_AFTER_END.format(child=child_id)
                 return CaseFinding(case, Verdict.MISSING, seen=why, by_link=True)
             absent = any(cancel.accepted is None for cancel in cancels)
-            return CaseFinding(
-                case, Verdict.FAIL, expected=expected, seen="a CANCEL not accepted", absent=absent
-            )
+            return _fails(case, "timeout" if absent else "both_answered", expected, "a CANCEL not accepted")
         if running.answer is None or any(cancel.answer is None for cancel in cancels):
-            return CaseFinding(case, Verdict.FAIL, expected=expected, seen="a goal left without an answer",
-                           absent=True)  # fmt: skip
+            return _fails(case, "timeout", expected, "a goal left without an answer")
         result = running.answer[1]
         wrong = [cancel for cancel in cancels if cancel.answer != (GoalStatus.SUCCEEDED, result)]
         if wrong:
@@ -1441,8 +1432,7 @@ def _cancel_both_answered(probe: Probe, case: Case) -> CaseFinding:
             # the first CANCEL freed the robot before its child ended (D1), and the second, accepted,
             # was aborted as idle (in D8's words)
             idle = [cancel for cancel in wrong if _aborted_with(cancel, Failure.IDLE_CANCEL)]
-            return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen,
-                           divergence="D1" if idle == wrong else None)  # fmt: skip
+            return _fails(case, "both_answered", expected, seen, divergence="D1" if idle == wrong else None)
         return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
@@ -1504,19 +1494,13 @@ def _action_cancel_running(probe: Probe, case: Case) -> CaseFinding:
         running.answered(probe.timeout)
         probe.note(f"the NEXT: {_describe_answer(running)}")
         if accepted is None:
-            return CaseFinding(case, Verdict.FAIL, expected=expected, seen="no cancel response", absent=True)
-        if not accepted:
-            return CaseFinding(
-                case, Verdict.FAIL, expected=expected, seen="the cancel refused", divergence="D31"
-            )
-        if running.answer is None:
-            return CaseFinding(
-                case, Verdict.FAIL, expected=expected, seen="the NEXT not answered", absent=True
-            )
-        if running.answer[0] is not GoalStatus.CANCELED:
-            return CaseFinding(
-                case, Verdict.FAIL, expected=expected, seen=f"the NEXT {_describe_answer(running)}"
-            )
+            return _fails(case, "timeout", expected, "no cancel response")
+        if accepted and running.answer is None:
+            return _fails(case, "timeout", expected, "the NEXT not answered")
+        # the cancel refused (R10.3), or the NEXT answered other than canceled (R8.2): the judge's
+        if not accepted or (running.answer is not None and running.answer[0] is not GoalStatus.CANCELED):
+            return _seen_by_script(case, expected, f"the cancel {'accepted' if accepted else 'refused'}; "
+                                   f"the NEXT {_describe_answer(running)}")  # fmt: skip
         return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
@@ -1526,11 +1510,9 @@ def _action_cancel_answered(probe: Probe, case: Case) -> CaseFinding:
         raise _TimedOut(f"the child did not end within {probe.timeout:g} s")
     accepted = probe.cancel(exchange)
     if accepted is None:
-        return CaseFinding(
-            case, Verdict.FAIL, expected="the cancel refused", seen="no cancel response", absent=True
-        )
-    if accepted:
-        return CaseFinding(case, Verdict.FAIL, expected="the cancel refused", seen="the cancel accepted")
+        return _fails(case, "timeout", "the cancel refused", "no cancel response")
+    if accepted:  # the judge finds the cancel response the machine does not give (R10.5)
+        return _seen_by_script(case, "the cancel refused", "the cancel accepted")
     return CaseFinding(case, Verdict.PASS, expected="the cancel refused", seen="so")
 
 
@@ -1547,8 +1529,9 @@ def _describe_query(probe: Probe, case: Case) -> CaseFinding:
     probe.note(f"answer: running={got[0]} status={got[1]} id={got[2]} description={answer.description!r}")
     expected = f"running, {status.status}, id {status.id}, the begin's description"
     if got != wanted or (begun and answer.description != begun[-1].description):
-        return CaseFinding(case, Verdict.FAIL, expected=expected,
-                       seen=f"running={got[0]}, {got[1]}, id {got[2]}, {answer.description!r}")  # fmt: skip
+        return _fails(
+            case, "query", expected, f"running={got[0]}, {got[1]}, id {got[2]}, {answer.description!r}"
+        )
     return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
@@ -1580,7 +1563,7 @@ def _seq_wrap(probe: Probe, case: Case) -> CaseFinding:
     probe.note(f"the run after {_LAST_SEQ}: {after[0]}; begins seen for runs {begins}")
     expected = f"run 0 after run {_LAST_SEQ}, begun on the begin topic; a goal for {_LAST_SEQ} refused"
     if after[0] != 0 or 0 not in begins:
-        return CaseFinding(case, Verdict.FAIL, expected=expected, seen=f"run {after[0]}; begins for {begins}")
+        return _fails(case, "seq_wrap", expected, f"run {after[0]}; begins for {begins}")
     if status.dynamic_event_seq != 0:
         raise _Unreachable(f"run 0 is over: the robot is in run {status.dynamic_event_seq}")
     finding = probe.refused(case, _goal(status, EventType.FINISHED, dynamic_event_seq=_LAST_SEQ))
