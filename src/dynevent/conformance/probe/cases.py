@@ -319,7 +319,7 @@ CASES: tuple[Case, ...] = (
     Case("action.cancel_answered", "an action-level cancel of an answered goal is refused", ("R10.5",),
          needs="child"),
     Case("finished.ends_the_run", "FINISHED ends the run: succeeded, completed, then INACTIVE",
-         ("R11.1", "R11.2", "R2.2")),
+         ("R11.1", "R11.2", "R2.2", "R4.16")),
     Case("finished.next_after", "a NEXT after the run ended is refused", ("R4.3",), needs="place"),
     Case("finished.cancel_after", "a CANCEL after the run ended is refused", ("R4.3",), needs="status"),
     Case("finished.finished_after", "a FINISHED after the run ended is refused", ("R4.3",), needs="status"),
@@ -358,12 +358,8 @@ NOT_YET_JUDGED: dict[str, str] = {
     "in cancel.running_child's records: it reads the CANCEL's early answer as the child's end",
     "both_answered": "cancel.both_answered reads a refused second CANCEL against the server's stamps "
     "(a lossy link may deliver it after the child's end), which the judge does not read",
-    "finished_refused": "the judge files a refused FINISHED of the active run under R4.16, the case "
-    "under R11.1",
     "log_seq": "the judge reads a log seq that skips within a child as feedback lost on the way (an "
     "open item, uncertain), and takes a tier it does not know as info",
-    "seq_wrap": "the judge files a run after the wrap whose begin never came under R2.2, the case under "
-    "R3.1 and R3.3",
 }
 
 

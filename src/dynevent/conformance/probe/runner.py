@@ -1148,8 +1148,10 @@ def _finished(probe: Probe, case: Case) -> CaseFinding:
     expected = "succeeded, completed; then INACTIVE"
     answer = exchange.answer
     if answer is None or (answer[0], answer[1].status) != (GoalStatus.SUCCEEDED, _COMPLETED):
-        absent = answer is None and exchange.accepted is not False  # no response, or no answer yet
-        return _fails(case, "timeout" if absent else "finished_refused", expected, _describe_answer(exchange))
+        if answer is None and exchange.accepted is not False:  # no response, or no answer yet
+            return _fails(case, "timeout", expected, _describe_answer(exchange))
+        # refused (R4.16: it passes every check), or answered other than the run's end (R11.1): the judge's
+        return _seen_by_script(case, expected, _describe_answer(exchange))
     seq = status.dynamic_event_seq
     missed = probe.link.statuses_missed
     if not probe.link.wait_seen(
@@ -1558,12 +1560,16 @@ def _seq_wrap(probe: Probe, case: Case) -> CaseFinding:
     after = [seq for seq in seqs[last:] if seq != _LAST_SEQ]
     if not after:
         raise _TimedOut(f"no run began after run {_LAST_SEQ} within {probe.timeout:g} s")
-    probe.link.wait_begin(after[0], probe.timeout)
+    begun = probe.link.wait_begin(after[0], probe.timeout)
     begins = sorted({begin.dynamic_event_seq for begin in probe.link.begins})
     probe.note(f"the run after {_LAST_SEQ}: {after[0]}; begins seen for runs {begins}")
     expected = f"run 0 after run {_LAST_SEQ}, begun on the begin topic; a goal for {_LAST_SEQ} refused"
-    if after[0] != 0 or 0 not in begins:
-        return _fails(case, "seq_wrap", expected, f"run {after[0]}; begins for {begins}")
+    if not begun:  # the begin of the run after the wrap never came
+        return _fails(
+            case, "timeout", expected, f"run {after[0]}; begins for {begins} within {probe.timeout:g} s"
+        )
+    if after[0] != 0:  # the judge finds the run's seq the machine does not give (R3.1)
+        return _seen_by_script(case, expected, f"run {after[0]}; begins for {begins}")
     if status.dynamic_event_seq != 0:
         raise _Unreachable(f"run 0 is over: the robot is in run {status.dynamic_event_seq}")
     finding = probe.refused(case, _goal(status, EventType.FINISHED, dynamic_event_seq=_LAST_SEQ))
