@@ -325,6 +325,7 @@ class Violation(enum.Enum):
     # feedback and logs
     FEEDBACK_NOT_RUNNING = ("feedback_not_running", "R7.1")
     LOG_SEQ = ("log_seq", "R7.3")
+    LOG_TIER = ("log_tier", "R7.2")
     FEEDBACK_ID = ("feedback_id", "R7.1")
     # cancels, the end of a run, stubbornness, the description service
     CANCEL_ANSWERED_EARLY = ("cancel_answered_early", "R9.3")

@@ -273,6 +273,35 @@ def test_log_seqs_that_step_by_two_are_judged_alike_by_the_probe_and_by_check(tm
     }
 
 
+@pytest.mark.spec("R7.2")
+def test_a_log_entry_of_no_known_tier_fails_the_log_case_by_the_judges_finding(tmp_path: Path) -> None:
+    """A server whose feedback carries a log entry of tier ``debug`` (none of the four, R7.2): the
+    judge finds it (``log_tier``), in the probe's records and in ``check`` alike, and
+    ``feedback.log_seq`` fails with that finding."""
+    first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
+    server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG), first)
+
+    def debug(output: outs.Output) -> outs.Output:
+        if not isinstance(output, outs.PublishFeedback):
+            return output
+        logs = tuple(attrs.evolve(entry, tier="debug") for entry in output.feedback.logs)
+        return attrs.evolve(output, feedback=attrs.evolve(output.feedback, logs=logs))
+
+    def stepper(event: ins.Input) -> tuple[outs.Output, ...]:
+        return tuple(debug(output) for output in server.step(event))
+
+    trace = tmp_path / "trace.jsonl"
+    cases = [case for case in CASES if case.id == "feedback.log_seq"]
+    said: list[str] = []
+    options = attrs.evolve(OPTIONS, trace=str(trace))
+    code, (finding,) = probe_in_process(options, cases, said.append, CONFIG, write=_unasked, stepper=stepper)
+    assert (finding.verdict, finding.cause) == (Verdict.FAIL, "judge"), said
+    assert finding.expected.endswith("(R7.2)") and "'debug'" in finding.seen, finding
+    assert code == probe_cases.EXIT_FAILED
+    found = check_trace(trace.read_text("utf-8"), "t").findings
+    assert found and {(item.rule, item.code) for item in found} == {("R7.2", "log_tier")}
+
+
 @pytest.mark.spec("R12.2")
 def test_a_clamp_warning_in_a_later_feedback_fails_the_case_by_the_judges_finding() -> None:
     """The start feedback carries the warning of a clamped stubborn period (R12.2), a MUST: a server

@@ -873,6 +873,20 @@ _STATUS_VALUES = frozenset(status.value for status in Status)
 _TASK_SIGNALS = (ins.TaskCancel, ins.TaskKill)
 
 
+#: The tiers a log entry may have (R7.2, the input's tier).
+_TIERS = tuple(tier.value for tier in Tier)
+
+
+def tier_faults(feedback: Feedback) -> list[tuple[str, str]]:
+    """The log entries of ``feedback`` whose tier is none of the four (R7.2): what was seen and what
+    was expected, for each."""
+    return [
+        (f"LogEntry.seq {entry.seq} of tier {entry.tier!r}", f"a tier of {', '.join(_TIERS)} (R7.2)")
+        for entry in feedback.logs
+        if entry.tier not in _TIERS
+    ]
+
+
 class LogSeqs:
     """The robot's last log entry seen on feedback, and whose it was: what R7.3 judges the next entry
     against (:func:`machine.log_seq_fault`)."""
@@ -925,6 +939,8 @@ class _Feedback(_Part):
         feedback: Feedback = record.message
         for fault, message, expected in self.log_seqs.faults(record.goal_uuid, feedback):
             self.findings.flag(Violation.LOG_SEQ, message, expected, seen=feedback, detail=fault)
+        for message, expected in tier_faults(feedback):
+            self.findings.flag(Violation.LOG_TIER, message, expected, seen=feedback)
         uuid = record.goal_uuid
         seen = self.goals.bind_unknown(uuid)
         label = f"feedback {feedback.status} id={feedback.id} for goal {uuid}"

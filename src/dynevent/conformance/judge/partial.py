@@ -38,7 +38,7 @@ import collections
 import attrs
 
 from dynevent.conformance.judge.abduction import same_status
-from dynevent.conformance.judge.observer import LogSeqs
+from dynevent.conformance.judge.observer import LogSeqs, tier_faults
 from dynevent.conformance.judge.trace import Finding, Record, Report, TraceHeader
 from dynevent.errors import InvalidMessage
 from dynevent.server import inputs as ins
@@ -254,6 +254,8 @@ class PartialJudge:
         feedback: Feedback = record.message
         for fault, message, expected in self.log_seqs.faults(record.goal_uuid, feedback):
             self._flag(record.line, Violation.LOG_SEQ, message, expected, seen=feedback, detail=fault)
+        for message, expected in tier_faults(feedback):
+            self._flag(record.line, Violation.LOG_TIER, message, expected, seen=feedback)
         uuid, goal = record.goal_uuid, self._goal(record.goal_uuid)
         label = f"feedback {feedback.status} id={feedback.id} for goal {uuid}"
         if goal.order == 0:
