@@ -256,6 +256,17 @@ def test_a_childs_end_shown_by_its_status_alone_owes_the_answer() -> None:
     assert late.check().clean, found(late.check())
 
 
+@pytest.mark.spec("R8.1")
+def test_an_answer_after_the_status_of_its_childs_end_still_names_the_child_and_an_ended_status() -> None:
+    """Seen over DDS: a client hears the WAITING status of a child's end before the child's answer.
+    How the child ended is not on the wire, but what the answer's result must name is (R8.1): the
+    child's id and an ended status.  A result naming neither is a finding; one naming both is not."""
+    good = Trace().started().status(1, 1, "standby", 6).result(1, "succeeded", "completed", 6)
+    assert good.check().clean, found(good.check())
+    bad = Trace().started().status(1, 1, "standby", 6).result(1, "succeeded", "", 0)
+    assert found(bad.check()) == [(bad.line, "R8.1", "result")]
+
+
 @pytest.mark.spec("R19.1")
 def test_the_observer_keeps_the_latest_closed_goals_only_and_still_finds_a_late_second_answer() -> None:
     """Memory stays flat on a trace of any length: of the goals answered or refused, the observer keeps

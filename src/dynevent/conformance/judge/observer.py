@@ -1212,11 +1212,21 @@ class _Answers(_Part):
         assert isinstance(output, outs.AnswerGoal)
         result: Result = record.message
         expected, observed = output.result, result
-        if not owed.exact:
-            return  # an end read from a status alone: the answer was owed, its content is not known
         label = f"goal {record.goal_uuid} answered {answer_text(record.status, result, first_line=True)}"
         want = answer_text(output.status.value, expected, first_line=True)
         seen_answer, owed_answer = Answer(record.status, result), Answer(output.status.value, expected)
+        if not owed.exact:
+            # an end read from a status alone: the child's final status is not on the wire, so neither is
+            # the answer's goal status; what its result must name is (R8.1: the child, an ended status)
+            named = (first_line(observed.execution_failure), observed.id)
+            if named != (first_line(expected.execution_failure), expected.id) or (
+                observed.status not in ENDED_CHILD_STATUSES
+            ):
+                rule = result_rule(owed.rule)
+                failure = first_line(expected.execution_failure) or "no failure"
+                want = f"{failure}, an ended status, id={expected.id}"
+                self.findings.differs(rule, "result", label, f"{want} ({rule})", seen=seen_answer)
+            return
         seen = self.goals.get(record.goal_uuid)
         early = {record.status, output.status.value} == {GoalStatus.ABORTED.value, GoalStatus.CANCELED.value}
         if early and seen is not None and seen.line == 0:
