@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from dynevent.conformance import vectors
-from dynevent.conformance.probe.cases import LIVE_CANNOT_SHOW
+from dynevent.conformance.probe.cases import LIVE_CANNOT_SHOW, Verdict
 from dynevent.conformance.records import config_from_json, input_from_json
 from dynevent.conformance.vectors.driver import state_from_json
 from dynevent.server import inputs as ins
@@ -21,7 +21,16 @@ from dynevent.server import machine
 from dynevent.server import outputs as outs
 from dynevent.testing import switched_off as kit
 from dynevent.wire.messages import Goal
-from support.completeness import DDS_ADDED, DDS_CANNOT_SHOW, LINKS, OVER_DDS, dds_cases, measure, table
+from support.completeness import (
+    DDS_ADDED,
+    DDS_CANNOT_SHOW,
+    LINKS,
+    OVER_DDS,
+    dds_cases,
+    measure,
+    probe_published_at_start,
+    table,
+)
 
 
 def _rules_the_vectors_meet() -> set[str]:
@@ -130,6 +139,20 @@ def test_r8_4_switched_off_fails_the_case_of_its_rule_rather_than_leaving_cases_
     """A server that publishes no status at a child's end: the case of R8.4 fails, naming it."""
     (item,) = [item for item in measure() if item.rule == "R8.4"]
     assert item.probe["in process"] == ("standard", ("next.status_after_child",))
+
+
+@pytest.mark.parametrize("link", LINKS)
+def test_r2_3_switched_off_after_the_first_status_fails_the_case_of_its_rule(link: str) -> None:
+    """A server that publishes its status when it starts (as dynevent's ROS binding does) and no change
+    of it after, R2.3 switched off: the child's end it never publishes fails the case of R8.4 and R2.3,
+    naming them, rather than leaving that case and the rest not run (exit 3)."""
+    code, findings = probe_published_at_start("R2.3", link)
+    verdicts = {finding.case.id: finding for finding in findings}
+    assert verdicts["status.latched"].verdict is Verdict.PASS  # the first status came
+    assert code == 1
+    after = verdicts["next.status_after_child"]
+    assert after.verdict is Verdict.FAIL and {"R2.3", "R8.4"} <= set(after.case.rules)
+    assert "the status still says WAITING" in after.seen and "R8.4" in after.expected
 
 
 def test_the_record_of_the_probe_over_dds_holds_every_check_the_probe_catches_in_process() -> None:

@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping
+from typing import Any
 
 import attrs
 
-from dynevent.conformance.probe.cases import CASES, KNOWN, KNOWN_MISSING, Verdict
+from dynevent.conformance.probe.cases import CASES, KNOWN, KNOWN_MISSING, CaseFinding, Verdict
 from dynevent.conformance.probe.in_process import probe_in_process
 from dynevent.conformance.probe.runner import Options
 from dynevent.conformance.vectors import InProcessImplementation, Vector, load_vectors, run_vectors
@@ -159,6 +160,47 @@ def _probe(rule: str, link: str, mode: str) -> tuple[bool, tuple[str, ...]]:
         return reached[0], ()
     failed = tuple(f.case.id for f in findings if f.verdict is Verdict.FAIL and not f.known)
     return reached[0], failed or ("the judge",)
+
+
+def probe_published_at_start(rule: str, link: str) -> tuple[int, list[CaseFinding]]:
+    """Every case, over ``link``, against a server that publishes its first status (as dynevent's ROS
+    binding publishes the robot's status when it starts, for a late joiner) and has ``rule`` switched
+    off from then on: the exit status and the findings."""
+    first: list[ins.Input] = []
+    if link == "driver":
+        inner = InProcessImplementation()
+        switched_driver = kit.switched_off_implementation(inner, rule)
+
+        class Published:  # the first input (the run's begin) stepped by the machine as it is
+            name = switched_driver.name
+
+            def reset(self, *args: Any) -> None:
+                switched_driver.reset(*args)
+
+            def apply(self, event: Any) -> tuple[list[Any], Any]:
+                if not first:
+                    first.append(event)
+                    result: tuple[list[Any], Any] = inner.apply(event)
+                    return result
+                return switched_driver.apply(event)  # type: ignore[no-any-return]
+
+            def close(self) -> None:
+                switched_driver.close()
+
+        return probe_in_process(
+            OPTIONS, list(CASES), lambda _: None, CONFIG, write=_unasked, implementation=Published()
+        )
+    first_state = CONFIG.first_state(OPTIONS.robot)
+    server = RobotServer(OPTIONS.fleet, OPTIONS.robot, machine_config(CONFIG), first_state)
+    switched = kit.switched_off_stepper(server.step, rule)
+
+    def stepper(event: ins.Input) -> tuple[outs.Output, ...]:
+        if not first:
+            first.append(event)
+            return tuple(server.step(event))
+        return switched(event)
+
+    return probe_in_process(OPTIONS, list(CASES), lambda _: None, CONFIG, write=_unasked, stepper=stepper)
 
 
 def _first_vector(rule: str, vectors: list[Vector]) -> str | None:

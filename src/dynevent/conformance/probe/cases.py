@@ -284,7 +284,8 @@ CASES: tuple[Case, ...] = (
          ("R6.2", "R6.4", "R7.1", "R8.1", "R8.2", "R19.1"), needs="child"),
     # right after the first child: a server that publishes no status at a child's end fails here on R8.4,
     # before the cases that wait in vain for the WAITING status they start from leave the rest not run
-    Case("next.status_after_child", "after a child ends the status is WAITING with its id", ("R2.2", "R8.4"),
+    Case("next.status_after_child", "after a child ends the status is WAITING with its id",
+         ("R2.2", "R8.4", "R2.3"),
          needs="child", divergences=("D2",), trace_shows_failure=False),
     Case("next.id_zero", "a NEXT with id 0 runs child status.id + 1 (the server numbers it)",
          ("R6.2", "R20.1"), needs="child", divergences=("D10",)),

@@ -1026,19 +1026,31 @@ def _status_after_child(probe: Probe, case: Case) -> CaseFinding:
 
 
 def _end_unpublished(probe: Probe, case: Case) -> CaseFinding | None:
-    """R8.4's failure when the latest status still shows running a child whose NEXT (an earlier case's)
-    was answered with its end; None otherwise."""
+    """R8.4's failure (R2.3: the status changed at the child's end, and must be published) when the
+    latest status, of the run of a child whose NEXT (an earlier case's) was answered with its end,
+    still shows that child running, or names an id before it (no status came at its start nor at its
+    end); None otherwise."""
     latest = probe.link.status
-    if latest is None or not machine.runs_a_child(latest):
+    if latest is None:
         return None
     for exchange in reversed(probe._nexts):
         answer = exchange.answer
-        if answer is not None and not answer[1].execution_failure and answer[1].id == latest.id:
-            seen = (
-                f"child {latest.id} was answered {answer[1].status!r}; the status still says "
-                + status_text(latest)
-            )
-            return _fails(case, "timeout", f"WAITING, standby, id {latest.id}", seen)
+        if answer is None or answer[1].execution_failure or exchange.goal.dynamic_event_seq != (
+            latest.dynamic_event_seq
+        ):
+            continue
+        child = answer[1].id
+        running = machine.runs_a_child(latest) and child == latest.id
+        if not (running or (latest.id != child and id_not_after(latest.id, child))):
+            return None
+
+        def published() -> bool:  # a status that shows the child's end, come late (a lagging link)
+            status = probe.link.status
+            return status is not None and not probe._behind(status) and machine.robot_waits(status)
+
+        probe.heard_later[case.id] = published
+        seen = f"child {child} was answered {answer[1].status!r}; the status still says {status_text(latest)}"
+        return _fails(case, "timeout", f"WAITING, standby, id {child} (R8.4, published: R2.3)", seen)
     return None
 
 
