@@ -84,6 +84,7 @@ OVER_DDS: Mapping[str, tuple[str, ...]] = {
     "R10.5": (),
     "R11.1": ("finished.ends_the_run",),
     "R12.2": ("stubborn.clamp_notice",),
+    "R16.1": ("describe.after_the_run",),
     "R17.2": ("request.event_type_0",),
     "R17.4": ("next.status_after_child",),
 }

@@ -321,6 +321,9 @@ CASES: tuple[Case, ...] = (
          needs="child"),
     Case("finished.ends_the_run", "FINISHED ends the run: succeeded, completed, then INACTIVE",
          ("R11.1", "R11.2", "R2.2", "R4.16")),
+    # right after a run's end, before the next run begins (the query is no trace record)
+    Case("describe.after_the_run", "between a run's end and the next run's begin, the description query "
+         "answers not running, every field empty", ("R16.1",), needs="status", trace_shows_failure=False),
     Case("finished.next_after", "a NEXT after the run ended is refused", ("R4.3",), needs="place"),
     Case("finished.cancel_after", "a CANCEL after the run ended is refused", ("R4.3",), needs="status"),
     Case("finished.finished_after", "a FINISHED after the run ended is refused", ("R4.3",), needs="status"),
@@ -422,7 +425,6 @@ LIVE_CANNOT_SHOW: dict[str, str] = {
     "R14.5": _TASK_INPUT.format(what="resume"),
     "R15.1": _TASK_INPUT.format(what="shutdown"),
     "R15.2": _TASK_INPUT.format(what="shutdown"),
-    "R16.1": "not yet: no case asks the description query between a run's end and the next run's begin",
     "R16.2": "a server need not offer the description query (D17): one that gives no answer reads as one "
     "that offers none (info)",
     "R17.1": "rmf_ros2 mode reproduces rmf_ros2's divergences (docs/divergences.md): a server that checks "

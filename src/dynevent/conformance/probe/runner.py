@@ -161,6 +161,8 @@ class Link:
         #: the deadline cut the link's waiting on the server short, or kept a request from it: what
         #: was heard since is no verdict on the server
         self.cut_off = False
+        #: the server answered the description query once: it offers the query (R16; rmf_ros2 does not, D17)
+        self.query_answered = False
 
     # ---------------------------------------------------------------- the transport's part
 
@@ -806,6 +808,11 @@ OVERWRITTEN = (
     "run {later}'s status came and run {seq}'s INACTIVE did not, and a status was published that never "
     "came: the status topic keeps one message, and the next run's took its place before this link "
     "delivered it (a lossy link)"
+)
+#: Why ``describe.after_the_run`` is not run when the next run began before its query reached the server.
+BEGAN_FIRST = (
+    "run {later} began after run {ended} ended and before the description query could be asked{seen}: "
+    "the server begins runs again sooner than this link brings a run's end"
 )
 #: Why a case whose goal was sent while a late status showed a child running is not run.
 ENDED_FIRST = (
@@ -1529,9 +1536,17 @@ def _action_cancel_answered(probe: Probe, case: Case) -> CaseFinding:
     return CaseFinding(case, Verdict.PASS, expected="the cancel refused", seen="so")
 
 
+def _describe(probe: Probe) -> tuple[Any, str]:
+    """The description query's answer, or None and why there is none (:meth:`Link.describe`); an
+    answer tells :attr:`Link.query_answered` that the server offers the query."""
+    answer, why = probe.link.describe(probe.timeout)
+    probe.link.query_answered = probe.link.query_answered or answer is not None
+    return answer, why
+
+
 def _describe_query(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
-    answer, why = probe.link.describe(probe.timeout)
+    answer, why = _describe(probe)
     if answer is None:
         probe.note(why)
         return CaseFinding(case, Verdict.INFO, expected="an answer, where the server offers the query",
@@ -1546,6 +1561,52 @@ def _describe_query(probe: Probe, case: Case) -> CaseFinding:
             case, "query", expected, f"running={got[0]}, {got[1]}, id {got[2]}, {answer.description!r}"
         )
     return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
+
+
+def _describe_after(probe: Probe, case: Case) -> CaseFinding:
+    """R16.1: asked between a run's end and the next run's begin (the case ends the run with a FINISHED
+    where one is active), the query answers ``DescriptionResponse()``.  A server that gives no answer
+    fails where it answered the query during a run (it offers the query), and is ``info`` otherwise."""
+    status = probe.any_status()
+    ended = [  # the runs the probe's FINISHEDs ended, by their answers
+        made.goal.dynamic_event_seq for made in probe.link.made
+        if made.goal.event_type == EventType.FINISHED.value and made.answer is not None
+        and made.answer[0] is GoalStatus.SUCCEEDED
+    ]  # fmt: skip
+    if status.dynamic_state != DynamicState.INACTIVE and ended:
+        if status.dynamic_event_seq != ended[-1]:
+            raise _Unreachable(BEGAN_FIRST.format(later=status.dynamic_event_seq, ended=ended[-1], seen=""))
+        probe.note(f"run {ended[-1]} ended (its FINISHED succeeded), though no INACTIVE status came")
+    elif status.dynamic_state != DynamicState.INACTIVE:  # no run ended: the case ends this one
+        _describe(probe)  # during the run: does the server offer the query?
+        finishing = probe.send(_goal(status, EventType.FINISHED))
+        if finishing.answer is None or finishing.answer[0] is not GoalStatus.SUCCEEDED:
+            raise _Unreachable(f"the FINISHED that ends run {status.dynamic_event_seq} was "
+                               f"{_describe_answer(finishing)}")  # fmt: skip
+        inactive = probe.link.wait_status(lambda s: s.dynamic_state == DynamicState.INACTIVE, probe.timeout)
+        if inactive is None:
+            raise _TimedOut(f"no INACTIVE status within {probe.timeout:g} s after the FINISHED")
+        status = inactive
+    seq = status.dynamic_event_seq
+    expected = "not running, every field empty (status '', description '', id 0)"
+    answer, why = _describe(probe)
+    if answer is None:
+        probe.note(why)
+        if not probe.link.query_answered:
+            return CaseFinding(case, Verdict.INFO, expected="an answer, where the server offers the query",
+                           seen=f"{why} (a server need not offer it: rmf_ros2 does not, D17)")  # fmt: skip
+        return CaseFinding(case, Verdict.FAIL, expected=expected,
+                       seen=f"{why}, where it answered the query during a run", absent=True)  # fmt: skip
+    got = (bool(answer.running), str(answer.status), str(answer.description), int(answer.id))
+    if got == (False, "", "", 0):
+        return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
+    seen = f"running={got[0]}, status {got[1]!r}, id {got[3]}, description {got[2]!r}"
+    if got[0] and got[1] == _STANDBY:  # a run's first status: the next run may have begun before the query
+        later = probe.link.wait_status(lambda s: seq_after(s.dynamic_event_seq, seq), probe.timeout)
+        if later is not None:
+            why = BEGAN_FIRST.format(later=later.dynamic_event_seq, ended=seq, seen=f" ({seen})")
+            return CaseFinding(case, Verdict.MISSING, seen=why, by_link=True)
+    return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen)
 
 
 _LAST_SEQ = U32_MAX
@@ -1619,6 +1680,7 @@ _CASES: dict[str, Callable[[Probe, Case], CaseFinding]] = {
     "action.cancel_running": _action_cancel_running,
     "action.cancel_answered": _action_cancel_answered,
     "finished.ends_the_run": _finished,
+    "describe.after_the_run": _describe_after,
     "finished.next_after": _next_after,
     "finished.cancel_after": _cancel_after,
     "finished.finished_after": _finished_after,
