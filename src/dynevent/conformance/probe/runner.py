@@ -1595,8 +1595,7 @@ def _describe_after(probe: Probe, case: Case) -> CaseFinding:
         if not probe.link.query_answered:
             return CaseFinding(case, Verdict.INFO, expected="an answer, where the server offers the query",
                            seen=f"{why} (a server need not offer it: rmf_ros2 does not, D17)")  # fmt: skip
-        return CaseFinding(case, Verdict.FAIL, expected=expected,
-                       seen=f"{why}, where it answered the query during a run", absent=True)  # fmt: skip
+        return _fails(case, "timeout", expected, f"{why}, where it answered the query during a run")
     got = (bool(answer.running), str(answer.status), str(answer.description), int(answer.id))
     if got == (False, "", "", 0):
         return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
@@ -1606,7 +1605,7 @@ def _describe_after(probe: Probe, case: Case) -> CaseFinding:
         if later is not None:
             why = BEGAN_FIRST.format(later=later.dynamic_event_seq, ended=seq, seen=f" ({seen})")
             return CaseFinding(case, Verdict.MISSING, seen=why, by_link=True)
-    return CaseFinding(case, Verdict.FAIL, expected=expected, seen=seen)
+    return _fails(case, "query", expected, seen)
 
 
 _LAST_SEQ = U32_MAX
