@@ -65,6 +65,7 @@ class RosLink(Link):
         self._subscriptions = [self._subscribe(name, latched(_READER_DEPTH)) for name in self._topics]
         self._action = ActionClient(node, DynamicEvent, action_name(fleet, robot))
         self._sender = GoalSender(node, self._action)
+        self._describer: Any = None  # the description query's client, made at its first use
 
     def _subscribe(self, name: str, qos: QoSProfile) -> Any:
         kind, topic, callback = self._topics[name]
@@ -198,23 +199,24 @@ class RosLink(Link):
         service = convert.describe_type()
         if service is None:
             return None, "this installation's rmf_task_msgs has no DescribeDynamicEvent service type"
-        client = self._node.create_client(service, description_service(self.fleet, self.robot))
-        try:
-            if not client.wait_for_service(timeout_sec=min(timeout, _SERVICE_WAIT)):
-                return None, f"no description service {description_service(self.fleet, self.robot)}"
-            answered = threading.Event()
-            future = client.call_async(service.Request())
-            future.add_done_callback(lambda _: answered.set())
-            if not answered.wait(timeout):
-                return None, f"the description service did not answer within {timeout:g} s"
-            return future.result(), ""
-        finally:
-            self._node.destroy_client(client)
+        if self._describer is None:  # one client for the run: a query after the first needs no discovery
+            self._describer = self._node.create_client(service, description_service(self.fleet, self.robot))
+        client = self._describer
+        if not client.wait_for_service(timeout_sec=min(timeout, _SERVICE_WAIT)):
+            return None, f"no description service {description_service(self.fleet, self.robot)}"
+        answered = threading.Event()
+        future = client.call_async(service.Request())
+        future.add_done_callback(lambda _: answered.set())
+        if not answered.wait(timeout):
+            return None, f"the description service did not answer within {timeout:g} s"
+        return future.result(), ""
 
     def introspect(self) -> bool:
         """Publish the probe's action service events (ROS 2 introspection, with contents)."""
         return introspect(self._action, self._node)
 
     def destroy(self) -> None:
+        if self._describer is not None:
+            self._node.destroy_client(self._describer)
         self._sender.destroy()
         self._action.destroy()
