@@ -267,6 +267,32 @@ def test_an_answer_after_the_status_of_its_childs_end_still_names_the_child_and_
     assert found(bad.check()) == [(bad.line, "R8.1", "result")]
 
 
+@pytest.mark.spec("R4.6", "R11.1")
+def test_a_finished_accepted_after_the_status_of_the_childs_end_may_have_come_after_that_end() -> None:
+    """Seen at a client across a lossy link: a FINISHED sent while a child ran, its response heard
+    after the status of the child's end and the child's answer.  Its request may have reached the
+    server after that end (a lost request is sent again, seconds later), where the server rightly
+    accepts it: no finding.  A FINISHED accepted before the child's end is heard still is one (R4.6)."""
+
+    def trace(response_first: bool) -> Trace:
+        finished = {"dynamic_event_seq": 1, "event_type": 3, "category": "", "description": "", "id": 0}
+        talk = Trace()
+        talk.rows[0] = {**talk.rows[0], "tap": "client"}
+        talk.started().add("goal", goal_uuid=uuid(2), goal=finished)
+        if response_first:
+            talk.add("goal_response", goal_uuid=uuid(2), accepted=True)
+        talk.status(1, 1, "standby", 6).result(1, "succeeded", "completed", 6)
+        if not response_first:
+            talk.add("goal_response", goal_uuid=uuid(2), accepted=True)
+        return talk.result(2, "succeeded", "completed", 5).status(1, 0, "uninitialized", 0)
+
+    late = trace(response_first=False)
+    assert late.check().clean, found(late.check())
+    assert [finding[1:] for finding in found(trace(response_first=True).check())][:1] == [
+        ("R4.6", "accepted_busy")
+    ]
+
+
 @pytest.mark.spec("R19.1")
 def test_the_observer_keeps_the_latest_closed_goals_only_and_still_finds_a_late_second_answer() -> None:
     """Memory stays flat on a trace of any length: of the goals answered or refused, the observer keeps

@@ -1349,6 +1349,13 @@ def _response_ahead(rooms: _ObserverState, record: Record, window: Iterable[Reco
         seen = rooms.goals.get(ahead.goal_uuid)
         return ahead.kind == "goal_response" and seen is not None and not seen.responded
 
+    def explained(response: Record) -> bool:
+        seen = rooms.goals.get(response.goal_uuid)
+        if seen is None or rooms.replica.state is None:
+            return True
+        replica = rooms.replica
+        return isinstance(machine.accept(replica.st, seen.goal, replica.config_for(seen.goal)), outs.Accepted)
+
     if record.kind == "status":
         seq = record.message.dynamic_event_seq
         state = rooms.replica.state
@@ -1360,8 +1367,18 @@ def _response_ahead(rooms: _ObserverState, record: Record, window: Iterable[Reco
         late = _late_feedback(rooms.replica.state, record.message, list(window))
         if late is not None:
             return late
-        # the status of an accepted goal's start, before its response
-        return next((ahead for ahead in window if awaited(ahead) and ahead.accepted), None)
+        # the status of an accepted goal's start, before its response; where the status shows no child
+        # running (a child's end), a response the state before it does not explain stays where it came:
+        # its request may have reached the server after that end (a FINISHED sent while a child ran)
+        ends = not machine.runs_a_child(record.message)
+        return next(
+            (
+                ahead
+                for ahead in window
+                if awaited(ahead) and ahead.accepted and (explained(ahead) or not ends)
+            ),
+            None,
+        )
     if record.kind not in ("feedback", "result"):
         return None
     return next((ahead for ahead in window if awaited(ahead) and ahead.goal_uuid == record.goal_uuid), None)
