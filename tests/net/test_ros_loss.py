@@ -35,15 +35,24 @@ def _verdicts(junit: Path) -> dict[str, str]:
     return verdicts
 
 
-@pytest.mark.skipif(
-    os.environ.get("DYNEVENT_NET_LOSS") != "1",
-    reason="opt-in (DYNEVENT_NET_LOSS=1) until #51 item 4 is done: the probe's verdicts and serve's client "
-    "judge held at 10% and 30% in the latest runs, but check on the bag may read feedback a lossy link "
-    "delivered after the status of its child's end as sent after that end (R8.2: a bag cannot tell it from "
-    "rmf_ros2's own D30) at 10% now and then, and at 30% misreads more late messages",
-)
+#: The losses each way: 10% runs everywhere the tests across hosts run (CI included); 30% is opt-in.
+LOSSES = [
+    10,
+    pytest.param(
+        30,
+        marks=pytest.mark.skipif(
+            os.environ.get("DYNEVENT_NET_LOSS") != "1",
+            reason="opt-in (DYNEVENT_NET_LOSS=1) until #51 item 4 is done at 30%: a CANCEL or an "
+            "action-level cancel sent while a child ran, refused because the lossy link delivered it after "
+            "the child's end, may still be read by the judge as refused while the child ran, when the "
+            "refusal is heard before the child's end",
+        ),
+    ),
+]
+
+
 @pytest.mark.spec("R19.1", "R8.2", "R5.2")
-@pytest.mark.parametrize("loss", [10, 30])
+@pytest.mark.parametrize("loss", LOSSES)
 def test_loss_gives_no_false_verdict(ros_site: Callable[..., RosSite], loss: int) -> None:
     site = ros_site(["server", "prober", "recorder", "client"])
     categories = {"go_to_place": {"duration": 6.0, "report_every": 1.0}}  # longer than the link's lag
