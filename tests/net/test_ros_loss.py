@@ -42,10 +42,9 @@ LOSSES = [
         30,
         marks=pytest.mark.skipif(
             os.environ.get("DYNEVENT_NET_LOSS") != "1",
-            reason="opt-in (DYNEVENT_NET_LOSS=1) until #51 item 4 is done at 30%: a CANCEL or an "
-            "action-level cancel sent while a child ran, refused because the lossy link delivered it after "
-            "the child's end, may still be read by the judge as refused while the child ran, when the "
-            "refusal is heard before the child's end",
+            reason="opt-in (DYNEVENT_NET_LOSS=1) until #51 item 4 is done at 30%: an action-level cancel "
+            "sent while a child ran, refused because the lossy link delivered it after the child's end, is "
+            "still read by the judge as refused while the child ran (R10.3)",
         ),
     ),
 ]

@@ -293,6 +293,32 @@ def test_a_finished_accepted_after_the_status_of_the_childs_end_may_have_come_af
     ]
 
 
+@pytest.mark.spec("R4.13", "R4.16")
+def test_a_cancel_refused_at_a_client_before_it_hears_the_childs_end_may_have_come_after_that_end() -> None:
+    """Seen at a client across a lossy link: a CANCEL of the running child, delivered after the child's
+    end, rightly refused (R4.13: no child runs), the refusal heard before the status of that end and
+    the child's answer.  At a client it is read as reaching the server after the end whose answer is
+    ahead: no finding.  A refusal for a reason that end does not give, or seen at the server, where a
+    response follows its request at once, is still one (R4.16)."""
+
+    def trace(tap: str, reason: str | None) -> Trace:
+        cancel = {"dynamic_event_seq": 1, "event_type": 2, "category": "", "description": "", "id": 6}
+        talk = Trace()
+        talk.rows[0] = {**talk.rows[0], "tap": tap}
+        talk.started().add("goal", goal_uuid=uuid(2), goal=cancel)
+        refusal: dict[str, Any] = {"goal_uuid": uuid(2), "accepted": False}
+        talk.add("goal_response", **(refusal if reason is None else {**refusal, "reason": reason}))
+        return talk.status(1, 1, "standby", 6).result(1, "succeeded", "completed", 6)
+
+    for reason in (None, "cancel_idle"):
+        late = trace("client", reason)
+        assert late.check().clean, (reason, found(late.check()))
+    for tap, reason in (("client", "busy"), ("server", None)):
+        assert [finding[1:] for finding in found(trace(tap, reason).check())] == [
+            ("R4.16", "rejected_acceptable")
+        ]
+
+
 @pytest.mark.spec("R19.1")
 def test_the_observer_keeps_the_latest_closed_goals_only_and_still_finds_a_late_second_answer() -> None:
     """Memory stays flat on a trace of any length: of the goals answered or refused, the observer keeps

@@ -478,8 +478,9 @@ class _Part:
 class _Requests(_Part):
     """Goal requests, their responses and action-level cancels: the machine's ``accept``, compared."""
 
-    def __init__(self, rooms: _ObserverState) -> None:
+    def __init__(self, rooms: _ObserverState, *, apart: bool = False) -> None:
         super().__init__(rooms)
+        self.apart = apart  # the records were seen apart from the server (a client, a recorder)
         self.duplicates: set[str] = set()  # goal UUIDs requested again while open
 
     def on_goal(self, record: Record) -> None:
@@ -592,6 +593,14 @@ class _Requests(_Part):
             if self.agrees(decision, record):
                 self.replica.commit(state, owed)
                 return
+        if self.apart and not record.accepted:
+            # at a client, whose channels lag one another: a refusal the request reached the server
+            # too late for, after the running child's end, whose answer is heard later
+            for ended in _ended_ahead(self.replica, self.ahead):
+                state, owed = self.replica.simulate(ended)
+                if self.agrees(machine.accept(state, goal, self.replica.config_for(goal)), record):
+                    self.replica.commit(state, owed)
+                    return
         if record.reason is RejectReason.SHUTTING_DOWN:
             state, owed = self.replica.simulate([ins.Shutdown(now=self.replica.now)])
             self.replica.commit(state, owed)
@@ -822,11 +831,7 @@ class _Runs(_Part):
         """A child's end whose answer the next records show, after the starts of none, one, ... of the
         queued goals (a CANCEL starts silently and stops the child): a tap at a client sees the status
         topic and the answer on separate channels, so the status may come first."""
-        running = self.replica.st.running
-        answer = self.ahead.of_goal(running.goal_uuid) if running is not None and running.started else None
-        if answer is None or answer.kind != "result" or answer.message.status not in _STATUS_VALUES:
-            return []
-        return self.child_ends(ins.ChildFinished(status=answer.message.status, now=self.replica.now))
+        return _ended_ahead(self.replica, self.ahead)
 
     def ended_unanswered(self, message: DynamicEventStatus) -> tuple[State, list[Owed]] | None:
         """A status that shows the running child's end (WAITING, or INACTIVE under a task signal),
@@ -853,9 +858,7 @@ class _Runs(_Part):
         """``ended`` after the starts of all, ..., one, none of the queued goals (a CANCEL starts
         silently and stops the child); most starts first: a binding starts a goal as soon as it
         accepts it."""
-        now = self.replica.now
-        starts = [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now) for queued in self.replica.st.queued]
-        return [[*starts[:count], ended] for count in range(len(starts), -1, -1)]
+        return _child_ends(self.replica, ended)
 
 
 def _answers(owed: Iterable[Owed]) -> set[tuple[str, str]]:
@@ -1298,8 +1301,9 @@ class _Observer:
         findings, ahead = _Findings(), _Lookahead()
         replica = _ServerReplica(header, findings, ahead)
         self.rooms = _ObserverState(findings=findings, ahead=ahead, replica=replica, goals=_Goals(replica))
-        self.requests = _Requests(self.rooms)
-        self.runs = _Runs(self.rooms, header, apart=apart or header.tap == "client")
+        apart = apart or header.tap == "client"
+        self.requests = _Requests(self.rooms, apart=apart)
+        self.runs = _Runs(self.rooms, header, apart=apart)
         self.feedback = _Feedback(self.rooms)
         self.answers = _Answers(self.rooms)
         self._handlers: dict[str, Callable[[Record], None]] = {
@@ -1322,6 +1326,23 @@ class _Observer:
         self._handlers[record.kind](record)
         if record.kind in ("result", "goal_response"):
             rooms.goals.judged(record)
+
+
+def _ended_ahead(replica: _ServerReplica, ahead: _Lookahead) -> list[list[ins.Input]]:
+    """The running child's end, where its answer is among the records ahead (its status, from
+    ``ended_child``'s answer), after the starts of all, ..., none of the queued goals."""
+    running = replica.st.running
+    answer = ahead.of_goal(running.goal_uuid) if running is not None and running.started else None
+    if answer is None or answer.kind != "result" or answer.message.status not in _STATUS_VALUES:
+        return []
+    return _child_ends(replica, ins.ChildFinished(status=answer.message.status, now=replica.now))
+
+
+def _child_ends(replica: _ServerReplica, ended: ins.ChildFinished) -> list[list[ins.Input]]:
+    """``ended`` after the starts of all, ..., one, none of the queued goals, most starts first."""
+    now = replica.now
+    starts = [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now) for queued in replica.st.queued]
+    return [[*starts[:count], ended] for count in range(len(starts), -1, -1)]
 
 
 #: How many closed (answered or refused) goals the observer remembers: a record naming one of the

@@ -1042,8 +1042,10 @@ def _end_unpublished(probe: Probe, case: Case) -> CaseFinding | None:
         return None
     for exchange in reversed(probe._nexts):
         answer = exchange.answer
-        if answer is None or answer[1].execution_failure or exchange.goal.dynamic_event_seq != (
-            latest.dynamic_event_seq
+        if (
+            answer is None
+            or answer[1].execution_failure
+            or exchange.goal.dynamic_event_seq != (latest.dynamic_event_seq)
         ):
             continue
         child = answer[1].id
