@@ -734,6 +734,30 @@ def test_a_goal_received_after_its_starts_status_and_feedback_goes_before_them(
     assert check_bag(tmp_path / "bag").clean
 
 
+def test_a_goal_whose_servers_records_a_lossy_link_delivered_seconds_late_goes_by_the_servers_stamps(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Seen across hosts at 10% loss: the server's own records of a NEXT's request and response (its
+    introspection) reached the recorder three seconds late, after the RUNNING status and the feedback
+    the goal's start published.  The server stamps them as it sends them, as it stamps a status: each
+    goes by its stamp, up to ``HOLD`` back, and the status is not read as a child no goal started."""
+    run = Conversation().begin().status(1, 1, "standby", 0)
+    run.now += 5 * SECOND
+    run.goal(1, goal_id=1).ask(1).status(1, 2, "underway", 1).feedback(1, "underway", 1)
+    run.now += 2 * SECOND
+    run.feedback(1, "underway", 1).status(1, 1, "standby", 1).result(1, SUCCEEDED, "completed", 1)
+    late = 3 * SECOND
+    goal_events = run.messages[2:4]  # the request and the response, as the server stamped them
+    rest = run.messages[4:7]
+    run.messages[2:7] = [
+        *rest,
+        *[(topic, kind, time + late, event) for topic, kind, time, event in goal_events],
+    ]
+    passed = _passed(monkeypatch, run.write(tmp_path / "bag", StoragePlugin.MCAP))
+    assert passed[:4] == ["begin", "status", "goal", "goal_response"], passed
+    assert check_bag(tmp_path / "bag").clean, _robot(check_bag(tmp_path / "bag")).report.findings
+
+
 def test_feedback_received_between_its_childs_end_and_its_answer_is_read_as_sent_before_both(
     tmp_path: Path,
 ) -> None:

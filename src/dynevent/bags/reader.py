@@ -760,8 +760,9 @@ HOLD = 10_000_000_000
 
 def _stamp(channel: str, message: Any, time: int, sent: int | None) -> int:
     """The time the server stamped on a message, when it is within :data:`SKEW` of the bag time (a
-    status: up to :data:`HOLD` before it, since a server stamps a status as it publishes it, R2.2, and
-    a lossy link may deliver it that late).  A message with no stamp of its own (feedback, the goal
+    status or a service event of the server's, its goal request received or its response sent: up to
+    :data:`HOLD` before it, since a server stamps them as it publishes them, R2.2, and a lossy link
+    may deliver them that late).  A message with no stamp of its own (feedback, the goal
     statuses) goes by the time the server sent it where the bag holds it (:mod:`dynevent.bags.sent`),
     up to :data:`HOLD` before the bag time; else by the bag time.  A service event a client published
     (its request sent, its response received) has the client's clock, which may be another host's:
@@ -775,7 +776,10 @@ def _stamp(channel: str, message: Any, time: int, sent: int | None) -> int:
     if stamped is None:
         return sent if sent is not None and -HOLD <= sent - time <= SKEW else time
     nanoseconds = int(stamped.sec) * 1_000_000_000 + int(stamped.nanosec)
-    earliest = HOLD if channel == "status" else SKEW
+    # what the server stamps as it sends it (a status, its own record of a goal's request and
+    # response) a lossy link may deliver up to HOLD late
+    server = channel == "status" or channel in _SERVICES
+    earliest = HOLD if server else SKEW
     return nanoseconds if -earliest <= nanoseconds - time <= SKEW else time
 
 
