@@ -192,10 +192,11 @@ def test_a_goal_whose_response_the_bag_lost_is_read_as_accepted_from_its_feedbac
         return talk.result(1, SUCCEEDED, "completed", 1).status(1, 1, "standby", 1)
 
     lossy = run(response=False)
-    feedback = next(time for topic, _, time, _ in lossy.messages if topic.endswith("feedback"))
+    request = next(time for topic, _, time, _ in lossy.messages if "send_goal" in topic)
     robot = _robot(check_bag(lossy.write(tmp_path / "lossy", StoragePlugin.MCAP)))
     assert robot.report.clean, robot.report.findings
-    assert robot.unheard == ((feedback, "01" * 16),) and robot.lost == ()
+    # accepted as it came (its feedback, within the records held, says so)
+    assert robot.unheard == ((request, "01" * 16),) and robot.lost == ()
     assert _robot(check_bag(run().write(tmp_path / "whole", StoragePlugin.MCAP))).unheard == ()
     done = check_command(str(tmp_path / "lossy"))
     assert done.returncode == 0 and f"the bag lacks the response to goal {'01' * 16}" in done.stdout
@@ -228,6 +229,7 @@ def test_a_goal_whose_response_the_bag_lost_is_read_as_accepted_from_the_status_
     still found."""
     talk = _request_alone(Conversation().begin().status(1, 1, "standby", 0), 1, 1).status(1, 2, "underway", 1)
     running = talk.now
+    talk.now += 11 * SECOND  # its feedback comes later than the records held: the status alone tells
     talk.ask(1).feedback(1, "underway", 1).result(1, SUCCEEDED, "completed", 1).status(1, 1, "standby", 1)
     robot = _robot(check_bag(talk.write(tmp_path / "lossy", StoragePlugin.MCAP)))
     assert robot.report.clean, robot.report.findings
@@ -849,6 +851,56 @@ def test_feedback_a_lossy_link_delivered_after_its_childs_end_goes_by_when_sent(
         robot = next(robot for robot in report.robots if robot.robot == "probed")
         findings = [(finding.rule, finding.code) for finding in robot.report.findings]
         assert findings == [("R8.2", "feedback_not_running")] * 2, robot.report.findings
+
+
+@pytest.mark.spec("R8.2")
+def test_a_message_sent_further_back_than_the_reader_holds_is_said_late_not_judged(tmp_path: Path) -> None:
+    """The two feedback messages of the lossy bag, had the link delivered them 13 s after they were
+    sent (more than HOLD: a loaded host, as a busy machine's loss run showed), came after the
+    records the server sent later had been judged: neither is judged in place (two R8.2 findings
+    were), and each is said, with its bag time and how late it came.  The same messages 6 s late
+    (within HOLD) are judged where they were sent, and none is late."""
+    from dynevent.bags.reader import HOLD
+    from dynevent.tools.check import bag_records, format_bag
+
+    late_by = HOLD + 3_000_000_000
+
+    def sent_at(topic: str, time: int, sent: int | None) -> int | None:
+        """The two late feedback messages 13 s before their bag time; every other message but feedback
+        a millisecond (the other feedback messages keep none: a lossy link delayed some of them, by
+        how much the bag does not say)."""
+        if sent is not None:
+            return time - late_by
+        return None if topic.endswith("/_action/feedback") else time - 1_000_000
+
+    bag = _copy(LATE_FEEDBACK, tmp_path / "later", sent_at)
+    report = check_bag(bag)
+    robot = next(robot for robot in report.robots if robot.robot == "probed")
+    assert report.clean, robot.report.findings
+    assert [(channel, time - sent) for time, channel, sent in robot.late] == [("feedback", late_by)] * 2
+    assert format_bag(report).count("a feedback message sent 13.0 s before it was received") == 2
+    rows = [row for row in bag_records(report) if row["type"] == "late"]
+    assert [(row["robot"], row["channel"]) for row in rows] == [("tinyRobot/probed", "feedback")] * 2
+    assert not next(robot for robot in check_bag(LATE_FEEDBACK).robots if robot.robot == "probed").late
+
+
+#: A bag recorded across hosts at 10% loss with a busy loop on one core (tests/data/lossy/README.md).
+LOADED = LATE_FEEDBACK.parent / "loaded"
+
+
+@pytest.mark.spec("R4.13", "R9.1")
+def test_a_goal_whose_response_was_lost_and_whose_answer_came_later_was_accepted_as_it_came() -> None:
+    """A CANCEL whose response the recorder lost, and whose first record after its request is its
+    answer, seconds later, after the status of the cancelled child's end: the server accepted it as
+    it came, while the child ran (the answer says so), so it is read as accepted there, not at its
+    answer (where no child runs: R4.13 and R9.1 findings).  The bag's one message of the server's
+    received more than HOLD after it was sent is said, not judged."""
+    report = check_bag(LOADED)
+    robot = next(robot for robot in report.robots if robot.robot == "probed")
+    assert report.clean, robot.report.findings
+    cancel = "0457dd7075b4d1aa8e11102da160678f"
+    assert (1795877466405981199, cancel) in robot.unheard  # at its request, not its answer
+    assert [(time, channel) for time, channel, _ in robot.late] == [(1795877397189648399, "get_result")]
 
 
 def test_the_recorders_writer_keeps_each_messages_publish_time_beside_its_log_time(tmp_path: Path) -> None:

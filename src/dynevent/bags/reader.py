@@ -176,6 +176,10 @@ class RobotReport:
     #: where the bag held a goal's request but lacked its response, and its feedback or answer came:
     #: (the bag time of that record, the goal's UUID); the goal is read as accepted from there
     unheard: tuple[tuple[int, str], ...] = ()
+    #: the server's messages received more than :data:`HOLD` after they were sent, after records it
+    #: sent later had been judged (a lossy link on a loaded host): (bag time, channel, when sent, as the
+    #: bag says); each is left unjudged, and said
+    late: tuple[tuple[int, str, int], ...] = ()
 
     @property
     def name(self) -> str:
@@ -475,6 +479,11 @@ class _Robot:
         self._before: list[Report] = []  # the judgements cut where the bag lost a goal's request
         self.lost: list[tuple[int, str]] = []
         self.unheard: list[tuple[int, str]] = []
+        #: the messages of the server's the bag received after records it sent later were passed on,
+        #: (bag time, channel, when sent): not judged (see :data:`HOLD`)
+        self.late: list[tuple[int, str, int]] = []
+        self._sent_of: dict[int, int] = {}  # when the server sent each waiting record, by arrival
+        self._sent_passed = 0  # the latest time the server sent a record passed on
         self._arrived = 0
         self._began: int | None = None  # the bag time of the robot's first message
         self._server_introspects = False  # the bag holds the server's own records of its goal service
@@ -487,6 +496,12 @@ class _Robot:
         self.channels.add(channel)
         if self._began is None:
             self._began = time
+        server_sent = sent is not None and (
+            channel not in _SERVICES or int(message.info.event_type) in (_REQUEST_RECEIVED, _RESPONSE_SENT)
+        )
+        if server_sent and sent is not None and sent < self._sent_passed and time - sent > HOLD:
+            self.late.append((time, channel, sent))  # sent before what was passed on: not judged
+            return
         # nothing goes before the robot's first message: a status latched for a late subscriber comes
         # at once, published before the recording began
         stamp = max(_stamp(channel, message, time, sent), self._began)
@@ -515,7 +530,7 @@ class _Robot:
                     self._seen[key] = None
                     if len(self._seen) > _CALLS:
                         self._seen.popitem(last=False)
-                self._order(record, stamp, sent_then)
+                self._order(record, stamp, sent_then, sent if server_sent else None)
         except InvalidMessage:
             self.refused += 1
 
@@ -528,7 +543,7 @@ class _Robot:
         later = [item for item in self._waiting if item[3].kind == "feedback" and _logged(item[3]) > stamp]
         return min(later) if later else None
 
-    def _order(self, record: Record, stamp: int, sent: bool = False) -> None:
+    def _order(self, record: Record, stamp: int, sent: bool = False, server_sent: int | None = None) -> None:
         """Pass records on in the server's order: a recorder receives each topic in order, but not
         the topics in order with one another (a goal's request event may come after the status its
         start published).  Each record waits :data:`SKEW` of bag time, then goes in the order of the
@@ -538,7 +553,10 @@ class _Robot:
         keep their own order: its answer goes after the feedback received before it, and feedback
         received while its answer waits is read as sent before it (the feedback topic and the
         result service are two channels: a recorder cannot tell late delivery from late sending), unless
-        the bag says when the feedback was sent (``sent``): then it goes by that alone."""
+        the bag says when the feedback was sent (``sent``): then it goes by that alone.  A record the
+        server published keeps the time the bag says it was sent (``server_sent``) until it is passed
+        on: a message sent before the latest of those came too late to be put in its place
+        (:attr:`late`)."""
         while self._waiting and self._waiting[0][0] <= record.time - HOLD:  # what is due goes first
             self._release()
         guess = record.kind == "feedback" and not sent  # when it was sent, read from what came around it
@@ -563,6 +581,8 @@ class _Robot:
             while len(self._last) > _CALLS:
                 self._last.popitem(last=False)
         entry = (key[0], key[1], self._arrived, record)
+        if server_sent is not None:
+            self._sent_of[self._arrived] = server_sent
         heapq.heappush(self._waiting, entry)
         self._arrived += 1
         if record.kind == "goal":
@@ -591,8 +611,20 @@ class _Robot:
             if first is not None and first is not entry:
                 self._waiting.remove(first)
                 heapq.heapify(self._waiting)
-                self._pass(first[3])
-        self._pass(record)
+                self._passing(first)
+        self._passing(entry)
+        # its response lost, and its feedback or answer among the records held: it was accepted as it
+        # came, before the records between (the status of a child's end, say)
+        lost = record.kind == "goal" and uuid in self._goals and uuid not in self._waiting_responses
+        if lost and any(item[3].goal_uuid == uuid and item[3].kind in _ACCEPTED_BY for item in self._waiting):
+            self.unheard_response(record)
+
+    def _passing(self, entry: tuple[int, float, int, Record]) -> None:
+        """Pass on a waiting record, noting when the server sent it where the bag says."""
+        sent = self._sent_of.pop(entry[2], None)
+        if sent is not None:
+            self._sent_passed = max(self._sent_passed, sent)
+        self._pass(entry[3])
 
     @property
     def judge(self) -> Checker | PartialJudge:
@@ -615,7 +647,7 @@ class _Robot:
             return
         if record.kind in ("feedback", "result") and record.goal_uuid not in self._requested:
             self.lost_request(record)
-        elif record.kind in ("feedback", "result") and record.goal_uuid in self._goals:
+        elif record.kind in _ACCEPTED_BY and record.goal_uuid in self._goals:
             self.unheard_response(record)
         elif record.kind == "status":
             self._last_status = record
@@ -735,7 +767,7 @@ class _Robot:
             report = attrs.evolve(report, records=records, findings=before.findings + report.findings)
         return RobotReport(
             self.fleet, self.robot, channels, absent, report, not self.judged, self.refused, tuple(self.lost),
-            tuple(self.unheard),
+            tuple(self.unheard), tuple(self.late),
         )  # fmt: skip
 
 
@@ -754,7 +786,10 @@ SKEW = 1_000_000_000
 
 #: How long a record waits (bag time) for those the server sent before it, on other channels or,
 #: for feedback, on its own: a recorder on a lossy link receives a lost message when it is sent again,
-#: seconds later (Fast DDS repairs at its writers' heartbeat, every 3 s by default).
+#: seconds later (Fast DDS repairs at its writers' heartbeat, every 3 s by default).  A message of the
+#: server's that the bag says was sent before a record already passed on, and more than this before it
+#: was received, is not judged: :attr:`RobotReport.late` says it (the bag's clock and the server's
+#: are taken to agree within this, as the publish times of one server's messages do with one another).
 HOLD = 10_000_000_000
 
 
@@ -796,6 +831,9 @@ _CALLS = 1024
 #: The records that open a goal: each goes by its own stamp, never after a record that names the goal
 #: but was received first (its start's feedback, say).
 _OPENING = frozenset({"goal", "goal_response"})
+#: The records of a goal that show it was accepted (a server feeds back and answers only a goal it
+#: accepted).
+_ACCEPTED_BY = frozenset({"feedback", "result"})
 #: The records a service event gives.
 _EVENT_KINDS = frozenset({"goal", "goal_response", "result", "cancel_request", "cancel_response"})
 

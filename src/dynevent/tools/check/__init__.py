@@ -112,6 +112,8 @@ def format_bag(bag: Any) -> str:
         for time, uuid in robot.unheard:
             lines.append(f"{where} @ {_bag_time(time)}: the bag lacks the response to goal {uuid}: "
                          "read as accepted from its feedback, answer or running child")  # fmt: skip
+        for time, channel, sent in robot.late:
+            lines.append(f"{where} @ {_bag_time(time)}: {_late(channel, time, sent)}")
         if robot.refused:
             lines.append(f"{where}: {robot.refused} message(s) the mirrors refuse, not judged")
         count = len(robot.report.findings)
@@ -125,6 +127,14 @@ def format_bag(bag: Any) -> str:
         f"{total or 'no'} violation{'s' if total != 1 else ''}"
     )
     return "\n".join(lines) + "\n"
+
+
+def _late(channel: str, time: int, sent: int) -> str:
+    """What a message of the server's that came too late to be judged in its place is said as."""
+    return (
+        f"a {channel} message sent {(time - sent) / 1e9:.1f} s before it was received, after messages "
+        "sent later were judged: not judged"
+    )
 
 
 def _bag_time(nanoseconds: int) -> str:
@@ -151,6 +161,9 @@ def bag_records(bag: Any) -> list[dict[str, Any]]:
         for time, uuid in robot.unheard:
             rows.append({"type": "lost_response", "file": bag.source, "robot": robot.name,
                          "time": _bag_time(time), "goal_uuid": uuid})  # fmt: skip
+        for time, channel, sent in robot.late:
+            rows.append({"type": "late", "file": bag.source, "robot": robot.name, "time": _bag_time(time),
+                         "channel": channel, "sent": _bag_time(sent)})  # fmt: skip
         if robot.refused:
             rows.append(
                 {"type": "refused", "file": bag.source, "robot": robot.name, "messages": robot.refused}
