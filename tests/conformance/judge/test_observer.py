@@ -319,6 +319,40 @@ def test_a_cancel_refused_at_a_client_before_it_hears_the_childs_end_may_have_co
         ]
 
 
+@pytest.mark.spec("R10.3")
+def test_an_action_level_cancel_refused_after_a_client_hears_its_goals_answer_may_have_come_after_it() -> (
+    None
+):
+    """Seen at a client across a lossy link: an action-level cancel of the running NEXT, sent while its
+    child ran, its refusal heard after the child's end and the NEXT's answer (succeeded: the cancel
+    did not stop it).  Its request may have reached the server after that answer (a lost request is
+    sent again, seconds later), where a server rightly refuses it: no finding.  Refused before the
+    answer is heard, or seen at the server, or after an answer that says the cancel stopped the child
+    (the cancel reached the server while the child ran), it is still one (R10.3)."""
+
+    def trace(tap: str, answer_first: bool, child: str = "completed") -> Trace:
+        talk = Trace()
+        talk.rows[0] = {**talk.rows[0], "tap": tap}
+        talk.started().add("cancel_request", goal_uuid=uuid(1))
+        if not answer_first:
+            talk.add("cancel_response", goal_uuid=uuid(1), accepted=False)
+        answer = "succeeded" if child == "completed" else "aborted"
+        talk.status(1, 1, "standby", 6).result(1, answer, child, 6)
+        if answer_first:
+            talk.add("cancel_response", goal_uuid=uuid(1), accepted=False)
+        return talk
+
+    late = trace("client", answer_first=True)
+    assert late.check().clean, found(late.check())
+    for tap, answer_first, child in (
+        ("client", False, "completed"),
+        ("server", True, "completed"),
+        ("client", True, "canceled"),
+    ):
+        findings = [finding[1:] for finding in found(trace(tap, answer_first, child).check())]
+        assert ("R10.3", "cancel_response") in findings, (tap, answer_first, child, findings)
+
+
 @pytest.mark.spec("R19.1")
 def test_the_observer_keeps_the_latest_closed_goals_only_and_still_finds_a_late_second_answer() -> None:
     """Memory stays flat on a trace of any length: of the goals answered or refused, the observer keeps

@@ -62,15 +62,16 @@ class GoalSeen:
     responded: bool = False
     accepted: bool = False
     answered: int | None = None  # the line of its terminal answer
+    stopped: bool = False  # its answer says its child was cancelled
     owed: bool = False  # dropped from the state on resynchronisation: its answers are not judged
 
     def respond(self, accepted: bool) -> None:
         """The server answered the request: accepted or refused."""
         self.responded, self.accepted = True, accepted
 
-    def answer(self, line: int) -> None:
-        """Its terminal answer came, on ``line``."""
-        self.answered = line
+    def answer(self, line: int, stopped: bool = False) -> None:
+        """Its terminal answer came, on ``line``; ``stopped``: it says the child was cancelled."""
+        self.answered, self.stopped = line, stopped
 
     def let_go(self) -> None:
         """The state no longer follows the goal: what it owes is not judged."""

@@ -647,6 +647,13 @@ class _Requests(_Part):
             return
         owed = self.replica.take(index)
         assert isinstance(owed.output, outs.CancelResponse)
+        seen = self.goals.get(record.goal_uuid)
+        answered = seen is not None and seen.answered is not None and not seen.stopped
+        if self.apart and owed.output.accepted and answered:
+            # at a client: the goal's answer heard before the refusal, and its child not cancelled: the
+            # request may have reached the server after that answer (a lost request is sent again,
+            # seconds later), where it is rightly refused
+            return
         if owed.output.accepted != record.accepted:
             word = {True: "accepted", False: "rejected"}
             self.findings.differs(
@@ -1143,7 +1150,7 @@ class _Answers(_Part):
                 "exactly one terminal answer per goal",
             )
             return
-        seen.answer(record.line)
+        seen.answer(record.line, stopped=record.message.status == Status.CANCELED.value)
         if seen.owed:
             return
         channel = f"goal:{uuid}"
