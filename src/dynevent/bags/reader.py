@@ -46,7 +46,7 @@ from dynevent import files
 from dynevent.bags import sent, unpack
 from dynevent.conformance.judge.observer import AnswerEvidence, Checker
 from dynevent.conformance.judge.partial import GOAL_STATUSES, PartialJudge
-from dynevent.conformance.judge.trace import Record, Report, TraceHeader
+from dynevent.conformance.judge.trace import Finding, Record, Report, TraceHeader
 from dynevent.conformance.received import (
     begin_from_ros,
     feedback_from_ros,
@@ -65,8 +65,9 @@ from dynevent.errors import (
     TraceError,
     short_repr,
 )
+from dynevent.wire.messages import Feedback
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
-from dynevent.wire.vocab import Compatibility, DynamicState, EventType, GoalStatus
+from dynevent.wire.vocab import Compatibility, DynamicState, EventType, GoalStatus, Violation
 
 __all__ = [
     "HIDDEN_SUFFIXES",
@@ -441,6 +442,48 @@ def _routes(
     return routes
 
 
+class _Calls:
+    """A robot's service calls, as its introspection events come: a response event carries no request
+    (ROS 2 introspection), so the request of the same call (client GID and sequence number) is kept
+    until its response comes, and a response that comes first is kept until its request does."""
+
+    def __init__(self) -> None:
+        self.requests: dict[tuple[str, bytes, int], Any] = {}  # calls whose response is to come
+        #: responses whose request is to come: (the event, its bag time, when it was sent)
+        self.early: dict[tuple[str, bytes, int], tuple[Any, int, int | None]] = {}
+
+    def paired(
+        self, channel: str, event: Any, came: tuple[int, int | None]
+    ) -> tuple[int, Any, Any, tuple[str, bytes, int]] | None:
+        """A service event as (kind, request, response, call).  None for a response whose request the
+        bag does not hold yet: it is kept in :attr:`early`, with when it ``came`` (its bag time, when
+        it was sent), for its request (a lossy link may deliver the request's event after the
+        response's), whose taker takes it then (:meth:`_Robot.take`)."""
+        kind = int(event.info.event_type)
+        call = (channel, bytes(bytearray(event.info.client_gid)), int(event.info.sequence_number))
+        request = event.request[0] if len(event.request) else None
+        response = event.response[0] if len(event.response) else None
+        if kind in (_REQUEST_SENT, _REQUEST_RECEIVED):
+            if request is None:
+                return None  # introspection without contents: nothing to judge
+            _keep(self.requests, call, request)
+            return kind, request, None, call
+        request = request if request is not None else self.requests.pop(call, None)
+        if request is None and response is not None:
+            _keep(self.early, call, (event, *came))
+        if request is None or response is None:
+            return None
+        return kind, request, response, call
+
+
+def _keep(books: dict[Any, Any], key: Any, value: Any) -> None:
+    """Keep ``key`` in ``books``, the latest :data:`_CALLS` keys only (calls never answered, or whose
+    request never came: the oldest are let go)."""
+    books[key] = value
+    while len(books) > _CALLS:
+        del books[next(iter(books))]
+
+
 class _Robot:
     """One robot's records, judged as they come.  A client's and the server's introspection both
     record each goal, response and answer: a record the same as one taken before is taken once (an
@@ -463,7 +506,7 @@ class _Robot:
         self.refused = 0
         # the records taken lately: the client's copy of one comes close to the server's
         self._seen: collections.OrderedDict[tuple[Any, ...], None] = collections.OrderedDict()
-        self._calls: dict[tuple[str, bytes, int], Any] = {}  # service calls whose response is to come
+        self._calls = _Calls()
         # records held for the server's order: (stamp, order, arrival, record)
         self._waiting: list[tuple[int, float, int, Record]] = []
         self._waiting_goals: dict[str, tuple[int, float, int, Record]] = {}
@@ -484,6 +527,7 @@ class _Robot:
         self.late: list[tuple[int, str, int]] = []
         self._sent_of: dict[int, int] = {}  # when the server sent each waiting record, by arrival
         self._sent_passed = 0  # the latest time the server sent a record passed on
+        self._late_logs: set[int] = set()  # the log seqs of late feedback, not judged
         self._arrived = 0
         self._began: int | None = None  # the bag time of the robot's first message
         self._server_introspects = False  # the bag holds the server's own records of its goal service
@@ -499,8 +543,14 @@ class _Robot:
         server_sent = sent is not None and (
             channel not in _SERVICES or int(message.info.event_type) in (_REQUEST_RECEIVED, _RESPONSE_SENT)
         )
+        while self._waiting and self._waiting[0][0] <= time - HOLD:  # what is due goes first
+            self._release()
         if server_sent and sent is not None and sent < self._sent_passed and time - sent > HOLD:
             self.late.append((time, channel, sent))  # sent before what was passed on: not judged
+            if channel == FEEDBACK:  # its log seqs, which a skip judged before it lacked
+                with contextlib.suppress(InvalidMessage):
+                    for record in _RECORDS[channel](time, message):
+                        self._late_logs.update(entry.seq for entry in record.message.logs)
             return
         # nothing goes before the robot's first message: a status latched for a late subscriber comes
         # at once, published before the recording began
@@ -509,7 +559,7 @@ class _Robot:
         call: tuple[str, bytes, int] | None = None
         try:
             if channel in _SERVICES:
-                message = self._paired(channel, message)
+                message = self._calls.paired(channel, message, (time, sent))
                 if message is None:
                     return
                 call = message[3]
@@ -533,6 +583,9 @@ class _Robot:
                 self._order(record, stamp, sent_then, sent if server_sent else None)
         except InvalidMessage:
             self.refused += 1
+        early = self._calls.early.pop(call, None) if call is not None else None
+        if early is not None:  # its response came first: taken now, as of when it came
+            self.take(channel, early[1], early[0], early[2])
 
     def _logged_after(self, stamp: int) -> tuple[int, float, int, Record] | None:
         """The first waiting feedback whose logs the server stamped after ``stamp``, if any (looked for
@@ -665,25 +718,15 @@ class _Robot:
             del self._goals[record.goal_uuid]
         self.judge.push(record)
 
-    def _paired(self, channel: str, event: Any) -> tuple[int, Any, Any, tuple[str, bytes, int]] | None:
-        """A service event as (kind, request, response, call): a response event carries no request (ROS 2
-        introspection), so the request of the same call (client GID and sequence number) is kept
-        until it comes.  None for a response whose request the bag does not hold."""
-        kind = int(event.info.event_type)
-        call = (channel, bytes(bytearray(event.info.client_gid)), int(event.info.sequence_number))
-        request = event.request[0] if len(event.request) else None
-        response = event.response[0] if len(event.response) else None
-        if kind in (_REQUEST_SENT, _REQUEST_RECEIVED):
-            if request is None:
-                return None  # introspection without contents: nothing to judge
-            self._calls[call] = request
-            while len(self._calls) > _CALLS:  # calls never answered: the oldest are let go
-                del self._calls[next(iter(self._calls))]
-            return kind, request, None, call
-        request = request if request is not None else self._calls.pop(call, None)
-        if request is None or response is None:
-            return None
-        return kind, request, response, call
+    def _came_late(self, finding: Finding) -> bool:
+        """Whether ``finding`` is a log seq that skips (R7.3) where the seq it lacked came late, on
+        feedback not judged (:attr:`late`): lost on the way and sent again, not skipped."""
+        feedback = finding.seen
+        if finding.code != Violation.LOG_SEQ.code or finding.detail != "skips":
+            return False
+        if not isinstance(feedback, Feedback):
+            return False
+        return any((entry.seq - 1) % 2**32 in self._late_logs for entry in feedback.logs)
 
     def lost_request(self, record: Record) -> None:
         """``record`` names a goal whose request the bag lacks (lost on the way: a recorder that had
@@ -765,6 +808,10 @@ class _Robot:
         for before in reversed(self._before):
             records = before.records + report.records
             report = attrs.evolve(report, records=records, findings=before.findings + report.findings)
+        if self._late_logs:
+            report = attrs.evolve(
+                report, findings=tuple(item for item in report.findings if not self._came_late(item))
+            )
         return RobotReport(
             self.fleet, self.robot, channels, absent, report, not self.judged, self.refused, tuple(self.lost),
             tuple(self.unheard), tuple(self.late),
