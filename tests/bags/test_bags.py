@@ -938,6 +938,20 @@ def test_a_response_whose_request_came_later_is_paired_and_a_skip_the_late_feedb
     ]
 
 
+@pytest.mark.spec("R4.6", "R2.2", "R5.2", "R7.3")
+@pytest.mark.parametrize(
+    "name", ["late_feedback", "loaded", "thirty", "ended_by_goal_status", "delayed", "late_begin"]
+)
+def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
+    """The recordings of tests/data/lossy (each README section says what the link did in it): check
+    finds nothing against the correct server.  In ``ended_by_goal_status`` the child's end is read
+    from the goal statuses that showed its goal succeeded (its status and answer were lost); in
+    ``delayed`` a feedback received 10 s after it was sent goes where it was sent; in ``late_begin``
+    a begin received 3 s late goes by when it was sent."""
+    report = check_bag(LOADED.parent / name)
+    assert report.clean, [robot.report.findings for robot in report.robots]
+
+
 def test_the_recorders_writer_keeps_each_messages_publish_time_beside_its_log_time(tmp_path: Path) -> None:
     """What ``dynevent record`` writes: an MCAP bag whose message records hold the publish time given
     (across chunks: more than one chunk's worth of messages), which rosbags and other readers still

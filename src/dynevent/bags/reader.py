@@ -527,6 +527,9 @@ class _Robot:
         self.late: list[tuple[int, str, int]] = []
         self._sent_of: dict[int, int] = {}  # when the server sent each waiting record, by arrival
         self._sent_passed = 0  # the latest time the server sent a record passed on
+        # the least lag (bag time less when sent) of the server's messages: the link's, and the offset
+        # between the server's clock and the bag's
+        self._least_lag: int | None = None
         self._late_logs: set[int] = set()  # the log seqs of late feedback, not judged
         self._arrived = 0
         self._began: int | None = None  # the bag time of the robot's first message
@@ -545,16 +548,24 @@ class _Robot:
         )
         while self._waiting and self._waiting[0][0] <= time - HOLD:  # what is due goes first
             self._release()
-        if server_sent and sent is not None and sent < self._sent_passed and time - sent > HOLD:
+        delayed = False  # on the way longer than the records wait: more than HOLD over the least lag
+        if server_sent and sent is not None:
+            lag = time - sent
+            self._least_lag = lag if self._least_lag is None else min(self._least_lag, lag)
+            delayed = lag - self._least_lag > HOLD
+        if delayed and sent is not None and sent < self._sent_passed:
             self.late.append((time, channel, sent))  # sent before what was passed on: not judged
             if channel == FEEDBACK:  # its log seqs, which a skip judged before it lacked
                 with contextlib.suppress(InvalidMessage):
                     for record in _RECORDS[channel](time, message):
                         self._late_logs.update(entry.seq for entry in record.message.logs)
             return
+        stamp = _stamp(channel, message, time, sent)
+        if delayed and sent is not None and self._least_lag is not None and abs(self._least_lag) <= SKEW:
+            stamp = sent  # nothing sent after it passed on yet: it goes where it was sent
         # nothing goes before the robot's first message: a status latched for a late subscriber comes
         # at once, published before the recording began
-        stamp = max(_stamp(channel, message, time, sent), self._began)
+        stamp = max(stamp, self._began)
         sent_then = channel == FEEDBACK and stamp != time and sent == stamp
         call: tuple[str, bytes, int] | None = None
         try:
@@ -696,6 +707,11 @@ class _Robot:
         if record.kind == GOAL_STATUSES:  # the goals' own records tell the rest
             for uuid, status in record.message:
                 if status.is_terminal:
+                    # its answer not among the records held (lost, with the status of its end, say):
+                    # the goal statuses alone show its child's end
+                    answer = uuid in self._waiting_answers
+                    if uuid not in self._settled and not answer and isinstance(self.judge, Checker):
+                        self.judge.goal_ended(uuid)
                     _remember(self._settled, uuid, status.value)
             return
         if record.kind in ("feedback", "result") and record.goal_uuid not in self._requested:
@@ -845,8 +861,10 @@ def _stamp(channel: str, message: Any, time: int, sent: int | None) -> int:
     status or a service event of the server's, its goal request received or its response sent: up to
     :data:`HOLD` before it, since a server stamps them as it publishes them, R2.2, and a lossy link
     may deliver them that late).  A message with no stamp of its own (feedback, the goal
-    statuses) goes by the time the server sent it where the bag holds it (:mod:`dynevent.bags.sent`),
-    up to :data:`HOLD` before the bag time; else by the bag time.  A service event a client published
+    statuses), or whose stamp is not used (a begin's start time more than :data:`SKEW` before the
+    bag time), goes by the time its publisher sent it where the bag holds it
+    (:mod:`dynevent.bags.sent`), up to :data:`HOLD` before the bag time; else by the bag time.  A
+    service event a client published
     (its request sent, its response received) has the client's clock, which may be another host's:
     its bag time is used.  (A feedback's logs' time orders it among feedback alone: :func:`_logged`.)"""
     if channel in _SERVICES and int(message.info.event_type) in (_REQUEST_SENT, _RESPONSE_RECEIVED):
@@ -855,14 +873,15 @@ def _stamp(channel: str, message: Any, time: int, sent: int | None) -> int:
     stamped = (
         getattr(message, source, None) if source else getattr(getattr(message, "info", None), "stamp", None)
     )
+    by_sent = sent if sent is not None and -HOLD <= sent - time <= SKEW else time
     if stamped is None:
-        return sent if sent is not None and -HOLD <= sent - time <= SKEW else time
+        return by_sent
     nanoseconds = int(stamped.sec) * 1_000_000_000 + int(stamped.nanosec)
     # what the server stamps as it sends it (a status, its own record of a goal's request and
     # response) a lossy link may deliver up to HOLD late
     server = channel == "status" or channel in _SERVICES
     earliest = HOLD if server else SKEW
-    return nanoseconds if -earliest <= nanoseconds - time <= SKEW else time
+    return nanoseconds if -earliest <= nanoseconds - time <= SKEW else by_sent
 
 
 def _logged(record: Record) -> int:

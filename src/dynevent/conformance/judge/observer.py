@@ -482,6 +482,9 @@ class _Requests(_Part):
         super().__init__(rooms)
         self.apart = apart  # the records were seen apart from the server (a client, a recorder)
         self.duplicates: set[str] = set()  # goal UUIDs requested again while open
+        #: the goals the action's goal statuses showed ended before the record judged (a bag's), the
+        #: latest CLOSED_GOALS
+        self.ended_shown: collections.OrderedDict[str, None] = collections.OrderedDict()
 
     def on_goal(self, record: Record) -> None:
         seen = self.goals.get(record.goal_uuid)
@@ -498,18 +501,22 @@ class _Requests(_Part):
     def ended_unseen(self) -> bool:
         """Whether an accepted goal the machine finds busy found the running child ended: a child
         whose last report was a final status (R20.2), of a goal the trace picked up mid-way (its
-        request, so its answer too, may be missing from a recording).  The child is then taken as
-        ended, as a client takes it, and its answer is not judged."""
+        request, so its answer too, may be missing from a recording); or one whose goal the action's
+        goal statuses showed ended before (:attr:`ended_shown`: a bag whose recorder lost both the
+        answer and the status of the child's end).  The child is then taken as ended, as a client
+        takes it, and its answer is not judged."""
         state = self.replica.st
         running = state.running
         if running is None or not running.started or state.task_signal:
             return False
         bound = self.goals.get(running.goal_uuid)
-        if not machine.ends_a_child(running.child_status) or bound is None or bound.line != 0:
+        if bound is None or bound.answered is not None:
             return False
-        if bound.answered is not None:
+        mid_way = machine.ends_a_child(running.child_status) and bound.line == 0
+        if not mid_way and running.goal_uuid not in self.ended_shown:
             return False
-        ended = ins.ChildFinished(status=running.child_status, now=self.replica.now)
+        final = running.child_status if machine.ends_a_child(running.child_status) else Status.COMPLETED.value
+        ended = ins.ChildFinished(status=final, now=self.replica.now)
         after, _ = self.replica.simulate([ended])
         self.replica.resync(after)
         bound.let_go()
@@ -1466,6 +1473,8 @@ class Checker:
     def __init__(self, header: TraceHeader, source: str = "<trace>", *, apart: bool = False) -> None:
         self.source = source
         self._observer = _Observer(header, apart=apart)
+        self._pushed = 0
+        self._shown: collections.deque[tuple[int, str]] = collections.deque()  # (before record, goal)
         self._window: collections.deque[Record] = collections.deque()
         self._count = 0
         self._client = header.tap == "client"
@@ -1475,8 +1484,15 @@ class Checker:
         """Take the next record; the one :data:`LOOKAHEAD` records before it (:data:`CLIENT_LOOKAHEAD`
         at a client) is judged."""
         self._window.append(record)
+        self._pushed += 1
         if len(self._window) > self._lookahead:
             self._judge_first()
+
+    def goal_ended(self, uuid: str) -> None:
+        """The action's goal statuses (a bag's, between the records pushed so far and the next)
+        showed goal ``uuid`` ended: a NEXT accepted after it finds that goal's child ended, where its
+        answer and the status of its end were lost on the way (:meth:`_Requests.ended_unseen`)."""
+        self._shown.append((self._pushed, uuid))
 
     def finish(self, evidence: AnswerEvidence | None = None) -> Report:
         """Judge what is held, then what never came (answers owed; ``evidence``: which answers the
@@ -1506,6 +1522,9 @@ class Checker:
             window.appendleft(record)
             record = response
         rooms.ahead.show(tuple(window))
+        ended = self._observer.requests.ended_shown
+        while self._shown and self._shown[0][0] <= self._count:  # shown before this record
+            _remember_goal(ended, self._shown.popleft()[1])
         try:
             self._observer.feed(record)
         except Unreadable as exc:
@@ -1513,6 +1532,13 @@ class Checker:
         self._count += 1
         if self._client and record.kind == "goal":
             _response_next(rooms, record, window)
+
+
+def _remember_goal(books: collections.OrderedDict[str, None], uuid: str) -> None:
+    """Keep ``uuid`` in ``books``, the latest :data:`CLOSED_GOALS` only."""
+    books[uuid] = None
+    while len(books) > CLOSED_GOALS:
+        books.popitem(last=False)
 
 
 def _response_next(rooms: _ObserverState, goal: Record, window: collections.deque[Record]) -> None:
