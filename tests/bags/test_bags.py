@@ -940,14 +940,24 @@ def test_a_response_whose_request_came_later_is_paired_and_a_skip_the_late_feedb
 
 @pytest.mark.spec("R4.6", "R2.2", "R5.2", "R7.3")
 @pytest.mark.parametrize(
-    "name", ["late_feedback", "loaded", "thirty", "ended_by_goal_status", "delayed", "late_begin"]
+    "name",
+    [
+        "late_feedback",
+        "loaded",
+        "thirty",
+        "ended_by_goal_status",
+        "delayed",
+        "late_begin",
+        "late_cancel_request",
+    ],
 )
 def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
     """The recordings of tests/data/lossy (each README section says what the link did in it): check
     finds nothing against the correct server.  In ``ended_by_goal_status`` the child's end is read
     from the goal statuses that showed its goal succeeded (its status and answer were lost); in
     ``delayed`` a feedback received 10 s after it was sent goes where it was sent; in ``late_begin``
-    a begin received 3 s late goes by when it was sent."""
+    a begin received 3 s late goes by when it was sent; in ``late_cancel_request`` a cancel's request
+    received 3 s late, after its goal's answer, goes by the server's stamp, before it."""
     report = check_bag(LOADED.parent / name)
     assert report.clean, [robot.report.findings for robot in report.robots]
 

@@ -484,6 +484,62 @@ def _keep(books: dict[Any, Any], key: Any, value: Any) -> None:
         del books[next(iter(books))]
 
 
+class _Lateness:
+    """A robot's messages that came later than the records wait (:data:`HOLD`), by when the bag says
+    the server sent them: the least time any of them was on its way (the link's, and the offset of
+    the server's clock from the bag's), and when the server sent the latest record passed on.  A
+    message on its way more than HOLD longer than the least is delayed; one sent before a record
+    already passed on is late (:attr:`late`), and not judged."""
+
+    def __init__(self) -> None:
+        #: the late messages: (bag time, channel, when sent)
+        self.late: list[tuple[int, str, int]] = []
+        self.sent_of: dict[int, int] = {}  # when the server sent each waiting record, by arrival
+        self._sent_passed = 0  # the latest time the server sent a record passed on
+        self._least_lag: int | None = None  # bag time less when sent, the least of the server's messages
+        self._logs: set[int] = set()  # the log seqs of late feedback
+
+    def delayed(self, time: int, sent: int) -> bool:
+        """Was a message of the server's received at bag ``time`` and ``sent`` then on its way more than
+        :data:`HOLD` longer than the quickest?"""
+        lag = time - sent
+        self._least_lag = lag if self._least_lag is None else min(self._least_lag, lag)
+        return lag - self._least_lag > HOLD
+
+    @property
+    def clocks_agree(self) -> bool:
+        """Do the server's clock and the bag's agree within :data:`SKEW` (its quickest message's lag)?"""
+        return self._least_lag is not None and abs(self._least_lag) <= SKEW
+
+    def overtaken(self, time: int, channel: str, message: Any, sent: int) -> bool:
+        """Was a delayed message ``sent`` before a record already passed on?  Then it is late: kept in
+        :attr:`late`, and a feedback's log seqs with it (a skip judged before it lacked them)."""
+        if sent >= self._sent_passed:
+            return False
+        self.late.append((time, channel, sent))
+        if channel == FEEDBACK:
+            with contextlib.suppress(InvalidMessage):
+                for record in _RECORDS[channel](time, message):
+                    self._logs.update(entry.seq for entry in record.message.logs)
+        return True
+
+    def passed(self, arrival: int) -> None:
+        """The record that arrived ``arrival``-th is passed on."""
+        sent = self.sent_of.pop(arrival, None)
+        if sent is not None:
+            self._sent_passed = max(self._sent_passed, sent)
+
+    def explains(self, finding: Finding) -> bool:
+        """Whether ``finding`` is a log seq that skips (R7.3) where the seq it lacked came late, on
+        feedback not judged: lost on the way and sent again, not skipped."""
+        feedback = finding.seen
+        if finding.code != Violation.LOG_SEQ.code or finding.detail != "skips":
+            return False
+        if not isinstance(feedback, Feedback):
+            return False
+        return any((entry.seq - 1) % 2**32 in self._logs for entry in feedback.logs)
+
+
 class _Robot:
     """One robot's records, judged as they come.  A client's and the server's introspection both
     record each goal, response and answer: a record the same as one taken before is taken once (an
@@ -522,15 +578,7 @@ class _Robot:
         self._before: list[Report] = []  # the judgements cut where the bag lost a goal's request
         self.lost: list[tuple[int, str]] = []
         self.unheard: list[tuple[int, str]] = []
-        #: the messages of the server's the bag received after records it sent later were passed on,
-        #: (bag time, channel, when sent): not judged (see :data:`HOLD`)
-        self.late: list[tuple[int, str, int]] = []
-        self._sent_of: dict[int, int] = {}  # when the server sent each waiting record, by arrival
-        self._sent_passed = 0  # the latest time the server sent a record passed on
-        # the least lag (bag time less when sent) of the server's messages: the link's, and the offset
-        # between the server's clock and the bag's
-        self._least_lag: int | None = None
-        self._late_logs: set[int] = set()  # the log seqs of late feedback, not judged
+        self.lateness = _Lateness()
         self._arrived = 0
         self._began: int | None = None  # the bag time of the robot's first message
         self._server_introspects = False  # the bag holds the server's own records of its goal service
@@ -548,32 +596,25 @@ class _Robot:
         )
         while self._waiting and self._waiting[0][0] <= time - HOLD:  # what is due goes first
             self._release()
-        delayed = False  # on the way longer than the records wait: more than HOLD over the least lag
-        if server_sent and sent is not None:
-            lag = time - sent
-            self._least_lag = lag if self._least_lag is None else min(self._least_lag, lag)
-            delayed = lag - self._least_lag > HOLD
-        if delayed and sent is not None and sent < self._sent_passed:
-            self.late.append((time, channel, sent))  # sent before what was passed on: not judged
-            if channel == FEEDBACK:  # its log seqs, which a skip judged before it lacked
-                with contextlib.suppress(InvalidMessage):
-                    for record in _RECORDS[channel](time, message):
-                        self._late_logs.update(entry.seq for entry in record.message.logs)
-            return
+        delayed = server_sent and sent is not None and self.lateness.delayed(time, sent)
+        if delayed and sent is not None and self.lateness.overtaken(time, channel, message, sent):
+            return  # sent before what was passed on: not judged
         stamp = _stamp(channel, message, time, sent)
-        if delayed and sent is not None and self._least_lag is not None and abs(self._least_lag) <= SKEW:
+        if delayed and sent is not None and self.lateness.clocks_agree:
             stamp = sent  # nothing sent after it passed on yet: it goes where it was sent
         # nothing goes before the robot's first message: a status latched for a late subscriber comes
         # at once, published before the recording began
         stamp = max(stamp, self._began)
         sent_then = channel == FEEDBACK and stamp != time and sent == stamp
         call: tuple[str, bytes, int] | None = None
+        own = False  # a cancel the server stamped: by its own stamp, not after what named its goal
         try:
             if channel in _SERVICES:
                 message = self._calls.paired(channel, message, (time, sent))
                 if message is None:
                     return
                 call = message[3]
+                own = channel == CANCEL_GOAL and message[0] in (_REQUEST_RECEIVED, _RESPONSE_SENT)
                 if channel == SEND_GOAL and message[0] in (_REQUEST_RECEIVED, _RESPONSE_SENT):
                     self._server_introspects = True
                 if channel == GET_RESULT and message[2] is None:
@@ -591,7 +632,7 @@ class _Robot:
                     self._seen[key] = None
                     if len(self._seen) > _CALLS:
                         self._seen.popitem(last=False)
-                self._order(record, stamp, sent_then, sent if server_sent else None)
+                self._order(record, stamp, sent_then, sent if server_sent else None, own=own)
         except InvalidMessage:
             self.refused += 1
         early = self._calls.early.pop(call, None) if call is not None else None
@@ -607,7 +648,15 @@ class _Robot:
         later = [item for item in self._waiting if item[3].kind == "feedback" and _logged(item[3]) > stamp]
         return min(later) if later else None
 
-    def _order(self, record: Record, stamp: int, sent: bool = False, server_sent: int | None = None) -> None:
+    def _order(
+        self,
+        record: Record,
+        stamp: int,
+        sent: bool = False,
+        server_sent: int | None = None,
+        *,
+        own: bool = False,
+    ) -> None:
         """Pass records on in the server's order: a recorder receives each topic in order, but not
         the topics in order with one another (a goal's request event may come after the status its
         start published).  Each record waits :data:`SKEW` of bag time, then goes in the order of the
@@ -617,10 +666,11 @@ class _Robot:
         keep their own order: its answer goes after the feedback received before it, and feedback
         received while its answer waits is read as sent before it (the feedback topic and the
         result service are two channels: a recorder cannot tell late delivery from late sending), unless
-        the bag says when the feedback was sent (``sent``): then it goes by that alone.  A record the
-        server published keeps the time the bag says it was sent (``server_sent``) until it is passed
-        on: a message sent before the latest of those came too late to be put in its place
-        (:attr:`late`)."""
+        the bag says when the feedback was sent (``sent``): then it goes by that alone; a cancel the
+        server stamped (``own``, its own record of a cancel's request or response) goes by its stamp
+        too.  A record the server published keeps the time the bag says it was sent (``server_sent``)
+        until it is passed on: a message sent before the latest of those came too late to be put in
+        its place (:attr:`_Lateness.late`)."""
         while self._waiting and self._waiting[0][0] <= record.time - HOLD:  # what is due goes first
             self._release()
         guess = record.kind == "feedback" and not sent  # when it was sent, read from what came around it
@@ -636,7 +686,7 @@ class _Robot:
             )
         elif sent:
             key = (stamp, float(self._arrived))
-        elif record.goal_uuid and record.kind not in _OPENING:
+        elif record.goal_uuid and record.kind not in _OPENING and not own:
             key = (max(stamp, self._last.get(record.goal_uuid, stamp)), float(self._arrived))
         else:  # a goal's request and response go by their own stamps: what names it goes after them
             key = (stamp, float(self._arrived))
@@ -646,7 +696,7 @@ class _Robot:
                 self._last.popitem(last=False)
         entry = (key[0], key[1], self._arrived, record)
         if server_sent is not None:
-            self._sent_of[self._arrived] = server_sent
+            self.lateness.sent_of[self._arrived] = server_sent
         heapq.heappush(self._waiting, entry)
         self._arrived += 1
         if record.kind == "goal":
@@ -685,9 +735,7 @@ class _Robot:
 
     def _passing(self, entry: tuple[int, float, int, Record]) -> None:
         """Pass on a waiting record, noting when the server sent it where the bag says."""
-        sent = self._sent_of.pop(entry[2], None)
-        if sent is not None:
-            self._sent_passed = max(self._sent_passed, sent)
+        self.lateness.passed(entry[2])
         self._pass(entry[3])
 
     @property
@@ -733,16 +781,6 @@ class _Robot:
                 return  # the response to a goal the bag does not hold (lost, or before the recording)
             del self._goals[record.goal_uuid]
         self.judge.push(record)
-
-    def _came_late(self, finding: Finding) -> bool:
-        """Whether ``finding`` is a log seq that skips (R7.3) where the seq it lacked came late, on
-        feedback not judged (:attr:`late`): lost on the way and sent again, not skipped."""
-        feedback = finding.seen
-        if finding.code != Violation.LOG_SEQ.code or finding.detail != "skips":
-            return False
-        if not isinstance(feedback, Feedback):
-            return False
-        return any((entry.seq - 1) % 2**32 in self._late_logs for entry in feedback.logs)
 
     def lost_request(self, record: Record) -> None:
         """``record`` names a goal whose request the bag lacks (lost on the way: a recorder that had
@@ -824,13 +862,10 @@ class _Robot:
         for before in reversed(self._before):
             records = before.records + report.records
             report = attrs.evolve(report, records=records, findings=before.findings + report.findings)
-        if self._late_logs:
-            report = attrs.evolve(
-                report, findings=tuple(item for item in report.findings if not self._came_late(item))
-            )
+        kept = tuple(finding for finding in report.findings if not self.lateness.explains(finding))
         return RobotReport(
-            self.fleet, self.robot, channels, absent, report, not self.judged, self.refused, tuple(self.lost),
-            tuple(self.unheard), tuple(self.late),
+            self.fleet, self.robot, channels, absent, attrs.evolve(report, findings=kept), not self.judged,
+            self.refused, tuple(self.lost), tuple(self.unheard), tuple(self.lateness.late),
         )  # fmt: skip
 
 
@@ -850,9 +885,9 @@ SKEW = 1_000_000_000
 #: How long a record waits (bag time) for those the server sent before it, on other channels or,
 #: for feedback, on its own: a recorder on a lossy link receives a lost message when it is sent again,
 #: seconds later (Fast DDS repairs at its writers' heartbeat, every 3 s by default).  A message of the
-#: server's that the bag says was sent before a record already passed on, and more than this before it
-#: was received, is not judged: :attr:`RobotReport.late` says it (the bag's clock and the server's
-#: are taken to agree within this, as the publish times of one server's messages do with one another).
+#: server's that the bag says was on its way more than this longer than its quickest goes where it was
+#: sent, unless it was sent before a record already passed on: then it is not judged, and
+#: :attr:`RobotReport.late` says it (:class:`_Lateness`).
 HOLD = 10_000_000_000
 
 
