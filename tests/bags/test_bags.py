@@ -949,6 +949,7 @@ def test_a_response_whose_request_came_later_is_paired_and_a_skip_the_late_feedb
         "delayed",
         "late_begin",
         "late_cancel_request",
+        "late_run_begin",
     ],
 )
 def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
@@ -957,7 +958,10 @@ def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
     from the goal statuses that showed its goal succeeded (its status and answer were lost); in
     ``delayed`` a feedback received 10 s after it was sent goes where it was sent; in ``late_begin``
     a begin received 3 s late goes by when it was sent; in ``late_cancel_request`` a cancel's request
-    received 3 s late, after its goal's answer, goes by the server's stamp, before it."""
+    received 3 s late, after its goal's answer, goes by the server's stamp, before it; in
+    ``late_run_begin`` a run's begin received 14 s late is said, and its run's status read without it
+    is no finding, and a CANCEL whose events came after its child's end and answer is read before
+    them."""
     report = check_bag(LOADED.parent / name)
     assert report.clean, [robot.report.findings for robot in report.robots]
 

@@ -65,7 +65,7 @@ from dynevent.errors import (
     TraceError,
     short_repr,
 )
-from dynevent.wire.messages import Feedback
+from dynevent.wire.messages import DynamicEventStatus, Feedback
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
 from dynevent.wire.vocab import Compatibility, DynamicState, EventType, GoalStatus, Violation
 
@@ -498,6 +498,7 @@ class _Lateness:
         self._sent_passed = 0  # the latest time the server sent a record passed on
         self._least_lag: int | None = None  # bag time less when sent, the least of the server's messages
         self._logs: set[int] = set()  # the log seqs of late feedback
+        self._runs: set[int] = set()  # the runs (dynamic event seqs) whose begin came late
 
     def delayed(self, time: int, sent: int) -> bool:
         """Was a message of the server's received at bag ``time`` and ``sent`` then on its way more than
@@ -521,6 +522,8 @@ class _Lateness:
             with contextlib.suppress(InvalidMessage):
                 for record in _RECORDS[channel](time, message):
                     self._logs.update(entry.seq for entry in record.message.logs)
+        elif channel == "begin":
+            self._runs.add(int(message.dynamic_event_seq))
         return True
 
     def passed(self, arrival: int) -> None:
@@ -530,14 +533,23 @@ class _Lateness:
             self._sent_passed = max(self._sent_passed, sent)
 
     def explains(self, finding: Finding) -> bool:
-        """Whether ``finding`` is a log seq that skips (R7.3) where the seq it lacked came late, on
-        feedback not judged: lost on the way and sent again, not skipped."""
-        feedback = finding.seen
-        if finding.code != Violation.LOG_SEQ.code or finding.detail != "skips":
-            return False
-        if not isinstance(feedback, Feedback):
-            return False
-        return any((entry.seq - 1) % 2**32 in self._logs for entry in feedback.logs)
+        """Whether ``finding`` is what a late message not judged leaves: a log seq that skips (R7.3)
+        where the seq it lacked came late, on feedback (lost on the way and sent again, not skipped);
+        a status of a run whose begin came late (R2.2), read where no begin had opened it."""
+        seen = finding.seen
+        if (
+            finding.code == Violation.LOG_SEQ.code
+            and finding.detail == "skips"
+            and isinstance(seen, Feedback)
+        ):
+            return any((entry.seq - 1) % 2**32 in self._logs for entry in seen.logs)
+        owed = finding.owed
+        if finding.code == Violation.STATUS_MISMATCH.code and isinstance(seen, DynamicEventStatus):
+            other_run = (
+                isinstance(owed, DynamicEventStatus) and owed.dynamic_event_seq != seen.dynamic_event_seq
+            )
+            return other_run and seen.dynamic_event_seq in self._runs
+        return False
 
 
 class _Robot:

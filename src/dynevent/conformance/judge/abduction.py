@@ -62,6 +62,7 @@ class GoalSeen:
     responded: bool = False
     accepted: bool = False
     answered: int | None = None  # the line of its terminal answer
+    order: int = 0  # how many records were judged before its request (a bag's lines are bag times)
     stopped: bool = False  # its answer says its child was cancelled
     owed: bool = False  # dropped from the state on resynchronisation: its answers are not judged
 

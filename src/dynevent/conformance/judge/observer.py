@@ -155,6 +155,7 @@ class _ServerReplica:
         self._owed: list[Owed] = []
         self.now = ins.NOW_RANGE[0]
         self._line = 0
+        self.order = 0  # how many records were judged before this one: the order, where lines are bag times
         self.partial = False  # the trace begins mid-way: goals it never showed may be open
         self.event_id_unknown = False  # the run began before the trace: its own id is not known
         self.start_uncertain = False  # a RUNNING "queued" status: a deferred child, or one reporting queued
@@ -196,6 +197,7 @@ class _ServerReplica:
         """The record of ``line``, stamped ``time``, is being judged (the time never goes back)."""
         self.now = max(self.now, time)
         self._line = line
+        self.order += 1
 
     def open(self, record: Record) -> bool:
         """Set the starting state from the first record; True when the record is used up."""
@@ -360,8 +362,8 @@ class _Goals:
         return self._seen.get(uuid)
 
     def requested(self, uuid: str, goal: Goal, line: int) -> None:
-        """A client requested ``goal`` as ``uuid``, on ``line``."""
-        self._seen[uuid] = GoalSeen(goal=goal, line=line)
+        """A client requested ``goal`` as ``uuid``, on ``line``, the record judged now."""
+        self._seen[uuid] = GoalSeen(goal=goal, line=line, order=self._replica.order)
 
     def bind_unknown(self, uuid: str, running_goal: bool = True) -> GoalSeen | None:
         """What the trace showed of this goal; a goal it never showed may have begun before it.
@@ -1135,7 +1137,7 @@ class _Answers(_Part):
 
     def __init__(self, rooms: _ObserverState) -> None:
         super().__init__(rooms)
-        self.last_end: tuple[int, Result] | None = None  # the last child end: its line and result
+        self.last_end: tuple[int, Result] | None = None  # the last child end: its order and result
 
     def on_result(self, record: Record) -> None:
         result: Result = record.message
@@ -1181,7 +1183,7 @@ class _Answers(_Part):
             self.replica.commit(state, [item for item in owed if item.channel != channel])
             self.compare_answer(first, record)
             if isinstance(events[-1], ins.ChildFinished) and isinstance(first.output, outs.AnswerGoal):
-                self.last_end = (record.line, first.output.result)
+                self.last_end = (self.replica.order, first.output.result)
             return
         self.unexplained_answer(record, seen)
 
@@ -1216,8 +1218,8 @@ class _Answers(_Part):
         seen = self.goals.get(uuid)
         if queued is None or queued.goal.event_type != EventType.CANCEL or self.last_end is None:
             return False
-        line, result = self.last_end
-        if seen is None or seen.line > line or record.status != GoalStatus.SUCCEEDED.value:
+        order, result = self.last_end
+        if seen is None or seen.order > order or record.status != GoalStatus.SUCCEEDED.value:
             return False
         if record.message != result:
             return False
