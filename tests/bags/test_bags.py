@@ -950,6 +950,7 @@ def test_a_response_whose_request_came_later_is_paired_and_a_skip_the_late_feedb
         "late_begin",
         "late_cancel_request",
         "late_run_begin",
+        "answer_after_next",
     ],
 )
 def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:

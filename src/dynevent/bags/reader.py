@@ -67,7 +67,7 @@ from dynevent.errors import (
 )
 from dynevent.wire.messages import DynamicEventStatus, Feedback
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
-from dynevent.wire.vocab import Compatibility, DynamicState, EventType, GoalStatus, Violation
+from dynevent.wire.vocab import Compatibility, DynamicState, EventType, GoalStatus, Status, Violation
 
 __all__ = [
     "HIDDEN_SUFFIXES",
@@ -767,10 +767,12 @@ class _Robot:
         if record.kind == GOAL_STATUSES:  # the goals' own records tell the rest
             for uuid, status in record.message:
                 if status.is_terminal:
-                    # its answer not among the records held (lost, with the status of its end, say):
-                    # the goal statuses alone show its child's end
-                    answer = uuid in self._waiting_answers
-                    if uuid not in self._settled and not answer and isinstance(self.judge, Checker):
+                    # the goal's end shows its child's end, unless its answer, among the records held,
+                    # says the child was cancelled (a server may answer a goal as it takes a CANCEL,
+                    # before the child's end: the answer, in its place, is judged then)
+                    held = self._waiting_answers.get(uuid)
+                    stopped = held is not None and held[3].message.status == Status.CANCELED.value
+                    if uuid not in self._settled and not stopped and isinstance(self.judge, Checker):
                         self.judge.goal_ended(uuid)
                     _remember(self._settled, uuid, status.value)
             return
