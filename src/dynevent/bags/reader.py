@@ -448,9 +448,12 @@ class _Calls:
     until its response comes, and a response that comes first is kept until its request does."""
 
     def __init__(self) -> None:
-        self.requests: dict[tuple[str, bytes, int], Any] = {}  # calls whose response is to come
-        #: responses whose request is to come: (the event, its bag time, when it was sent)
-        self.early: dict[tuple[str, bytes, int], tuple[Any, int, int | None]] = {}
+        # calls whose response is to come, and (kept as :attr:`early`) responses whose request is to
+        # come: (the event, its bag time, when it was sent); the latest _CALLS of each
+        self.requests: collections.OrderedDict[tuple[str, bytes, int], Any] = collections.OrderedDict()
+        self.early: collections.OrderedDict[tuple[str, bytes, int], tuple[Any, int, int | None]] = (
+            collections.OrderedDict()
+        )
 
     def paired(
         self, channel: str, event: Any, came: tuple[int, int | None]
@@ -466,22 +469,14 @@ class _Calls:
         if kind in (_REQUEST_SENT, _REQUEST_RECEIVED):
             if request is None:
                 return None  # introspection without contents: nothing to judge
-            _keep(self.requests, call, request)
+            _remember(self.requests, call, request)
             return kind, request, None, call
         request = request if request is not None else self.requests.pop(call, None)
         if request is None and response is not None:
-            _keep(self.early, call, (event, *came))
+            _remember(self.early, call, (event, *came))
         if request is None or response is None:
             return None
         return kind, request, response, call
-
-
-def _keep(books: dict[Any, Any], key: Any, value: Any) -> None:
-    """Keep ``key`` in ``books``, the latest :data:`_CALLS` keys only (calls never answered, or whose
-    request never came: the oldest are let go)."""
-    books[key] = value
-    while len(books) > _CALLS:
-        del books[next(iter(books))]
 
 
 class _Lateness:
@@ -494,7 +489,7 @@ class _Lateness:
     def __init__(self) -> None:
         #: the late messages: (bag time, channel, when sent)
         self.late: list[tuple[int, str, int]] = []
-        self.sent_of: dict[int, int] = {}  # when the server sent each waiting record, by arrival
+        self._sent_of: dict[int, int] = {}  # when the server sent each waiting record, by arrival
         self._sent_passed = 0  # the latest time the server sent a record passed on
         self._least_lag: int | None = None  # bag time less when sent, the least of the server's messages
         self._logs: set[int] = set()  # the log seqs of late feedback
@@ -526,9 +521,13 @@ class _Lateness:
             self._runs.add(int(message.dynamic_event_seq))
         return True
 
+    def waits(self, arrival: int, sent: int) -> None:
+        """The record that arrived ``arrival``-th, which the server ``sent`` then, waits."""
+        self._sent_of[arrival] = sent
+
     def passed(self, arrival: int) -> None:
         """The record that arrived ``arrival``-th is passed on."""
-        sent = self.sent_of.pop(arrival, None)
+        sent = self._sent_of.pop(arrival, None)
         if sent is not None:
             self._sent_passed = max(self._sent_passed, sent)
 
@@ -708,7 +707,7 @@ class _Robot:
                 self._last.popitem(last=False)
         entry = (key[0], key[1], self._arrived, record)
         if server_sent is not None:
-            self.lateness.sent_of[self._arrived] = server_sent
+            self.lateness.waits(self._arrived, server_sent)
         heapq.heappush(self._waiting, entry)
         self._arrived += 1
         if record.kind == "goal":
@@ -883,7 +882,7 @@ class _Robot:
         )  # fmt: skip
 
 
-def _remember(books: collections.OrderedDict[str, Any], key: str, value: Any) -> None:
+def _remember(books: collections.OrderedDict[Any, Any], key: Any, value: Any) -> None:
     """Keep ``key`` in ``books``, the latest :data:`_CALLS` keys only."""
     books[key] = value
     books.move_to_end(key)

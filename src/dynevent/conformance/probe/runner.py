@@ -1045,7 +1045,7 @@ def _end_unpublished(probe: Probe, case: Case) -> CaseFinding | None:
         if (
             answer is None
             or answer[1].execution_failure
-            or exchange.goal.dynamic_event_seq != (latest.dynamic_event_seq)
+            or exchange.goal.dynamic_event_seq != latest.dynamic_event_seq
         ):
             continue
         child = answer[1].id
