@@ -1009,14 +1009,16 @@ class _LateCancelLink(InProcessLink):
     lossy link sends a lost request again, late), or, ``forged``, answers it refused at once without
     the server seeing it: a server that refuses a CANCEL while the child it names runs."""
 
-    def __init__(self, lag: float, *, forged: bool = False) -> None:
-        self.lag, self.forged, self.cancels = lag, forged, 0
+    def __init__(self, lag: float, *, forged: bool = False, at_report: bool = False) -> None:
+        self.lag, self.forged, self.at_report, self.cancels = lag, forged, at_report, 0
         super().__init__(CONFIG)
 
     def deliver(self, exchange: probe_runner.Exchange) -> None:
         if exchange.goal.event_type != EventType.CANCEL:
             return super().deliver(exchange)
         self.cancels += 1
+        if self.cancels % 2 and self.at_report and self._children:  # a microsecond before its next report
+            return self._at(self._agenda[0][0] - 1_000, lambda: InProcessLink.deliver(self, exchange))
         if self.cancels % 2:
             return super().deliver(exchange)
         if self.forged:
@@ -1042,6 +1044,21 @@ def test_a_cancel_that_reaches_the_server_after_the_child_ended_is_no_failure_of
     assert late.seen == probe_runner.REFUSED_AFTER_END.format(child=_child_of(late)), late.seen
     refused = verdict(_LateCancelLink(0.0, forged=True))
     assert refused.verdict is Verdict.FAIL and refused.seen == "a CANCEL not accepted", refused
+
+
+@pytest.mark.spec("R9.3", "R4.13")
+def test_a_cancel_refused_late_is_no_failure_when_the_child_ended_as_the_first_was_accepted() -> None:
+    """As above, but the first CANCEL reaches the server a microsecond before the child's next report,
+    which ends it: the server's stamps put the end with the acceptance, as a server that frees the
+    robot at once (D1) does.  The second CANCEL's refusal came a second after the first's response,
+    though both were sent at once: the link delayed it, so the case is not run, saying why."""
+    options = attrs.evolve(OPTIONS, deadline=1000)
+    findings = probe_runner.run_cases(
+        _LateCancelLink(1.0, at_report=True), options, list(CASES), lambda _: None
+    )
+    late = {finding.case.id: finding for finding in findings}["cancel.both_answered"]
+    assert late.verdict is Verdict.MISSING, late
+    assert late.seen == probe_runner.REFUSED_AFTER_END.format(child=_child_of(late)), late.seen
 
 
 class _LosingLink(InProcessLink):
@@ -1150,6 +1167,83 @@ def test_a_case_an_earlier_cases_late_goal_took_effect_during_is_no_failure_of_t
     assert zero.verdict is Verdict.MISSING, zero
     assert zero.seen.startswith(probe_runner.EARLIER_CAME.split("{", 1)[0]), zero.seen
     assert zero.seen.endswith("(rejected)"), zero.seen
+
+
+class _LateGoalLink(_LaggingLink):
+    """The in-process link whose statuses lag ``status`` seconds, and that delivers the NEXT each case
+    of ``late`` sends that many seconds late (a lossy link sends a lost request again, late), and the
+    answer to it ``answer_lag`` seconds late: the probe's view of the robot is stale as a late goal
+    runs."""
+
+    def __init__(
+        self, config: ServeConfig, late: dict[str, float], *, status: float, answer_lag: float
+    ) -> None:
+        self.late, self.answer_lag, self.case = late, answer_lag, ""
+        self.late_goals: list[probe_runner.Exchange] = []
+        super().__init__(config, status=status)
+
+    def mark(self, text: str) -> None:
+        self.case = text.removeprefix("case ")
+        super().mark(text)
+
+    def deliver(self, exchange: probe_runner.Exchange) -> None:
+        if exchange.goal.event_type != EventType.NEXT or self.case not in self.late:
+            return super().deliver(exchange)
+        self.late_goals.append(exchange)
+        later = self.now + round(self.late[self.case] * 1_000_000_000)
+        return self._at(later, lambda: InProcessLink.deliver(self, exchange))
+
+    def hear_answer(self, exchange: probe_runner.Exchange, status: Any, result: Any) -> None:
+        if exchange not in self.late_goals:
+            return super().hear_answer(exchange, status, result)
+        later = self.now + round(self.answer_lag * 1_000_000_000)
+        return self._at(later, lambda: InProcessLink.hear_answer(self, exchange, status, result))
+
+
+def _late_goal_verdicts(answer_lag: float) -> dict[str, CaseFinding]:
+    """The probe (6 s children, --timeout 10) over a link whose statuses lag 3 s, where
+    ``next.runs_a_child``'s NEXT reaches the server 18 s late, as ``next.status_after_child`` (whose
+    own NEXT never comes) gives up, and runs its child while ``next.id_zero`` begins."""
+    config = attrs.evolve(CONFIG, categories={"go_to_place": CategorySpec(duration=6.0, report_every=0.25)})
+    late = {"next.runs_a_child": 18.0, "next.status_after_child": 10_000.0}
+    link = _LateGoalLink(config, late, status=3.0, answer_lag=answer_lag)
+    options = attrs.evolve(OPTIONS, timeout=10, deadline=5000)
+    return {
+        finding.case.id: finding
+        for finding in probe_runner.run_cases(link, options, list(CASES), lambda _: None)
+    }
+
+
+@pytest.mark.spec("R4.6", "R6.2")
+def test_a_case_waits_for_an_earlier_cases_late_child_to_end_before_it_reads_a_status() -> None:
+    """A NEXT that its case gave up on runs its child later, while the statuses the probe hears still
+    show the robot waiting: the next case waits (within --timeout) for that goal's answer before it
+    reads a status, so its NEXT is not refused as busy and read as the server's fault."""
+    verdicts = _late_goal_verdicts(answer_lag=0.0)
+    assert {case for case, finding in verdicts.items() if finding.verdict is Verdict.FAIL} == set()
+    zero = verdicts["next.id_zero"]
+    assert zero.verdict is Verdict.PASS, zero
+    assert any(line.endswith("accepted late, was answered") for line in zero.messages), zero.messages
+    assert verdicts["next.id_chosen"].verdict is Verdict.PASS, verdicts["next.id_chosen"]
+
+
+def test_a_late_goal_whose_answer_never_comes_is_waited_for_once() -> None:
+    """As above, but the late goal's answer never comes (lost for good): the first case after it
+    waits --timeout for it once, in vain, then goes by the statuses, which show the child's end; later
+    cases do not wait for it again.  Only the case that sent it fails: its answer never came, over a
+    link that says it lost nothing."""
+    verdicts = _late_goal_verdicts(answer_lag=10_000.0)
+    failed = {case: finding.seen for case, finding in verdicts.items() if finding.verdict is Verdict.FAIL}
+    assert failed == {"next.runs_a_child": "no response"}
+    waited = [
+        case
+        for case, finding in verdicts.items()
+        if any("accepted late" in line for line in finding.messages)
+    ]
+    assert waited == ["next.id_zero"], waited
+    zero = verdicts["next.id_zero"]
+    assert zero.messages[0].endswith("accepted late, was not answered"), zero.messages
+    assert zero.verdict is Verdict.PASS and verdicts["next.id_chosen"].verdict is Verdict.PASS
 
 
 def _child_of(finding: CaseFinding) -> int:

@@ -101,6 +101,8 @@ class Exchange:
         #: heard things in, which a lossy link may make another than the server's
         self.response_heard: int | None = None
         self.answer_heard: int | None = None
+        #: when its response came, by the link's clock
+        self.response_at: float | None = None
         self.statuses_before_response = 0
         #: how many messages the link had heard when it was sent
         self.sent_heard = link.heard
@@ -226,6 +228,7 @@ class Link:
         def update() -> None:
             exchange.accepted = accepted
             exchange.response_heard, exchange.statuses_before_response = self.heard, len(self.statuses)
+            exchange.response_at = self.clock()
 
         self._heard("goal_response", update, goal_uuid=exchange.uuid, accepted=accepted)
 
@@ -471,6 +474,8 @@ class Probe:
         self.unanswered: dict[str, list[Exchange]] = {}
         #: what a case waited for in vain besides its goals' messages, by case id: whether it came since
         self.heard_later: dict[str, Callable[[], bool]] = {}
+        #: the goals a case ended without their response (the server may take them later), in order
+        self.given_up: list[Exchange] = []
 
     @property
     def timeout(self) -> float:
@@ -503,6 +508,7 @@ class Probe:
         self.link.mark(f"case {case.id}")
         started = self.link.clock()
         heard, earlier = self.link.heard, [made for made in self.link.made if made.accepted is None]
+        self.given_up.extend(made for made in earlier if made not in self.given_up)
         timed_out = False
         try:
             if case.needs in ("child", "place") and self.options.place is None:
@@ -523,6 +529,11 @@ class Probe:
         silent = (timed_out or finding.absent) and self.link.heard == heard
         self.timeouts_in_a_row = self.timeouts_in_a_row + 1 if silent else 0
         return self._settled(finding, started)
+
+    def _late_running(self) -> list[Exchange]:
+        """The goals accepted after the case that sent them gave up on them (a lossy link delivered
+        them late), not answered yet: their child may still run."""
+        return [made for made in self.given_up if made.accepted and made.answer_heard is None]
 
     def _settled(self, finding: CaseFinding, started: float) -> CaseFinding:
         """The finding with the case's messages, time, and whether --known or --allow-missing expect it."""
@@ -599,9 +610,15 @@ class Probe:
         and the robot is not waiting; else the case is missing.  Waiting is WAITING, or RUNNING with
         a child's final status (R20.2: what rmf_ros2 keeps publishing after a child ends)."""
         timeout = self.timeout
+        late = self._late_running()
+        if late:  # a late goal's child may run, though no status heard says so yet: let it end first
+            ended = self.link.wait(lambda: all(made.answer_heard is not None for made in late), timeout)
+            self.note(f"{goal_text(late[0].goal)}, accepted late, {'was' if ended else 'was not'} answered")
+            if not ended:  # waited for once: later cases go by the statuses alone
+                self.given_up = [made for made in self.given_up if made not in late]
 
         def waits(status: DynamicEventStatus) -> bool:  # and not older than what the answers told
-            return machine.robot_waits(status) and not self._behind(status)
+            return machine.robot_waits(status) and not _behind(status, self.link.made, self._nexts)
 
         status = self.link.wait_status(waits, 0.5)
         if status is None and self.options.begin_command:
@@ -610,28 +627,6 @@ class Probe:
         if status is None:
             raise _TimedOut(f"no active run (a WAITING status) within {timeout:g} s")
         return status
-
-    def _behind(self, status: DynamicEventStatus) -> bool:
-        """A status of a run the probe's FINISHED ended, or one that names an id below a child whose
-        answer the probe has: it was published before those answers, which another channel brought
-        first (a lagging link), and a goal built from it would name an ended run or a stale id."""
-        seq = status.dynamic_event_seq
-        if any(  # the run ended: the probe's FINISHED of it succeeded
-            exchange.goal.event_type == EventType.FINISHED.value
-            and exchange.goal.dynamic_event_seq == seq
-            and exchange.answer is not None
-            and exchange.answer[0] is GoalStatus.SUCCEEDED
-            for exchange in self.link.made
-        ):
-            return True
-        ids = [  # the children the answers name (a feedback's id is the server's word less firmly)
-            answer[1].id
-            for exchange in self._nexts
-            if exchange.goal.dynamic_event_seq == seq
-            for answer in exchange.answers[:1]
-            if not answer[1].execution_failure
-        ]
-        return bool(ids) and not id_not_after(max(ids), status.id)
 
     def _run_begin_command(self) -> None:
         """Run ``--begin-command`` (bounded by the timeout); a command that cannot run makes the case
@@ -850,10 +845,34 @@ _NEEDS_OF_WAIT = {"status": ("run", "place", "child")}
 _LOOK_AGAIN = 0.2
 
 
+def _behind(status: DynamicEventStatus, made: list[Exchange], nexts: list[Exchange]) -> bool:
+    """A status of a run a FINISHED among the goals ``made`` ended, or one that names an id below a
+    child whose answer ``nexts`` has: it was published before those answers, which another channel
+    brought first (a lagging link), and a goal built from it would name an ended run or a stale id."""
+    seq = status.dynamic_event_seq
+    if any(  # the run ended: the probe's FINISHED of it succeeded
+        exchange.goal.event_type == EventType.FINISHED.value
+        and exchange.goal.dynamic_event_seq == seq
+        and exchange.answer is not None
+        and exchange.answer[0] is GoalStatus.SUCCEEDED
+        for exchange in made
+    ):
+        return True
+    ids = [  # the children the answers name (a feedback's id is the server's word less firmly)
+        answer[1].id
+        for exchange in nexts
+        if exchange.goal.dynamic_event_seq == seq
+        for answer in exchange.answers[:1]
+        if not answer[1].execution_failure
+    ]
+    return bool(ids) and not id_not_after(max(ids), status.id)
+
+
 def _unless_earlier_came(finding: CaseFinding, earlier: list[Exchange], heard: int) -> CaseFinding:
     """A case failed by what it saw, while a goal an earlier case sent, whose response had not come
     when this one began, was accepted meanwhile: that goal reached the server late (a lossy link sent
-    it again), and what this case saw may be its doing, so the case is not run, saying so."""
+    it again), and what this case saw may be its doing, so the case is not run, saying so.  (One
+    accepted before this case began is waited for by :meth:`Probe.waiting`.)"""
     came = [made for made in earlier if made.accepted and (made.response_heard or 0) > heard]
     if finding.absent or not came:
         return finding
@@ -1055,7 +1074,11 @@ def _end_unpublished(probe: Probe, case: Case) -> CaseFinding | None:
 
         def published() -> bool:  # a status that shows the child's end, come late (a lagging link)
             status = probe.link.status
-            return status is not None and not probe._behind(status) and machine.robot_waits(status)
+            return (
+                status is not None
+                and not _behind(status, probe.link.made, probe._nexts)
+                and machine.robot_waits(status)
+            )
 
         probe.heard_later[case.id] = published
         seen = f"child {child} was answered {answer[1].status!r}; the status still says {status_text(latest)}"
@@ -1440,7 +1463,10 @@ def _cancel_both_answered(probe: Probe, case: Case) -> CaseFinding:
             refused = [cancel for cancel in cancels if cancel.accepted is False]
             ended_by = [running, *(cancel for cancel in cancels if cancel.accepted)]
             late = all(_heard_after_end(probe, cancel, ended_by, child_id) for cancel in refused)
-            if late and any(_outlived(probe, cancel, child_id) for cancel in ended_by[1:]):
+            if late and (
+                any(_outlived(probe, cancel, child_id) for cancel in ended_by[1:])
+                or all(_delayed(cancel, cancels) for cancel in refused)
+            ):
                 why = REFUSED_AFTER_END.format(child=child_id)
                 return CaseFinding(case, Verdict.MISSING, seen=why, by_link=True)
             absent = any(cancel.accepted is None for cancel in cancels)
@@ -1471,6 +1497,15 @@ def _heard_after_end(probe: Probe, refused: Exchange, ended_by: list[Exchange], 
     if any(other.answer_heard is not None and other.answer_heard < heard for other in ended_by):
         return True
     return _end_of(probe.link.history()[: refused.statuses_before_response], child_id) is not None
+
+
+def _delayed(refused: Exchange, cancels: list[Exchange]) -> bool:
+    """Whether ``refused``'s response came :data:`_RAN_ON` or more after that of a CANCEL sent with it
+    and accepted: the two were sent at once, and a server takes them one after the other, so the link
+    delayed the refused one's request (a lossy link sends a lost request again, late: it may have
+    reached the server after the child's end) or its response."""
+    came = [cancel.response_at for cancel in cancels if cancel.accepted and cancel.response_at is not None]
+    return refused.response_at is not None and bool(came) and refused.response_at - min(came) >= _RAN_ON / 1e9
 
 
 def _outlived(probe: Probe, cancel: Exchange, child_id: int) -> bool:
