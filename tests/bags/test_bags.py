@@ -951,6 +951,7 @@ def test_a_response_whose_request_came_later_is_paired_and_a_skip_the_late_feedb
         "late_cancel_request",
         "late_run_begin",
         "answer_after_next",
+        "begin_on_one_topic",
     ],
 )
 def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
@@ -962,9 +963,21 @@ def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
     received 3 s late, after its goal's answer, goes by the server's stamp, before it; in
     ``late_run_begin`` a run's begin received 14 s late is said, and its run's status read without it
     is no finding, and a CANCEL whose events came after its child's end and answer is read before
-    them."""
+    them; in ``begin_on_one_topic`` a run's begin that came on the fleet's begin topic alone, the
+    robot's own copy lost, opens the run."""
     report = check_bag(LOADED.parent / name)
     assert report.clean, [robot.report.findings for robot in report.robots]
+
+
+def test_every_recording_of_tests_data_lossy_is_judged_and_said_in_its_readme() -> None:
+    """A recording added to tests/data/lossy is held to the test above, and its README says what the
+    link did in it."""
+    folders = sorted(path.name for path in LOADED.parent.iterdir() if path.is_dir())
+    marks = test_every_lossy_recording_of_a_correct_server_is_clean.pytestmark  # type: ignore[attr-defined]
+    judged = next(mark.args[1] for mark in marks if mark.name == "parametrize")
+    assert sorted(judged) == folders
+    readme = (LOADED.parent / "README.md").read_text()
+    assert [name for name in folders if f"`{name}/`" not in readme and f"## {name}" not in readme] == []
 
 
 def test_the_recorders_writer_keeps_each_messages_publish_time_beside_its_log_time(tmp_path: Path) -> None:

@@ -65,7 +65,7 @@ from dynevent.errors import (
     TraceError,
     short_repr,
 )
-from dynevent.wire.messages import DynamicEventStatus, Feedback
+from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Feedback
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
 from dynevent.wire.vocab import Compatibility, DynamicState, EventType, GoalStatus, Status, Violation
 
@@ -437,7 +437,7 @@ def _routes(
             robot.channels.add(channel)
             robot.own_begins = robot.own_begins or channel == "begin"
         routes[connection.id] = (robot, channel)
-    for connection in fleet_wide:  # a robot's begins, where its own begin topic was not recorded
+    for connection in fleet_wide:  # a robot's begins, with those of its own begin topic, read once
         routes[connection.id] = (_FleetBegins(robots, compatibility, keep), "begin")  # type: ignore[assignment]
     return routes
 
@@ -569,6 +569,9 @@ class _Robot:
         self._judge: Checker | PartialJudge | None = None  # made at the first record: the channels are known
         self.channels: set[str] = set()
         self.own_begins = False  # the bag recorded the robot's own begin topic
+        # the begins taken lately, and on which of the robot's begin topics each came (fleet-wide or not)
+        self._begins: collections.OrderedDict[Any, bool] = collections.OrderedDict()
+        self._begun: int | None = None  # the run of the latest begin taken
         self.contents = True  # its send_goal introspection holds the goals (not METADATA alone)
         self.refused = 0
         # the records taken lately: the client's copy of one comes close to the server's
@@ -597,8 +600,11 @@ class _Robot:
         self.keep = keep  # keep every record passed on, in ``kept`` (bag_records)
         self.kept: list[Record] = []
 
-    def take(self, channel: str, time: int, message: Any, sent: int | None = None) -> None:
-        """A message received at bag ``time`` and, where the bag says, ``sent`` by its publisher then."""
+    def take(
+        self, channel: str, time: int, message: Any, sent: int | None = None, *, fleet_wide: bool = False
+    ) -> None:
+        """A message received at bag ``time`` and, where the bag says, ``sent`` by its publisher then
+        (``fleet_wide``: a begin of the fleet's begin topic)."""
         self.channels.add(channel)
         if self._began is None:
             self._began = time
@@ -631,6 +637,8 @@ class _Robot:
                 if channel == GET_RESULT and message[2] is None:
                     _remember(self._asked, uuid_from_ros(message[1].goal_id), None)
             for record in _RECORDS[channel](time, message):
+                if record.kind == "begin" and not self._begin_taken(record.message, fleet_wide):
+                    continue
                 if record.kind in _EVENT_KINDS:
                     # one call seen by both the client's and the server's introspection is one record; an
                     # answer asked for again is the same answer (another answer to the goal is not)
@@ -649,6 +657,20 @@ class _Robot:
         early = self._calls.early.pop(call, None) if call is not None else None
         if early is not None:  # its response came first: taken now, as of when it came
             self.take(channel, early[1], early[0], early[2])
+
+    def _begin_taken(self, begin: DynamicEventDescription, fleet_wide: bool) -> bool:
+        """Whether to read ``begin``: a server publishes each on the robot's own begin topic and on the
+        fleet's, and a lossy link may lose either copy for good.  One copy is read; and where the bag
+        recorded the robot's own topic, a fleet-wide begin only of a run after every begin read (the
+        fleet's topic keeps earlier runs' begins, which a recording that starts late receives)."""
+        if self._begins.get(begin, fleet_wide) is not fleet_wide:
+            return False  # the same begin, come on the other topic
+        seq, last = begin.dynamic_event_seq, self._begun
+        if fleet_wide and self.own_begins and last is not None and not 0 < (seq - last) % 2**32 < 2**31:
+            return False
+        _remember(self._begins, begin, fleet_wide)
+        self._begun = seq
+        return True
 
     def _logged_after(self, stamp: int) -> tuple[int, float, int, Record] | None:
         """The first waiting feedback whose logs the server stamped after ``stamp``, if any (looked for
@@ -953,8 +975,8 @@ _EVENT_KINDS = frozenset({"goal", "goal_response", "result", "cancel_request", "
 
 
 class _FleetBegins:
-    """The fleet-wide begin topic: each begin goes to its robot, unless that robot's own begin
-    topic was recorded (the same begin, twice)."""
+    """The fleet-wide begin topic: each begin goes to its robot, which reads a begin that came on
+    its own begin topic too once (either may be lost over a lossy link, and the other not)."""
 
     def __init__(
         self, robots: dict[tuple[str, str], _Robot], compatibility: Compatibility, keep: bool = False
@@ -968,8 +990,7 @@ class _FleetBegins:
         robot = self.robots.get(key)
         if robot is None:
             robot = self.robots[key] = _Robot(*key, compatibility=self.compatibility, keep=self.keep)
-        if not robot.own_begins:
-            robot.take(channel, time, message, sent)
+        robot.take(channel, time, message, sent, fleet_wide=True)
 
 
 def _status(time: int, message: Any) -> Iterator[Record]:
