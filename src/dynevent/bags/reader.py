@@ -435,7 +435,7 @@ def _routes(
         robot = robots.setdefault(key, _Robot(*key, compatibility=compatibility, keep=keep))
         if connection.msgcount:  # a topic subscribed to in vain holds nothing to judge
             robot.channels.add(channel)
-            robot.own_begins = robot.own_begins or channel == "begin"
+            robot.begins.own = robot.begins.own or channel == "begin"
         routes[connection.id] = (robot, channel)
     for connection in fleet_wide:  # a robot's begins, with those of its own begin topic, read once
         routes[connection.id] = (_FleetBegins(robots, compatibility, keep), "begin")  # type: ignore[assignment]
@@ -551,6 +551,30 @@ class _Lateness:
         return False
 
 
+class _Begins:
+    """A robot's begins: a server publishes each on the robot's own begin topic and on the fleet's,
+    and a lossy link may lose either copy for good.  One copy is read; and where the bag recorded the
+    robot's own topic (:attr:`own`), a fleet-wide begin only of a run after every begin read (the
+    fleet's topic keeps earlier runs' begins, which a recording that starts late receives)."""
+
+    def __init__(self) -> None:
+        self.own = False  # the bag recorded the robot's own begin topic
+        # the begins read lately, and on which topic each came (fleet-wide or not)
+        self._read: collections.OrderedDict[DynamicEventDescription, bool] = collections.OrderedDict()
+        self._last: int | None = None  # the run of the latest begin read
+
+    def taken(self, begin: DynamicEventDescription, fleet_wide: bool) -> bool:
+        """Whether to read ``begin``, come on the fleet's begin topic or (not ``fleet_wide``) the robot's."""
+        if self._read.get(begin, fleet_wide) is not fleet_wide:
+            return False  # the same begin, come on the other topic
+        seq, last = begin.dynamic_event_seq, self._last
+        if fleet_wide and self.own and last is not None and not 0 < (seq - last) % 2**32 < 2**31:
+            return False
+        _remember(self._read, begin, fleet_wide)
+        self._last = seq
+        return True
+
+
 class _Robot:
     """One robot's records, judged as they come.  A client's and the server's introspection both
     record each goal, response and answer: a record the same as one taken before is taken once (an
@@ -568,10 +592,7 @@ class _Robot:
         self.compatibility = Compatibility(compatibility)
         self._judge: Checker | PartialJudge | None = None  # made at the first record: the channels are known
         self.channels: set[str] = set()
-        self.own_begins = False  # the bag recorded the robot's own begin topic
-        # the begins taken lately, and on which of the robot's begin topics each came (fleet-wide or not)
-        self._begins: collections.OrderedDict[Any, bool] = collections.OrderedDict()
-        self._begun: int | None = None  # the run of the latest begin taken
+        self.begins = _Begins()
         self.contents = True  # its send_goal introspection holds the goals (not METADATA alone)
         self.refused = 0
         # the records taken lately: the client's copy of one comes close to the server's
@@ -637,7 +658,7 @@ class _Robot:
                 if channel == GET_RESULT and message[2] is None:
                     _remember(self._asked, uuid_from_ros(message[1].goal_id), None)
             for record in _RECORDS[channel](time, message):
-                if record.kind == "begin" and not self._begin_taken(record.message, fleet_wide):
+                if record.kind == "begin" and not self.begins.taken(record.message, fleet_wide):
                     continue
                 if record.kind in _EVENT_KINDS:
                     # one call seen by both the client's and the server's introspection is one record; an
@@ -657,20 +678,6 @@ class _Robot:
         early = self._calls.early.pop(call, None) if call is not None else None
         if early is not None:  # its response came first: taken now, as of when it came
             self.take(channel, early[1], early[0], early[2])
-
-    def _begin_taken(self, begin: DynamicEventDescription, fleet_wide: bool) -> bool:
-        """Whether to read ``begin``: a server publishes each on the robot's own begin topic and on the
-        fleet's, and a lossy link may lose either copy for good.  One copy is read; and where the bag
-        recorded the robot's own topic, a fleet-wide begin only of a run after every begin read (the
-        fleet's topic keeps earlier runs' begins, which a recording that starts late receives)."""
-        if self._begins.get(begin, fleet_wide) is not fleet_wide:
-            return False  # the same begin, come on the other topic
-        seq, last = begin.dynamic_event_seq, self._begun
-        if fleet_wide and self.own_begins and last is not None and not 0 < (seq - last) % 2**32 < 2**31:
-            return False
-        _remember(self._begins, begin, fleet_wide)
-        self._begun = seq
-        return True
 
     def _logged_after(self, stamp: int) -> tuple[int, float, int, Record] | None:
         """The first waiting feedback whose logs the server stamped after ``stamp``, if any (looked for

@@ -293,6 +293,28 @@ def test_a_finished_accepted_after_the_status_of_the_childs_end_may_have_come_af
     ]
 
 
+@pytest.mark.spec("R6.4", "R2.2")
+def test_a_child_whose_start_a_client_never_saw_is_read_from_its_end() -> None:
+    """Seen at a client across a lossy link: a NEXT accepted, then nothing of its child's start (the
+    status that showed it running was taken over by the next, the status topic keeping one message,
+    and its feedback was lost for good), then the status of its end and its answer: the child started
+    and ended, no finding.  Seen at the server, where every record is kept, the same records are
+    findings: a status of a child that never started (R2.2), and its answer (R6.4)."""
+
+    def trace(tap: str, *, answered: bool = True) -> Trace:
+        talk = Trace()
+        talk.rows[0] = {**talk.rows[0], "tap": tap}
+        talk.started().result(1, "succeeded", "completed", 6).status(1, 1, "standby", 6)
+        talk.next(2, 7).status(1, 1, "standby", 7)
+        return talk.result(2, "succeeded", "completed", 7) if answered else talk.status(1, 1, "standby", 7)
+
+    assert trace("client").check().clean, found(trace("client").check())
+    server = [finding[1:] for finding in found(trace("server").check())]
+    assert server == [("R2.2", "status_mismatch"), ("R6.4", "unexpected_answer")], server
+    unanswered = [finding[1:] for finding in found(trace("client", answered=False).check())]
+    assert ("R2.2", "status_mismatch") in unanswered, unanswered
+
+
 @pytest.mark.spec("R4.13", "R4.16")
 def test_a_cancel_refused_at_a_client_before_it_hears_the_childs_end_may_have_come_after_that_end() -> None:
     """Seen at a client across a lossy link: a CANCEL of the running child, delivered after the child's

@@ -846,8 +846,11 @@ class _Runs(_Part):
     def ended_child(self) -> list[list[ins.Input]]:
         """A child's end whose answer the next records show, after the starts of none, one, ... of the
         queued goals (a CANCEL starts silently and stops the child): a tap at a client sees the status
-        topic and the answer on separate channels, so the status may come first."""
-        return _ended_ahead(self.replica, self.ahead)
+        topic and the answer on separate channels, so the status may come first.  Seen apart from the
+        server, also a queued NEXT's start and its child's end, where its answer is ahead and nothing
+        of its start was seen (:func:`_run_ahead`)."""
+        ends = _ended_ahead(self.replica, self.ahead)
+        return [*ends, *_run_ahead(self.replica, self.ahead)] if self.apart else ends
 
     def ended_unanswered(self, message: DynamicEventStatus) -> tuple[State, list[Owed]] | None:
         """A status that shows the running child's end (WAITING, or INACTIVE under a task signal),
@@ -1352,6 +1355,25 @@ def _ended_ahead(replica: _ServerReplica, ahead: _Lookahead) -> list[list[ins.In
     if answer is None or answer.kind != "result" or answer.message.status not in _STATUS_VALUES:
         return []
     return _child_ends(replica, ins.ChildFinished(status=answer.message.status, now=replica.now))
+
+
+def _run_ahead(replica: _ServerReplica, ahead: _Lookahead) -> list[list[ins.Input]]:
+    """With no child running, a queued NEXT whose next record ahead is its answer: its child started
+    and ended, after the starts of the goals queued before it, and its start feedback and the status
+    that showed it running were lost on the way to a view apart from the server (a lossy link: the
+    status topic keeps one message, and the feedback topic its last ten)."""
+    if replica.st.running is not None:
+        return []
+    now = replica.now
+    starts: list[ins.Input] = []
+    for queued in replica.st.queued:
+        starts.append(ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now))
+        answer = ahead.of_goal(queued.goal_uuid)
+        if queued.goal.event_type != EventType.NEXT or answer is None or answer.kind != "result":
+            continue
+        if answer.message.status in _STATUS_VALUES:
+            return [[*starts, ins.ChildFinished(status=answer.message.status, now=now)]]
+    return []
 
 
 def _child_ends(replica: _ServerReplica, ended: ins.ChildFinished) -> list[list[ins.Input]]:
