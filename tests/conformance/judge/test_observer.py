@@ -315,6 +315,28 @@ def test_a_child_whose_start_a_client_never_saw_is_read_from_its_end() -> None:
     assert ("R2.2", "status_mismatch") in unanswered, unanswered
 
 
+@pytest.mark.spec("R5.2", "R4.6")
+def test_a_racing_next_whose_child_a_client_saw_start_after_the_others_end_came_after_that_end() -> None:
+    """Seen at a client across a lossy link: two NEXTs sent at once; the first runs its child to the
+    end, and only then do the second's start feedback, the status of its child and its response come
+    (its request was lost and sent again, seconds later).  The server took the second after the first
+    child's end, rightly: no finding.  Read as accepted beside the first (its response moved back to
+    its request, or before the first child's status), it would have lost the race (R5.2)."""
+    nexts = {"event_type": 1, "category": "go_to_place", "description": '"pantry"'}
+    talk = Trace()
+    talk.rows[0] = {**talk.rows[0], "tap": "client"}
+    talk.begin().status(1, 1, "standby", 5)
+    talk.add("goal", goal_uuid=uuid(1), goal={"dynamic_event_seq": 1, **nexts, "id": 6})
+    talk.add("goal", goal_uuid=uuid(2), goal={"dynamic_event_seq": 1, **nexts, "id": 7})
+    talk.add("goal_response", goal_uuid=uuid(1), accepted=True)
+    talk.feedback(1, "underway", 6).status(1, 2, "underway", 6)
+    talk.status(1, 1, "standby", 6).result(1, "succeeded", "completed", 6)
+    talk.feedback(2, "underway", 7).status(1, 2, "underway", 7)
+    talk.add("goal_response", goal_uuid=uuid(2), accepted=True)
+    talk.status(1, 1, "standby", 7).result(2, "succeeded", "completed", 7)
+    assert talk.check().clean, found(talk.check())
+
+
 @pytest.mark.spec("R4.13", "R4.16")
 def test_a_cancel_refused_at_a_client_before_it_hears_the_childs_end_may_have_come_after_that_end() -> None:
     """Seen at a client across a lossy link: a CANCEL of the running child, delivered after the child's

@@ -1430,6 +1430,8 @@ def _response_ahead(rooms: _ObserverState, record: Record, window: Iterable[Reco
         # running (a child's end), a response the state before it does not explain stays where it came:
         # its request may have reached the server after that end (a FINISHED sent while a child ran)
         ends = not machine.runs_a_child(record.message)
+        if not ends and state is not None and same_status(rooms.replica.status(), record.message):
+            return None  # the running child's status, which the state explains: no other goal's start
         return next(
             (
                 ahead
@@ -1571,17 +1573,36 @@ def _response_next(rooms: _ObserverState, goal: Record, window: collections.dequ
     request at once; a client hears it late over a lagging link, after statuses the server published
     since (a child's end, a new run's begin), and read there it would look decided on a state the
     server had not reached.  A response the state at its request does not explain stays where it
-    came (the request itself may have reached the server late)."""
+    came (the request itself may have reached the server late), as does one heard after a status
+    that shows the robot waiting which came before its goal's first feedback: that goal's child
+    started after another's end, so the server took the goal after it (a NEXT accepted while a
+    child runs, or beside another NEXT, never starts after that child's end)."""
     uuid = goal.goal_uuid
     responses = (ahead for ahead in window if ahead.kind == "goal_response" and ahead.goal_uuid == uuid)
     response = next(responses, None)
     if response is None or response is (window[0] if window else None):
+        return
+    if _started_after_an_end(uuid, window, response):
         return
     replica = rooms.replica
     decision = machine.accept(replica.st, goal.message, replica.config_for(goal.message))
     if isinstance(decision, outs.Accepted) == bool(response.accepted):
         window.remove(response)
         window.appendleft(response)
+
+
+def _started_after_an_end(uuid: str, window: Iterable[Record], response: Record) -> bool:
+    """Whether, among the records ahead, a status showing the robot waiting comes before both goal
+    ``uuid``'s first feedback and its ``response``."""
+    waited = responded = False
+    for ahead in window:
+        if ahead is response:
+            responded = True
+        elif ahead.kind == "status" and machine.robot_waits(ahead.message):
+            waited = waited or not responded
+        elif ahead.kind == "feedback" and ahead.goal_uuid == uuid:
+            return waited
+    return False
 
 
 def check_records(header: TraceHeader, records: Iterable[Record], source: str = "<trace>") -> Report:
