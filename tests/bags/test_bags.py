@@ -952,6 +952,7 @@ def test_a_response_whose_request_came_later_is_paired_and_a_skip_the_late_feedb
         "late_run_begin",
         "answer_after_next",
         "begin_on_one_topic",
+        "finished_answered_late",
     ],
 )
 def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
@@ -964,7 +965,9 @@ def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
     ``late_run_begin`` a run's begin received 14 s late is said, and its run's status read without it
     is no finding, and a CANCEL whose events came after its child's end and answer is read before
     them; in ``begin_on_one_topic`` a run's begin that came on the fleet's begin topic alone, the
-    robot's own copy lost, opens the run."""
+    robot's own copy lost, opens the run; in ``finished_answered_late`` a FINISHED of a run whose own
+    id the judgement did not know (it began anew mid-run) is answered after the next run's begin,
+    and its result's id is not held to the new run's."""
     report = check_bag(LOADED.parent / name)
     assert report.clean, [robot.report.findings for robot in report.robots]
 

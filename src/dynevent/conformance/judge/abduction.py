@@ -102,6 +102,8 @@ class Owed:
     exact: bool = (
         True  # False: inferred from a status alone, whose answer is owed but whose content is not known
     )
+    #: False: a FINISHED's answer owed while the run's own id (its result's id, R11.1) was not known
+    id_known: bool = True
 
 
 def _channel(output: outs.Output) -> str | None:

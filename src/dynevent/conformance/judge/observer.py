@@ -234,7 +234,11 @@ class _ServerReplica:
     def commit(self, state: State, owed: Iterable[Owed]) -> None:
         """The step that gave ``state`` and owes ``owed`` took place, at the current line."""
         self.state = state
-        self._owed.extend(attrs.evolve(item, line=self._line) for item in owed)
+        unknown = self.event_id_unknown  # a FINISHED's answer then owes an id not known (R11.1)
+        self._owed.extend(
+            attrs.evolve(item, line=self._line, id_known=not (unknown and item.rule == machine.FINISHED_RULE))
+            for item in owed
+        )
 
     def resync(self, state: State) -> None:
         """The server is known to be in ``state``, whatever the steps so far say (see :mod:`resync`)."""
@@ -1259,7 +1263,7 @@ class _Answers(_Part):
             )
         elif owed.rule == machine.FINISHED_RULE and self.replica.event_id_unknown:
             self.replica.learn_event_id_from_finished(observed.id)
-        elif expected.id != observed.id:
+        elif expected.id != observed.id and owed.id_known:  # (a run's id may become known too late)
             rule = result_rule(owed.rule)
             self.findings.differs(
                 rule,
