@@ -315,6 +315,21 @@ def test_a_child_whose_start_a_client_never_saw_is_read_from_its_end() -> None:
     assert ("R2.2", "status_mismatch") in unanswered, unanswered
 
 
+@pytest.mark.spec("R6.4", "R2.2")
+def test_a_childs_feedback_a_client_heard_after_the_status_of_its_end_was_sent_before_it() -> None:
+    """Seen at a client across a lossy link: a NEXT accepted, the status that showed its child running
+    lost (taken over by the next), then the status of the child's end, and only then the child's start
+    feedback, a progress feedback and its answer (feedback sent again, late): the feedback was sent
+    before that status (R6.4: a child's start feeds back first), no finding."""
+    talk = Trace()
+    talk.rows[0] = {**talk.rows[0], "tap": "client"}
+    talk.started().result(1, "succeeded", "completed", 6).status(1, 1, "standby", 6)
+    talk.next(2, 7).status(1, 1, "standby", 7)
+    talk.feedback(2, "underway", 7).feedback(2, "underway", 7, logs=(1,))
+    talk.result(2, "succeeded", "completed", 7)
+    assert talk.check().clean, found(talk.check())
+
+
 @pytest.mark.spec("R5.2", "R4.6")
 def test_a_racing_next_whose_child_a_client_saw_start_after_the_others_end_came_after_that_end() -> None:
     """Seen at a client across a lossy link: two NEXTs sent at once; the first runs its child to the

@@ -1469,11 +1469,24 @@ def _lagged_ahead(rooms: _ObserverState, record: Record, window: Iterable[Record
     """At a client, whose channels lag one another (a lossy link): the record among those ahead that
     the server sent before ``record``, on another channel.  A goal's feedback before its answer (R19.1:
     nothing follows an answer); the INACTIVE status that ended a run before the next run's begin
-    (R3.4: a run begins once the last has ended)."""
+    (R3.4: a run begins once the last has ended); with no child running, the start feedback of an
+    accepted NEXT's child before a status that names that child (R6.4: its start feeds back first)."""
     if record.kind == "result":
         uuid = record.goal_uuid
         return next((ahead for ahead in window if ahead.kind == "feedback" and ahead.goal_uuid == uuid), None)
     state = rooms.replica.state
+    if record.kind == "status" and state is not None and state.running is None:
+        nexts = {queued.goal_uuid for queued in state.queued if queued.goal.event_type == EventType.NEXT}
+        return next(
+            (
+                ahead
+                for ahead in window
+                if ahead.kind == "feedback"
+                and ahead.goal_uuid in nexts
+                and ahead.message.id == record.message.id
+            ),
+            None,
+        )
     if (
         record.kind == "begin"
         and state is not None
