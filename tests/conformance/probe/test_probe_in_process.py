@@ -1009,14 +1009,18 @@ class _LateCancelLink(InProcessLink):
     lossy link sends a lost request again, late), or, ``forged``, answers it refused at once without
     the server seeing it: a server that refuses a CANCEL while the child it names runs."""
 
-    def __init__(self, lag: float, *, forged: bool = False, at_report: bool = False) -> None:
-        self.lag, self.forged, self.at_report, self.cancels = lag, forged, at_report, 0
+    def __init__(
+        self, lag: float, *, forged: bool = False, at_report: bool = False, both: bool = False
+    ) -> None:
+        self.lag, self.forged, self.at_report, self.both, self.cancels = lag, forged, at_report, both, 0
         super().__init__(CONFIG)
 
     def deliver(self, exchange: probe_runner.Exchange) -> None:
         if exchange.goal.event_type != EventType.CANCEL:
             return super().deliver(exchange)
         self.cancels += 1
+        if self.both and self.cancels % 2:  # this one late too: the next, its pair, is
+            return self._at(self.now + round(self.lag * 1e9), lambda: InProcessLink.deliver(self, exchange))
         if self.cancels % 2 and self.at_report and self._children:  # a microsecond before its next report
             return self._at(self._agenda[0][0] - 1_000, lambda: InProcessLink.deliver(self, exchange))
         if self.cancels % 2:
@@ -1044,6 +1048,9 @@ def test_a_cancel_that_reaches_the_server_after_the_child_ended_is_no_failure_of
     assert late.seen == probe_runner.REFUSED_AFTER_END.format(child=_child_of(late)), late.seen
     refused = verdict(_LateCancelLink(0.0, forged=True))
     assert refused.verdict is Verdict.FAIL and refused.seen == "a CANCEL not accepted", refused
+    both = verdict(_LateCancelLink(1.0, both=True))  # both after the child's end: both refused
+    assert both.verdict is Verdict.MISSING, both
+    assert both.seen == probe_runner.REFUSED_AFTER_END.format(child=_child_of(both)), both.seen
 
 
 @pytest.mark.spec("R9.3", "R4.13")

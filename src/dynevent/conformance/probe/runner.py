@@ -1466,6 +1466,7 @@ def _cancel_both_answered(probe: Probe, case: Case) -> CaseFinding:
             if late and (
                 any(_outlived(probe, cancel, child_id) for cancel in ended_by[1:])
                 or all(_delayed(cancel, cancels) for cancel in refused)
+                or len(refused) == len(cancels)  # none accepted: each may have come after the end
             ):
                 why = REFUSED_AFTER_END.format(child=child_id)
                 return CaseFinding(case, Verdict.MISSING, seen=why, by_link=True)
