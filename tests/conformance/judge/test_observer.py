@@ -352,6 +352,30 @@ def test_a_racing_next_whose_child_a_client_saw_start_after_the_others_end_came_
     assert talk.check().clean, found(talk.check())
 
 
+@pytest.mark.spec("R9.1", "R9.2")
+def test_a_cancel_a_client_heard_answered_after_the_next_child_started_had_stopped_its_child() -> None:
+    """Seen at a client across a lossy link: a CANCEL of the running child sent, the child answered
+    canceled and the robot waiting again, then the next NEXT's child started (and ended, and a CANCEL
+    of it was refused), and only then the CANCEL's response and its answer (the link sent both
+    again, seconds late).  The CANCEL reached
+    the server at once and stopped its child (R9.1): no finding.  Read as still queued when the
+    child ended, it would have started while the next child ran, and its answer would be owed as the
+    mismatch (R9.2)."""
+    talk = Trace()
+    talk.rows[0] = {**talk.rows[0], "tap": "client"}
+    talk.started().add("goal", goal_uuid=uuid(2), goal={"dynamic_event_seq": 1, "event_type": 2, "id": 6})
+    talk.result(1, "aborted", "canceled", 6).status(1, 1, "standby", 6)
+    fields = {"event_type": 1, "category": "go_to_place", "description": '"pantry"', "id": 7}
+    talk.add("goal", goal_uuid=uuid(3), goal={"dynamic_event_seq": 1, **fields})
+    talk.feedback(3, "underway", 7).status(1, 2, "underway", 7)
+    talk.add("goal_response", goal_uuid=uuid(2), accepted=True)
+    talk.add("goal_response", goal_uuid=uuid(3), accepted=True).status(1, 1, "standby", 7)
+    talk.add("goal", goal_uuid=uuid(4), goal={"dynamic_event_seq": 1, "event_type": 2, "id": 7})
+    talk.add("goal_response", goal_uuid=uuid(4), accepted=False)  # child 7 has ended (R4.13)
+    talk.result(2, "succeeded", "canceled", 6).result(3, "succeeded", "completed", 7)
+    assert talk.check().clean, found(talk.check())
+
+
 @pytest.mark.spec("R4.13", "R4.16")
 def test_a_cancel_refused_at_a_client_before_it_hears_the_childs_end_may_have_come_after_that_end() -> None:
     """Seen at a client across a lossy link: a CANCEL of the running child, delivered after the child's

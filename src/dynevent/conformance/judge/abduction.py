@@ -4,7 +4,7 @@ the outputs that input owes (see the package docs).  Its names are the vocabular
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 
 import attrs
 
@@ -39,6 +39,7 @@ __all__ = [
     "confirmed",
     "failure_of",
     "first_line",
+    "foreseen",
     "matches_exactly",
     "result_rule",
     "same_status",
@@ -230,6 +231,11 @@ def candidates(state: State, record: Record, now: int) -> Iterator[list[ins.Inpu
         if running is not None and running.started:
             final = result.status if result.status in STATUSES else Status.COMPLETED.value
             yield [ins.ChildFinished(status=final, now=now)]
+            if final == Status.CANCELED.value:  # a queued CANCEL's start (unseen at a client) stopped it
+                for queued in state.queued:
+                    if queued.goal.event_type == EventType.CANCEL:
+                        started = ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now)
+                        yield [started, ins.ChildFinished(status=final, now=now)]
         if running is not None and not running.started and running.goal_uuid == uuid:
             for queued in state.queued:  # a CANCEL's start cancels a deferred child at once (R9.4)
                 if queued.goal.event_type == EventType.CANCEL:
@@ -258,14 +264,23 @@ def confirmed(found: Found, upcoming: Record | None) -> bool:
     return bool(rest) and upcoming is not None and _owes(rest[0], upcoming)
 
 
+def foreseen(found: Found, ahead: Sequence[Record]) -> bool:
+    """Does a record ahead show exactly an answer this candidate owes to another goal?  (Seen away
+    from the server, a goal's answer may come many records late: the answer of a CANCEL that stopped
+    the child, heard after the next child started.)"""
+    rest = [item for item in found[2] if item is not found[3] and isinstance(item.output, outs.AnswerGoal)]
+    return any(_owes(item, record) for item in rest for record in ahead)
+
+
 def abduce(
-    state: State, config: ServerConfig, record: Record, now: int, upcoming: Record | None
+    state: State, config: ServerConfig, record: Record, now: int, ahead: Sequence[Record]
 ) -> Found | None:
     """The first candidate whose first output on the action is this feedback or answer.
 
-    A candidate that reproduces the observation exactly is preferred; else
-    the first whose output is of the same kind for the same goal (the
-    differences are then reported).  The abducer only calls the machine.
+    A candidate that reproduces the observation exactly is preferred: of those, one that owes another
+    goal's answer a record ahead shows (``ahead``: the records after this one), else one whose next
+    output is the next record; else the first whose output is of the same kind for the same goal
+    (the differences are then reported).  The abducer only calls the machine.
     """
     channel = f"goal:{record.goal_uuid}"
     kind = outs.PublishFeedback if record.kind == "feedback" else outs.AnswerGoal
@@ -287,6 +302,10 @@ def abduce(
         elif near is None:
             near = (events, after, owed, first)
     # candidates that agree on this record differ in what comes next: let the next record choose
+    upcoming = ahead[0] if ahead else None
+    for found in exact:
+        if foreseen(found, ahead):
+            return found
     for found in exact:
         if confirmed(found, upcoming):
             return found

@@ -189,7 +189,7 @@ class _ServerReplica:
 
     def abduce(self, record: Record) -> Found | None:
         """The candidate that explains ``record`` in the current state (see :func:`abduce`)."""
-        return abduce(self.st, self.config, record, self.now, self._ahead.upcoming)
+        return abduce(self.st, self.config, record, self.now, self._ahead.records)
 
     # ------------------------------------------------------------------ the trace's opening and time
 
