@@ -53,14 +53,11 @@ BROKEN = {
     },
     # R8.4 after a completed child, and after a cancelled one
     "running_after_child": {"next.status_after_child": "fail (D2)", "cancel.running_child": "fail (D2)"},
-    # every case that holds a child's feedback to its id (the judge reads next.runs_a_child's as a child
-    # numbered other than its NEXT says: the way D10 breaks R6.2)
-    # and the clean-up's CANCEL of the child the status names: the judge, which took the child's id
-    # from its feedback, reads it as naming another event (the way D8 breaks R4.14)
-    "wrong_feedback_id": {
-        "next.runs_a_child": "fail (D10)", "next.id_zero": "fail", "next.id_chosen": "fail",
-        "next.stateless_id": "fail", "next.race": "fail", "cancel.wrong_id": "fail (D8)",
-    },
+    # the case that holds a child's feedback to its id: the judge, whose statuses name the child as its
+    # NEXT does, files it under the feedback's rule (R6.4), not as a child numbered otherwise (D10, R6.2,
+    # the rule of the cases that number children), and keeps the child's id for the clean-up's CANCEL of
+    # cancel.wrong_id
+    "wrong_feedback_id": {"next.runs_a_child": "fail"},
     # the cases after it go by the run the FINISHED ended, its success the run's end (R11.1); the next
     # run begins while finished.ends_the_run waits for the INACTIVE, before the query after the end
     "ignores_finished": {"finished.ends_the_run": "fail", "describe.after_the_run": "missing"},

@@ -569,6 +569,19 @@ def test_a_child_not_named_by_its_goal() -> None:
     assert found(trace.check()) == [(first, "R6.2", "child_id")]
 
 
+@pytest.mark.spec("R6.4", "R6.2", "R9.1")
+def test_a_start_feedback_naming_another_child_than_the_status_does_is_the_feedbacks_fault() -> None:
+    """The child's start feedback names id 9, the status that shows it running names 6, the NEXT's:
+    the child has its NEXT's id and the feedback names the wrong one (R6.4), not a child numbered
+    otherwise (R6.2).  The judge keeps id 6, so a CANCEL of child 6 stops it, with no finding."""
+    trace = Trace().begin().status(1, 1, "standby", 5).next(1, 6).feedback(1, "underway", 9)
+    first = trace.line
+    trace.status(1, 2, "underway", 6).goal(2, event_type=2, id=6)
+    trace.result(1, "aborted", "canceled", 6).result(2, "succeeded", "canceled", 6)
+    trace.status(1, 1, "standby", 6)
+    assert found(trace.check()) == [(first, "R6.4", "feedback_id")]
+
+
 def test_a_goal_that_does_not_lose_its_race() -> None:
     trace = Trace().begin().status(1, 1, "standby", 5).next(1, 6).next(2, 7)
     trace.feedback(1, "underway", 6).status(1, 2, "underway", 6).feedback(2, "underway", 7)

@@ -795,13 +795,14 @@ def test_the_race_names_d10_when_the_server_numbers_the_child_as_the_other_next(
     own number, which is D10 (known with --known rmf_ros2), not a second child.  Seen on the lab's
     EasyFullControl site, where the race failed unexplained; serve's rmf_ros2 mode numbers so too."""
     config = attrs.evolve(CONFIG, compatibility=Compatibility.RMF_ROS2)
-    link = InProcessLink(config)
     cases = [case for case in CASES if case.id in ("next.runs_a_child", "next.race")]
     options = attrs.evolve(OPTIONS, known=probe_cases.KNOWN["rmf_ros2"])
-    ran, race = probe_runner.run_cases(link, options, cases, lambda _: None)
+    _, (ran, race) = probe_in_process(options, cases, lambda _: None, config, write=_unasked)
     assert ran.verdict is Verdict.PASS, ran  # child 2, as its NEXT asked; its plan then drew id 3
-    assert race.verdict is Verdict.FAIL and race.divergence == "D10" and race.known, race
-    assert "feedback ids [4]" in race.seen and any("id=3" in message for message in race.messages), race
+    # the judge's verdict (R6.2, the case's rule), labelled where the judge checks it
+    assert race.verdict is Verdict.FAIL and race.cause == "judge", race
+    assert race.divergence == "D10" and race.known, race
+    assert race.seen.endswith("has id 4") and any("id=3" in message for message in race.messages), race
 
 
 @pytest.mark.spec("R19.1")

@@ -1027,7 +1027,7 @@ class _Feedback(_Part):
             started = isinstance(events[-1], (ins.GoalStarted, ins.Resume))
             if self._drawn_unseen(events[-1], expected.id, feedback.id):
                 self.replica.learn_child_id(feedback.id)
-            elif started:
+            elif started and not self._status_names(expected.id):
                 policy = (
                     "the NEXT goal's id" if self.replica.config.id_policy is IdPolicy.GOAL else "the next id"
                 )
@@ -1052,6 +1052,16 @@ class _Feedback(_Part):
                 f"feedback {expected.status}",
             )
         self.check_clamp(owed, feedback)
+
+    def _status_names(self, child_id: int) -> bool:
+        """Does the first status ahead that shows a child running name ``child_id``?  Then the child
+        has the id the rules gave it, and a start feedback naming another is the feedback's fault
+        (R8.1), not the child's number (R6.2)."""
+        for ahead in self.ahead.records:
+            if ahead.kind == "status" and ahead.message.dynamic_state == DynamicState.RUNNING:
+                message: DynamicEventStatus = ahead.message
+                return message.id == child_id
+        return False
 
     def check_clamp(self, owed: Owed, feedback: Feedback) -> None:
         """A start's feedback carries the warning of a clamped stubborn period (R12.2)."""

@@ -1294,38 +1294,25 @@ def _ran(exchange: Exchange, child_id: int) -> str | None:
 
 
 def _ran_finding(probe: Probe, case: Case, exchange: Exchange, child_id: int, expected: str) -> CaseFinding:
+    """The case passes where the NEXT ran child ``child_id`` to its end; a child seen whole otherwise
+    (another id, another answer) is the judge's to fail, on the case's records (R6.2, R6.4, R8.1: a
+    server that numbers children itself is labelled D10 there).  Seen in part, the case is not run."""
     seen = _ran(exchange, child_id)
-    if seen is None:
-        return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
+    if seen is None or (exchange.accepted is True and _complete(exchange)):
+        return CaseFinding(case, Verdict.PASS, expected=expected, seen=seen or "so")
     unrun = _not_run(case, exchange, expected) if exchange.accepted is not True else None
     if unrun is not None:
         return unrun
     # seen in part (no answer, or a child that ran without its start's feedback): the run's end tells a
     # server that never sent the rest from a link that delivered it late
-    return _fails(case, "child_ran" if _complete(exchange) else "timeout", expected, seen)
-
-
-def _numbered_by_server(finding: CaseFinding, exchange: Exchange, asked: int, above: int) -> CaseFinding:
-    """A NEXT whose child ran and completed under another fresh id (above ``above``) than the one
-    asked for: the server numbered the child itself, by a counter of its own (D10)."""
-    answer = exchange.answer
-    numbered = (
-        answer is not None
-        and answer[0] is GoalStatus.SUCCEEDED
-        and answer[1].id != asked
-        and answer[1].id > above
-    )
-    return (
-        attrs.evolve(finding, divergence="D10") if finding.verdict is Verdict.FAIL and numbered else finding
-    )
+    return _fails(case, "timeout", expected, seen)
 
 
 def _id_zero(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     child_id = machine.next_child_id(Goal(id=0), status.id, _SERVER_NUMBERS)
     exchange = probe.send(probe.next_goal(status, goal_id=0))
-    finding = _ran_finding(probe, case, exchange, child_id, f"child {child_id} runs and completes")
-    return _numbered_by_server(finding, exchange, child_id, status.id)
+    return _ran_finding(probe, case, exchange, child_id, f"child {child_id} runs and completes")
 
 
 def _id_chosen(probe: Probe, case: Case) -> CaseFinding:
@@ -1334,10 +1321,7 @@ def _id_chosen(probe: Probe, case: Case) -> CaseFinding:
     if chosen > U64_MAX:
         raise _Unreachable(f"no id above {status.id} is left to choose")
     exchange = probe.send(probe.next_goal(status, goal_id=chosen))
-    finding = _ran_finding(
-        probe, case, exchange, chosen, f"child {chosen} (the NEXT's id) runs and completes"
-    )
-    return _numbered_by_server(finding, exchange, chosen, status.id)  # the id ignored
+    return _ran_finding(probe, case, exchange, chosen, f"child {chosen} (the NEXT's id) runs and completes")
 
 
 def _stateless_id(probe: Probe, case: Case) -> CaseFinding:
@@ -1353,8 +1337,7 @@ def _stateless_id(probe: Probe, case: Case) -> CaseFinding:
     probe.note(f"status {status_text(after)}: the client's only state")
     exchange = probe.send(probe.next_goal(after))  # seq and the fresh id from that status alone
     fresh = _fresh(after.id)
-    finding = _ran_finding(probe, case, exchange, fresh, f"child {fresh} runs and completes")
-    return _numbered_by_server(finding, exchange, fresh, after.id)
+    return _ran_finding(probe, case, exchange, fresh, f"child {fresh} runs and completes")
 
 
 def _race(probe: Probe, case: Case) -> CaseFinding:
@@ -1377,12 +1360,9 @@ def _race(probe: Probe, case: Case) -> CaseFinding:
             return _fails(case, "timeout", expected, count)
         refused = all(exchange.accepted is False for exchange in exchanges)  # what a configuration decides
         return _fails(case, "configuration" if refused else "two_nexts", expected, count)
-    seen = _ran(ran[0], ran[0].goal.id)
-    if seen is not None:
-        failed = _fails(
-            case, "child_ran" if _complete(ran[0]) else "timeout", expected, f"the child that ran: {seen}"
-        )
-        return _numbered_by_server(failed, ran[0], ran[0].goal.id, status.id)
+    seen = _ran(ran[0], ran[0].goal.id)  # another id or answer: the judge's (R6.2, R6.4, R8.1)
+    if seen is not None and not _complete(ran[0]):
+        return _fails(case, "timeout", expected, f"the child that ran: {seen}")
     other = exchanges[1] if ran[0] is exchanges[0] else exchanges[0]
     if other.accepted is None:
         return _fails(case, "timeout", expected, "the other NEXT: no response")
