@@ -953,6 +953,7 @@ def test_a_response_whose_request_came_later_is_paired_and_a_skip_the_late_feedb
         "answer_after_next",
         "begin_on_one_topic",
         "finished_answered_late",
+        "finished_response_late",
     ],
 )
 def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
@@ -967,7 +968,9 @@ def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
     them; in ``begin_on_one_topic`` a run's begin that came on the fleet's begin topic alone, the
     robot's own copy lost, opens the run; in ``finished_answered_late`` a FINISHED of a run whose own
     id the judgement did not know (it began anew mid-run) is answered after the next run's begin,
-    and its result's id is not held to the new run's."""
+    and its result's id is not held to the new run's; in ``finished_response_late`` a FINISHED whose
+    response came 12 s late, after the next run's begin, is read as accepted where the goal statuses
+    listed it."""
     report = check_bag(LOADED.parent / name)
     assert report.clean, [robot.report.findings for robot in report.robots]
 

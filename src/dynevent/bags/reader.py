@@ -793,6 +793,11 @@ class _Robot:
             self.judge.push(record)
             return
         if record.kind == GOAL_STATUSES:  # the goals' own records tell the rest
+            for uuid, _ in record.message:
+                # the server lists only a goal it accepted: one whose response has not come (a lossy
+                # link delivers it late, or never) was accepted by now
+                if uuid in self._goals and uuid not in self._waiting_responses:
+                    self.unheard_response(record, uuid)
             for uuid, status in record.message:
                 if status.is_terminal:
                     # the goal's end shows its child's end, unless its answer, among the records held,
@@ -867,9 +872,9 @@ class _Robot:
 
     def unheard_response(self, record: Record, uuid: str | None = None) -> None:
         """``record`` is the feedback or answer of a goal whose request the bag holds and whose response
-        it lacks (or the status that shows goal ``uuid``'s child running): a server feeds back,
-        answers and runs the child of only a goal it accepted, so the response was accepted, and lost
-        on its way to the recorder (a lossy link: a service event a writer's short history let go
+        it lacks (or the status that shows goal ``uuid``'s child running, or the goal statuses that
+        list it): a server feeds back, answers, runs the child of and lists only a goal it accepted,
+        so the response was accepted, and lost (or delayed past :data:`HOLD`) on its way to the recorder (a lossy link: a service event a writer's short history let go
         before it was sent again).  It is read as accepted, here, and said."""
         uuid = record.goal_uuid if uuid is None else uuid
         self._goals.pop(uuid)
