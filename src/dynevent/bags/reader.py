@@ -874,8 +874,9 @@ class _Robot:
         """``record`` is the feedback or answer of a goal whose request the bag holds and whose response
         it lacks (or the status that shows goal ``uuid``'s child running, or the goal statuses that
         list it): a server feeds back, answers, runs the child of and lists only a goal it accepted,
-        so the response was accepted, and lost (or delayed past :data:`HOLD`) on its way to the recorder (a lossy link: a service event a writer's short history let go
-        before it was sent again).  It is read as accepted, here, and said."""
+        so the response was accepted, and lost (or delayed past :data:`HOLD`) on its way to the
+        recorder (a lossy link: a service event a writer's short history let go before it was sent
+        again).  It is read as accepted, here, and said."""
         uuid = record.goal_uuid if uuid is None else uuid
         self._goals.pop(uuid)
         self.unheard.append((record.time, uuid))

@@ -110,8 +110,8 @@ def format_bag(bag: Any) -> str:
             lines.append(f"{where} @ {_bag_time(time)}: the bag lacks the request of goal {uuid}: "
                          "judged anew from the status before it")  # fmt: skip
         for time, uuid in robot.unheard:
-            lines.append(f"{where} @ {_bag_time(time)}: the bag lacks the response to goal {uuid}: "
-                         "read as accepted from its feedback, answer, running child or goal status")  # fmt: skip
+            lines.append(f"{where} @ {_bag_time(time)}: the bag lacks the response to goal {uuid}: read "
+                         "as accepted from its feedback, answer, running child or goal status")  # fmt: skip
         for time, channel, sent in robot.late:
             lines.append(f"{where} @ {_bag_time(time)}: {_late(channel, time, sent)}")
         if robot.refused:
