@@ -235,10 +235,12 @@ class _ServerReplica:
         """The step that gave ``state`` and owes ``owed`` took place, at the current line."""
         self.state = state
         unknown = self.event_id_unknown  # a FINISHED's answer then owes an id not known (R11.1)
-        self._owed.extend(
-            attrs.evolve(item, line=self._line, id_known=not (unknown and item.rule == machine.FINISHED_RULE))
-            for item in owed
-        )
+
+        def id_known(item: Owed) -> bool:
+            finished = item.rule == machine.FINISHED_RULE and isinstance(item.output, outs.AnswerGoal)
+            return not (unknown and finished)
+
+        self._owed.extend(attrs.evolve(item, line=self._line, id_known=id_known(item)) for item in owed)
 
     def resync(self, state: State) -> None:
         """The server is known to be in ``state``, whatever the steps so far say (see :mod:`resync`)."""
