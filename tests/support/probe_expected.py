@@ -53,11 +53,11 @@ BROKEN = {
     },
     # R8.4 after a completed child, and after a cancelled one
     "running_after_child": {"next.status_after_child": "fail (D2)", "cancel.running_child": "fail (D2)"},
-    # the case that holds a child's feedback to its id: the judge, whose statuses name the child as its
-    # NEXT does, files it under the feedback's rule (R6.4), not as a child numbered otherwise (D10, R6.2,
-    # the rule of the cases that number children), and keeps the child's id for the clean-up's CANCEL of
-    # cancel.wrong_id
-    "wrong_feedback_id": {"next.runs_a_child": "fail"},
+    # the cases that hold a child's start feedback to its id (R6.4): the judge, whose statuses name the
+    # child as its NEXT does, files it under the feedback's rule, not as a child numbered otherwise (D10,
+    # R6.2, the rule of the cases that number children), and keeps the child's id for the clean-up's
+    # CANCEL of cancel.wrong_id
+    "wrong_feedback_id": {"next.runs_a_child": "fail", "next.race": "fail"},
     # the cases after it go by the run the FINISHED ended, its success the run's end (R11.1); the next
     # run begins while finished.ends_the_run waits for the INACTIVE, before the query after the end
     "ignores_finished": {"finished.ends_the_run": "fail", "describe.after_the_run": "missing"},

@@ -299,7 +299,8 @@ CASES: tuple[Case, ...] = (
     Case("next.busy_finished", "a FINISHED while a child runs is refused", ("R4.6",), needs="child",
          divergences=("D30",)),
     Case("next.race", "two NEXTs at once: one child runs, the other NEXT is refused or aborted, each "
-         "answered once", ("R4.16", "R5.2", "R19.2", "R19.1", "R6.2"), needs="child", divergences=("D10",)),
+         "answered once", ("R4.16", "R5.2", "R19.2", "R19.1", "R6.2", "R6.4"), needs="child",
+         divergences=("D10",)),
     Case("feedback.log_seq", "log entries are numbered one by one per robot, across children, in known tiers",
          ("R7.2", "R7.3"), needs="child", divergences=("D9",)),
     Case("stubborn.clamp_notice", "a stubborn period below the minimum is clamped with a warning in the "
@@ -349,9 +350,6 @@ UNTRACEABLE: dict[str, str] = {
 #: Checks a case's script still makes by hand because the judge does not decide them as the case
 #: does yet, each with why: the work left before every verdict is the judge's or :data:`UNTRACEABLE`.
 NOT_YET_JUDGED: dict[str, str] = {
-    "two_nexts": "next.race's reading of R5.2 and R4.16 (two children ran, or the NEXT that ran none was "
-    "answered other than aborted) is not yet held to the judge's: no server of the test kit breaks it "
-    "but by refusing both NEXTs (configuration)",
     "status_after_end": "the judge reads a status that still shows a child after its answer as a "
     "response recorded late (an open item of a view taken at a client), where the probe heard the "
     "answer first and then waited for the status",
