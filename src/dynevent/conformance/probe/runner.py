@@ -1298,8 +1298,10 @@ def _ran_finding(probe: Probe, case: Case, exchange: Exchange, child_id: int, ex
     (another id, another answer) is the judge's to fail, on the case's records (R6.2, R6.4, R8.1: a
     server that numbers children itself is labelled D10 there).  Seen in part, the case is not run."""
     seen = _ran(exchange, child_id)
-    if seen is None or (exchange.accepted is True and _complete(exchange)):
-        return CaseFinding(case, Verdict.PASS, expected=expected, seen=seen or "so")
+    if seen is None:
+        return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
+    if exchange.accepted is True and _complete(exchange):
+        return _seen_by_script(case, expected, seen)
     unrun = _not_run(case, exchange, expected) if exchange.accepted is not True else None
     if unrun is not None:
         return unrun
@@ -1362,15 +1364,15 @@ def _race(probe: Probe, case: Case) -> CaseFinding:
             return _fails(case, "timeout", expected, count)
         if all(exchange.accepted is False for exchange in exchanges):  # what a configuration decides
             return _fails(case, "configuration", expected, count)
-        return CaseFinding(case, Verdict.PASS, expected=expected, seen=count)
+        return _seen_by_script(case, expected, count)
     seen = _ran(ran[0], ran[0].goal.id)
     if seen is not None and not _complete(ran[0]):
         return _fails(case, "timeout", expected, f"the child that ran: {seen}")
     other = exchanges[1] if ran[0] is exchanges[0] else exchanges[0]
     if other.accepted is None:
         return _fails(case, "timeout", expected, "the other NEXT: no response")
-    seen = f"the other NEXT: {_describe_answer(other)}"
-    return CaseFinding(case, Verdict.PASS, expected=expected, seen=seen)  # an unanswered other: R19.1 below
+    # an unanswered other: R19.1, the judge's too
+    return _seen_by_script(case, expected, f"the other NEXT: {_describe_answer(other)}")
 
 
 def _log_seq(probe: Probe, case: Case) -> CaseFinding:
