@@ -72,6 +72,7 @@ OVER_DDS: Mapping[str, tuple[str, ...]] = {
     "R3.1": ("the judge",),
     "R3.3": ("status.waiting",),
     "R4.16": (),
+    "R5.2": (),
     "R6.4": ("next.runs_a_child",),
     "R8.1": ("next.runs_a_child",),
     "R8.2": ("next.runs_a_child",),
@@ -98,6 +99,9 @@ DDS_CANNOT_SHOW: Mapping[str, str] = {
         "ACCEPT or REJECT, and an acceptance carries nothing more)",
         what="acceptance",
     ),
+    "R5.2": "dynevent's ROS binding submits an accepted goal, request and start in one step under its "
+    "lock (R5.3): no goal is asked for between a goal's acceptance and its start, and a race it loses "
+    "there is R5.3's",
     "R10.5": _BINDING.format(
         does="refuses every action-level cancel the machine does not accept (rclpy's cancel callback "
         "answers ACCEPT or REJECT)",

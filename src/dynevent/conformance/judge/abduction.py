@@ -226,8 +226,15 @@ def candidates(state: State, record: Record, now: int) -> Iterator[list[ins.Inpu
         return
     if record.kind == "result":
         result: Result = record.message
-        if any(item.goal_uuid == uuid for item in state.queued):
+        order = [item.goal_uuid for item in state.queued]
+        if uuid in order:
             yield [ins.GoalStarted(goal_uuid=uuid, now=now)]
+            before = order[: order.index(uuid)]
+            if before:  # the goals accepted before it started first (a race it lost, R5.2)
+                yield [
+                    *(ins.GoalStarted(goal_uuid=first, now=now) for first in before),
+                    ins.GoalStarted(goal_uuid=uuid, now=now),
+                ]
         if running is not None and running.started:
             final = result.status if result.status in STATUSES else Status.COMPLETED.value
             yield [ins.ChildFinished(status=final, now=now)]
@@ -273,14 +280,22 @@ def foreseen(found: Found, ahead: Sequence[Record]) -> bool:
 
 
 def abduce(
-    state: State, config: ServerConfig, record: Record, now: int, ahead: Sequence[Record]
+    state: State,
+    config: ServerConfig,
+    record: Record,
+    now: int,
+    ahead: Sequence[Record],
+    *,
+    apart: bool = False,
 ) -> Found | None:
     """The first candidate whose first output on the action is this feedback or answer.
 
     A candidate that reproduces the observation exactly is preferred: of those, one that owes another
     goal's answer a record ahead shows (``ahead``: the records after this one), else one whose next
     output is the next record; else the first whose output is of the same kind for the same goal
-    (the differences are then reported).  The abducer only calls the machine.
+    (the differences are then reported).  Seen ``apart`` from the server (a client, a recorder), an
+    answer is the first output on its own goal's channel: a goal's answer comes by a service of its
+    own, in no order with another goal's feedback or answer.  The abducer only calls the machine.
     """
     channel = f"goal:{record.goal_uuid}"
     kind = outs.PublishFeedback if record.kind == "feedback" else outs.AnswerGoal
@@ -294,7 +309,9 @@ def abduce(
                 for item in owed
                 if item.channel != channel or not isinstance(item.output, outs.PublishFeedback)
             ]
-        first = next((item for item in owed if item.channel.startswith("goal:")), None)
+        mine = apart and kind is outs.AnswerGoal
+        first = next((item for item in owed if item.channel == channel or (
+            not mine and item.channel.startswith("goal:"))), None)  # fmt: skip
         if first is None or first.channel != channel or not isinstance(first.output, kind):
             continue
         if matches_exactly(first.output, record):

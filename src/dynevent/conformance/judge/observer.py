@@ -141,9 +141,10 @@ class _ServerReplica:
     and what the trace leaves uncertain about it.  The only writer of all of them: the parts change
     them through its methods, each named for what the trace showed."""
 
-    def __init__(self, header: TraceHeader, findings: _Findings, ahead: _Lookahead) -> None:
+    def __init__(self, header: TraceHeader, findings: _Findings, ahead: _Lookahead, *, apart: bool) -> None:
         self._findings = findings
         self._ahead = ahead
+        self.apart = apart  # seen apart from the server: see :func:`abduce`
         self.config_known = header.config is not None
         if header.config is not None:
             self.config = header.config
@@ -189,7 +190,7 @@ class _ServerReplica:
 
     def abduce(self, record: Record) -> Found | None:
         """The candidate that explains ``record`` in the current state (see :func:`abduce`)."""
-        return abduce(self.st, self.config, record, self.now, self._ahead.records)
+        return abduce(self.st, self.config, record, self.now, self._ahead.records, apart=self.apart)
 
     # ------------------------------------------------------------------ the trace's opening and time
 
@@ -1334,9 +1335,9 @@ class _Observer:
 
     def __init__(self, header: TraceHeader, *, apart: bool = False) -> None:
         findings, ahead = _Findings(), _Lookahead()
-        replica = _ServerReplica(header, findings, ahead)
-        self.rooms = _ObserverState(findings=findings, ahead=ahead, replica=replica, goals=_Goals(replica))
         apart = apart or header.tap == "client"
+        replica = _ServerReplica(header, findings, ahead, apart=apart)
+        self.rooms = _ObserverState(findings=findings, ahead=ahead, replica=replica, goals=_Goals(replica))
         self.requests = _Requests(self.rooms, apart=apart)
         self.runs = _Runs(self.rooms, header, apart=apart)
         self.feedback = _Feedback(self.rooms)

@@ -393,8 +393,6 @@ LIVE_CANNOT_SHOW: dict[str, str] = {
     "R4.8": "the description limit is the server's configuration, which a client does not know",
     "R4.15": "a binding answers every goal request: one the machine neither accepts nor refuses is refused",
     "R5.1": "moving an accepted goal to executing is the binding's, seen by no client of the protocol",
-    "R5.2": "not yet: the in-process and driver links start an accepted goal in the step that accepts it, "
-    "so that no other goal can take the world between a goal's acceptance and its start",
     "R5.3": "a submitted goal (request and start in one step) is a binding's choice, not a client's",
     "R6.1": "a server's configuration does not change between a goal's acceptance and its start in a live "
     "exchange a client drives",

@@ -3,15 +3,16 @@ robot (its ``--config``, either compatibility mode), on simulated time.
 
 :class:`InProcessLink` is a :class:`~dynevent.conformance.probe.runner.Link` whose far end is not a
 network but the machine itself, carried out the way serve's binding carries it out: a goal request
-is stepped (``GoalRequested``) and, accepted, handed over at once (``GoalStarted``, the
-``handle_accepted`` moment); the outputs are carried out in order (a status published, feedback and
-answers delivered to the goal's :class:`~dynevent.conformance.probe.runner.Exchange`, a child started or
-told to stop); children are :class:`~dynevent.sim.children.SimulatedChild`, reporting on serve's
-periods; a run that ends begins again after serve's ``rebegin``.  Time is simulated: a wait runs
-what is due up to its end and takes no time at all, so every case runs in well under a second, and
-the same cases give the same findings every run.  Real time is kept apart (``wall``): the run's
-``--deadline`` bounds it as it bounds the simulated time, so that a server that answers slowly, or
-not at all, is left when the deadline passes.
+is stepped (``GoalRequested``) and, accepted, handed over at the next wait (``GoalStarted``, the
+``handle_accepted`` moment: a goal sent with it is asked for first, and may win the race, R5.2); the
+outputs are carried out in order (a status published, feedback and answers delivered to the goal's
+:class:`~dynevent.conformance.probe.runner.Exchange`, a child started or told to stop); children are
+:class:`~dynevent.sim.children.SimulatedChild`, reporting on serve's periods; a run that ends begins
+again after serve's ``rebegin``.  Time is simulated: a wait runs what is due up to its end and takes
+no time at all, so every case runs in well under a second, and the same cases give the same findings
+every run.  Real time is kept apart (``wall``): the run's ``--deadline`` bounds it as it bounds the
+simulated time, so that a server that answers slowly, or not at all, is left when the deadline
+passes.
 
 The server can be replaced (``stepper``): any ``apply(input) -> outputs`` over the machine's inputs
 and outputs, so that a deliberately broken server (the test kit's) is probed the same way.
@@ -235,9 +236,14 @@ class InProcessLink(Link):
         self._drain()
         exchange.accepted_at = self.now if accepted else None
         self.hear_response(exchange, accepted)
-        if accepted:  # handed over for execution at once, as rclpy's handle_accepted does
-            self.step(ins.GoalStarted(goal_uuid=exchange.uuid, now=self.now))
-            self._drain()
+        if accepted:  # handed over for execution now, after what else is asked now (R5.2's race)
+            self._at(self.now, lambda: self._start(exchange.uuid))
+
+    def _start(self, uuid: str) -> None:
+        """Goal ``uuid``, accepted, is handed over for execution (rclpy's ``handle_accepted``): at the
+        first wait after its acceptance, so that a goal sent with it is asked for first, as a server
+        with an executor of its own may take it."""
+        self.step(ins.GoalStarted(goal_uuid=uuid, now=self.now))
 
     def cancel(self, exchange: Exchange, timeout: float) -> bool | None:
         self.sent("cancel_request", goal_uuid=exchange.uuid)
