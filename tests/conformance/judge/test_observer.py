@@ -376,6 +376,26 @@ def test_a_cancel_a_client_heard_answered_after_the_next_child_started_had_stopp
     assert talk.check().clean, found(talk.check())
 
 
+@pytest.mark.spec("R5.2")
+def test_a_race_a_client_heard_lost_before_it_heard_either_nexts_response_or_the_winners_start() -> None:
+    """Seen at a client whose responses lag: two NEXTs sent at once, both accepted, the first started
+    and the second lost the race (aborted, race condition); the client hears that answer first, then
+    the first child's status, the two responses, and the first child's feedback.  The NEXT accepted
+    first started first, and the other's answer comes by a service of its own, in no order with the
+    first's feedback: no finding."""
+    nexts = {"event_type": 1, "category": "go_to_place", "description": '"pantry"'}
+    talk = Trace()
+    talk.rows[0] = {**talk.rows[0], "tap": "client"}
+    talk.begin().status(1, 1, "standby", 5)
+    talk.add("goal", goal_uuid=uuid(1), goal={"dynamic_event_seq": 1, **nexts, "id": 6})
+    talk.add("goal", goal_uuid=uuid(2), goal={"dynamic_event_seq": 1, **nexts, "id": 7})
+    talk.result(2, "aborted", "", 0, failure="race condition").status(1, 2, "underway", 6)
+    talk.add("goal_response", goal_uuid=uuid(1), accepted=True)
+    talk.add("goal_response", goal_uuid=uuid(2), accepted=True)
+    talk.feedback(1, "underway", 6).result(1, "succeeded", "completed", 6).status(1, 1, "standby", 6)
+    assert talk.check().clean, found(talk.check())
+
+
 @pytest.mark.spec("R4.13", "R4.16")
 def test_a_cancel_refused_at_a_client_before_it_hears_the_childs_end_may_have_come_after_that_end() -> None:
     """Seen at a client across a lossy link: a CANCEL of the running child, delivered after the child's
