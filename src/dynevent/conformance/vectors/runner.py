@@ -289,7 +289,9 @@ class ExternalImplementation:
             chunk = os.read(stdout.fileno(), 65536)
             if not chunk:
                 try:
-                    code = self._process.wait(timeout=max(deadline - time.monotonic(), _LAST_WAIT))
+                    # as long as closing its input would give it (CLOSE_WAIT), within the answer's time
+                    left = min(deadline - time.monotonic(), CLOSE_WAIT)
+                    code = self._process.wait(timeout=max(left, _LAST_WAIT))
                 except subprocess.TimeoutExpired:  # its output closed, the process still there
                     self._process.kill()
                     code = self._process.wait()
