@@ -13,7 +13,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from dynevent.conformance.judge import Report, TraceError, check_trace, read_trace, step_records
+from dynevent.conformance.judge import Report, TraceError, check_trace, divergences, read_trace, step_records
 from dynevent.conformance.judge.trace import TAPS, TraceWriter
 from dynevent.server import inputs as ins
 from dynevent.server import machine
@@ -394,6 +394,54 @@ def test_a_race_a_client_heard_lost_before_it_heard_either_nexts_response_or_the
     talk.add("goal_response", goal_uuid=uuid(2), accepted=True)
     talk.feedback(1, "underway", 6).result(1, "succeeded", "completed", 6).status(1, 1, "standby", 6)
     assert talk.check().clean, found(talk.check())
+
+
+def _stamped_status(talk: Trace, phase: int, status: str, event_id: int, at: float) -> None:
+    """A status of run 1 the server stamped ``at`` (seconds)."""
+    stamp = {"sec": int(at), "nanosec": round((at - int(at)) * 1e9)}
+    message = {
+        "dynamic_event_seq": 1,
+        "dynamic_state": phase,
+        "status": status,
+        "id": event_id,
+        "time": stamp,
+    }
+    talk.add("status", message=message)
+
+
+def _logged_feedback(talk: Trace, n: int, event_id: int, seq: int, at: float) -> None:
+    """Goal ``n``'s feedback carrying log entry ``seq``, made ``at`` (seconds)."""
+    entry = {"seq": seq, "tier": "info", "unix_millis_time": round(at * 1000), "text": "moving"}
+    feedback = {"status": "underway", "id": event_id, "logs": [entry]}
+    talk.add("feedback", goal_uuid=uuid(n), feedback=feedback)
+
+
+@pytest.mark.spec("R6.4", "R8.2", "R19.1")
+def test_a_goal_whose_response_a_client_never_heard_is_read_as_accepted_from_its_feedback() -> None:
+    """Seen at a client whose link lost a NEXT's response for good (and its answer), and delivered
+    feedback the server made before the status of the child's end after that status: the server
+    feeds back only a goal it accepted, so the goal is read as accepted at its first feedback, and
+    the late feedback as sent before the status (their stamps are the server's).  The answer never
+    came: missing, but as an open item of the judge (``answer_lost``), since the client that lost the
+    response may have lost the answer the same way."""
+    talk = Trace()
+    talk.rows[0] = {**talk.rows[0], "tap": "client"}
+    talk.begin()
+    _stamped_status(talk, 1, "standby", 5, 100.0)
+    talk.add("goal", goal_uuid=uuid(1), goal={"dynamic_event_seq": 1, "event_type": 1,
+             "category": "go_to_place", "description": '"pantry"', "id": 6})  # fmt: skip
+    talk.feedback(1, "underway", 6)
+    _stamped_status(talk, 2, "underway", 6, 101.0)
+    _logged_feedback(talk, 1, 6, 0, 102.0)
+    _stamped_status(talk, 1, "standby", 6, 106.0)  # the child's end
+    for seq in (1, 2, 3):
+        _logged_feedback(talk, 1, 6, seq, 102.0 + seq)  # made before that status, delivered after it
+    report = talk.check()
+    assert [(finding.rule, finding.code, finding.detail) for finding in report.findings] == [
+        ("R19.1", "answer_missing", "response_unheard")
+    ], found(report)
+    assert divergences.label(report.findings[0]) == "answer_lost"
+    assert divergences.label(report.findings[0]) in divergences.OPEN_ITEMS
 
 
 @pytest.mark.spec("R4.13", "R4.16")

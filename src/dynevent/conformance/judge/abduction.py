@@ -66,10 +66,15 @@ class GoalSeen:
     order: int = 0  # how many records were judged before its request (a bag's lines are bag times)
     stopped: bool = False  # its answer says its child was cancelled
     owed: bool = False  # dropped from the state on resynchronisation: its answers are not judged
+    heard: bool = True  # False: its response was read from its feedback or answer, never heard
 
     def respond(self, accepted: bool) -> None:
         """The server answered the request: accepted or refused."""
         self.responded, self.accepted = True, accepted
+
+    def unheard(self) -> None:
+        """Its response was never heard: read as accepted from its feedback or answer."""
+        self.heard = False
 
     def answer(self, line: int, stopped: bool = False) -> None:
         """Its terminal answer came, on ``line``; ``stopped``: it says the child was cancelled."""

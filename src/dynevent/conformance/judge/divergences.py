@@ -50,6 +50,9 @@ OPEN_ITEMS: frozenset[str] = frozenset(
         # a client records the feedback that reaches it: one lost on the way leaves its child's log
         # seqs skipping (R7.3), as a server that skips them does
         "feedback_lost",
+        # a client that never heard a goal's response (read from its feedback or answer) may have lost
+        # its answer on the way too: a goal never answered is then not known to be the server's fault
+        "answer_lost",
     }
 )
 
@@ -63,6 +66,8 @@ def label(finding: Finding) -> str:
     seen, owed = finding.seen, finding.owed
     if code == "log_seq" and detail == "skips":
         return "feedback_lost"
+    if code == "answer_missing" and detail == "response_unheard":
+        return "answer_lost"
     # a goal accepted while a child runs: a FINISHED ends the run under the child (D30); a NEXT finds
     # the robot freed by a CANCEL before the child's end (D1)
     if code == "accepted_busy":

@@ -1222,13 +1222,18 @@ class _Answers(_Part):
                     continue  # no client asked for it: no recording could hold it
                 if evidence.until is not None and item.line > evidence.until:
                     continue  # the recording stopped while it may have been on its way
+            seen = self.goals.get(uuid)
+            # a client that never heard the goal's response may have lost its answer the same way
+            detail = "response_unheard" if seen is not None and not seen.heard else ""
             if item.exact:
                 message = f"goal {uuid} never answered (by the end of the trace)"
                 expected = f"{answer_text(item.output.status.value, item.output.result)} ({item.rule})"
             else:  # a child's end read from its status alone: how it ended is not on the wire
                 message = f"goal {uuid} never answered, though this status shows its child's end"
                 expected = f"one terminal answer, with the child's result, before this status ({item.rule})"
-            self.findings.differs(missing.rule, missing.code, message, expected, line=item.line)
+            self.findings.differs(
+                missing.rule, missing.code, message, expected, line=item.line, detail=detail
+            )
 
     def started_unseen(self, record: Record) -> bool:
         """A CANCEL's start shows nothing on the wire: its answer may say it waited for the last child."""
@@ -1483,7 +1488,12 @@ def _lagged_ahead(rooms: _ObserverState, record: Record, window: Iterable[Record
     the server sent before ``record``, on another channel.  A goal's feedback before its answer (R19.1:
     nothing follows an answer); the INACTIVE status that ended a run before the next run's begin
     (R3.4: a run begins once the last has ended); with no child running, the start feedback of an
-    accepted NEXT's child before a status that names that child (R6.4: its start feeds back first)."""
+    accepted NEXT's child before a status that names that child (R6.4: its start feeds back first);
+    the running child's feedback whose log entries the server made before the status that shows that
+    child's end was stamped (the two stamps are the server's clock)."""
+    ended = _fed_back_before(rooms.replica.state, record, window)
+    if ended is not None:
+        return ended
     if record.kind == "result":
         uuid = record.goal_uuid
         return next((ahead for ahead in window if ahead.kind == "feedback" and ahead.goal_uuid == uuid), None)
@@ -1516,6 +1526,24 @@ def _lagged_ahead(rooms: _ObserverState, record: Record, window: Iterable[Record
             ),
             None,
         )
+    return None
+
+
+def _fed_back_before(state: State | None, record: Record, window: Iterable[Record]) -> Record | None:
+    """The running child's feedback, among the records ahead, whose last log entry was made before
+    ``record``, a status that shows that child ended, was stamped (see :func:`_lagged_ahead`)."""
+    running = state.running if state is not None else None
+    if record.kind != "status" or running is None or not running.started:
+        return None
+    status: DynamicEventStatus = record.message
+    if machine.runs_a_child(status) and status.id == running.child_id:
+        return None
+    stamped = status.time.sec * 1_000_000_000 + status.time.nanosec
+    for ahead in window:
+        if ahead.kind != "feedback" or ahead.goal_uuid != running.goal_uuid or not ahead.message.logs:
+            continue
+        if ahead.message.logs[-1].unix_millis_time * 1_000_000 < stamped:
+            return ahead
     return None
 
 
@@ -1577,6 +1605,13 @@ class Checker:
             window.remove(response)
             window.appendleft(record)
             record = response
+        elif self._client and _response_lost(rooms, record, window):
+            # a server feeds back and answers only a goal it accepted: the response was lost on the way
+            window.appendleft(record)
+            record = attrs.evolve(record, kind="goal_response", message=None, accepted=True, status="")
+            unheard = rooms.goals.get(record.goal_uuid)
+            if unheard is not None:
+                unheard.unheard()
         rooms.ahead.show(tuple(window))
         ended = self._observer.requests.ended_shown
         while self._shown and self._shown[0][0] <= self._count:  # shown before this record
@@ -1588,6 +1623,18 @@ class Checker:
         self._count += 1
         if self._client and record.kind == "goal":
             _response_next(rooms, record, window)
+
+
+def _response_lost(rooms: _ObserverState, record: Record, window: Iterable[Record]) -> bool:
+    """Whether ``record`` is the feedback or answer of a goal requested whose response was not heard
+    and is not among the records ahead: lost on the way to a client (a lossy link, a service response
+    sent while the client's host was cut off)."""
+    if record.kind not in ("feedback", "result"):
+        return False
+    seen = rooms.goals.get(record.goal_uuid)
+    if seen is None or seen.responded:
+        return False
+    return not any(ahead.kind == "goal_response" and ahead.goal_uuid == record.goal_uuid for ahead in window)
 
 
 def _remember_goal(books: collections.OrderedDict[str, None], uuid: str) -> None:
