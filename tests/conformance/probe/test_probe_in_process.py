@@ -877,6 +877,42 @@ class _LaggingLink(InProcessLink):
         self._later("begin", lambda: InProcessLink.hear_begin(self, begin))
 
 
+class _FeedbackLosingLink(_LaggingLink):
+    """The lagging link that also loses for good every third feedback that carries a log entry (a
+    reliable topic keeps its last messages only, and a link that repairs slowly loses older ones)."""
+
+    def __init__(self, config: ServeConfig, **lags: float) -> None:
+        self.logged = 0
+        super().__init__(config, keep_last=True, **lags)
+
+    def hear_feedback(self, exchange: probe_runner.Exchange, feedback: Any) -> None:
+        if feedback.logs:
+            self.logged += 1
+            if self.logged % 3 == 0:
+                return
+        super().hear_feedback(exchange, feedback)
+
+
+@pytest.mark.spec("R7.3")
+def test_log_seqs_that_skip_over_a_link_that_lost_messages_are_no_verdict() -> None:
+    """Feedback lost on the way leaves a child's log seqs skipping, as a server that skips them does:
+    over a link that shows it lost messages (statuses published and never delivered),
+    feedback.log_seq is not run, saying why, where over a link that shows no loss it fails."""
+    options = attrs.evolve(OPTIONS, timeout=10, deadline=1000, allow_missing=("describe.after_the_run",))
+    config = attrs.evolve(CONFIG, categories={"go_to_place": CategorySpec(duration=3.0, report_every=0.25)})
+    lossy = _FeedbackLosingLink(config, status=0.5)
+    findings = {f.case.id: f for f in probe_runner.run_cases(lossy, options, list(CASES), lambda _: None)}
+    assert lossy.statuses_missed > 0
+    logs = findings["feedback.log_seq"]
+    assert logs.verdict is Verdict.MISSING and logs.by_link, logs
+    assert logs.seen.startswith(probe_runner.LOSSY_LOGS.split("(", 1)[0]), logs.seen
+    assert [case for case, f in findings.items() if f.verdict is Verdict.FAIL] == [], findings
+    quiet = _FeedbackLosingLink(config)  # no lag: no status superseded on its way, nothing shows loss
+    findings = {f.case.id: f for f in probe_runner.run_cases(quiet, options, list(CASES), lambda _: None)}
+    assert quiet.statuses_missed == 0
+    assert findings["feedback.log_seq"].verdict is Verdict.FAIL, findings["feedback.log_seq"]
+
+
 def _lagging_verdicts(**lags: float) -> dict[str, CaseFinding]:
     link = _LaggingLink(CONFIG, **lags)
     findings = probe_runner.run_cases(link, attrs.evolve(OPTIONS, deadline=1000), list(CASES), lambda _: None)

@@ -358,7 +358,8 @@ NOT_YET_JUDGED: dict[str, str] = {
     "both_answered": "cancel.both_answered reads a refused second CANCEL against the server's stamps "
     "(a lossy link may deliver it after the child's end), which the judge does not read",
     "log_seq": "the judge reads a log seq that skips within a child as feedback lost on the way (an "
-    "open item, uncertain), where the case fails it: whether the link lost feedback is not yet said",
+    "open item, uncertain), where the case fails it, unless the run shows the link lost messages (then "
+    "it is not run): a link that lost a feedback and nothing else is not told from a server that skips",
 }
 
 

@@ -835,6 +835,12 @@ LOSSY = (
     "what it waited for never came, over a link that lost messages during the run ({lost}): no verdict "
     "on the server (probe it over a link that loses none)"
 )
+#: Why feedback.log_seq, failed for log seqs that skip within a child, is not run over a link that
+#: lost messages: feedback lost on the way leaves them so (the judge reads them so too, uncertain).
+LOSSY_LOGS = (
+    "log seqs that skip within a child, over a link that lost messages during the run ({lost}): feedback "
+    "lost on the way leaves them so; no verdict on the server (probe it over a link that loses none)"
+)
 #: Why a case whose awaited message came after ``--timeout`` is not run: the link, not the server.
 LATE = "not run to its end: what it waited for came after --timeout's {timeout:g} s; raise --timeout"
 #: Which cases a kind of wait that timed out stops: no status heard stops every case that needs an
@@ -1747,14 +1753,22 @@ def run_cases(
         link.wait(lambda: all(probe.came_late(finding) for finding in pending), probe.timeout)
     findings[:] = [probe.late(finding) for finding in findings]
     lost = _losses(probe.link, findings)
-    if lost is not None:  # what never came is no verdict over a link that lost messages
-        findings[:] = [
-            attrs.evolve(finding, verdict=Verdict.MISSING, seen=f"{LOSSY.format(lost=lost)} ({finding.seen})",
-                         absent=False, by_link=True)
-            if finding.absent and finding.verdict is Verdict.FAIL else finding
-            for finding in findings
-        ]  # fmt: skip
+    if (
+        lost is not None
+    ):  # what never came, or log seqs that skip, is no verdict over a link that lost messages
+        findings[:] = [_lossy(finding, lost) for finding in findings]
     return findings
+
+
+def _lossy(finding: CaseFinding, lost: str) -> CaseFinding:
+    """``finding`` over a link that ``lost`` messages: a case failed for what never came, or for log
+    seqs that skip within a child, is not run, saying why."""
+    if finding.verdict is not Verdict.FAIL or not (finding.absent or finding.cause == "log_seq"):
+        return finding
+    why = (LOSSY if finding.absent else LOSSY_LOGS).format(lost=lost)
+    return attrs.evolve(
+        finding, verdict=Verdict.MISSING, seen=f"{why} ({finding.seen})", absent=False, by_link=True
+    )
 
 
 def _losses(link: Link, findings: list[CaseFinding]) -> str | None:
