@@ -37,11 +37,11 @@ def _verdicts(junit: Path) -> dict[str, str]:
 
 #: 30% is opt-in until #51 item 4 is done: why.
 _THIRTY = (
-    "opt-in (DYNEVENT_NET_LOSS=1) until #51 item 4 is done: at 30% beside a busy loop, a failing run still "
-    "finds another way a lossy link misleads a reader: of eight runs on 2026-11-28, five failed, each on "
-    "another reading, each fixed since with a test of its own (a child whose start feedback and status "
-    "were lost, the same with its feedback heard after its end, a racing NEXT the server took late, a "
-    "FINISHED answered after the next run's begin, two CANCELs refused after the child's end)"
+    "opt-in (DYNEVENT_NET_LOSS=1) until #51 item 4 is done: at 30% beside a busy loop, a failing run has "
+    "each time found another way a lossy link misleads a reader, each fixed since with a test of its own "
+    "(on 2026-11-28: of eight runs, five failed; then a CANCEL answered after the next child started, a "
+    "FINISHED's response delivered past the reader's hold, a NEXT's response lost for good); of the seven "
+    "runs since the first two of those were fixed, six passed, and the seventh failed on the third"
 )
 #: The shares of packets each lossy host drops, each way.
 LOSSES = [
