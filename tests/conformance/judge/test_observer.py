@@ -330,6 +330,16 @@ def test_a_childs_feedback_a_client_heard_after_the_status_of_its_end_was_sent_b
     assert talk.check().clean, found(talk.check())
 
 
+def _racing_nexts() -> Trace:
+    """Seen at a client: run 1 waiting at event 5, then NEXTs 6 (goal 1) and 7 (goal 2) sent at once."""
+    nexts = {"event_type": 1, "category": "go_to_place", "description": '"pantry"'}
+    talk = Trace()
+    talk.rows[0] = {**talk.rows[0], "tap": "client"}
+    talk.begin().status(1, 1, "standby", 5)
+    talk.add("goal", goal_uuid=uuid(1), goal={"dynamic_event_seq": 1, **nexts, "id": 6})
+    return talk.add("goal", goal_uuid=uuid(2), goal={"dynamic_event_seq": 1, **nexts, "id": 7})
+
+
 @pytest.mark.spec("R5.2", "R4.6")
 def test_a_racing_next_whose_child_a_client_saw_start_after_the_others_end_came_after_that_end() -> None:
     """Seen at a client across a lossy link: two NEXTs sent at once; the first runs its child to the
@@ -337,12 +347,7 @@ def test_a_racing_next_whose_child_a_client_saw_start_after_the_others_end_came_
     (its request was lost and sent again, seconds later).  The server took the second after the first
     child's end, rightly: no finding.  Read as accepted beside the first (its response moved back to
     its request, or before the first child's status), it would have lost the race (R5.2)."""
-    nexts = {"event_type": 1, "category": "go_to_place", "description": '"pantry"'}
-    talk = Trace()
-    talk.rows[0] = {**talk.rows[0], "tap": "client"}
-    talk.begin().status(1, 1, "standby", 5)
-    talk.add("goal", goal_uuid=uuid(1), goal={"dynamic_event_seq": 1, **nexts, "id": 6})
-    talk.add("goal", goal_uuid=uuid(2), goal={"dynamic_event_seq": 1, **nexts, "id": 7})
+    talk = _racing_nexts()
     talk.add("goal_response", goal_uuid=uuid(1), accepted=True)
     talk.feedback(1, "underway", 6).status(1, 2, "underway", 6)
     talk.status(1, 1, "standby", 6).result(1, "succeeded", "completed", 6)
@@ -357,10 +362,9 @@ def test_a_cancel_a_client_heard_answered_after_the_next_child_started_had_stopp
     """Seen at a client across a lossy link: a CANCEL of the running child sent, the child answered
     canceled and the robot waiting again, then the next NEXT's child started (and ended, and a CANCEL
     of it was refused), and only then the CANCEL's response and its answer (the link sent both
-    again, seconds late).  The CANCEL reached
-    the server at once and stopped its child (R9.1): no finding.  Read as still queued when the
-    child ended, it would have started while the next child ran, and its answer would be owed as the
-    mismatch (R9.2)."""
+    again, seconds late).  The CANCEL reached the server at once and stopped its child (R9.1): no
+    finding.  Read as still queued when the child ended, it would have started while the next child
+    ran, and its answer would be owed as the mismatch (R9.2)."""
     talk = Trace()
     talk.rows[0] = {**talk.rows[0], "tap": "client"}
     talk.started().add("goal", goal_uuid=uuid(2), goal={"dynamic_event_seq": 1, "event_type": 2, "id": 6})
@@ -383,12 +387,7 @@ def test_a_race_a_client_heard_lost_before_it_heard_either_nexts_response_or_the
     the first child's status, the two responses, and the first child's feedback.  The NEXT accepted
     first started first, and the other's answer comes by a service of its own, in no order with the
     first's feedback: no finding."""
-    nexts = {"event_type": 1, "category": "go_to_place", "description": '"pantry"'}
-    talk = Trace()
-    talk.rows[0] = {**talk.rows[0], "tap": "client"}
-    talk.begin().status(1, 1, "standby", 5)
-    talk.add("goal", goal_uuid=uuid(1), goal={"dynamic_event_seq": 1, **nexts, "id": 6})
-    talk.add("goal", goal_uuid=uuid(2), goal={"dynamic_event_seq": 1, **nexts, "id": 7})
+    talk = _racing_nexts()
     talk.result(2, "aborted", "", 0, failure="race condition").status(1, 2, "underway", 6)
     talk.add("goal_response", goal_uuid=uuid(1), accepted=True)
     talk.add("goal_response", goal_uuid=uuid(2), accepted=True)
