@@ -38,8 +38,8 @@ OPEN_ITEMS: frozenset[str] = frozenset(
         # child running
         "task_signal_unseen",
         # a client records its CANCEL's request after sending it, and the server may act on it first:
-        # check reads the status of the cancelled child's end before the CANCEL, as the child still
-        # running (the replay pulls such a CANCEL ahead, dynevent.conformance.judge.replay.CLIENT_LAG)
+        # check reads the child's end before the CANCEL, which then looks sent to an idle robot (the
+        # replay pulls such a CANCEL ahead, dynevent.conformance.judge.replay.CLIENT_LAG)
         "cancel_seen_late",
         # the same for a FINISHED: check reads the run's INACTIVE, which the FINISHED caused, before the
         # FINISHED, which then looks sent to an ended run
@@ -120,7 +120,7 @@ def _status_label(seen: DynamicEventStatus, owed: DynamicEventStatus | None, det
     if phase == DynamicState.WAITING and seen.id == 0 and seen.status == Status.UNINITIALIZED.value:
         return "D26"
     if phase == DynamicState.WAITING and seen.status == _CANCELED:
-        return "cancel_seen_late" if held else "D28"
+        return "D28"  # a waiting robot's status is standby (R8.4), whatever the judge held running
     if phase == DynamicState.RUNNING and owed is not None and owed.dynamic_state == DynamicState.WAITING:
         return "response_seen_late"
     if phase == DynamicState.INACTIVE and owed is not None and owed.status == _CANCELED:

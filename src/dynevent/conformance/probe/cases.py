@@ -312,7 +312,7 @@ CASES: tuple[Case, ...] = (
     Case("cancel.seq_future", "a CANCEL of the running child for a run that has not begun is refused",
          ("R4.2",), needs="child"),
     Case("cancel.running_child", "a CANCEL of the running child ends it: both goals answered once, "
-         "then WAITING standby", ("R9.3", "R8.2", "R8.3", "R19.1", "R8.4"), needs="child",
+         "then WAITING standby", ("R9.3", "R8.2", "R8.3", "R19.1", "R8.4", "R2.2"), needs="child",
          divergences=("D28",)),
     Case("cancel.both_answered", "two CANCELs of the running child wait for its end and are both "
          "answered with its result", ("R9.3", "R8.3", "R19.1"), needs="child", divergences=("D1",)),
@@ -345,16 +345,18 @@ UNTRACEABLE: dict[str, str] = {
     "which a trace taken at a client lacks, so that the judge cannot tell a refused NEXT from one a "
     "configuration refuses",
     "query": "the description query's answer (R16): a service call, of which a trace holds no record",
+    "robot": "what the server asked of its robot (an effect for the adapter, such as stopping the child "
+    "a CANCEL names, R9.3): a trace shows how the child ended, and a child that ends completed after a "
+    "CANCEL may have ended before its robot was told",
+    "status_after_end": "a status that still shows the child RUNNING, with its final status, after its "
+    "answer (D2): a report of the child may carry any status (R7.1), and a trace taken at a client "
+    "cannot tell such a status published after the child's end from one a report published before it "
+    "that came late, where the probe asks for the status once it has heard the answer",
 }
 
 #: Checks a case's script still makes by hand because the judge does not decide them as the case
 #: does yet, each with why: the work left before every verdict is the judge's or :data:`UNTRACEABLE`.
 NOT_YET_JUDGED: dict[str, str] = {
-    "status_after_end": "the judge reads a status that still shows a child after its answer as a "
-    "response recorded late (an open item of a view taken at a client), where the probe heard the "
-    "answer first and then waited for the status",
-    "cancel_end": "with R9.3 switched off (a CANCEL answered as it is accepted) the judge finds nothing "
-    "in cancel.running_child's records: it reads the CANCEL's early answer as the child's end",
     "both_answered": "cancel.both_answered reads a refused second CANCEL against the server's stamps "
     "(a lossy link may deliver it after the child's end), which the judge does not read",
     "log_seq": "the judge reads a log seq that skips within a child as feedback lost on the way (an "
