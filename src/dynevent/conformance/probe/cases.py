@@ -345,6 +345,10 @@ UNTRACEABLE: dict[str, str] = {
     "which a trace taken at a client lacks, so that the judge cannot tell a refused NEXT from one a "
     "configuration refuses",
     "query": "the description query's answer (R16): a service call, of which a trace holds no record",
+    "start": "when the server started a goal it had accepted (the transport's handle_accepted moment, "
+    "R5: no message marks it): a second CANCEL, accepted while the child ran, that is answered idle "
+    "(R9.1) may have started after the child's end, where the probe sent it with the first and heard "
+    "both accepted before the end",
     "robot": "what the server asked of its robot (an effect for the adapter, such as stopping the child "
     "a CANCEL names, R9.3): a trace shows how the child ended, and a child that ends completed after a "
     "CANCEL may have ended before its robot was told",

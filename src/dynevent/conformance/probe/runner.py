@@ -1470,9 +1470,11 @@ def _cancel_both_answered(probe: Probe, case: Case) -> CaseFinding:
         if wrong:
             seen = f"a CANCEL {_describe_answer(wrong[0])}; the NEXT {_describe_answer(running)}"
             # the first CANCEL freed the robot before its child ended (D1), and the second, accepted,
-            # was aborted as idle (in D8's words)
+            # was aborted as idle (in D8's words): when it started is not on the wire
             idle = [cancel for cancel in wrong if _aborted_with(cancel, Failure.IDLE_CANCEL)]
-            return _fails(case, "both_answered", expected, seen, divergence="D1" if idle == wrong else None)
+            if idle == wrong:
+                return _fails(case, "start", expected, seen, divergence="D1")
+            return _seen_by_script(case, expected, seen)  # answered otherwise: the judge's (R8.3)
         return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
