@@ -1,30 +1,37 @@
 """The client's contact with the robot's server processes, without ROS: a new process (R21.4) and a
-process lost and found again (R21.5) each make the client ask again for every open goal's result."""
+process lost and found again (R21.5) each make the client ask again for every open goal's result,
+and so does a status that shows a goal answered whose answer has not come (R21.6)."""
 
 from __future__ import annotations
 
 import itertools
 
+import attrs
 import pytest
 
 from dynevent import client
 from dynevent.client import (
+    ANSWER_GRACE,
     ASK_AGAIN_LONGEST,
     ASK_AGAIN_PERIOD,
     SECOND,
     AskResult,
     BackInContact,
+    BeginReceived,
     ContactLost,
     ContactMade,
+    FeedbackReceived,
     GoalResponse,
     Ignored,
     Outcome,
     OutOfContact,
     SendGoal,
+    StatusReceived,
     Tick,
 )
+from dynevent.wire.messages import Feedback
 from dynevent.wire.vocab import GoalStatus
-from support.client_scenario import RUNNING, answer, feed, status, waiting
+from support.client_scenario import RUNNING, WAITING, answer, begin, feed, status, waiting
 
 
 def _sent(state: client.ClientState) -> tuple[client.ClientState, str]:
@@ -132,3 +139,82 @@ def test_asking_again_runs_beside_a_timeout_and_ticks_at_the_earlier() -> None:
     assert client.next_deadline(state) == 5 * SECOND
     state, _ = feed(state, ContactMade(now=SECOND))
     assert client.next_deadline(state) == SECOND + ASK_AGAIN_PERIOD
+
+
+def _kinds(outputs: list[client.ClientOutput]) -> list[client.OutcomeKind]:
+    return [output.kind for output in outputs if isinstance(output, Outcome)]
+
+
+def _at(event: StatusReceived | BeginReceived, now: int) -> StatusReceived | BeginReceived:
+    """``event`` as a binding gives it: with the instant it arrived (R21.6)."""
+    return attrs.evolve(event, now=now)
+
+
+@pytest.mark.spec("R21.6")
+def test_a_status_that_shows_a_nexts_child_ended_asks_for_its_answer_after_the_grace() -> None:
+    state, uuid = _sent(waiting())
+    state, _ = feed(state, GoalResponse(goal_uuid=uuid, accepted=True), _at(status(1, RUNNING, 6), 0))
+    state, _ = feed(state, FeedbackReceived(goal_uuid=uuid, feedback=Feedback(status="underway", id=6)))
+    assert client.next_deadline(state) is None  # the child runs: its answer is not due
+    state, outputs = feed(state, _at(status(1, WAITING, 6), 10 * SECOND))
+    assert _asked(outputs) == []  # the answer comes on a channel of its own: given time
+    assert client.next_deadline(state) == 10 * SECOND + ANSWER_GRACE
+    state, outputs = feed(state, Tick(now=10 * SECOND + ANSWER_GRACE))
+    assert outputs == [AskResult(goal_uuid=uuid, contact=False)]
+    state, outputs = feed(state, Tick(now=10 * SECOND + ANSWER_GRACE + ASK_AGAIN_PERIOD))
+    assert outputs == [AskResult(goal_uuid=uuid, contact=False)]  # and again, each wait twice the last
+    assert client.next_deadline(state) == 10 * SECOND + ANSWER_GRACE + 3 * ASK_AGAIN_PERIOD
+    state, outputs = feed(state, answer(uuid, GoalStatus.SUCCEEDED, "completed", id=6))
+    assert _kinds(outputs) == [client.OutcomeKind.COMPLETED]
+    assert client.next_deadline(state) is None
+
+
+@pytest.mark.spec("R21.6")
+def test_an_answer_that_comes_within_the_grace_is_not_asked_for() -> None:
+    state, uuid = _sent(waiting())
+    state, _ = feed(state, GoalResponse(goal_uuid=uuid, accepted=True))
+    state, _ = feed(state, FeedbackReceived(goal_uuid=uuid, feedback=Feedback(status="underway", id=6)))
+    state, _ = feed(state, _at(status(1, RUNNING, 7), SECOND))  # a later child: the NEXT's has ended
+    assert client.next_deadline(state) == SECOND + ANSWER_GRACE
+    state, _ = feed(state, answer(uuid, GoalStatus.SUCCEEDED, "completed", id=6))
+    state, outputs = feed(state, Tick(now=SECOND + ANSWER_GRACE))
+    assert _asked(outputs) == [] and client.next_deadline(state) is None
+
+
+@pytest.mark.spec("R21.6")
+def test_a_newer_run_asks_for_the_answer_of_a_finished_whose_response_never_came() -> None:
+    transition = client.request_finish(waiting(), now=0)
+    state, (send,) = transition
+    assert isinstance(send, SendGoal)
+    state, outputs = feed(state, _at(begin(2), 5 * SECOND))  # the response was lost on the way
+    assert client.next_deadline(state) == 5 * SECOND + ANSWER_GRACE
+    state, outputs = feed(state, Tick(now=5 * SECOND + ANSWER_GRACE))
+    assert outputs == [AskResult(goal_uuid=send.goal_uuid, contact=False)]
+    state, outputs = feed(state, answer(send.goal_uuid, GoalStatus.SUCCEEDED, "completed", id=5))
+    assert _kinds(outputs) == [client.OutcomeKind.COMPLETED]
+
+
+@pytest.mark.spec("R21.6")
+def test_what_no_status_shows_answered_waits_for_its_answer() -> None:
+    state, uuid = _sent(waiting())  # a NEXT whose child no feedback named yet
+    state, _ = feed(state, GoalResponse(goal_uuid=uuid, accepted=True), _at(status(1, WAITING, 5), SECOND))
+    state, _ = feed(state, _at(status(1, RUNNING, 6), 2 * SECOND), _at(status(1, WAITING, 6), 3 * SECOND))
+    assert client.next_deadline(state) is None  # which child was its own, no feedback said
+    cancel = client.request_cancel(feed(waiting(), _at(status(1, RUNNING, 6), 0))[0], now=0)
+    state, (send,) = cancel
+    assert isinstance(send, SendGoal)
+    state, _ = feed(state, _at(status(1, RUNNING, 6, "underway"), SECOND))
+    assert client.next_deadline(state) is None  # the child it names still runs
+    state, _ = feed(state, _at(status(1, WAITING, 6), 2 * SECOND))
+    assert client.next_deadline(state) == 2 * SECOND + ANSWER_GRACE  # and now it has ended
+
+
+@pytest.mark.spec("R21.6", "R21.4")
+def test_contact_made_asks_as_r21_4_says_whatever_a_status_showed() -> None:
+    state, uuid = _sent(waiting())
+    state, _ = feed(state, GoalResponse(goal_uuid=uuid, accepted=True))
+    state, _ = feed(state, FeedbackReceived(goal_uuid=uuid, feedback=Feedback(status="underway", id=6)))
+    state, _ = feed(state, _at(status(1, WAITING, 6), SECOND))
+    state, outputs = feed(state, ContactMade(now=2 * SECOND))
+    assert outputs == [AskResult(goal_uuid=uuid)]  # a server that does not know it has lost it
+    assert AskResult(goal_uuid=uuid).contact

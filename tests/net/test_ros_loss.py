@@ -38,10 +38,10 @@ def _verdicts(junit: Path) -> dict[str, str]:
 #: 30% is opt-in until #51 item 4 is done: why.
 _THIRTY = (
     "opt-in (DYNEVENT_NET_LOSS=1) until #51 item 4 is done: at 30% beside a busy loop, a failing run has "
-    "each time found another way a lossy link misleads a reader, each fixed since with a test of its own "
-    "(on 2026-11-28: of eight runs, five failed; then a CANCEL answered after the next child started, a "
-    "FINISHED's response delivered past the reader's hold, a NEXT's response lost for good); of the seven "
-    "runs since the first two of those were fixed, six passed, and the seventh failed on the third"
+    "each time found another way a lossy network misleads a reader or a client, each fixed since with a "
+    "test of its own (on 2026-11-28: a CANCEL answered after the next child started, a FINISHED's "
+    "response delivered past the reader's hold, a NEXT's response lost for good; then, after seven runs "
+    "that passed, a FINISHED's response or answer lost to a client that still heard the robot, R21.6)"
 )
 #: The shares of packets each lossy host drops, each way.
 LOSSES = [

@@ -343,6 +343,46 @@ def test_finished_ends_the_run(graph: Graph, robot: Robot) -> None:
     wait_for(lambda: client.state.phase == 0, "INACTIVE")
 
 
+def _losing_first_answers(robot: Robot) -> list[str]:
+    """The robot's action server drops the first result request of every goal unanswered, as a
+    network does that loses the answer to one client while the client still hears the robot's
+    status (the server's side dropped the client for a while, the client's side kept the server):
+    the goals whose first request it dropped, in order."""
+    action = robot.server._ros.action
+    answer = action._execute_get_result_request
+    dropped: list[str] = []
+
+    async def losing(request_header_and_message: Any) -> None:
+        uuid = bytes(request_header_and_message[1].goal_id.uuid).hex()
+        if uuid not in dropped:
+            dropped.append(uuid)
+            return
+        await answer(request_header_and_message)
+
+    action._execute_get_result_request = losing
+    return dropped
+
+
+@pytest.mark.spec("R21.6")
+def test_an_answer_lost_on_the_way_is_asked_for_again_once_the_status_shows_it_given(
+    graph: Graph, robot: Robot
+) -> None:
+    """The first answers of a NEXT and of a FINISHED never reach the client; the statuses that show
+    the child's end and the run's end do, and the client asks again and ends each goal with the
+    answer the server gave (before R21.6 both waits ran out)."""
+    dropped = _losing_first_answers(robot)
+    client = _client(graph)
+    _feedback_matched(robot)
+    run = client.next("go_to_place", '"pantry"')
+    robot.adapter.child().finished()
+    outcome = _outcome(run)
+    assert (outcome.kind, outcome.id) == (cl.OutcomeKind.COMPLETED, 8)
+    finished = client.finish()
+    outcome = _outcome(finished)
+    assert (outcome.kind, outcome.id) == (cl.OutcomeKind.COMPLETED, 7)
+    assert dropped == [run.goal_uuid, finished.goal_uuid]  # each goal's first request went unanswered
+
+
 @pytest.mark.spec("R12.1", "R12.2")
 def test_a_clamped_stubborn_period(graph: Graph, robot: Robot) -> None:
     client = _client(graph)

@@ -22,6 +22,7 @@ from dynevent.client.inputs import (
     Tick,
 )
 from dynevent.client.machine import (
+    ANSWER_GRACE,
     ASK_AGAIN_LONGEST,
     ASK_AGAIN_PERIOD,
     SECOND,
@@ -52,6 +53,7 @@ from dynevent.client.outputs import (
 )
 
 __all__ = [
+    "ANSWER_GRACE",
     "ASK_AGAIN_LONGEST",
     "ASK_AGAIN_PERIOD",
     "SECOND",

@@ -54,6 +54,10 @@ def _now_converter(value: Any, instance: object, field: attrs.Attribute[Any]) ->
     return checked_now(type(instance).__name__, value)
 
 
+def _optional_now(value: Any, instance: object, field: attrs.Attribute[Any]) -> int | None:
+    return None if value is None else checked_now(type(instance).__name__, value)
+
+
 def _field(function: Any, **kwargs: Any) -> Any:
     """An ``attrs.field`` whose converter is ``function(value, instance, field)``."""
     return attrs.field(converter=attrs.Converter(function, takes_self=True, takes_field=True), **kwargs)
@@ -86,6 +90,9 @@ class BeginReceived(_ClientInput):
 
     KIND: ClassVar[str] = "begin_received"
     message: DynamicEventDescription = _typed(DynamicEventDescription)
+    #: When it arrived, in integer nanoseconds; ``None``: the client does not watch for the answers
+    #: it shows given (R21.6: a newer run shows the FINISHED of the run before answered).
+    now: int | None = _field(_optional_now, default=None)
 
 
 @attrs.frozen(kw_only=True)
@@ -94,6 +101,9 @@ class StatusReceived(_ClientInput):
 
     KIND: ClassVar[str] = "status_received"
     message: DynamicEventStatus = _typed(DynamicEventStatus)
+    #: When it arrived, in integer nanoseconds; ``None``: the client does not watch for the answers
+    #: it shows given (R21.6).
+    now: int | None = _field(_optional_now, default=None)
 
 
 def _rejection(value: Any, instance: object, field: attrs.Attribute[Any]) -> Rejected | None:

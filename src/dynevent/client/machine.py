@@ -64,7 +64,12 @@ one lost before) and when none is any longer (:class:`ContactLost`).  Coming
 into contact with goals open, the client asks again for each one's result
 (:class:`AskResult`, R21.4, R21.5), at once and then after waits that double
 up to :data:`ASK_AGAIN_LONGEST`, until it is answered; lost and found contact
-are said (:class:`OutOfContact`, :class:`BackInContact`).
+are said (:class:`OutOfContact`, :class:`BackInContact`).  A status or begin
+that arrives with its ``now`` and shows an open goal answered (its run over,
+or the child it ran or names ended) makes the client ask again for that
+goal's result :data:`ANSWER_GRACE` later, unless the answer comes first, and
+then as above (R21.6): a network may lose the answer to one client while the
+client still hears the robot.
 """
 
 from __future__ import annotations
@@ -121,6 +126,7 @@ from dynevent.wire.vocab import (
 )
 
 __all__ = [
+    "ANSWER_GRACE",
     "ASK_AGAIN_LONGEST",
     "ASK_AGAIN_PERIOD",
     "SECOND",
@@ -147,6 +153,10 @@ SECOND = _SECOND_NS
 ASK_AGAIN_PERIOD = SECOND
 #: The longest wait between two requests for the same goal's result (integer nanoseconds).
 ASK_AGAIN_LONGEST = 30 * SECOND
+#: How long after the robot's status showed a goal answered the client waits for the answer before
+#: it asks for it again (R21.6): the status and the answer come on channels of their own, and a
+#: network that loses packets brings the answer seconds after the status.  Integer nanoseconds.
+ANSWER_GRACE = 2 * SECOND
 
 _HEX = frozenset("0123456789abcdefABCDEF")
 
@@ -169,8 +179,11 @@ class OpenGoal:
     instant a NEXT with a timeout times out, ``timed_out`` once a tick
     reached it; ``withdrawn`` once the caller withdrew the NEXT
     (:func:`request_withdraw`).  ``ask_at`` is the instant the client next asks
-    the server again for the goal's result (R21.4, R21.5; ``None``: the request
-    sent with the goal stands), ``asks`` how often it has asked again.
+    the server again for the goal's result (R21.4, R21.5, R21.6; ``None``: the
+    request sent with the goal stands), ``asks`` how often it has asked again,
+    ``shown_answered`` whether it asks because the robot's status showed the
+    goal answered (R21.6) rather than because a server process came into
+    contact (R21.4).
     """
 
     goal_uuid: str
@@ -183,6 +196,7 @@ class OpenGoal:
     withdrawn: bool = False
     ask_at: int | None = None
     asks: int = 0
+    shown_answered: bool = False
 
     @property
     def cancel_owed(self) -> bool:
@@ -298,6 +312,39 @@ def _child_ended(state: ClientState, child_id: int) -> ClientState:
     """Record that child ``child_id`` of the newest run has ended."""
     if state.ended_id is None or not id_not_after(child_id, state.ended_id):
         return attrs.evolve(state, ended_id=child_id)
+    return state
+
+
+def _answer_shown(state: ClientState, goal: OpenGoal) -> bool:
+    """R21.6: does the robot's status show that ``goal`` has been answered?  Its run is over, or (a
+    NEXT whose child the feedback named, a CANCEL) the child it ran or names has ended: a status of
+    its run names that child's end (R20.2), a later child, or the robot waiting at that id or later
+    (a NEXT's child, or a CANCEL's target, runs before the robot waits at its id)."""
+    seq = goal.goal.dynamic_event_seq
+    if _run_over(state, seq):
+        return True
+    if goal.goal.event_type == EventType.NEXT:
+        child = goal.child_id
+    elif goal.goal.event_type == EventType.CANCEL:
+        child = goal.goal.id
+    else:
+        return False
+    if child is None or seq != state.newest_seq or state.seq != seq:
+        return False
+    if _ended(state, child):
+        return True
+    later = id_not_after(child, state.current_id)
+    if state.phase is DynamicState.RUNNING:
+        return later and state.current_id != child
+    return state.phase is DynamicState.WAITING and later
+
+
+def _watch_answers(state: ClientState, now: int) -> ClientState:
+    """R21.6: every open goal the robot's status now shows answered, and not yet asked for again, is
+    asked for again :data:`ANSWER_GRACE` from now unless its answer comes first."""
+    for goal in state.goals:
+        if goal.ask_at is None and _answer_shown(state, goal):
+            state = _replace(state, attrs.evolve(goal, ask_at=now + ANSWER_GRACE, shown_answered=True))
     return state
 
 
@@ -596,6 +643,8 @@ def _on_begin(state: ClientState, event: BeginReceived) -> ClientTransition:
     if state.description:
         return ClientTransition(state, (Ignored(input=event.KIND, why=f"run {seq} was already described"),))
     state = attrs.evolve(state, description=message.description)
+    if event.now is not None:
+        state = _watch_answers(state, event.now)
     return ClientTransition(state, (RunBegan(seq=seq, description=message.description),))
 
 
@@ -618,6 +667,8 @@ def _on_status(state: ClientState, event: StatusReceived) -> ClientTransition:
         state = _seen_id(state, seq, message.id)
     if machine.child_ended(message):
         state = _child_ended(state, message.id)  # R20.2: the child's final status names its end
+    if event.now is not None:
+        state = _watch_answers(state, event.now)
     outputs: list[ClientOutput] = []
     if (phase, seq, message.id, message.status) != before:
         outputs.append(ViewChanged(phase=phase, seq=seq, current_id=message.id, status=message.status))
@@ -741,7 +792,7 @@ def _on_result(state: ClientState, event: ResultReceived) -> ClientTransition:
 
 
 def _ask_due(state: ClientState, now: int) -> tuple[ClientState, tuple[ClientOutput, ...]]:
-    """Ask again for the result of every goal whose time to ask has come (R21.4, R21.5); the next
+    """Ask again for the result of every goal whose time to ask has come (R21.4, R21.5, R21.6); the next
     time is one wait on, each wait twice the last, up to :data:`ASK_AGAIN_LONGEST`."""
     asked: list[ClientOutput] = []
     for goal in state.goals:
@@ -749,7 +800,7 @@ def _ask_due(state: ClientState, now: int) -> tuple[ClientState, tuple[ClientOut
             continue
         wait = min(ASK_AGAIN_PERIOD << min(goal.asks, 16), ASK_AGAIN_LONGEST)
         state = _replace(state, attrs.evolve(goal, ask_at=min(now + wait, U64_MAX), asks=goal.asks + 1))
-        asked.append(AskResult(goal_uuid=goal.goal_uuid))
+        asked.append(AskResult(goal_uuid=goal.goal_uuid, contact=not goal.shown_answered))
     return state, tuple(asked)
 
 
@@ -760,9 +811,8 @@ def _on_contact_made(state: ClientState, event: ContactMade) -> ClientTransition
     if state.contact_lost_at is not None:
         outputs.append(BackInContact(since=state.contact_lost_at, now=event.now))
         state = attrs.evolve(state, contact_lost_at=None)
-    state = attrs.evolve(
-        state, goals=tuple(attrs.evolve(goal, ask_at=event.now, asks=0) for goal in state.goals)
-    )
+    asking = (attrs.evolve(goal, ask_at=event.now, asks=0, shown_answered=False) for goal in state.goals)
+    state = attrs.evolve(state, goals=tuple(asking))
     state, asked = _ask_due(state, event.now)
     return ClientTransition(state, (*outputs, *asked))
 

@@ -270,7 +270,7 @@ class DynamicEventClient:
                 if ended is not None:
                     ended.end(output)
             elif isinstance(output, cl.AskResult):
-                self._ask_result(output.goal_uuid)
+                self._ask_result(output.goal_uuid, contact=output.contact)
             elif isinstance(output, (cl.OutOfContact, cl.BackInContact)) and self._on_contact is not None:
                 self._on_contact(output)
         self._arm()
@@ -293,21 +293,24 @@ class DynamicEventClient:
         if accepted:
             handle.get_result_async().add_done_callback(lambda done: self._on_result(uuid, done))
 
-    def _ask_result(self, uuid: str) -> None:
-        """Ask the server again for a goal's result (R21.4, R21.5); a request sent while the action
-        server is not matched would go nowhere, and the machine asks again later."""
+    def _ask_result(self, uuid: str, *, contact: bool) -> None:
+        """Ask the server again for a goal's result (R21.4, R21.5, R21.6: :class:`~dynevent.client.AskResult`
+        says what an unknown goal means); a request sent while the action server is not matched
+        would go nowhere, and the machine asks again later."""
         if not self._action.server_is_ready():
             return
         response = DynamicEvent.Impl.SendGoalService.Response(accepted=True)
         handle = ClientGoalHandle(self._action, convert.uuid_to_ros(uuid), response)
-        handle.get_result_async().add_done_callback(lambda done: self._on_result(uuid, done))
+        handle.get_result_async().add_done_callback(lambda done: self._on_result(uuid, done, contact=contact))
 
-    def _on_result(self, uuid: str, future: Any) -> None:
+    def _on_result(self, uuid: str, future: Any, *, contact: bool = True) -> None:
         response = future.result()
         if self.state.goal(uuid) is None:
             return  # answered already: a goal asked for again hears its answer once per request
-        if response.status == RosGoalStatus.STATUS_UNKNOWN:  # a server that does not know the goal (R21.4)
-            status, result = GoalStatus.ABORTED, Result(execution_failure=Failure.LOST.value)
+        if response.status == RosGoalStatus.STATUS_UNKNOWN:  # a server that does not know the goal
+            if not contact:
+                return  # R21.6: not received yet; the machine asks again
+            status, result = GoalStatus.ABORTED, Result(execution_failure=Failure.LOST.value)  # R21.4
         else:
             status = _TERMINAL.get(response.status, GoalStatus.ABORTED)
             result = convert.result_from_ros(response.result)
@@ -338,12 +341,12 @@ class DynamicEventClient:
         if status is not None:
             with self._lock:
                 self._status_seen = True
-            self._step(cl.StatusReceived(message=status))
+            self._step(cl.StatusReceived(message=status, now=self.now()))
 
     def _on_begin(self, message: Any) -> None:
         begin = self._heard("begin", convert.begin_from_ros, message)
         if begin is not None:
-            self._step(cl.BeginReceived(message=begin))
+            self._step(cl.BeginReceived(message=begin, now=self.now()))
 
     def _on_tick(self) -> None:
         if self.state.goals:
