@@ -1369,3 +1369,62 @@ def test_a_runs_inactive_status_the_next_run_overwrote_on_its_way_is_not_the_ser
     for case in ("finished.next_after", "finished.cancel_after", "finished.finished_after"):
         assert verdicts[case].verdict is Verdict.PASS, verdicts[case]
     assert not [finding for finding in findings if finding.verdict is Verdict.FAIL]
+
+
+class _DownLink(InProcessLink):
+    """The in-process link that goes down for good once ``after`` goal requests have gone through:
+    nothing reaches the server, and nothing of it reaches the probe (a host's cable pulled)."""
+
+    def __init__(self, config: ServeConfig, after: int) -> None:
+        self.after = after
+        self.sent_through = 0
+        super().__init__(config)
+
+    @property
+    def down(self) -> bool:
+        return self.sent_through >= self.after
+
+    def deliver(self, exchange: probe_runner.Exchange) -> None:
+        if self.down:
+            return
+        self.sent_through += 1
+        super().deliver(exchange)
+
+    def hear_status(self, status: Any) -> None:
+        if not self.down:
+            super().hear_status(status)
+
+    def hear_answer(self, exchange: probe_runner.Exchange, status: Any, result: Any) -> None:
+        if not self.down:
+            super().hear_answer(exchange, status, result)
+
+    def hear_feedback(self, exchange: probe_runner.Exchange, feedback: Any) -> None:
+        if not self.down:
+            super().hear_feedback(exchange, feedback)
+
+
+@pytest.mark.spec("R19.1")
+def test_a_link_that_goes_down_mid_run_fails_no_case() -> None:
+    """Found at 30% loss across hosts: the link went down after eight cases had passed, and the three
+    cases whose goal requests then heard no response failed before the probe took the server as
+    silent.  A server that responded to requests and then responds to none is not told from a link
+    gone down: those three are not run, from the first of them on, as the rest are (exit 3)."""
+    link = _DownLink(CONFIG, after=5)  # the first few request cases go through
+    options = attrs.evolve(OPTIONS, deadline=1000)
+    findings = probe_runner.run_cases(link, options, list(CASES), lambda _: None)
+    verdicts = {finding.case.id: finding for finding in findings}
+    assert [case for case, f in verdicts.items() if f.verdict is Verdict.FAIL] == []
+    fell = [f for f in findings if f.seen.startswith(probe_runner.STOPPED_ANSWERING + ", from this case on")]
+    assert len(fell) == probe_runner.SILENT_AFTER, findings
+    assert all(f.verdict is Verdict.MISSING and f.by_link for f in fell)
+    assert probe_cases.exit_status(findings) == probe_cases.EXIT_NOT_RUN
+
+
+@pytest.mark.spec("R19.1")
+def test_a_server_that_never_responds_fails_the_cases_that_asked_it() -> None:
+    """The same silence from the start, before the server ever responded: not a link gone down
+    mid-run, but a server that answers nothing; the cases that waited for it fail."""
+    link = _DownLink(CONFIG, after=0)
+    findings = probe_runner.run_cases(link, attrs.evolve(OPTIONS, deadline=1000), list(CASES), lambda _: None)
+    assert any(f.verdict is Verdict.FAIL and f.absent for f in findings), findings
+    assert not any("from this case on" in f.seen for f in findings)

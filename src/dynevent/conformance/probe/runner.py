@@ -457,7 +457,12 @@ class Probe:
         self.options = options
         self.messages: list[str] = []
         self.exchanges: list[Exchange] = []
-        self.timeouts_in_a_row = 0  # cases that waited out the timeout, one after the other
+        #: the cases, one after the other, that waited out the timeout and heard nothing meanwhile
+        self.silent_cases: list[str] = []
+        #: whether the server had responded to a goal request before those cases fell silent
+        self.answered_before_silence = False
+        #: the cases that sent a goal request and heard no response to it
+        self.unresponded: set[str] = set()
         self._places_sent = 0
         self._nexts: list[Exchange] = []  # every NEXT sent, across cases: where the robot went
         # the deadline on the link's clock, and in real time (from here, or from where the link began
@@ -508,6 +513,7 @@ class Probe:
         self.link.mark(f"case {case.id}")
         started = self.link.clock()
         heard, earlier = self.link.heard, [made for made in self.link.made if made.accepted is None]
+        sent = len(self.link.made)
         self.given_up.extend(made for made in earlier if made not in self.given_up)
         timed_out = False
         try:
@@ -527,7 +533,11 @@ class Probe:
         finding = _unless_earlier_came(finding, earlier, heard)
         # silent: the case waited out the timeout and the server sent nothing at all meanwhile
         silent = (timed_out or finding.absent) and self.link.heard == heard
-        self.timeouts_in_a_row = self.timeouts_in_a_row + 1 if silent else 0
+        if any(exchange.accepted is None for exchange in self.exchanges):
+            self.unresponded.add(case.id)
+        if silent and not self.silent_cases:
+            self.answered_before_silence = any(made.accepted is not None for made in self.link.made[:sent])
+        self.silent_cases = [*self.silent_cases, case.id] if silent else []
         return self._settled(finding, started)
 
     def _late_running(self) -> list[Exchange]:
@@ -554,7 +564,7 @@ class Probe:
     def silent(self) -> bool:
         """Has the server stopped answering: :data:`SILENT_AFTER` cases in a row waited out the timeout
         with no message from it?"""
-        return self.timeouts_in_a_row >= SILENT_AFTER
+        return len(self.silent_cases) >= SILENT_AFTER
 
     def late(self, finding: CaseFinding) -> CaseFinding:
         """A failure for a goal's response or answer that did not come within ``--timeout``
@@ -1754,13 +1764,29 @@ def run_cases(
     pending = [finding for finding in findings if finding.absent and finding.verdict is Verdict.FAIL]
     if pending and not probe.past_deadline:
         link.wait(lambda: all(probe.came_late(finding) for finding in pending), probe.timeout)
-    findings[:] = [probe.late(finding) for finding in findings]
+    findings[:] = [_fell_silent(probe, probe.late(finding)) for finding in findings]
     lost = _losses(probe.link, findings)
     if (
         lost is not None
     ):  # what never came, or log seqs that skip, is no verdict over a link that lost messages
         findings[:] = [_lossy(finding, lost) for finding in findings]
     return findings
+
+
+def _fell_silent(probe: Probe, finding: CaseFinding) -> CaseFinding:
+    """A failure for what never came, of a case of the silence that made the probe take the server
+    as having stopped answering (:attr:`Probe.silent`), whose goal request heard no response, where
+    the server had responded to goal requests before: a server that responds to no request any more,
+    mid-run, is not told from a link that has gone down, so the case is not run, saying why, like
+    those after it.  A server that never responded, or a wait for a status or an answer that
+    never came while requests were responded to, is failed for it."""
+    silence = probe.silent and probe.answered_before_silence and finding.case.id in probe.silent_cases
+    if not (silence and finding.case.id in probe.unresponded):
+        return finding
+    if finding.verdict is not Verdict.FAIL or not finding.absent:
+        return finding
+    seen = f"{STOPPED_ANSWERING}, from this case on ({finding.seen})"
+    return attrs.evolve(finding, verdict=Verdict.MISSING, seen=seen, absent=False, by_link=True)
 
 
 def _lossy(finding: CaseFinding, lost: str) -> CaseFinding:
