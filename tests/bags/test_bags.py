@@ -954,6 +954,7 @@ def test_a_response_whose_request_came_later_is_paired_and_a_skip_the_late_feedb
         "begin_on_one_topic",
         "finished_answered_late",
         "finished_response_late",
+        "response_after_cut",
     ],
 )
 def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
@@ -970,7 +971,8 @@ def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
     id the judgement did not know (it began anew mid-run) is answered after the next run's begin,
     and its result's id is not held to the new run's; in ``finished_response_late`` a FINISHED whose
     response came 12 s late, after the next run's begin, is read as accepted where the goal statuses
-    listed it."""
+    listed it; in ``response_after_cut`` the judgement begun anew at a goal whose request the bag
+    lost takes first the request of a CANCEL whose response it had not judged yet."""
     report = check_bag(LOADED.parent / name)
     assert report.clean, [robot.report.findings for robot in report.robots]
 

@@ -605,6 +605,7 @@ class _Robot:
         self._waiting_responses: dict[str, tuple[int, float, int, Record]] = {}
         self._last: collections.OrderedDict[str, int] = collections.OrderedDict()  # a goal's latest key
         self._goals: collections.OrderedDict[str, Record] = collections.OrderedDict()  # awaiting a response
+        self._passed_goals: collections.OrderedDict[str, Record] = collections.OrderedDict()  # passed on
         # the goals whose answer a client asked for, and those whose goal status showed their end
         self._asked: collections.OrderedDict[str, None] = collections.OrderedDict()
         self._settled: collections.OrderedDict[str, str] = collections.OrderedDict()
@@ -820,6 +821,7 @@ class _Robot:
                 self.unheard_response(record, started)
         if record.kind == "goal":
             _remember(self._requested, record.goal_uuid, None)
+            _remember(self._passed_goals, record.goal_uuid, record)
             self._goals[record.goal_uuid] = record
             if len(self._goals) > _CALLS:
                 self._goals.popitem(last=False)
@@ -848,7 +850,17 @@ class _Robot:
         statuses = [index for index, item in enumerate(pending) if item.kind == "status"]
         seed = pending[statuses[-1]] if statuses else self._last_status  # the lost goal's start, or later
         rest = pending[statuses[-1] + 1 :] if statuses else pending
-        awaiting = [goal for goal in self._goals.values() if goal not in rest]  # their responses are to come
+        # the goals whose responses are to come, or among the records not judged yet (a request judged
+        # just before the cut, its response not): the new judgement takes their requests first
+        requested = {item.goal_uuid for item in rest if item.kind == "goal"}
+        responded = [
+            self._passed_goals[item.goal_uuid] for item in rest
+            if item.kind == "goal_response" and item.goal_uuid not in requested
+            and item.goal_uuid in self._passed_goals
+        ]  # fmt: skip
+        awaiting = [goal for goal in self._goals.values() if goal not in rest]
+        awaiting += [goal for goal in responded if goal not in awaiting]
+        awaiting.sort(key=lambda goal: goal.line)
         for item in [seed, *awaiting, *rest] if seed is not None else [*awaiting, *rest]:
             self._judge.push(item)
         _remember(self._requested, record.goal_uuid, None)  # what follows of it is the new judgement's
