@@ -955,6 +955,7 @@ def test_a_response_whose_request_came_later_is_paired_and_a_skip_the_late_feedb
         "finished_answered_late",
         "finished_response_late",
         "response_after_cut",
+        "cancel_request_late",
     ],
 )
 def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
@@ -972,7 +973,9 @@ def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
     and its result's id is not held to the new run's; in ``finished_response_late`` a FINISHED whose
     response came 12 s late, after the next run's begin, is read as accepted where the goal statuses
     listed it; in ``response_after_cut`` the judgement begun anew at a goal whose request the bag
-    lost takes first the request of a CANCEL whose response it had not judged yet."""
+    lost takes first the request of a CANCEL whose response it had not judged yet; in
+    ``cancel_request_late`` a NEXT answered ``canceled`` by an action-level cancel whose events came
+    27 s late is no finding."""
     report = check_bag(LOADED.parent / name)
     assert report.clean, [robot.report.findings for robot in report.robots]
 

@@ -46,7 +46,7 @@ from dynevent import files
 from dynevent.bags import sent, unpack
 from dynevent.conformance.judge.observer import AnswerEvidence, Checker
 from dynevent.conformance.judge.partial import GOAL_STATUSES, PartialJudge
-from dynevent.conformance.judge.trace import Finding, Record, Report, TraceHeader
+from dynevent.conformance.judge.trace import Answer, Finding, Record, Report, TraceHeader
 from dynevent.conformance.received import (
     begin_from_ros,
     feedback_from_ros,
@@ -494,6 +494,7 @@ class _Lateness:
         self._least_lag: int | None = None  # bag time less when sent, the least of the server's messages
         self._logs: set[int] = set()  # the log seqs of late feedback
         self._runs: set[int] = set()  # the runs (dynamic event seqs) whose begin came late
+        self._cancelled: set[str] = set()  # the goals an action-level cancel of came late
 
     def delayed(self, time: int, sent: int) -> bool:
         """Was a message of the server's received at bag ``time`` and ``sent`` then on its way more than
@@ -519,6 +520,12 @@ class _Lateness:
                     self._logs.update(entry.seq for entry in record.message.logs)
         elif channel == "begin":
             self._runs.add(int(message.dynamic_event_seq))
+        elif channel == CANCEL_GOAL:  # the event of its request, or of its response, which lists the goals
+            with contextlib.suppress(InvalidMessage):
+                asked = (uuid_from_ros(request.goal_info.goal_id) for request in message.request)
+                self._cancelled.update(asked)
+                for response in message.response:
+                    self._cancelled.update(uuid_from_ros(info.goal_id) for info in response.goals_canceling)
         return True
 
     def waits(self, arrival: int, sent: int) -> None:
@@ -531,11 +538,21 @@ class _Lateness:
         if sent is not None:
             self._sent_passed = max(self._sent_passed, sent)
 
-    def explains(self, finding: Finding) -> bool:
+    def explains(self, finding: Finding, answered: collections.OrderedDict[int, str]) -> bool:
         """Whether ``finding`` is what a late message not judged leaves: a log seq that skips (R7.3)
         where the seq it lacked came late, on feedback (lost on the way and sent again, not skipped);
-        a status of a run whose begin came late (R2.2), read where no begin had opened it."""
+        a status of a run whose begin came late (R2.2), read where no begin had opened it; a goal
+        answered ``canceled`` where ``aborted`` was owed, its result the same (R8.2), whose
+        action-level cancel came late (``answered``: the goal of each answer, by its line)."""
         seen = finding.seen
+        if (
+            finding.code == "goal_status"
+            and isinstance(seen, Answer)
+            and isinstance(finding.owed, Answer)
+            and (seen.status, finding.owed.status) == (GoalStatus.CANCELED.value, GoalStatus.ABORTED.value)
+            and seen.result == finding.owed.result
+        ):
+            return answered.get(finding.line) in self._cancelled
         if (
             finding.code == Violation.LOG_SEQ.code
             and finding.detail == "skips"
@@ -606,6 +623,7 @@ class _Robot:
         self._last: collections.OrderedDict[str, int] = collections.OrderedDict()  # a goal's latest key
         self._goals: collections.OrderedDict[str, Record] = collections.OrderedDict()  # awaiting a response
         self._passed_goals: collections.OrderedDict[str, Record] = collections.OrderedDict()  # passed on
+        self._answered: collections.OrderedDict[int, str] = collections.OrderedDict()  # goals, by answer line
         # the goals whose answer a client asked for, and those whose goal status showed their end
         self._asked: collections.OrderedDict[str, None] = collections.OrderedDict()
         self._settled: collections.OrderedDict[str, str] = collections.OrderedDict()
@@ -819,6 +837,8 @@ class _Robot:
             started = self._started_by(record.message)
             if started is not None:
                 self.unheard_response(record, started)
+        if record.kind == "result":
+            _remember(self._answered, record.line, record.goal_uuid)
         if record.kind == "goal":
             _remember(self._requested, record.goal_uuid, None)
             _remember(self._passed_goals, record.goal_uuid, record)
@@ -922,7 +942,9 @@ class _Robot:
         for before in reversed(self._before):
             records = before.records + report.records
             report = attrs.evolve(report, records=records, findings=before.findings + report.findings)
-        kept = tuple(finding for finding in report.findings if not self.lateness.explains(finding))
+        kept = tuple(
+            finding for finding in report.findings if not self.lateness.explains(finding, self._answered)
+        )
         return RobotReport(
             self.fleet, self.robot, channels, absent, attrs.evolve(report, findings=kept), not self.judged,
             self.refused, tuple(self.lost), tuple(self.unheard), tuple(self.lateness.late),
