@@ -218,3 +218,11 @@ def test_contact_made_asks_as_r21_4_says_whatever_a_status_showed() -> None:
     state, outputs = feed(state, ContactMade(now=2 * SECOND))
     assert outputs == [AskResult(goal_uuid=uuid)]  # a server that does not know it has lost it
     assert AskResult(goal_uuid=uuid).contact
+
+
+def test_a_status_or_begin_arrived_at_no_instant_is_refused_naming_the_field() -> None:
+    from dynevent.errors import InvalidValue
+
+    for event in (status(1, WAITING, 5), begin(1)):
+        with pytest.raises(InvalidValue, match=r"\.now: expected integer nanoseconds \(got 'soon'\)"):
+            attrs.evolve(event, now="soon")
