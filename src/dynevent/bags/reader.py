@@ -36,7 +36,7 @@ import heapq
 import importlib.resources
 import os
 import stat
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path, PurePath
 from typing import Any, NamedTuple
 
@@ -870,17 +870,7 @@ class _Robot:
         statuses = [index for index, item in enumerate(pending) if item.kind == "status"]
         seed = pending[statuses[-1]] if statuses else self._last_status  # the lost goal's start, or later
         rest = pending[statuses[-1] + 1 :] if statuses else pending
-        # the goals whose responses are to come, or among the records not judged yet (a request judged
-        # just before the cut, its response not): the new judgement takes their requests first
-        requested = {item.goal_uuid for item in rest if item.kind == "goal"}
-        responded = [
-            self._passed_goals[item.goal_uuid] for item in rest
-            if item.kind == "goal_response" and item.goal_uuid not in requested
-            and item.goal_uuid in self._passed_goals
-        ]  # fmt: skip
-        awaiting = [goal for goal in self._goals.values() if goal not in rest]
-        awaiting += [goal for goal in responded if goal not in awaiting]
-        awaiting.sort(key=lambda goal: goal.line)
+        awaiting = _awaiting(self._goals, self._passed_goals, rest)
         for item in [seed, *awaiting, *rest] if seed is not None else [*awaiting, *rest]:
             self._judge.push(item)
         _remember(self._requested, record.goal_uuid, None)  # what follows of it is the new judgement's
@@ -949,6 +939,20 @@ class _Robot:
             self.fleet, self.robot, channels, absent, attrs.evolve(report, findings=kept), not self.judged,
             self.refused, tuple(self.lost), tuple(self.unheard), tuple(self.lateness.late),
         )  # fmt: skip
+
+
+def _awaiting(goals: Mapping[str, Record], passed: Mapping[str, Record], rest: list[Record]) -> list[Record]:
+    """The requests a judgement begun anew before ``rest`` takes first: of the ``goals`` whose
+    responses are to come, and of the goals ``passed`` on whose responses are among ``rest`` without
+    their requests (a request judged just before the cut, its response not yet), in bag order."""
+    requested = {item.goal_uuid for item in rest if item.kind == "goal"}
+    responded = [
+        passed[item.goal_uuid] for item in rest
+        if item.kind == "goal_response" and item.goal_uuid not in requested and item.goal_uuid in passed
+    ]  # fmt: skip
+    awaiting = [goal for goal in goals.values() if goal not in rest]
+    awaiting += [goal for goal in responded if goal not in awaiting]
+    return sorted(awaiting, key=lambda goal: goal.line)
 
 
 def _remember(books: collections.OrderedDict[Any, Any], key: Any, value: Any) -> None:

@@ -1428,3 +1428,33 @@ def test_a_server_that_never_responds_fails_the_cases_that_asked_it() -> None:
     findings = probe_runner.run_cases(link, attrs.evolve(OPTIONS, deadline=1000), list(CASES), lambda _: None)
     assert any(f.verdict is Verdict.FAIL and f.absent for f in findings), findings
     assert not any("from this case on" in f.seen for f in findings)
+
+
+class _CancelRefusingLink(_LaggingLink):
+    """The lagging link to a server that refuses every CANCEL while a child runs (R4.13 misapplied)."""
+
+    def deliver(self, exchange: probe_runner.Exchange) -> None:
+        if exchange.goal.event_type == EventType.CANCEL and self._server.state.running is not None:
+            self.hear_response(exchange, False)
+            return
+        super().deliver(exchange)
+
+
+def test_a_cancel_refused_while_its_child_runs_is_no_verdict_over_a_link_that_lost_messages() -> None:
+    """Found at 30% loss across hosts: both CANCELs of cancel.both_answered were refused, heard before
+    the child's end, which the link brought seconds late; their requests had reached the server after
+    that end.  Over a link that shows it lost messages (statuses published and never delivered) such a
+    refusal is no verdict, saying why; over one that shows none it fails the case."""
+    options = attrs.evolve(OPTIONS, timeout=10, deadline=1000, allow_missing=("describe.after_the_run",))
+    config = attrs.evolve(CONFIG, categories={"go_to_place": CategorySpec(duration=3.0, report_every=0.25)})
+    lossy = _CancelRefusingLink(config, keep_last=True, status=0.5)
+    findings = {f.case.id: f for f in probe_runner.run_cases(lossy, options, list(CASES), lambda _: None)}
+    assert lossy.statuses_missed > 0
+    finding = findings["cancel.both_answered"]
+    assert finding.verdict is Verdict.MISSING and finding.by_link, finding
+    assert finding.seen.startswith(probe_runner.LOSSY_REFUSAL.split("(", 1)[0]), finding.seen
+    quiet = _CancelRefusingLink(config)
+    findings = {f.case.id: f for f in probe_runner.run_cases(quiet, options, list(CASES), lambda _: None)}
+    assert quiet.statuses_missed == 0
+    finding = findings["cancel.both_answered"]
+    assert (finding.verdict, finding.cause) == (Verdict.FAIL, "both_answered"), finding

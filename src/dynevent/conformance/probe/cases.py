@@ -361,8 +361,10 @@ UNTRACEABLE: dict[str, str] = {
 #: Checks a case's script still makes by hand because the judge does not decide them as the case
 #: does yet, each with why: the work left before every verdict is the judge's or :data:`UNTRACEABLE`.
 NOT_YET_JUDGED: dict[str, str] = {
-    "both_answered": "cancel.both_answered reads a refused second CANCEL against the server's stamps "
-    "(a lossy link may deliver it after the child's end), which the judge does not read",
+    "both_answered": "cancel.both_answered reads a CANCEL refused while it had not heard the child end "
+    "against the order it heard the server's messages in and the server's stamps (a lossy link may "
+    "deliver the request after the child's end), which the judge does not read; over a link that shows "
+    "it lost messages the case is not run",
     "log_seq": "the judge reads a log seq that skips within a child as feedback lost on the way (an "
     "open item, uncertain), where the case fails it, unless the run shows the link lost messages (then "
     "it is not run): a link that lost a feedback and nothing else is not told from a server that skips",

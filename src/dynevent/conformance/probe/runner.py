@@ -851,6 +851,14 @@ LOSSY_LOGS = (
     "log seqs that skip within a child, over a link that lost messages during the run ({lost}): feedback "
     "lost on the way leaves them so; no verdict on the server (probe it over a link that loses none)"
 )
+#: Why cancel.both_answered, failed for a CANCEL refused while the probe had not heard the child end,
+#: is not run over a link that lost messages: its channels lag one another by seconds there, and the
+#: request may have reached the server after the child's end, where the refusal is right (R4.13).
+LOSSY_REFUSAL = (
+    "a CANCEL refused, over a link that lost messages during the run ({lost}): its request may have "
+    "reached the server after the child's end, where the refusal is right (R4.13), and the end came "
+    "late; no verdict on the server (probe it over a link that loses none)"
+)
 #: Why a case whose awaited message came after ``--timeout`` is not run: the link, not the server.
 LATE = "not run to its end: what it waited for came after --timeout's {timeout:g} s; raise --timeout"
 #: Which cases a kind of wait that timed out stops: no status heard stops every case that needs an
@@ -1790,11 +1798,13 @@ def _fell_silent(probe: Probe, finding: CaseFinding) -> CaseFinding:
 
 
 def _lossy(finding: CaseFinding, lost: str) -> CaseFinding:
-    """``finding`` over a link that ``lost`` messages: a case failed for what never came, or for log
-    seqs that skip within a child, is not run, saying why."""
-    if finding.verdict is not Verdict.FAIL or not (finding.absent or finding.cause == "log_seq"):
+    """``finding`` over a link that ``lost`` messages: a case failed for what never came, for log
+    seqs that skip within a child, or for a CANCEL refused while the child ran (as the probe heard
+    it), is not run, saying why."""
+    lossy = {"log_seq": LOSSY_LOGS, "both_answered": LOSSY_REFUSAL}
+    if finding.verdict is not Verdict.FAIL or not (finding.absent or finding.cause in lossy):
         return finding
-    why = (LOSSY if finding.absent else LOSSY_LOGS).format(lost=lost)
+    why = (LOSSY if finding.absent else lossy[finding.cause]).format(lost=lost)
     return attrs.evolve(
         finding, verdict=Verdict.MISSING, seen=f"{why} ({finding.seen})", absent=False, by_link=True
     )
