@@ -37,11 +37,13 @@ def _verdicts(junit: Path) -> dict[str, str]:
 
 #: 30% is opt-in until #51 item 4 is done: why.
 _THIRTY = (
-    "opt-in (DYNEVENT_NET_LOSS=1) until #51 item 4 is done: at 30% beside a busy loop, a failing run has "
-    "each time found another way a lossy network misleads a reader or a client, each fixed since with a "
-    "test of its own (on 2026-11-28: a CANCEL answered after the next child started, a FINISHED's "
-    "response delivered past the reader's hold, a NEXT's response lost for good; then, after seven runs "
-    "that passed, a FINISHED's response or answer lost to a client that still heard the robot, R21.6)"
+    "opt-in (DYNEVENT_NET_LOSS=1) until #51 item 4 is done: at 30% beside a busy loop, each failing run "
+    "has found another way a lossy network misleads a reader or a client, each fixed since with a test "
+    "of its own (2026-11-28 and 29: a CANCEL answered after the next child started, a FINISHED's "
+    "response past the reader's hold, a NEXT's response lost for good, an answer lost to a client that "
+    "still heard the robot (R21.6), a link down for the rest of the run, a cut judgement, a late "
+    "action-level cancel, CANCELs refused before the end was heard); open: a refusal heard after the "
+    "status of the child's end, given while the child ran (the judge's R4.16)"
 )
 #: The shares of packets each lossy host drops, each way.
 LOSSES = [
