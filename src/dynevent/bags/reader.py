@@ -538,7 +538,7 @@ class _Lateness:
         if sent is not None:
             self._sent_passed = max(self._sent_passed, sent)
 
-    def explains(self, finding: Finding, answered: collections.OrderedDict[int, str]) -> bool:
+    def explains(self, finding: Finding, answered: Mapping[int, str]) -> bool:
         """Whether ``finding`` is what a late message not judged leaves: a log seq that skips (R7.3)
         where the seq it lacked came late, on feedback (lost on the way and sent again, not skipped);
         a status of a run whose begin came late (R2.2), read where no begin had opened it; a goal

@@ -1774,9 +1774,9 @@ def run_cases(
         link.wait(lambda: all(probe.came_late(finding) for finding in pending), probe.timeout)
     findings[:] = [_fell_silent(probe, probe.late(finding)) for finding in findings]
     lost = _losses(probe.link, findings)
-    if (
-        lost is not None
-    ):  # what never came, or log seqs that skip, is no verdict over a link that lost messages
+    # what never came, log seqs that skip, a CANCEL refused before the end was heard: no verdict over
+    # a link that lost messages
+    if lost is not None:
         findings[:] = [_lossy(finding, lost) for finding in findings]
     return findings
 
