@@ -469,6 +469,46 @@ def test_a_cancel_refused_at_a_client_before_it_hears_the_childs_end_may_have_co
         ]
 
 
+@pytest.mark.spec("R4.6", "R4.16")
+def test_a_finished_refused_busy_by_a_child_a_client_heard_run_between_its_request_and_response() -> None:
+    """Seen at a client across a lossy link: a NEXT whose response was lost and whose child the client
+    heard start only after it sent a FINISHED (the NEXT's request reached the server late), then that
+    child's end, then the FINISHED's refusal, busy (R4.6): the FINISHED reached the server while the
+    child ran.  At a client, a refusal that a state between the request and its response gives is no
+    finding.  Requested after the client heard the child's end, or seen at the server, or refused for
+    a reason no state between gives, it is still one (R4.16)."""
+
+    def trace(tap: str, reason: str = "busy", request_first: bool = True) -> Trace:
+        finished = {"dynamic_event_seq": 1, "event_type": 3, "category": "", "description": "", "id": 0}
+        nxt = {
+            "dynamic_event_seq": 1,
+            "event_type": 1,
+            "category": "go_to_place",
+            "description": '"pantry"',
+            "id": 6,
+        }
+        talk = Trace()
+        talk.rows[0] = {**talk.rows[0], "tap": tap}
+        talk.begin().status(1, 1, "standby", 5).add("goal", goal_uuid=uuid(1), goal=nxt)
+        if request_first:
+            talk.add("goal", goal_uuid=uuid(2), goal=finished)
+        talk.feedback(1, "underway", 6).status(1, 2, "underway", 6)
+        talk.status(1, 1, "standby", 6).result(1, "succeeded", "completed", 6)
+        if not request_first:
+            talk.add("goal", goal_uuid=uuid(2), goal=finished)
+        return talk.add("goal_response", goal_uuid=uuid(2), accepted=False, reason=reason)
+
+    late = trace("client")
+    assert late.check().clean, found(late.check())
+    for tap, reason, request_first in (
+        ("server", "busy", True),
+        ("client", "busy", False),
+        ("client", "cancel_idle", True),
+    ):
+        findings = [finding[1:] for finding in found(trace(tap, reason, request_first).check())]
+        assert ("R4.16", "rejected_acceptable") in findings, (tap, reason, request_first, findings)
+
+
 @pytest.mark.spec("R10.3")
 def test_an_action_level_cancel_refused_after_a_client_hears_its_goals_answer_may_have_come_after_it() -> (
     None

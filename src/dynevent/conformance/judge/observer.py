@@ -494,6 +494,11 @@ class _Requests(_Part):
         #: the goals the action's goal statuses showed ended before the record judged (a bag's), the
         #: latest CLOSED_GOALS
         self.ended_shown: collections.OrderedDict[str, None] = collections.OrderedDict()
+        #: seen apart: each goal awaiting its response (the latest CLOSED_GOALS), with the refusals the
+        #: server's states since its request give it; the request reached the server in one of them
+        self.refusable: collections.OrderedDict[str, dict[RejectReason, outs.Rejected]] = (
+            collections.OrderedDict()
+        )
 
     def on_goal(self, record: Record) -> None:
         seen = self.goals.get(record.goal_uuid)
@@ -506,6 +511,28 @@ class _Requests(_Part):
             self.duplicates.add(record.goal_uuid)
             return
         self.goals.requested(record.goal_uuid, record.message, record.line)
+        if self.apart:
+            self.refusable[record.goal_uuid] = {}
+            while len(self.refusable) > CLOSED_GOALS:
+                self.refusable.popitem(last=False)
+            self.note_refusals()
+
+    def note_refusals(self) -> None:
+        """Seen apart: the server's state now is one a goal awaiting its response may have met."""
+        for uuid, refusals in self.refusable.items():
+            seen = self.goals.get(uuid)
+            if seen is None or seen.responded:
+                continue
+            decision = machine.accept(self.replica.st, seen.goal, self.replica.config_for(seen.goal))
+            if isinstance(decision, outs.Rejected):
+                refusals.setdefault(decision.reason, decision)
+
+    def refused_earlier(self, uuid: str, record: Record) -> bool:
+        """Seen apart: a state the server passed through after the request was sent, before the
+        response was heard, refuses the goal as ``record`` says (the request reached the server then,
+        and its response came after records of later states)."""
+        refusals = self.refusable.get(uuid, {})
+        return not record.accepted and any(self.same_reason(refusal, record) for refusal in refusals.values())
 
     def ended_unseen(self) -> bool:
         """Whether an accepted goal the machine finds busy found the running child ended: a child
@@ -540,11 +567,15 @@ class _Requests(_Part):
             raise Unreadable("goal_uuid", "no goal record with this uuid awaits a response")
         seen.respond(record.accepted)
         goal = seen.goal
+        refused_earlier = self.refused_earlier(record.goal_uuid, record)
+        self.refusable.pop(record.goal_uuid, None)
         decision = machine.accept(self.replica.st, goal, self.replica.config_for(goal))
         busy = isinstance(decision, outs.Rejected) and decision.reason is RejectReason.BUSY
         if busy and record.accepted and self.ended_unseen():
             decision = machine.accept(self.replica.st, goal, self.replica.config_for(goal))
         if not self.agrees(decision, record):
+            if refused_earlier:
+                return  # a refusal changes nothing: the states since are the server's
             self.explain_response(goal, record)
             decision = machine.accept(self.replica.st, goal, self.replica.config_for(goal))
         if record.accepted:
@@ -1367,6 +1398,8 @@ class _Observer:
         self._handlers[record.kind](record)
         if record.kind in ("result", "goal_response"):
             rooms.goals.judged(record)
+        if self.requests.refusable:
+            self.requests.note_refusals()
 
 
 def _ended_ahead(replica: _ServerReplica, ahead: _Lookahead) -> list[list[ins.Input]]:
