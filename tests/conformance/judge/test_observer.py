@@ -571,6 +571,31 @@ def test_the_observer_keeps_the_latest_closed_goals_only_and_still_finds_a_late_
     assert report.findings[0].message.endswith(f"or closed before the latest {CLOSED_GOALS} closed goals")
 
 
+def test_a_judge_seen_apart_reads_states_against_the_latest_goals_awaiting_a_response_only() -> None:
+    """At a client, each record costs a bounded number of the machine's decisions: of the goals whose
+    responses never came, the judge reads the server's states against the latest AWAITING_REFUSALS
+    only.  A refusal of a goal it let go is judged on the state its response found: a FINISHED
+    refused busy, its child heard to run and end between, is then R4.16."""
+    from dynevent.conformance.judge.observer import AWAITING_REFUSALS, Checker
+    from dynevent.conformance.judge.trace import read_trace
+
+    finished = {"dynamic_event_seq": 1, "event_type": 3, "category": "", "description": "", "id": 0}
+    trace = Trace()
+    trace.rows[0] = {**trace.rows[0], "tap": "client"}
+    trace.begin().status(1, 1, "standby", 5).add("goal", goal_uuid=uuid(1), goal=finished)
+    for n in range(2, AWAITING_REFUSALS + 2):  # requests whose responses never came
+        trace.add("goal", goal_uuid=uuid(n), goal={**finished, "dynamic_event_seq": 0})
+    trace.next(900, 6).feedback(900, "underway", 6).status(1, 2, "underway", 6)
+    trace.status(1, 1, "standby", 6).result(900, "succeeded", "completed", 6)
+    trace.add("goal_response", goal_uuid=uuid(1), accepted=False, reason="busy")
+    header, records = read_trace(trace.text().splitlines(keepends=True), "t.jsonl")
+    checker = Checker(header)
+    for record in records:
+        checker.push(record)
+        assert len(checker._observer.requests.refusable) <= AWAITING_REFUSALS
+    assert [finding[1:] for finding in found(checker.finish())] == [("R4.16", "rejected_acceptable")]
+
+
 def test_a_status_that_disagrees_with_the_state() -> None:
     trace = Trace().started().result(1, "succeeded", "completed", 6).status(1, 2, "completed", 6)
     assert found(trace.check()) == [(trace.line, "R2.2", "status_mismatch")]

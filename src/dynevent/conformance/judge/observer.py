@@ -494,8 +494,8 @@ class _Requests(_Part):
         #: the goals the action's goal statuses showed ended before the record judged (a bag's), the
         #: latest CLOSED_GOALS
         self.ended_shown: collections.OrderedDict[str, None] = collections.OrderedDict()
-        #: seen apart: each goal awaiting its response (the latest CLOSED_GOALS), with the refusals the
-        #: server's states since its request give it; the request reached the server in one of them
+        #: seen apart: each goal awaiting its response (the latest AWAITING_REFUSALS), with the refusals
+        #: the server's states since its request give it; the request reached the server in one of them
         self.refusable: collections.OrderedDict[str, dict[RejectReason, outs.Rejected]] = (
             collections.OrderedDict()
         )
@@ -513,7 +513,7 @@ class _Requests(_Part):
         self.goals.requested(record.goal_uuid, record.message, record.line)
         if self.apart:
             self.refusable[record.goal_uuid] = {}
-            while len(self.refusable) > CLOSED_GOALS:
+            while len(self.refusable) > AWAITING_REFUSALS:
                 self.refusable.popitem(last=False)
             self.note_refusals()
 
@@ -1441,6 +1441,10 @@ def _child_ends(replica: _ServerReplica, ended: ins.ChildFinished) -> list[list[
 #: How many closed (answered or refused) goals the observer remembers: a record naming one of the
 #: latest is judged against it (a second answer, feedback after the answer).
 CLOSED_GOALS = 4096
+#: How many goals awaiting their responses a judge seen apart reads each state against (the latest
+#: requested): a client has a few goals in flight; more, whose responses never came (a hostile or a
+#: lossy trace), are let go, so that each record costs a bounded number of the machine's decisions.
+AWAITING_REFUSALS = 32
 
 #: How many records after the one being judged the observer looks at: a trace is checked in one pass
 #: with this many records held, whatever its length.
