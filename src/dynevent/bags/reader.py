@@ -46,7 +46,7 @@ from dynevent import files
 from dynevent.bags import sent, unpack
 from dynevent.conformance.judge.observer import AnswerEvidence, Checker
 from dynevent.conformance.judge.partial import GOAL_STATUSES, PartialJudge
-from dynevent.conformance.judge.trace import Answer, Finding, Record, Report, TraceHeader
+from dynevent.conformance.judge.trace import SKIPS_OR_LOST, Answer, Finding, Record, Report, TraceHeader
 from dynevent.conformance.received import (
     begin_from_ros,
     feedback_from_ros,
@@ -555,7 +555,7 @@ class _Lateness:
             return answered.get(finding.line) in self._cancelled
         if (
             finding.code == Violation.LOG_SEQ.code
-            and finding.detail == "skips"
+            and finding.detail == SKIPS_OR_LOST
             and isinstance(seen, Feedback)
         ):
             return any((entry.seq - 1) % 2**32 in self._logs for entry in seen.logs)

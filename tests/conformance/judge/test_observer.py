@@ -642,6 +642,26 @@ def test_log_seq_going_backwards_or_repeating() -> None:
     assert "goes backwards" in report.findings[0].message and "repeats" in report.findings[1].message
 
 
+@pytest.mark.spec("R7.3")
+def test_a_log_seq_that_skips_is_the_servers_at_its_tap_and_an_open_item_seen_apart() -> None:
+    """A log seq that skips within a child: at the server's tap, which hears every feedback, the
+    server's (``skips``, no label from a recording); at a client's tap a feedback lost on the way
+    leaves the same gap (``skips_or_lost``, the open item ``feedback_lost``)."""
+    for tap, detail, label in (("server", "skips", "?"), ("client", "skips_or_lost", "feedback_lost")):
+        trace = Trace()
+        trace.rows[0] = {**trace.rows[0], "tap": tap}
+        trace.started().feedback(1, "underway", 6, logs=(4,)).feedback(1, "underway", 6, logs=(6,))
+        (finding,) = trace.check().findings
+        assert (finding.line, finding.rule, finding.code, finding.detail) == (
+            trace.line,
+            "R7.3",
+            "log_seq",
+            detail,
+        )
+        assert divergences.label(finding) == label
+        assert (label in divergences.OPEN_ITEMS) == (tap == "client")
+
+
 def test_log_seq_wraps() -> None:
     trace = (
         Trace().started().feedback(1, "underway", 6, logs=(2**32 - 1,)).feedback(1, "underway", 6, logs=(0,))

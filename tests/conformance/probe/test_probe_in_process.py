@@ -249,9 +249,10 @@ def _log_seqs_step_by_two(event: ins.Input, server: RobotServer) -> tuple[outs.O
 
 @pytest.mark.spec("R7.3")
 def test_log_seqs_that_step_by_two_are_judged_alike_by_the_probe_and_by_check(tmp_path: Path) -> None:
-    """R7.3 has one reading: the probe's case fails a server whose log seqs skip within a child, and
-    ``check`` on the probe's trace finds the same (the judge shows it as uncertain beside the cases: a
-    client cannot tell a skip from feedback lost on the way)."""
+    """R7.3 has one reading: the judge, over the probe's records, fails the probe's case on a server
+    whose log seqs skip within a child, and ``check`` on the probe's trace finds the same.  The
+    in-process link hears every feedback the server sends, so the skip is the server's: certain (seen
+    apart, a client could not tell it from a feedback lost on the way: ``skips_or_lost``)."""
     first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
     server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG), first)
     trace = tmp_path / "trace.jsonl"
@@ -267,7 +268,10 @@ def test_log_seqs_that_step_by_two_are_judged_alike_by_the_probe_and_by_check(tm
         "feedback.log_seq": "fail"
     }, "\n".join(said)
     assert code == probe_cases.EXIT_FAILED
-    assert ": uncertain: R7.3 log_seq: " in _judge_section("\n".join(said))
+    (logs,) = [finding for finding in findings if finding.case.id == "feedback.log_seq"]
+    assert logs.cause == "judge" and logs.seen.startswith("the judge: LogEntry.seq "), logs
+    section = _judge_section("\n".join(said))
+    assert ": fail: R7.3 log_seq: " in section and "uncertain" not in section, section
     found = check_trace(trace.read_text("utf-8"), "t").findings
     assert found and {(finding.rule, finding.code, finding.detail) for finding in found} == {
         ("R7.3", "log_seq", "skips")
@@ -884,6 +888,7 @@ class _FeedbackLosingLink(_LaggingLink):
     def __init__(self, config: ServeConfig, **lags: float) -> None:
         self.logged = 0
         super().__init__(config, keep_last=True, **lags)
+        self.apart = True  # a client's view, as over DDS: a feedback lost is not told from a server's skip
 
     def hear_feedback(self, exchange: probe_runner.Exchange, feedback: Any) -> None:
         if feedback.logs:

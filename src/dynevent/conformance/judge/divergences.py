@@ -13,7 +13,7 @@ from __future__ import annotations
 import re
 
 from dynevent.conformance.judge.replay import Difference
-from dynevent.conformance.judge.trace import Answer, Finding
+from dynevent.conformance.judge.trace import SKIPS_OR_LOST, Answer, Finding
 from dynevent.server.machine import RaceLoss
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.vocab import DynamicState, EventType, Failure, GoalStatus, Status
@@ -64,8 +64,10 @@ def label(finding: Finding) -> str:
     machine owed, its detail: :class:`~dynevent.conformance.judge.trace.Finding`), never its words."""
     rule, code, detail = finding.rule, finding.code, finding.detail
     seen, owed = finding.seen, finding.owed
-    if code == "log_seq" and detail == "skips":
+    if code == "log_seq" and detail == SKIPS_OR_LOST:
         return "feedback_lost"
+    if code == "log_seq" and detail == "skips":  # heard whole: the server's skip, which no recording showed
+        return "?"
     if code == "answer_missing" and detail == "response_unheard":
         return "answer_lost"
     # a goal accepted while a child runs: a FINISHED ends the run under the child (D30); a NEXT finds

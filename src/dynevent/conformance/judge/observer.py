@@ -25,6 +25,7 @@ from dynevent.conformance.judge.abduction import (
     simulate,
 )
 from dynevent.conformance.judge.trace import (
+    SKIPS_OR_LOST,
     Answer,
     Finding,
     Record,
@@ -955,9 +956,12 @@ class LogSeqs:
         self.seq: int | None = None
         self.child: tuple[str, int] | None = None  # the goal and id of the started child it came with
 
-    def faults(self, goal_uuid: str, feedback: Feedback) -> list[tuple[str, str, str]]:
+    def faults(self, goal_uuid: str, feedback: Feedback, *, heard_all: bool) -> list[tuple[str, str, str]]:
         """What is wrong with the log seqs of ``feedback``, to goal ``goal_uuid``: each fault's kind
-        (see :func:`machine.log_seq_fault`), what was seen and what was expected."""
+        (see :func:`machine.log_seq_fault`), what was seen and what was expected.  ``heard_all``: the
+        reader hears every feedback the server sends (a tap at the server), so a seq that skips is the
+        server's (``"skips"``); seen apart, a feedback lost on the way leaves the same gap
+        (:data:`~dynevent.conformance.judge.trace.SKIPS_OR_LOST`, an open item)."""
         child = (goal_uuid, feedback.id) if feedback.status != Status.QUEUED.value else None
         faults = []
         for entry in feedback.logs:
@@ -968,7 +972,7 @@ class LogSeqs:
             if fault == "skips":
                 faults.append(
                     (
-                        fault,
+                        fault if heard_all else SKIPS_OR_LOST,
                         f"LogEntry.seq {entry.seq} after {last} in the feedback of child {feedback.id}: "
                         "the log seq skips",
                         f"LogEntry.seq {machine.next_log_seq(last or 0)}: the feedback carries every entry "
@@ -997,7 +1001,8 @@ class _Feedback(_Part):
 
     def on_feedback(self, record: Record) -> None:
         feedback: Feedback = record.message
-        for fault, message, expected in self.log_seqs.faults(record.goal_uuid, feedback):
+        heard_all = not self.replica.apart
+        for fault, message, expected in self.log_seqs.faults(record.goal_uuid, feedback, heard_all=heard_all):
             self.findings.flag(Violation.LOG_SEQ, message, expected, seen=feedback, detail=fault)
         for message, expected in tier_faults(feedback):
             self.findings.flag(Violation.LOG_TIER, message, expected, seen=feedback)

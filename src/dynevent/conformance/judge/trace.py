@@ -95,6 +95,11 @@ class Answer:
     result: Result
 
 
+#: The ``detail`` of a ``log_seq`` finding seen apart from the server (a client's tap, a recording): a
+#: log seq that skips within a child, which a feedback lost on the way leaves as a server's skip does
+#: (at the server's tap the detail is ``"skips"``, the server's).
+SKIPS_OR_LOST = "skips_or_lost"
+
 #: What a finding saw, or what the machine owed in its place, as a value.
 Shown: TypeAlias = "DynamicEventStatus | Goal | Feedback | Answer"
 
@@ -414,6 +419,7 @@ class TraceWriter:
         tap: str | None = None,
     ) -> None:
         self.path = path
+        self.tap = tap
         self._lock = threading.Lock()
         # closed by close(); with no path, the trace is only kept (``keep``) for :meth:`text`
         self._stream: TextIO | None = None if path is None else files.create_text(path, "--trace")

@@ -356,6 +356,11 @@ UNTRACEABLE: dict[str, str] = {
     "answer (D2): a report of the child may carry any status (R7.1), and a trace taken at a client "
     "cannot tell such a status published after the child's end from one a report published before it "
     "that came late, where the probe asks for the status once it has heard the answer",
+    "log_seq": "whether a client's link lost a feedback on the way: at a client's tap (the DDS link) a "
+    "log seq that skips within a child is not told from a feedback lost, and the judge reads it as an "
+    "open item (`skips_or_lost`); the case fails it where the run showed no loss, and is not run where "
+    "it did.  The in-process and driver links hear every feedback the server sends: there the judge "
+    "decides (`skips`)",
 }
 
 #: Checks a case's script still makes by hand because the judge does not decide them as the case
@@ -365,9 +370,6 @@ NOT_YET_JUDGED: dict[str, str] = {
     "against the order it heard the server's messages in and the server's stamps (a lossy link may "
     "deliver the request after the child's end), which the judge does not read; over a link that shows "
     "it lost messages the case is not run",
-    "log_seq": "the judge reads a log seq that skips within a child as feedback lost on the way (an "
-    "open item, uncertain), where the case fails it, unless the run shows the link lost messages (then "
-    "it is not run): a link that lost a feedback and nothing else is not told from a server that skips",
 }
 
 

@@ -143,6 +143,9 @@ class Link:
     def __init__(self, fleet: str, robot: str, trace: TraceWriter | None = None) -> None:
         self.fleet, self.robot = fleet, robot
         self._trace = trace
+        #: the trace is a client's tap, which the judge reads as seen apart from the server: a feedback
+        #: lost on the way is not told there from a server's gap (else the link loses nothing it hears)
+        self.apart = trace is not None and trace.tap == "client"
         self.statuses: list[DynamicEventStatus] = []
         self.begins: list[DynamicEventDescription] = []
         self.made: list[Exchange] = []  # every goal sent, in order
@@ -1423,7 +1426,7 @@ def _log_seq(probe: Probe, case: Case) -> CaseFinding:
     faults = {machine.log_seq_fault(last, seq, same_child=same) for (last, _), (seq, same) in pairs} - {""}
     gaps = [(b.seq - a.seq) % _U32 for a, b in itertools.pairwise(entries)]
     seen = f"tiers {tiers}; steps between entries {gaps}"
-    if faults == {"skips"}:  # the judge reads a skip as feedback lost on the way: uncertain
+    if faults == {"skips"} and probe.link.apart:  # the judge seen apart: maybe feedback lost on the way
         return _fails(case, "log_seq", expected, seen)
     if tiers or faults:  # a tier none of the four (R7.2), a seq that repeats or goes back (R7.3): the judge's
         return _seen_by_script(case, expected, seen)
