@@ -812,6 +812,37 @@ def test_feedback_a_lossy_link_delivered_out_of_order_goes_by_its_logs_time(tmp_
     assert check_bag(lossy.write(tmp_path / "lossy", StoragePlugin.MCAP)).clean
 
 
+@pytest.mark.spec("R7.3")
+def test_a_log_seq_that_skips_where_the_feedback_writers_numbers_show_a_feedback_lost_is_no_finding(
+    tmp_path: Path,
+) -> None:
+    """Found at 30% loss across hosts: a feedback that carried log seq 33 never reached the recorder
+    (a reliable topic keeps its last messages only), so seq 34 came after 32.  ``dynevent record``
+    writes each message's publication number (MCAP's sequence): the feedback writer's numbers show
+    a message lost between the two, and the skip is no finding.  Where the numbers run on without a
+    gap (the server skipped), or the bag holds none, it is still one (R7.3)."""
+
+    def run(numbers: tuple[int, ...]) -> Conversation:
+        talk = Conversation().begin().status(1, 1, "standby", 0)
+        talk.goal(1, goal_id=1).feedback(1, "underway", 1).numbered(numbers[0])
+        talk.status(1, 2, "underway", 1)
+        for logs, number in zip(((1,), (2,), (4,)), numbers[1:], strict=True):
+            talk.feedback(1, "underway", 1, logs=logs)
+            if number:
+                talk.numbered(number)
+        talk.result(1, SUCCEEDED, "completed", 1).status(1, 1, "standby", 1)
+        return talk
+
+    lost = run((7, 8, 9, 11))  # number 10, which carried log 3, never came
+    assert check_bag(lost.write(tmp_path / "lost", StoragePlugin.MCAP)).clean
+    for name, numbers in (("skipped", (7, 8, 9, 10)), ("unnumbered", (0, 0, 0, 0))):
+        findings = _robot(check_bag(run(numbers).write(tmp_path / name, StoragePlugin.MCAP))).report.findings
+        assert [(finding.rule, finding.code) for finding in findings] == [("R7.3", "log_seq")], (
+            name,
+            findings,
+        )
+
+
 #: A bag recorded across hosts at 10% loss (tests/data/lossy/README.md): a child's start feedback and
 #: its last log's feedback, lost on the recorder's link, came again after the status of the child's end.
 LATE_FEEDBACK = Path(__file__).resolve().parents[1] / "data" / "lossy" / "late_feedback"
@@ -834,7 +865,8 @@ def _copy(source: Path, target: Path, sent_at: Callable[[str, int, int | None], 
         }
         for connection, time, raw in reader.messages():
             was = sent.get((connection.topic, time, hash(raw)))
-            writer.write_sent(added[connection.id], time, sent_at(connection.topic, time, was), raw)
+            then = sent_at(connection.topic, time, None if was is None else was.time)
+            writer.write_sent(added[connection.id], time, then, raw)
     return target
 
 
@@ -993,24 +1025,35 @@ def test_every_recording_of_tests_data_lossy_is_judged_and_said_in_its_readme() 
 
 def test_the_recorders_writer_keeps_each_messages_publish_time_beside_its_log_time(tmp_path: Path) -> None:
     """What ``dynevent record`` writes: an MCAP bag whose message records hold the publish time given
-    (across chunks: more than one chunk's worth of messages), which rosbags and other readers still
-    read as a bag, and whose messages without a publish time hold the log time twice."""
+    (across chunks: more than one chunk's worth of messages) and the publication number given as the
+    record's sequence, saying so in its metadata, which rosbags and other readers still read as a
+    bag, and whose messages without a publish time hold the log time twice.  The numbers are read
+    only where asked (the metadata says so)."""
     from rosbags.rosbag2 import Reader
 
-    from dynevent.bags.sent import publish_times
+    from dynevent.bags.sent import SEQUENCE_KEY, SEQUENCE_VALUE, Sent, publish_times
 
     run = Conversation()
     for seq in range(3000):  # over 1 MiB: more than one chunk
         run.status(1, 1, "standby " + "x" * 400, seq % 5)
         if seq % 2:
             run.sent_at(run.now - 1000 - seq)
+        if seq % 3 == 0:
+            run.numbered(seq + 1)
     bag = run.write(tmp_path / "bag", StoragePlugin.MCAP)
     files = sorted(bag.glob("*.mcap"))
-    found = publish_times(str(bag), files)
     with Reader(bag) as reader:
         stored = [(connection.topic, time, hash(raw)) for connection, time, raw in reader.messages()]
     assert len(stored) == 3000
-    assert found == {key: key[1] - 1000 - seq for seq, key in enumerate(stored) if seq % 2}
+    assert f"{SEQUENCE_KEY}: {SEQUENCE_VALUE}" in (bag / "metadata.yaml").read_text("utf-8")
+    assert publish_times(str(bag), files) == {
+        key: Sent(key[1] - 1000 - seq, 0) for seq, key in enumerate(stored) if seq % 2
+    }
+    assert publish_times(str(bag), files, numbered=True) == {
+        key: Sent(key[1] - 1000 - seq if seq % 2 else None, seq + 1 if seq % 3 == 0 else 0)
+        for seq, key in enumerate(stored)
+        if seq % 2 or seq % 3 == 0
+    }
 
 
 def test_each_topic_is_read_as_its_robot_and_channel_and_no_other_is() -> None:

@@ -295,13 +295,15 @@ def test_the_recorder_keeps_when_each_message_arrived_not_when_it_got_to_it() ->
         def __init__(self) -> None:
             self.times: list[int] = []
             self.sent: list[int | None] = []
+            self.numbers: list[int] = []
 
         def add_connection(self, topic: str, msgtype: str, **details: Any) -> str:
             return topic
 
-        def write_sent(self, connection: str, time: int, sent: int | None, data: bytes) -> None:
+        def write_sent(self, connection: str, time: int, sent: int | None, data: bytes, number: int) -> None:
             self.times.append(time)
             self.sent.append(sent)
+            self.numbers.append(number)
 
     recording, robot = Session("dynevent_recorder", own_context=True), Session("tinyRobot1", own_context=True)
     try:
@@ -335,6 +337,10 @@ def test_the_recorder_keeps_when_each_message_arrived_not_when_it_got_to_it() ->
         assert all(
             before <= stamp <= after for (before, after), stamp in zip(published, writer.sent, strict=True)
         ), (published, writer.sent)
+        # and its publisher's number for it, one by one (a gap would be a message lost for good)
+        assert writer.numbers[0] > 0 and writer.numbers == list(
+            range(writer.numbers[0], writer.numbers[0] + 5)
+        )
     finally:
         recording.close()
         robot.close()

@@ -57,6 +57,7 @@ class Conversation:
         self.now = T0
         self.calls = 0  # get_result calls
         self.sent: dict[int, int] = {}  # id of a message: when its publisher sent it (the bag's publish time)
+        self.numbers: dict[int, int] = {}  # id of a message: its publisher's number for it
 
     def at(self, topic: str, msgtype: str, message: Any) -> Conversation:
         self.now += SECOND // 10
@@ -166,6 +167,11 @@ class Conversation:
         self.sent[id(self.messages[-1][3])] = time
         return self
 
+    def numbered(self, number: int) -> Conversation:
+        """The last message was its publisher's ``number``-th: an MCAP bag holds it as the sequence."""
+        self.numbers[id(self.messages[-1][3])] = number
+        return self
+
     def write(self, path: Path, storage: StoragePlugin) -> Path:
         """The bag: MCAP storage through the recorder's writer (publish times kept), SQLite through
         rosbags' own."""
@@ -180,7 +186,8 @@ class Conversation:
                     connections[topic] = writer.add_connection(topic, msgtype, msgdef=text, rihs01=UNHASHED)
                 data = STORE.serialize_cdr(message, _stored_name(STORE, msgtype))
                 if mcap:
-                    writer.write_sent(connections[topic], time, self.sent.get(id(message)), data)
+                    number = self.numbers.get(id(message), 0)
+                    writer.write_sent(connections[topic], time, self.sent.get(id(message)), data, number)
                 else:
                     writer.write(connections[topic], time, data)
         return path

@@ -231,17 +231,31 @@ def _read(
     with contextlib.ExitStack() as unpacked:
         with _storage(source, reader_errors):  # every chunk the library will unpack, vetted first
             bag = unpacked.enter_context(unpack.readable(source, Path(path), metadata))
-        return _judge(source, bag, compatibility, keep)
+        return _judge(source, bag, compatibility, keep, numbered=_numbered(metadata))
+
+
+def _numbered(metadata: Any) -> bool:
+    """Whether a bag's metadata says its MCAP sequences are its publishers' publication numbers
+    (``dynevent record``'s bags: :data:`dynevent.bags.sent.SEQUENCE_KEY`)."""
+    information = metadata.get("rosbag2_bagfile_information") if isinstance(metadata, dict) else None
+    custom = information.get("custom_data") if isinstance(information, dict) else None
+    return isinstance(custom, dict) and custom.get(sent.SEQUENCE_KEY) == sent.SEQUENCE_VALUE
 
 
 def _judge(
-    source: str, readable: unpack.Readable, compatibility: Compatibility, keep: bool
+    source: str,
+    readable: unpack.Readable,
+    compatibility: Compatibility,
+    keep: bool,
+    *,
+    numbered: bool = False,
 ) -> tuple[BagReport, dict[tuple[str, str], _Robot]]:
     """Judge the bag the storage library reads at ``readable.path``; each message unpacked within its
     budget when the bag's messages are compressed, and ordered by when it was sent where the bag
-    says (:mod:`dynevent.bags.sent`)."""
+    says (:mod:`dynevent.bags.sent`), with its publisher's number where the bag holds them
+    (``numbered``)."""
     bag, budget = readable.path, readable.budget
-    sent_at = sent.publish_times(source, readable.mcap)
+    sent_at = sent.publish_times(source, readable.mcap, numbered=numbered)
     reader_type, reader_errors = _rosbags()
     robots: dict[tuple[str, str], _Robot] = {}
     messages = other = 0
@@ -278,8 +292,10 @@ def _judge(
             robot, channel = routes[connection.id]
             message = _decode(store, _unpacked(item, budget, source), decode_as[connection.id], source)
             messages += 1
-            sent_then = sent_at.get((connection.topic, time, hash(bytes(raw)))) if sent_at else None
-            robot.take(channel, time, message, sent_then)
+            mark = sent_at.get((connection.topic, time, hash(bytes(raw)))) if sent_at else None
+            if mark is not None and mark.number and channel == FEEDBACK and isinstance(robot, _Robot):
+                robot.lateness.numbered(time, message, mark.number)  # its writer's number-th
+            robot.take(channel, time, message, None if mark is None else mark.time)
         reports = tuple(robot.finish(source, end) for _, robot in sorted(robots.items()))
     except TraceError as exc:  # a record the observer cannot take, in the bag's order
         raise BagError(source, f"{exc.field} at bag time {exc.line}: {exc.problem}") from None
@@ -493,6 +509,9 @@ class _Lateness:
         self._sent_passed = 0  # the latest time the server sent a record passed on
         self._least_lag: int | None = None  # bag time less when sent, the least of the server's messages
         self._logs: set[int] = set()  # the log seqs of late feedback
+        #: the feedback writer's numbers received (the latest NUMBERS_KEPT), and each log seq's
+        self._numbers: collections.OrderedDict[int, None] = collections.OrderedDict()
+        self._log_numbers: collections.OrderedDict[int, int] = collections.OrderedDict()
         self._runs: set[int] = set()  # the runs (dynamic event seqs) whose begin came late
         self._cancelled: set[str] = set()  # the goals an action-level cancel of came late
 
@@ -528,6 +547,34 @@ class _Lateness:
                     self._cancelled.update(uuid_from_ros(info.goal_id) for info in response.goals_canceling)
         return True
 
+    def numbered(self, time: int, message: Any, number: int) -> None:
+        """A feedback received at bag ``time`` was its writer's ``number``-th message."""
+        _remember(self._numbers, number, None, NUMBERS_KEPT)
+        with contextlib.suppress(InvalidMessage):
+            for record in _RECORDS[FEEDBACK](time, message):
+                for entry in record.message.logs:
+                    _remember(self._log_numbers, entry.seq, number, NUMBERS_KEPT)
+
+    def lost_before(self, feedback: Feedback) -> bool:
+        """Whether the feedback writer's numbers show a message lost for good between the feedback
+        that carried the log entry heard before a skip in ``feedback`` and ``feedback`` itself: the
+        log seqs it lacked may have been on it.  A skip within one feedback, or where the bag holds
+        no numbers (another recorder's), is not explained so."""
+        for entry in feedback.logs:
+            number = self._log_numbers.get(entry.seq)
+            before = next(
+                (back for back in range(1, SKIP_SPAN + 1) if (entry.seq - back) % 2**32 in self._log_numbers),
+                None,
+            )
+            if number is None or before is None or before == 1:
+                continue
+            earlier = self._log_numbers[(entry.seq - before) % 2**32]
+            if 0 < number - earlier <= NUMBERS_KEPT and any(
+                between not in self._numbers for between in range(earlier + 1, number)
+            ):
+                return True
+        return False
+
     def waits(self, arrival: int, sent: int) -> None:
         """The record that arrived ``arrival``-th, which the server ``sent`` then, waits."""
         self._sent_of[arrival] = sent
@@ -558,7 +605,7 @@ class _Lateness:
             and finding.detail == SKIPS_OR_LOST
             and isinstance(seen, Feedback)
         ):
-            return any((entry.seq - 1) % 2**32 in self._logs for entry in seen.logs)
+            return any((entry.seq - 1) % 2**32 in self._logs for entry in seen.logs) or self.lost_before(seen)
         owed = finding.owed
         if finding.code == Violation.STATUS_MISMATCH.code and isinstance(seen, DynamicEventStatus):
             other_run = (
@@ -955,11 +1002,11 @@ def _awaiting(goals: Mapping[str, Record], passed: Mapping[str, Record], rest: l
     return sorted(awaiting, key=lambda goal: goal.line)
 
 
-def _remember(books: collections.OrderedDict[Any, Any], key: Any, value: Any) -> None:
-    """Keep ``key`` in ``books``, the latest :data:`_CALLS` keys only."""
+def _remember(books: collections.OrderedDict[Any, Any], key: Any, value: Any, limit: int = 0) -> None:
+    """Keep ``key`` in ``books``, the latest ``limit`` keys only (:data:`_CALLS` where not said)."""
     books[key] = value
     books.move_to_end(key)
-    while len(books) > _CALLS:
+    while len(books) > (limit or _CALLS):
         books.popitem(last=False)
 
 
@@ -1015,6 +1062,11 @@ def _logged(record: Record) -> int:
 #: a robot keeps.
 _SERVICES = frozenset({SEND_GOAL, GET_RESULT, CANCEL_GOAL})
 _CALLS = 1024
+#: How many of a robot's feedback numbers (and log seqs, each with its feedback's number) a reader
+#: keeps, the latest: a gap farther back than these is not read as a feedback lost.
+NUMBERS_KEPT = 65_536
+#: The most log seqs a skip explained by a feedback lost may lack (a feedback carries a few).
+SKIP_SPAN = 64
 #: The records that open a goal: each goes by its own stamp, never after a record that names the goal
 #: but was received first (its start's feedback, say).
 _OPENING = frozenset({"goal", "goal_response"})

@@ -139,11 +139,13 @@ class Recorder:
         # and when its publisher sent it (DDS's source timestamp): the bag's publish time, which tells
         # a message a lossy link delivered late from one sent late (dynevent.bags.sent)
         sent = info.get("source_timestamp") or None
+        # and its publisher's number for it: a gap in a writer's numbers is a message lost for good
+        number = int(info.get("publication_sequence_number") or 0)
         with self._lock:
             connection = self._connections.get(topic)
             if connection is None:  # after close
                 return
-            self.writer.write_sent(connection, now, sent, data)
+            self.writer.write_sent(connection, now, sent, data, number)
             self.messages += 1
             self.bytes += len(data)
 

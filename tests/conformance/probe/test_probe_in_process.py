@@ -34,7 +34,7 @@ from dynevent.server.machine import State
 from dynevent.sim.config import CategorySpec, ServeConfig, machine_config
 from dynevent.testing import switched_off
 from dynevent.testing.broken import DEFECTS, broken_stepper
-from dynevent.wire.vocab import Compatibility, EventType
+from dynevent.wire.vocab import Compatibility, EventType, RejectReason
 from support.probe_expected import BROKEN, JUDGED_IN_PROCESS, RMF_ROS2_FAILS, RMF_ROS2_INFO, UNSEEN_BY_CASES
 
 #: serve as the DDS tests run it: brief children that log often, the first run at the seq wrap.
@@ -185,7 +185,7 @@ def _switched_off(rule: str) -> tuple[int, list[CaseFinding], str]:
 def test_every_failure_is_the_judges_or_one_a_trace_cannot_carry(server: str) -> None:
     """Against every broken server of the kit and every check switched off: a case fails by the judge's
     finding on its own records, filed under one of the case's rules (or R19.1), or by its script for a
-    cause of cases.UNTRACEABLE, or one of cases.NOT_YET_JUDGED; never otherwise."""
+    cause of cases.UNTRACEABLE (what a trace cannot carry); never otherwise."""
     kind, name = server.split(" ", 1)
     _, findings, text = _probe(defect=name) if kind == "defect" else _switched_off(name)
     for finding in findings:
@@ -195,7 +195,7 @@ def test_every_failure_is_the_judges_or_one_a_trace_cannot_carry(server: str) ->
             rule = re.search(r"\((R\d+\.\d+)\)$", finding.expected)
             assert rule is not None and rule[1] in {*finding.case.rules, "R19.1"}, (finding, text)
         else:
-            assert finding.cause in {*probe_cases.UNTRACEABLE, *probe_cases.NOT_YET_JUDGED}, (finding, text)
+            assert finding.cause in probe_cases.UNTRACEABLE, (finding, text)
             assert finding.absent == (finding.cause == "timeout"), finding
 
 
@@ -407,7 +407,7 @@ def test_an_implementation_behind_the_driver_protocol_is_probed_without_ros() ->
     assert _took(own.stdout)[0].endswith(f"\n{len(CASES)} pass"), own.stdout
     broken = _probe_impl(f"{sys.executable} {SUPPORT / 'broken_driver.py'}")
     assert broken.returncode == 1, broken.stdout + broken.stderr
-    assert "cancel.both_answered (R9.3, R8.3, R19.1): fail" in broken.stdout, broken.stdout
+    assert "cancel.both_answered (R9.3, R4.16, R8.3, R19.1): fail" in broken.stdout, broken.stdout
 
 
 class _Stateless:
@@ -849,6 +849,7 @@ class _LaggingLink(InProcessLink):
         self.keep_last = keep_last  # the status topic keeps one message: one superseded on its way is lost
         self.published: list[Any] = []
         super().__init__(config, trace=trace)
+        self.apart = True  # a client's view over a lossy network, as over DDS
 
     def _later(self, kind: str, action: Any) -> None:
         lag = self.lags.get(kind, 0.0)
@@ -1056,6 +1057,7 @@ class _LateCancelLink(InProcessLink):
     ) -> None:
         self.lag, self.forged, self.at_report, self.both, self.cancels = lag, forged, at_report, both, 0
         super().__init__(CONFIG)
+        self.apart = True  # a client's view over a lossy network, as over DDS
 
     def deliver(self, exchange: probe_runner.Exchange) -> None:
         if exchange.goal.event_type != EventType.CANCEL:
@@ -1108,6 +1110,29 @@ def test_a_cancel_refused_late_is_no_failure_when_the_child_ended_as_the_first_w
     late = {finding.case.id: finding for finding in findings}["cancel.both_answered"]
     assert late.verdict is Verdict.MISSING, late
     assert late.seen == probe_runner.REFUSED_AFTER_END.format(child=_child_of(late)), late.seen
+
+
+@pytest.mark.spec("R9.3", "R4.16")
+def test_a_cancel_refused_while_its_child_runs_is_the_judges_failure_over_the_in_process_link() -> None:
+    """A server that refuses every CANCEL while a child runs (busy, as if it were a NEXT): over the
+    in-process link, whose records are in the server's order, ``cancel.both_answered`` fails by the
+    judge's finding, R4.16, not by its script."""
+    first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
+    server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG), first)
+
+    def stepper(event: ins.Input) -> tuple[outs.Output, ...]:
+        cancel = isinstance(event, ins.GoalRequested) and event.goal.event_type == EventType.CANCEL
+        if cancel and server.state.running is not None:
+            refusal = outs.Rejected(reason=RejectReason.BUSY, text="a child runs")
+            return (outs.GoalRejected(goal_uuid=event.goal_uuid, rejection=refusal),)
+        return server.step(event)
+
+    said: list[str] = []
+    cases = [case for case in CASES if case.id == "cancel.both_answered"]
+    code, (finding,) = probe_in_process(OPTIONS, cases, said.append, CONFIG, write=_unasked, stepper=stepper)
+    assert code == probe_cases.EXIT_FAILED, said
+    assert (finding.verdict, finding.cause) == (Verdict.FAIL, "judge"), said
+    assert finding.expected.endswith("(R4.16)") and finding.seen.startswith("the judge: "), finding
 
 
 class _LosingLink(InProcessLink):

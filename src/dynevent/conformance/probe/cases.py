@@ -45,7 +45,6 @@ __all__ = [
     "KNOWN",
     "KNOWN_MISSING",
     "LIVE_CANNOT_SHOW",
-    "NOT_YET_JUDGED",
     "UNTRACEABLE",
     "Case",
     "CaseFinding",
@@ -119,9 +118,8 @@ class CaseFinding:
     #: judge finds in its records may be the link's doing, and is reported, uncertain
     by_link: bool = False
     #: why a failure: ``"judge"`` (the judge's finding on the case's records, :func:`judge_verdicts`),
-    #: or what the case's own script saw that a trace cannot carry (a key of :data:`UNTRACEABLE`,
-    #: or of :data:`NOT_YET_JUDGED`); empty where nothing failed it (kept where the link then made
-    #: the case not run)
+    #: or what the case's own script saw that a trace cannot carry (a key of :data:`UNTRACEABLE`);
+    #: empty where nothing failed it (kept where the link then made the case not run)
     cause: str = ""
     #: why a failure the judge finds in the case's records may be the link's doing (an earlier case's
     #: goal, sent before this case began, was accepted during it): then the case is not run, saying so
@@ -315,7 +313,7 @@ CASES: tuple[Case, ...] = (
          "then WAITING standby", ("R9.3", "R8.2", "R8.3", "R19.1", "R8.4", "R2.2"), needs="child",
          divergences=("D28",)),
     Case("cancel.both_answered", "two CANCELs of the running child wait for its end and are both "
-         "answered with its result", ("R9.3", "R8.3", "R19.1"), needs="child", divergences=("D1",)),
+         "answered with its result", ("R9.3", "R4.16", "R8.3", "R19.1"), needs="child", divergences=("D1",)),
     Case("action.cancel_running", "an action-level cancel of the running NEXT is accepted and the NEXT "
          "answered canceled", ("R10.3", "R8.2"), needs="child", divergences=("D31",)),
     Case("action.cancel_answered", "an action-level cancel of an answered goal is refused", ("R10.5",),
@@ -356,6 +354,13 @@ UNTRACEABLE: dict[str, str] = {
     "answer (D2): a report of the child may carry any status (R7.1), and a trace taken at a client "
     "cannot tell such a status published after the child's end from one a report published before it "
     "that came late, where the probe asks for the status once it has heard the answer",
+    "both_answered": "when a CANCEL's request reached the server, at a client's tap (the DDS link): "
+    "a CANCEL of the running child refused before the client heard that child end may have reached "
+    "the server after the end (a lossy link sends a lost request again, late), and the judge reads it "
+    "so; the case reads the refusal against the order it heard the server's messages in and the "
+    "server's stamps (DDS's source timestamps, which a trace does not hold), and is not run over a "
+    "link that shows it lost messages.  Over the in-process and driver links, whose records are in "
+    "the server's order, the judge decides (R4.16)",
     "log_seq": "whether a client's link lost a feedback on the way: at a client's tap (the DDS link) a "
     "log seq that skips within a child is not told from a feedback lost, and the judge reads it as an "
     "open item (`skips_or_lost`); the case fails it where the run showed no loss, and is not run where "
@@ -363,23 +368,12 @@ UNTRACEABLE: dict[str, str] = {
     "decides (`skips`)",
 }
 
-#: Checks a case's script still makes by hand because the judge does not decide them as the case
-#: does yet, each with why: the work left before every verdict is the judge's or :data:`UNTRACEABLE`.
-NOT_YET_JUDGED: dict[str, str] = {
-    "both_answered": "cancel.both_answered reads a CANCEL refused while it had not heard the child end "
-    "against the order it heard the server's messages in and the server's stamps (a lossy link may "
-    "deliver the request after the child's end), which the judge does not read; over a link that shows "
-    "it lost messages the case is not run",
-}
-
 
 def causes_text() -> str:
     """The causes a case's script fails a case for, as docs/probe.md lists them: those of
-    :data:`UNTRACEABLE`, then those of :data:`NOT_YET_JUDGED`, a Markdown item each."""
+    :data:`UNTRACEABLE`, a Markdown item each."""
     lines = ["What a trace cannot carry:", ""]
     lines += [f"- `{name}`: {why}." for name, why in UNTRACEABLE.items()]
-    lines += ["", f"Not yet the judge's ({len(NOT_YET_JUDGED)}):", ""]
-    lines += [f"- `{name}`: {why}." for name, why in NOT_YET_JUDGED.items()]
     return "\n".join(lines) + "\n"
 
 
