@@ -1036,15 +1036,23 @@ class _LateFirstStatusLink(InProcessLink):
 def test_a_first_status_that_comes_after_the_timeout_is_no_failure_of_the_server() -> None:
     """The robot's status reaches the probe after ``--timeout`` (3 s) and the wait of status.latched
     (both waits: 6 s), but within the run's last wait: the link was slow, the case is not run, saying
-    so.  A status that never comes fails it (R1.4)."""
+    so.  A status that never comes fails it (R1.4).  Found at 30% loss across hosts (a latched status
+    21 s late): once the status came, the cases that need an active run run, and pass; where none
+    ever comes they are not run, saying so."""
     options = attrs.evolve(OPTIONS, deadline=1000)
     for after, verdict in ((7.0, Verdict.MISSING), (None, Verdict.FAIL)):
         findings = probe_runner.run_cases(_LateFirstStatusLink(after), options, list(CASES), lambda _: None)
         _, findings = probe_runner.conclude(findings, "", options, lambda _: None, _unasked)
-        latched = {finding.case.id: finding for finding in findings}["status.latched"]
+        verdicts = {finding.case.id: finding for finding in findings}
+        latched = verdicts["status.latched"]
         assert latched.verdict is verdict, (after, latched)
+        needing = [case.id for case in CASES if case.needs in ("run", "place", "child")]
+        ran = [case for case in needing if verdicts[case].verdict is Verdict.PASS]
         if verdict is Verdict.MISSING:
             assert latched.seen.startswith(probe_runner.LATE.format(timeout=OPTIONS.timeout)), latched.seen
+            assert len(ran) >= len(needing) - 2, [verdicts[case] for case in needing if case not in ran]
+        else:
+            assert ran == [], ran
 
 
 class _LateCancelLink(InProcessLink):
