@@ -509,6 +509,43 @@ def test_a_finished_refused_busy_by_a_child_a_client_heard_run_between_its_reque
         assert ("R4.16", "rejected_acceptable") in findings, (tap, reason, request_first, findings)
 
 
+@pytest.mark.spec("R5.2", "R4.6")
+def test_a_next_a_lossy_link_delivered_after_the_other_nexts_child_ended_is_a_fresh_next() -> None:
+    """Found at 30% loss across hosts (next.race): two NEXTs sent at once, the second delivered late,
+    after the first's child had ended (the status of that end overwritten on the status topic, the
+    first's answer heard last).  The server took the second as a fresh NEXT and ran its child: at a
+    client, a NEXT accepted while the state still runs a child whose answer is that child's next
+    record is read as reaching the server after that end; no race lost, no finding.  Where a report
+    of the first child comes after the second's acceptance (it still ran), or at the server's tap,
+    it is still one."""
+
+    def trace(tap: str, still_running: bool = False) -> Trace:
+        talk = Trace()
+        talk.rows[0] = {**talk.rows[0], "tap": tap}
+        talk.begin().status(1, 1, "standby", 5)
+        for n, event_id in ((1, 6), (2, 7)):
+            nxt = {
+                "dynamic_event_seq": 1,
+                "event_type": 1,
+                "category": "go_to_place",
+                "description": '"pantry"',
+            }
+            talk.add("goal", goal_uuid=uuid(n), goal={**nxt, "id": event_id})
+        talk.status(1, 2, "underway", 6).feedback(1, "underway", 6).feedback(1, "underway", 6, logs=(1,))
+        talk.add("goal_response", goal_uuid=uuid(1), accepted=True)
+        talk.feedback(2, "underway", 7).status(1, 2, "underway", 7)
+        talk.add("goal_response", goal_uuid=uuid(2), accepted=True)
+        if still_running:
+            talk.feedback(1, "underway", 6, logs=(2,))
+        talk.feedback(2, "underway", 7, logs=(3 if still_running else 2,)).status(1, 1, "standby", 7)
+        return talk.result(1, "succeeded", "completed", 6).result(2, "succeeded", "completed", 7)
+
+    late = trace("client")
+    assert late.check().clean, found(late.check())
+    for tap, still_running in (("server", False), ("client", True)):
+        assert found(trace(tap, still_running).check()), (tap, still_running)
+
+
 @pytest.mark.spec("R10.3")
 def test_an_action_level_cancel_refused_after_a_client_hears_its_goals_answer_may_have_come_after_it() -> (
     None

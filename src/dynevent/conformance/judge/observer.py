@@ -500,6 +500,9 @@ class _Requests(_Part):
         self.refusable: collections.OrderedDict[str, dict[RejectReason, outs.Rejected]] = (
             collections.OrderedDict()
         )
+        #: seen apart: the goal whose child ran when each goal awaiting its response was requested
+        #: (``""``: none), the latest AWAITING_REFUSALS
+        self.running_at_request: collections.OrderedDict[str, str] = collections.OrderedDict()
 
     def on_goal(self, record: Record) -> None:
         seen = self.goals.get(record.goal_uuid)
@@ -514,8 +517,13 @@ class _Requests(_Part):
         self.goals.requested(record.goal_uuid, record.message, record.line)
         if self.apart:
             self.refusable[record.goal_uuid] = {}
-            while len(self.refusable) > AWAITING_REFUSALS:
-                self.refusable.popitem(last=False)
+            running = self.replica.st.running
+            self.running_at_request[record.goal_uuid] = (
+                running.goal_uuid if running and running.started else ""
+            )
+            for books in (self.refusable, self.running_at_request):
+                while len(books) > AWAITING_REFUSALS:
+                    books.popitem(last=False)
             self.note_refusals()
 
     def note_refusals(self) -> None:
@@ -570,6 +578,8 @@ class _Requests(_Part):
         goal = seen.goal
         refused_earlier = self.refused_earlier(record.goal_uuid, record)
         self.refusable.pop(record.goal_uuid, None)
+        sent_before_start = self.sent_before_start(record.goal_uuid)
+        self.running_at_request.pop(record.goal_uuid, None)
         decision = machine.accept(self.replica.st, goal, self.replica.config_for(goal))
         busy = isinstance(decision, outs.Rejected) and decision.reason is RejectReason.BUSY
         if busy and record.accepted and self.ended_unseen():
@@ -577,7 +587,7 @@ class _Requests(_Part):
         if not self.agrees(decision, record):
             if refused_earlier:
                 return  # a refusal changes nothing: the states since are the server's
-            self.explain_response(goal, record)
+            self.explain_response(goal, record, sent_before_start=sent_before_start)
             decision = machine.accept(self.replica.st, goal, self.replica.config_for(goal))
         if record.accepted:
             self.replica.learn(goal)
@@ -631,8 +641,9 @@ class _Requests(_Part):
             return False
         return record.reason is None or record.reason in machine.CONFIGURED_REFUSALS
 
-    def explain_response(self, goal: Goal, record: Record) -> None:
-        """The response may follow starts of accepted goals whose outputs come later: try them."""
+    def explain_response(self, goal: Goal, record: Record, *, sent_before_start: bool = False) -> None:
+        """The response may follow starts of accepted goals whose outputs come later: try them.
+        ``sent_before_start``: seen apart, the goal was requested before the running child started."""
         events: list[ins.Input] = []
         for queued in self.replica.st.queued:
             events.append(ins.GoalStarted(goal_uuid=queued.goal_uuid, now=self.replica.now))
@@ -641,9 +652,13 @@ class _Requests(_Part):
             if self.agrees(decision, record):
                 self.replica.commit(state, owed)
                 return
-        if self.apart and not record.accepted:
-            # at a client, whose channels lag one another: a refusal the request reached the server
-            # too late for, after the running child's end, whose answer is heard later
+        if self.apart and (not record.accepted or sent_before_start):
+            # at a client, whose channels lag one another: a request that reached the server after
+            # the running child's end, whose answer is heard later and is the next record of that
+            # child (no report of it comes first): refused for that end (a CANCEL), or accepted as a
+            # fresh goal where it was sent before that child started (a NEXT sent beside another,
+            # delivered late, the status of the end lost: found at 30% loss); one sent while the
+            # child was seen running is accepted busy (rmf_ros2's D1)
             for ended in _ended_ahead(self.replica, self.ahead):
                 state, owed = self.replica.simulate(ended)
                 if self.agrees(machine.accept(state, goal, self.replica.config_for(goal)), record):
@@ -652,6 +667,12 @@ class _Requests(_Part):
         if record.reason is RejectReason.SHUTTING_DOWN:
             state, owed = self.replica.simulate([ins.Shutdown(now=self.replica.now)])
             self.replica.commit(state, owed)
+
+    def sent_before_start(self, uuid: str) -> bool:
+        """Seen apart: was goal ``uuid`` requested before the running child started?"""
+        running = self.replica.st.running
+        before = self.running_at_request.get(uuid)
+        return running is not None and before is not None and before != running.goal_uuid
 
     def on_cancel_request(self, record: Record) -> None:
         if self.replica.partial and record.goal_uuid not in self.goals:
@@ -1479,6 +1500,16 @@ def _response_ahead(rooms: _ObserverState, record: Record, window: Iterable[Reco
         replica = rooms.replica
         return isinstance(machine.accept(replica.st, seen.goal, replica.config_for(seen.goal)), outs.Accepted)
 
+    def names_another(response: Record, status: DynamicEventStatus) -> bool:
+        """The child the status shows running is the one an accepted NEXT queued names (its own id),
+        not ``response``'s goal's: not that goal's start (two NEXTs sent at once, the second's
+        response heard after the first's child started)."""
+        seen = rooms.goals.get(response.goal_uuid)
+        if seen is None or rooms.replica.state is None or seen.goal.id == status.id:
+            return False
+        queued = rooms.replica.st.queued
+        return any(item.goal.event_type == EventType.NEXT and item.goal.id == status.id for item in queued)
+
     if record.kind == "status":
         seq = record.message.dynamic_event_seq
         state = rooms.replica.state
@@ -1500,7 +1531,10 @@ def _response_ahead(rooms: _ObserverState, record: Record, window: Iterable[Reco
             (
                 ahead
                 for ahead in window
-                if awaited(ahead) and ahead.accepted and (explained(ahead) or not ends)
+                if awaited(ahead)
+                and ahead.accepted
+                and (explained(ahead) or not ends)
+                and (ends or not names_another(ahead, record.message))
             ),
             None,
         )
@@ -1711,15 +1745,18 @@ def _response_next(rooms: _ObserverState, goal: Record, window: collections.dequ
 
 
 def _started_after_an_end(uuid: str, window: Iterable[Record], response: Record) -> bool:
-    """Whether, among the records ahead, a status showing the robot waiting comes before both goal
-    ``uuid``'s first feedback and its ``response``."""
+    """Whether, among the records ahead, a status showing the robot waiting, or the feedback of
+    another goal's child (which ran first: two NEXTs accepted at once never both run, R5.2), comes
+    before both goal ``uuid``'s first feedback and its ``response``."""
     waited = responded = False
     for ahead in window:
         if ahead is response:
             responded = True
-        elif ahead.kind == "status" and machine.robot_waits(ahead.message):
+        elif (ahead.kind == "status" and machine.robot_waits(ahead.message)) or (
+            ahead.kind == "feedback" and ahead.goal_uuid != uuid
+        ):
             waited = waited or not responded
-        elif ahead.kind == "feedback" and ahead.goal_uuid == uuid:
+        elif ahead.kind == "feedback":
             return waited
     return False
 

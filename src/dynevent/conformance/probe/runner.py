@@ -463,8 +463,8 @@ class Probe:
         self.silent_cases: list[str] = []
         #: whether the server had responded to a goal request before those cases fell silent
         self.answered_before_silence = False
-        self._silence_waited = False  # a silence was waited out once more (hear_out_silence) in vain
-        self._status_waited = False  # the first status was waited for once more (_hear_out_status)
+        self.silence_waited = False  # a silence was waited out once more (_hear_out_silence) in vain
+        self.status_waited = False  # the first status was waited for once more (_hear_out_status)
         #: the cases that sent a goal request and heard no response to it
         self.unresponded: set[str] = set()
         self._places_sent = 0
@@ -505,7 +505,7 @@ class Probe:
             return f"the run's --deadline of {self.options.deadline:g} s passed"
         for kind, needs in _NEEDS_OF_WAIT.items():
             if kind in self.dead and case.needs in needs:
-                self._hear_out_status()
+                _hear_out_status(self)
                 if self.link.statuses:
                     del self.dead[kind]  # it came after all: the cases that need a run run
                     continue
@@ -573,57 +573,6 @@ class Probe:
         """Has the server stopped answering: :data:`SILENT_AFTER` cases in a row waited out the timeout
         with no message from it?"""
         return len(self.silent_cases) >= SILENT_AFTER
-
-    def _hear_out_status(self) -> None:
-        """Where no status came in the first wait nor in status.latched's, and the status topic is not
-        offered so that none can come, wait once more, within ``--timeout``, before the cases that
-        need an active run are not run (found at 30% loss across hosts: a latched status that a
-        slowly repairing link delivered 21 s late, a second after the latched case's wait)."""
-        if self.link.statuses or "status" in self.link.offered:
-            return
-        if not self._status_waited and not self.past_deadline:
-            self._status_waited = True
-            self.link.wait(lambda: bool(self.link.statuses), self.timeout)
-
-    def hear_out_silence(self) -> None:
-        """Where the server fell silent after it had responded to goal requests, wait once more, within
-        ``--timeout``, for anything from it: a lossy link that repairs slowly delivers what the silent
-        cases asked for seconds after their waits (found at 30% loss across hosts: three responses
-        came 13 s after the third wait, and the rest of the run was not run).  Heard, the server is
-        answering and the cases go on; not heard, the rest are not run (:data:`STOPPED_ANSWERING`)."""
-        if not self.silent or not self.answered_before_silence or self._silence_waited or self.past_deadline:
-            return
-        heard = self.link.heard
-        if self.link.wait(lambda: self.link.heard != heard, self.timeout):
-            self.silent_cases = []
-        else:
-            self._silence_waited = True  # waited out once: the server is taken as silent
-
-    def late(self, finding: CaseFinding) -> CaseFinding:
-        """A failure for a goal's response or answer that did not come within ``--timeout``
-        (``absent``), seen again at the run's end: when every goal the case left unanswered has had
-        its response and, accepted, its answer since (or the log seqs show its feedback was sent,
-        :func:`_feedback_lost`), the link was slow or lossy: the case is not run, saying so."""
-        if not (finding.absent and finding.verdict is Verdict.FAIL):
-            return finding
-        lost = _feedback_lost_in(self, finding)
-        if lost is not None:
-            why = FEEDBACK_LOST.format(first=lost[0], last=lost[-1])
-        elif self.came_late(finding):
-            why = LATE.format(timeout=self.options.timeout)
-        else:
-            return finding
-        return attrs.evolve(finding, verdict=Verdict.MISSING, seen=f"{why} ({finding.seen})", absent=False,
-                            by_link=True)  # fmt: skip
-
-    def came_late(self, finding: CaseFinding) -> bool:
-        """Whether what ``finding``'s case waited for in vain has come since: its goals' responses,
-        answers and start feedback, or what else it waited for (:attr:`heard_later`)."""
-        unanswered = self.unanswered.get(finding.case.id, [])
-        later = self.heard_later.get(finding.case.id)
-        return (bool(unanswered) and all(_complete(exchange) for exchange in unanswered)) or (
-            later is not None and later()
-        )
 
     def not_run(self, case: Case, why: str) -> CaseFinding:
         """The finding of a case the probe did not carry out."""
@@ -1795,7 +1744,7 @@ def run_cases(
         cause = f": the status topic is {offered}" if offered is not None else " (R1.4)"
         probe.dead["status"] = f"no status was heard within {options.timeout:g} s{cause}"
     for case in cases:
-        probe.hear_out_silence()
+        _hear_out_silence(probe)
         why = STOPPED_ANSWERING if probe.silent else probe.blocked(case)
         if why is not None:
             findings.append(probe.not_run(case, why))
@@ -1807,14 +1756,69 @@ def run_cases(
     # of all): the run's end waits for it, once, within --timeout and what the deadline leaves
     pending = [finding for finding in findings if finding.absent and finding.verdict is Verdict.FAIL]
     if pending and not probe.past_deadline:
-        link.wait(lambda: all(probe.came_late(finding) for finding in pending), probe.timeout)
-    findings[:] = [_fell_silent(probe, probe.late(finding)) for finding in findings]
+        link.wait(lambda: all(_came_late(probe, finding) for finding in pending), probe.timeout)
+    findings[:] = [_fell_silent(probe, _late(probe, finding)) for finding in findings]
     lost = _losses(probe.link, findings)
     # what never came, log seqs that skip, a CANCEL refused before the end was heard: no verdict over
     # a link that lost messages
     if lost is not None:
         findings[:] = [_lossy(finding, lost) for finding in findings]
     return findings
+
+
+def _hear_out_status(probe: Probe) -> None:
+    """Where no status came in the first wait nor in status.latched's, and the status topic is not
+    offered so that none can come, wait once more, within ``--timeout``, before the cases that
+    need an active run are not run (found at 30% loss across hosts: a latched status that a
+    slowly repairing link delivered 21 s late, a second after the latched case's wait)."""
+    if probe.link.statuses or "status" in probe.link.offered:
+        return
+    if not probe.status_waited and not probe.past_deadline:
+        probe.status_waited = True
+        probe.link.wait(lambda: bool(probe.link.statuses), probe.timeout)
+
+
+def _hear_out_silence(probe: Probe) -> None:
+    """Where the server fell silent after it had responded to goal requests, wait once more, within
+    ``--timeout``, for anything from it: a lossy link that repairs slowly delivers what the silent
+    cases asked for seconds after their waits (found at 30% loss across hosts: three responses
+    came 13 s after the third wait, and the rest of the run was not run).  Heard, the server is
+    answering and the cases go on; not heard, the rest are not run (:data:`STOPPED_ANSWERING`)."""
+    if not probe.silent or not probe.answered_before_silence or probe.silence_waited or probe.past_deadline:
+        return
+    heard = probe.link.heard
+    if probe.link.wait(lambda: probe.link.heard != heard, probe.timeout):
+        probe.silent_cases = []
+    else:
+        probe.silence_waited = True  # waited out once: the server is taken as silent
+
+
+def _late(probe: Probe, finding: CaseFinding) -> CaseFinding:
+    """A failure for a goal's response or answer that did not come within ``--timeout``
+    (``absent``), seen again at the run's end: when every goal the case left unanswered has had
+    its response and, accepted, its answer since (or the log seqs show its feedback was sent,
+    :func:`_feedback_lost`), the link was slow or lossy: the case is not run, saying so."""
+    if not (finding.absent and finding.verdict is Verdict.FAIL):
+        return finding
+    lost = _feedback_lost_in(probe, finding)
+    if lost is not None:
+        why = FEEDBACK_LOST.format(first=lost[0], last=lost[-1])
+    elif _came_late(probe, finding):
+        why = LATE.format(timeout=probe.options.timeout)
+    else:
+        return finding
+    return attrs.evolve(finding, verdict=Verdict.MISSING, seen=f"{why} ({finding.seen})", absent=False,
+                        by_link=True)  # fmt: skip
+
+
+def _came_late(probe: Probe, finding: CaseFinding) -> bool:
+    """Whether what ``finding``'s case waited for in vain has come since: its goals' responses,
+    answers and start feedback, or what else it waited for (:attr:`Probe.heard_later`)."""
+    unanswered = probe.unanswered.get(finding.case.id, [])
+    later = probe.heard_later.get(finding.case.id)
+    return (bool(unanswered) and all(_complete(exchange) for exchange in unanswered)) or (
+        later is not None and later()
+    )
 
 
 def _fell_silent(probe: Probe, finding: CaseFinding) -> CaseFinding:
