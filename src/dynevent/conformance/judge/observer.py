@@ -1727,9 +1727,10 @@ def _response_next(rooms: _ObserverState, goal: Record, window: collections.dequ
     since (a child's end, a new run's begin), and read there it would look decided on a state the
     server had not reached.  A response the state at its request does not explain stays where it
     came (the request itself may have reached the server late), as does one heard after a status
-    that shows the robot waiting which came before its goal's first feedback: that goal's child
-    started after another's end, so the server took the goal after it (a NEXT accepted while a
-    child runs, or beside another NEXT, never starts after that child's end)."""
+    that shows the robot waiting, or after another goal's feedback, which came before its goal's
+    first feedback: that goal's child started after another's end, so the server took the goal
+    after it (a NEXT accepted while a child runs, or beside another NEXT, never starts after that
+    child's end)."""
     uuid = goal.goal_uuid
     responses = (ahead for ahead in window if ahead.kind == "goal_response" and ahead.goal_uuid == uuid)
     response = next(responses, None)
