@@ -1,7 +1,8 @@
 """Clients of one robot for the tests across hosts, run as a process on a host:
-``python clients.py async ROBOT`` drives it with an AsyncRobotClient (a NEXT, then FINISHED), and
-``python clients.py bt ROBOT`` with a behaviour tree (a RunEvent, then a FinishRun).  Each prints
-one line, the outcomes' kinds, and exits 0 when both completed."""
+``python clients.py async ROBOT [TRACE]`` drives it with an AsyncRobotClient (a NEXT, then FINISHED),
+writing what it sends and hears to the trace file TRACE where given, and ``python clients.py bt
+ROBOT`` with a behaviour tree (a RunEvent, then a FinishRun).  Each prints one line, the outcomes'
+kinds, and exits 0 when both completed."""
 
 from __future__ import annotations
 
@@ -14,10 +15,14 @@ import time
 BOUND = 60.0
 
 
-async def _drive_async(robot: str) -> list[str]:
+async def _drive_async(robot: str, trace_path: str | None = None) -> list[str]:
+    from dynevent.conformance.judge.trace import TraceWriter
     from dynevent.ros import AsyncRobotClient
 
-    async with AsyncRobotClient("tinyRobot", robot, node_name=f"async_{robot}") as client:
+    trace = (
+        None if trace_path is None else TraceWriter(trace_path, fleet="tinyRobot", robot=robot, tap="client")
+    )
+    async with AsyncRobotClient("tinyRobot", robot, node_name=f"async_{robot}", trace=trace) as client:
         await client.ready(BOUND)
         outcome = await asyncio.wait_for(client.next("go_to_place", json.dumps("pantry")), BOUND)
         finished = await asyncio.wait_for(client.finish(), BOUND)
@@ -46,8 +51,8 @@ def _drive_tree(robot: str) -> list[str]:
 
 
 def main(argv: list[str]) -> int:
-    kind, robot = argv
-    kinds = asyncio.run(_drive_async(robot)) if kind == "async" else _drive_tree(robot)
+    kind, robot, *trace = argv
+    kinds = asyncio.run(_drive_async(robot, *trace)) if kind == "async" else _drive_tree(robot)
     print(kind, " ".join(kinds), flush=True)
     return 0 if kinds == ["completed", "completed"] else 1
 

@@ -78,7 +78,7 @@ def test_loss_gives_no_false_verdict(ros_site: Callable[..., RosSite], loss: int
     bounds = ("--deadline", "600", "--server-wait", str(START))
     reports = ("--junit", str(junit), "--trace", str(site.folder / "probe.jsonl"))
     probe = site.dynevent("prober", "probe", "--robot", "probed", *places, *reports, *bounds)
-    driver = site.python("client", CLIENTS, "async", "driven")
+    driver = site.python("client", CLIENTS, "async", "driven", str(site.folder / "client.jsonl"))
     assert driver.finish(START * 2) == 0, driver.output
     code = probe.finish(900)
     verdicts = _verdicts(junit)
