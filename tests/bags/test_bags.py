@@ -25,6 +25,7 @@ from dynevent.conformance.judge.divergences import label
 from dynevent.errors import BagError
 from support.recordings import (
     ABORTED,
+    ACCEPTED,
     ACTION,
     BEGIN_TOPIC,
     CANCELED,
@@ -238,6 +239,30 @@ def test_a_goal_whose_response_the_bag_lost_is_read_as_accepted_from_the_status_
     other.status(1, 2, "underway", 7)
     robot = _robot(check_bag(other.write(tmp_path / "other", StoragePlugin.MCAP)))
     assert [finding.code for finding in robot.report.findings] == ["status_mismatch"], robot.report.findings
+
+
+@pytest.mark.spec("R4.6", "R2.2")
+def test_the_goal_statuses_published_on_a_goals_acceptance_show_what_had_ended_by_then(
+    tmp_path: Path,
+) -> None:
+    """The status of child 1's end and the goal statuses published with its answer lost (each topic
+    keeps one message, and the next replaced it): the goal statuses the server published as it
+    accepted the next NEXT, just after that NEXT's response, show goal 1 succeeded, so child 1 had
+    ended before that acceptance.  Where they show goal 1 still executing, the NEXT was accepted
+    while its child ran (R4.6)."""
+
+    def talk(first: int) -> Conversation:
+        run = Conversation().begin().status(1, 1, "standby", 0)
+        run.goal(1, goal_id=1).goal_statuses((1, EXECUTING)).status(1, 2, "underway", 1)
+        run.feedback(1, "underway", 1)
+        run.now += 6 * SECOND  # child 1 ends here: its status and goal statuses never reach the bag
+        run.goal(2, goal_id=2).goal_statuses((1, first), (2, ACCEPTED)).status(1, 2, "underway", 2)
+        return run.feedback(2, "underway", 2)
+
+    robot = _robot(check_bag(talk(SUCCEEDED).write(tmp_path / "ended", StoragePlugin.MCAP)))
+    assert robot.report.clean, robot.report.findings
+    robot = _robot(check_bag(talk(EXECUTING).write(tmp_path / "busy", StoragePlugin.MCAP)))
+    assert ("R4.6", "accepted_busy") in {(finding.rule, finding.code) for finding in robot.report.findings}
 
 
 @pytest.mark.spec("R2.2")
@@ -988,6 +1013,7 @@ def test_a_response_whose_request_came_later_is_paired_and_a_skip_the_late_feedb
         "finished_response_late",
         "response_after_cut",
         "cancel_request_late",
+        "ended_at_acceptance",
     ],
 )
 def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
@@ -1007,7 +1033,8 @@ def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
     listed it; in ``response_after_cut`` the judgement begun anew at a goal whose request the bag
     lost takes first the request of a CANCEL whose response it had not judged yet; in
     ``cancel_request_late`` a NEXT answered ``canceled`` by an action-level cancel whose events came
-    27 s late is no finding."""
+    27 s late is no finding; in ``ended_at_acceptance`` a goal the goal statuses published on the next
+    NEXT's acceptance show succeeded (its status and answer lost) ended before that acceptance."""
     report = check_bag(LOADED.parent / name)
     assert report.clean, [robot.report.findings for robot in report.robots]
 

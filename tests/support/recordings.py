@@ -231,7 +231,7 @@ def clean_run(between: Any = None) -> Conversation:
 STORAGES = [StoragePlugin.MCAP, StoragePlugin.SQLITE3]
 
 
-EXECUTING, CANCELING, CANCELED = 2, 3, 5
+ACCEPTED, EXECUTING, CANCELING, CANCELED = 1, 2, 3, 5
 
 
 def topics_alone(run: Conversation) -> Conversation:

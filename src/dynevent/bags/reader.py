@@ -36,7 +36,7 @@ import heapq
 import importlib.resources
 import os
 import stat
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path, PurePath
 from typing import Any, NamedTuple
 
@@ -864,16 +864,7 @@ class _Robot:
                 # link delivers it late, or never) was accepted by now
                 if uuid in self._goals and uuid not in self._waiting_responses:
                     self.unheard_response(record, uuid)
-            for uuid, status in record.message:
-                if status.is_terminal:
-                    # the goal's end shows its child's end, unless its answer, among the records held,
-                    # says the child was cancelled (a server may answer a goal as it takes a CANCEL,
-                    # before the child's end: the answer, in its place, is judged then)
-                    held = self._waiting_answers.get(uuid)
-                    stopped = held is not None and held[3].message.status == Status.CANCELED.value
-                    if uuid not in self._settled and not stopped and isinstance(self.judge, Checker):
-                        self.judge.goal_ended(uuid)
-                    _remember(self._settled, uuid, status.value)
+            self._goals_ended(record.message)
             return
         if record.kind in ("feedback", "result") and record.goal_uuid not in self._requested:
             self.lost_request(record)
@@ -881,7 +872,7 @@ class _Robot:
             self.unheard_response(record)
         elif record.kind == "status":
             self._last_status = record
-            started = self._started_by(record.message)
+            started = _started_by(self._goals, record.message) if self._server_introspects else None
             if started is not None:
                 self.unheard_response(record, started)
         if record.kind == "result":
@@ -896,7 +887,31 @@ class _Robot:
             if record.goal_uuid not in self._goals:
                 return  # the response to a goal the bag does not hold (lost, or before the recording)
             del self._goals[record.goal_uuid]
+            if record.accepted:
+                self._ended_by_acceptance(record.goal_uuid)
         self.judge.push(record)
+
+    def _goals_ended(self, statuses: Sequence[tuple[str, GoalStatus]], but: str = "") -> None:
+        """Goal statuses that show goals ended (all but ``but``): each goal's end shows its child's end,
+        unless its answer, among the records held, says the child was cancelled (a server may answer a
+        goal as it takes a CANCEL, before the child's end: the answer, in its place, is judged then)."""
+        for uuid, status in statuses:
+            if status.is_terminal and uuid != but:
+                held = self._waiting_answers.get(uuid)
+                stopped = held is not None and held[3].message.status == Status.CANCELED.value
+                if uuid not in self._settled and not stopped and isinstance(self.judge, Checker):
+                    self.judge.goal_ended(uuid)
+                _remember(self._settled, uuid, status.value)
+
+    def _ended_by_acceptance(self, uuid: str) -> None:
+        """The goal statuses the server published as it accepted goal ``uuid`` show the goals that had
+        ended by then: where the bag lost the status of a child's end and the goal statuses that
+        followed it (each topic keeps one message, and the next replaced it), that end goes before
+        the acceptance, not after it (found at 30% loss: a NEXT accepted after the previous child's
+        end, read as accepted while it ran, R4.6)."""
+        statuses = _published_on_acceptance(self._waiting, uuid)
+        if statuses is not None:
+            self._goals_ended(statuses, but=uuid)
 
     def lost_request(self, record: Record) -> None:
         """``record`` names a goal whose request the bag lacks (lost on the way: a recorder that had
@@ -921,23 +936,6 @@ class _Robot:
         for item in [seed, *awaiting, *rest] if seed is not None else [*awaiting, *rest]:
             self._judge.push(item)
         _remember(self._requested, record.goal_uuid, None)  # what follows of it is the new judgement's
-
-    def _started_by(self, status: Any) -> str | None:
-        """The goal awaiting its response whose child ``status`` shows running: a NEXT of the status's
-        run that names the child's id, else the first of that run that lets the server name it (id 0).
-        A server shows a child running only once it accepted and started its NEXT.  Only where the bag
-        holds the server's own records of its goals: a response recorded by a client alone is stamped
-        as it arrives, after the statuses the server published on accepting the goal."""
-        if status.dynamic_state != DynamicState.RUNNING or not self._server_introspects:
-            return None
-        run = status.dynamic_event_seq
-        nexts = [
-            (uuid, goal.message) for uuid, goal in self._goals.items()
-            if goal.message.event_type == EventType.NEXT and goal.message.dynamic_event_seq == run
-        ]  # fmt: skip
-        named = [uuid for uuid, goal in nexts if goal.id == status.id]
-        unnamed = [uuid for uuid, goal in nexts if goal.id == 0]
-        return next(iter(named or unnamed), None)
 
     def unheard_response(self, record: Record, uuid: str | None = None) -> None:
         """``record`` is the feedback or answer of a goal whose request the bag holds and whose response
@@ -986,6 +984,38 @@ class _Robot:
             self.fleet, self.robot, channels, absent, attrs.evolve(report, findings=kept), not self.judged,
             self.refused, tuple(self.lost), tuple(self.unheard), tuple(self.lateness.late),
         )  # fmt: skip
+
+
+def _started_by(goals: Mapping[str, Record], status: Any) -> str | None:
+    """The goal of ``goals`` (awaiting their responses) whose child ``status`` shows running: a NEXT of
+    the status's run that names the child's id, else the first of that run that lets the server name
+    it (id 0).  A server shows a child running only once it accepted and started its NEXT.  Only where
+    the bag holds the server's own records of its goals: a response recorded by a client alone is
+    stamped as it arrives, after the statuses the server published on accepting the goal."""
+    if status.dynamic_state != DynamicState.RUNNING:
+        return None
+    run = status.dynamic_event_seq
+    nexts = [
+        (uuid, goal.message) for uuid, goal in goals.items()
+        if goal.message.event_type == EventType.NEXT and goal.message.dynamic_event_seq == run
+    ]  # fmt: skip
+    named = [uuid for uuid, goal in nexts if goal.id == status.id]
+    unnamed = [uuid for uuid, goal in nexts if goal.id == 0]
+    return next(iter(named or unnamed), None)
+
+
+def _published_on_acceptance(
+    waiting: list[tuple[int, float, int, Record]], uuid: str
+) -> Sequence[tuple[str, GoalStatus]] | None:
+    """The goal statuses the server published as it accepted goal ``uuid``, among the records
+    ``waiting``: the first that list it, where they list it as accepted."""
+    arrays = [
+        item
+        for item in waiting
+        if item[3].kind == GOAL_STATUSES and any(u == uuid for u, _ in item[3].message)
+    ]
+    statuses: Sequence[tuple[str, GoalStatus]] | None = min(arrays)[3].message if arrays else None
+    return statuses if statuses is not None and dict(statuses)[uuid] is GoalStatus.ACCEPTED else None
 
 
 def _awaiting(goals: Mapping[str, Record], passed: Mapping[str, Record], rest: list[Record]) -> list[Record]:
