@@ -434,21 +434,29 @@ def test_missing_cases_fail_the_run_unless_allowed(tmp_path: Path) -> None:
                    "--cases", "request.*", "next.runs_a_child"]  # fmt: skip
         plain = finish(subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                         env=child_env()), 120)  # fmt: skip
-        allowed = finish(subprocess.Popen([*command, "--allow-missing", "next.*", "request.seq_*_next"],
-                                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                          env=child_env()), 120)  # fmt: skip
+        allowing = ["--allow-missing", "next.*", "request.seq_*_next", "request.stubborn_nan"]
+        allowed = finish(
+            subprocess.Popen(
+                [*command, *allowing],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+                env=child_env(),
+            ),
+            120,
+        )
     finally:
         serve.stop()
     assert plain.returncode == 3, plain.stdout + plain.stderr
     lines = plain.stdout.splitlines()
     assert lines[0] == (
-        "no --place, and no run's description names one: the 3 case(s) that send the robot somewhere "
+        "no --place, and no run's description names one: the 4 case(s) that send the robot somewhere "
         "will not run"
     ), plain.stdout
-    assert lines[1].startswith("3 of 10 case(s) not run: no place to send the robot to"), plain.stdout
+    assert lines[1].startswith("4 of 12 case(s) not run: no place to send the robot to"), plain.stdout
     assert _verdicts(plain.stdout)["next.runs_a_child"] == "missing"
     assert allowed.returncode == 0, allowed.stdout + allowed.stderr
-    assert "3 of 10 case(s) not run, 3 of them expected" in allowed.stdout
+    assert "4 of 12 case(s) not run, 4 of them expected" in allowed.stdout
     assert _verdicts(allowed.stdout)["next.runs_a_child"] == "missing (allowed)"
 
 

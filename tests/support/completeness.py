@@ -65,6 +65,8 @@ OVER_DDS: Mapping[str, tuple[str, ...]] = {
     "R4.6": ("next.busy",),
     "R4.7": ("request.category_unknown",),
     "R4.9": ("next.runs_a_child",),
+    "R4.10": ("request.description_invalid",),
+    "R4.11": ("request.stubborn_nan",),
     "R4.12": ("next.id_stale",),
     "R4.13": ("request.cancel_idle",),
     "R4.14": ("cancel.wrong_id",),

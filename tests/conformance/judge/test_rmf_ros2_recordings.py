@@ -185,6 +185,33 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("finished_seen_late", "R5.2", "goal_status"): 1,
         ("response_seen_late", "R2.2", "status_mismatch"): 19,
     },
+    # the recalibration run (2026-11-29, a fresh build of the same commits, lab/rmf_ros2/measure.py):
+    # every case of the probe but the stubborn one, the NaN stubborn period's among them (D12: accepted,
+    # its child ran), and D31 in the EasyFullControl site's shape
+    ("recalibration", "standard"): {
+        ("D10", "R4.12", "accepted_stale_id"): 1,
+        ("D10", "R5.2", "race_not_lost"): 1,
+        ("D10", "R6.2", "child_id"): 17,
+        ("D12", "R4.11", "accepted_non_finite_stubborn_period"): 1,
+        ("D26", "R2.2", "status_mismatch"): 1,
+        ("D28", "R2.2", "status_mismatch"): 7,
+        ("D31", "R10.3", "cancel_response"): 1,
+        ("D31", "R8.2", "goal_status"): 1,
+        ("D7", "R4.4", "accepted_uninitialized_event_type"): 1,
+        ("D7", "R4.5", "accepted_unknown_event_type"): 1,
+        ("D8", "R4.13", "accepted_cancel_idle"): 1,
+        ("D8", "R4.14", "accepted_cancel_id_mismatch"): 1,
+        ("D9", "R7.3", "log_seq"): 48,
+    },
+    # serve's rmf_ros2 mode refuses a NaN stubborn period too (D12 has no compatibility option)
+    ("recalibration", "rmf_ros2"): {
+        ("D1", "R8.3", "goal_status"): 1,
+        ("D12", "R4.11", "accepted_non_finite_stubborn_period"): 1,
+        ("D26", "R2.2", "status_mismatch"): 1,
+        ("D31", "R10.3", "cancel_response"): 1,
+        ("D31", "R8.2", "goal_status"): 1,
+        ("D9", "R7.3", "log_seq"): 48,
+    },
     ("probe", "rmf_ros2"): {
         ("D1", "R2.2", "status_mismatch"): 3,
         ("D1", "R4.6", "accepted_busy"): 1,

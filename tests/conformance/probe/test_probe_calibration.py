@@ -1,16 +1,17 @@
 """``dynevent probe --known rmf_ros2`` calibrated against the deployed server, not serve's emulation.
 
 tests/data/rmf_ros2/calibration/probe-known.txt is the probe's report of a run against Open-RMF's
-own fleet adapter in the lab, remeasure/probe-known.txt that of the re-measure of a fresh build, and
-easy/probe-known.txt that of the site whose robot is added through EasyFullControl (every case),
-with the probe whose verdicts the judge decides where it sees them (lab/rmf_ros2/README.md; the
-command and provenance in tests/data/rmf_ros2/README.md): on the full_control site every case but
-``stubborn.clamp_notice``, whose stubborn period crashes that adapter (D27). Held here to the probe
-as it is now: the run covered every case, every failure was a way of breaking its rule that
-docs/divergences.md records for that case (so ``--known rmf_ros2`` passes the real adapter), and a
-case added to the probe, or a divergence taken from a case that the real adapter showed, fails here
-until the lab's run is made again (or, for a case whose verdict another case's shows, is listed in
-:data:`SINCE_THE_LAB` with that case).
+own fleet adapter in the lab, remeasure/probe-known.txt that of the re-measure of a fresh build,
+easy/probe-known.txt that of the site whose robot is added through EasyFullControl (every case), and
+recalibration/probe-known.txt that of the latest run, with every case the probe had that day
+(lab/rmf_ros2/README.md; the command and provenance in tests/data/rmf_ros2/README.md): on the
+full_control site every case but ``stubborn.clamp_notice``, whose stubborn period crashes that
+adapter (D27). Held here to the probe as it is now: each run covered every case the probe had when
+it was made (the cases added later, :data:`FIRST_HELD`, by the latest run), every failure was a way
+of breaking its rule that docs/divergences.md records for that case (so ``--known rmf_ros2`` passes
+the real adapter), and a case added to the probe, or a divergence taken from a case that the real
+adapter showed, fails here until the lab's run is made again (or, for a case whose verdict another
+case's shows, is listed in :data:`SINCE_THE_LAB` with that case).
 """
 
 from __future__ import annotations
@@ -23,7 +24,15 @@ import pytest
 from dynevent.conformance.probe import cases as probe_cases
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "rmf_ros2"
-RUNS = [DATA / name / "probe-known.txt" for name in ("calibration", "remeasure", "easy")]
+#: The lab's runs, oldest first.
+RUNS = [DATA / name / "probe-known.txt" for name in ("calibration", "remeasure", "easy", "recalibration")]
+#: The cases added to the probe after its first run, each with the first run that holds it: the runs
+#: before it were made without it.
+FIRST_HELD = {
+    "describe.after_the_run": "recalibration",
+    "request.description_invalid": "recalibration",
+    "request.stubborn_nan": "recalibration",
+}
 #: The cases the lab's runs on the full_control site leave out, and why (the EasyFullControl site's,
 #: ``easy``, runs every case).
 LEFT_OUT = {"stubborn.clamp_notice": "D27: a stubborn period crashes the full_control adapter"}
@@ -31,17 +40,13 @@ LEFT_OUT = {"stubborn.clamp_notice": "D27: a stubborn period crashes the full_co
 #: The cases added to the probe since the lab's last runs, each with the case of those runs whose
 #: verdict the deployed adapter gives it too, and why: a case leaves this list when the lab's run is
 #: made again (and a run that holds it fails here while it is listed).
-SINCE_THE_LAB = {
-    "describe.after_the_run": (
-        "describe.query",
-        "info: the adapter offers no description service (D17), so the query gets no answer after a "
-        "run's end either",
-    ),
-}
+SINCE_THE_LAB: dict[str, tuple[str, str]] = {}
 
 
 def _left_out(run: Path) -> set[str]:
-    return set(SINCE_THE_LAB) | (set() if run.parent.name == "easy" else set(LEFT_OUT))
+    names = [path.parent.name for path in RUNS]
+    later = {case for case, first in FIRST_HELD.items() if names.index(first) > names.index(run.parent.name)}
+    return set(SINCE_THE_LAB) | later | (set() if run.parent.name == "easy" else set(LEFT_OUT))
 
 
 VERDICT = r"(?P<verdict>pass|fail|info|known \((?P<d>D\d+)\)|missing \(allowed\)|missing)"
@@ -65,9 +70,15 @@ def test_the_real_run_covered_every_case_of_the_probe(run: Path) -> None:
 
 
 @pytest.mark.parametrize("run", RUNS, ids=lambda path: path.parent.name)
-def test_a_case_added_since_the_lab_gives_the_verdict_of_the_case_it_follows(run: Path) -> None:
+def test_a_case_added_since_a_run_is_first_held_by_the_run_named_or_follows_a_case(run: Path) -> None:
+    """A case of :data:`FIRST_HELD` is in the run it names and in none before it; one of
+    :data:`SINCE_THE_LAB` is in no run, and the case it follows has the verdict it says."""
     verdicts = _verdicts(run)
     cases = {case.id for case in probe_cases.CASES}
+    names = [path.parent.name for path in RUNS]
+    for added, first in FIRST_HELD.items():
+        held = names.index(run.parent.name) >= names.index(first)
+        assert added in cases and (added in verdicts) == held, (added, first)
     for added, (like, why) in SINCE_THE_LAB.items():
         assert added in cases and added not in verdicts, f"{added}: in the lab's run, or no case"
         assert verdicts[like][0] == why.split(":", 1)[0], (added, like, verdicts[like])

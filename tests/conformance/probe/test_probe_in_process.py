@@ -344,6 +344,50 @@ def test_every_defect_of_the_kit_is_caught_in_process() -> None:
     assert set(DEFECTS) == set(BROKEN) | set(UNSEEN_BY_CASES) | set(JUDGED_IN_PROCESS)
 
 
+@pytest.mark.spec("R4.18", "R4.10")
+def test_each_field_categorys_unfit_description_is_one_its_schema_refuses() -> None:
+    """request.description_invalid sends, for the probe's category, a description that fits no form of
+    that field category's schema: every server that supports the category refuses it (R4.18)."""
+    from dynevent import descriptions
+
+    assert set(probe_runner.UNFIT_DESCRIPTIONS) == set(descriptions.CATEGORIES)
+    for category, unfit in probe_runner.UNFIT_DESCRIPTIONS.items():
+        assert descriptions.shape_errors(category, unfit), category
+
+
+@pytest.mark.spec("R4.10", "R4.18")
+@pytest.mark.parametrize("category", ["perform_action", "sequence"])
+def test_a_description_unfit_for_another_field_category_is_refused_too(category: str) -> None:
+    config = attrs.evolve(CONFIG, categories={category: CategorySpec(duration=0.5)})
+    said: list[str] = []
+    _, findings = probe_in_process(
+        attrs.evolve(OPTIONS, category=category), list(probe_cases.select(["request.description_invalid"])),
+        said.append, config, write=_unasked,
+    )  # fmt: skip
+    assert _verdicts(findings) == {"request.description_invalid": "pass"}, "\n".join(said)
+    first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
+    server = RobotServer("tinyRobot", "tinyRobot1", machine_config(config), first)
+    off = switched_off.switched_off_stepper(server.step, "R4.10")
+    _, findings = probe_in_process(
+        attrs.evolve(OPTIONS, category=category), list(probe_cases.select(["request.description_invalid"])),
+        said.append, config, write=_unasked, stepper=off,
+    )  # fmt: skip
+    assert _verdicts(findings) == {"request.description_invalid": "fail"}, "\n".join(said)
+
+
+def test_a_category_of_the_servers_own_leaves_the_unfit_description_case_not_run() -> None:
+    """A category none of the field's: what fits it is the server's to say, and the case says so."""
+    config = attrs.evolve(CONFIG, categories={"patrol": CategorySpec(duration=0.5)})
+    said: list[str] = []
+    code, findings = probe_in_process(
+        attrs.evolve(OPTIONS, category="patrol"), list(probe_cases.select(["request.description_invalid"])),
+        said.append, config, write=_unasked,
+    )  # fmt: skip
+    (finding,) = findings
+    assert finding.verdict is Verdict.MISSING and code == probe_cases.EXIT_NOT_RUN
+    assert "the probe's category 'patrol' is none of the field's" in finding.seen, finding.seen
+
+
 def test_a_server_that_never_answers_a_next_ends_the_run_within_its_deadline() -> None:
     """Simulated time keeps the bound as real time does: the run ends by --deadline, each case not run
     says why."""

@@ -113,6 +113,8 @@ _BY_CODE = {
     "accepted_stale_id": "D10",
     "accepted_uninitialized_event_type": "D7",
     "accepted_unknown_event_type": "D7",
+    # rmf_ros2 reads a NaN stubborn period as none (its `stubborn_period > 0.0` test fails): the NEXT runs
+    "accepted_non_finite_stubborn_period": "D12",
 }
 
 

@@ -33,6 +33,7 @@ import attrs
 
 from dynevent import descriptions
 from dynevent.conformance.judge.trace import TraceWriter
+from dynevent.conformance.probe import cases as probe_cases
 from dynevent.conformance.probe import runner as probe_runner
 from dynevent.conformance.probe.cases import Case, CaseFinding
 from dynevent.conformance.probe.runner import Exchange, Link, Options
@@ -367,6 +368,8 @@ def probe_in_process(
     code, findings = probe_runner.conclude(findings, trace.text(), options, say, write)
     if server is not None and server.broken is not None:
         say(f"the implementation broke the driver protocol at {server.broken}")
-        code = max(code, 1)
+        # a break is the implementation's failure wherever it fell: at a request, a case fails with it;
+        # at another input (a child's end, a tick), the cases after it are not run, and the run fails
+        code = probe_cases.EXIT_FAILED
     say(probe_runner.took(took, options, simulated=link.clock()))
     return code, findings

@@ -989,6 +989,36 @@ def _description_not_json(probe: Probe, case: Case) -> CaseFinding:
     return probe.refused(case, goal)
 
 
+#: For each of the field's categories, a description that fits no form of its schema (R4.18): a key
+#: of the category's with a value of the wrong type, the slip a client makes most.
+UNFIT_DESCRIPTIONS: dict[str, dict[str, Any]] = {
+    "go_to_place": {"one_of": 5},
+    "perform_action": {"category": 5, "description": {}},
+    "sequence": {"activities": 5},
+    "clean": {"zone": 5},
+    "pickup": {"place": 0, "handler": 5, "payload": []},
+    "dropoff": {"place": 0, "handler": 5, "payload": []},
+}
+
+
+def _description_invalid(probe: Probe, case: Case) -> CaseFinding:
+    category = probe.options.category
+    unfit = UNFIT_DESCRIPTIONS.get(category)
+    if unfit is None:  # a category of the server's own: its forms are the server's to say
+        raise _Unreachable(f"the probe's category {category!r} is none of the field's, whose schemas bind "
+                           f"every server (R4.18): {', '.join(UNFIT_DESCRIPTIONS)}")  # fmt: skip
+    status = probe.waiting()
+    goal = _goal(
+        status, EventType.NEXT, category=category, description=json.dumps(unfit), id=_fresh(status.id)
+    )
+    return probe.refused(case, goal)
+
+
+def _stubborn_nan(probe: Probe, case: Case) -> CaseFinding:
+    goal = attrs.evolve(probe.next_goal(probe.waiting()), stubborn_period=math.nan)
+    return probe.refused(case, goal)
+
+
 def _cancel_idle(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
     return probe.refused(case, _goal(status, EventType.CANCEL, id=status.id))
@@ -1692,6 +1722,8 @@ _CASES: dict[str, Callable[[Probe, Case], CaseFinding]] = {
     "request.event_type_unknown": _event_type_unknown,
     "request.category_unknown": _category_unknown,
     "request.description_not_json": _description_not_json,
+    "request.description_invalid": _description_invalid,
+    "request.stubborn_nan": _stubborn_nan,
     "request.cancel_idle": _cancel_idle,
     "next.runs_a_child": _runs_a_child,
     "next.id_zero": _id_zero,
