@@ -387,10 +387,6 @@ def causes_text() -> str:
 
 _TASK_INPUT = "the input comes from the task or the robot (a {what}), never from a client: no probe sends it"
 _NOTICE = "the output is a notice to the adapter ({what}), never on the wire: no client sees it missing"
-_LAB = (
-    "not yet: no case sends {what}; a case added to the probe waits for the lab's run against the "
-    "deployed adapter (tests/conformance/test_probe_calibration.py)"
-)
 _HOLD = "stubbornness is the robot's hold in traffic ({what}), the fleet adapter's, never on the wire"
 
 #: The checks of the machine (docs/conformance.md's table of completeness) that no case catches when
