@@ -6,6 +6,7 @@ import json
 import signal
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -331,6 +332,67 @@ def test_a_crash_at_any_point_of_a_goals_life_loses_no_answer(
     finally:
         serve.process.send_signal(signal.SIGCONT)
         code = serve.stop()
+    assert code == 0, serve.output
+
+
+@pytest.mark.spec("R21.4")
+def test_a_restart_the_client_takes_as_one_matched_event_still_asks_the_new_process(tmp_path: Path) -> None:
+    """The client's executor takes no event while serve, frozen before it saw the client's goal, is
+    killed and a new serve is matched in its place: the one matched event it then takes sums both
+    (the current count unchanged, the total one up), and the client still asks the new process for
+    the goal, which does not know it: the goal ends lost (R21.4).  Found in CI under load, where the
+    goal waited for good."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    from dynevent.ros.spinning import close_down
+    from dynevent.wire.names import status_topic
+
+    config = tmp_path / "fleet.json"
+    config.write_text(json.dumps({"categories": {"go_to_place": {"duration": 60}}}), encoding="utf-8")
+    state = tmp_path / "state.db"
+    serve = Serve("--config", str(config), "--state", str(state)).ready()
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = rclpy.create_node("paused", context=context)
+    client = DynamicEventClient(node, "tinyRobot", ROBOT)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    topic = "/" + status_topic("tinyRobot", ROBOT)
+
+    def spin_until(condition: Any, what: str, timeout: float) -> None:
+        deadline = time.monotonic() + timeout
+        while not condition():
+            if time.monotonic() > deadline:
+                raise AssertionError(f"timed out after {timeout:g} s waiting for {what}")
+            executor.spin_once(timeout_sec=0.05)
+
+    def publishers() -> set[bytes]:  # the client's own graph, which its participant keeps unspun
+        return {bytes(info.endpoint_gid) for info in node.get_publishers_info_by_topic(topic)}
+
+    try:
+        spin_until(lambda: client.state.phase == 1, "WAITING", START)
+        old = publishers()
+        serve.process.send_signal(signal.SIGSTOP)  # the request reaches no one
+        run = client.next("go_to_place", json.dumps({"one_of": ["pantry"]}))
+        end = time.monotonic() + 1.0
+        spin_until(lambda: time.monotonic() > end, "the goal sent", 5.0)
+        serve.process.send_signal(signal.SIGKILL)
+        assert serve.process.wait(timeout=START) == -signal.SIGKILL, serve.output
+        serve.stop()
+        serve = Serve("--config", str(config), "--state", str(state)).ready()
+        # unspun until the client's participant has matched the new status publisher and let the old go
+        wait_for(lambda: bool(publishers()) and not publishers() & old, "the old process gone", START)
+        spin_until(run.done, "the goal's end", 20.0)
+        outcome = run.wait(0)
+        assert isinstance(outcome, cl.Outcome), outcome
+        assert outcome.execution_failure == Failure.LOST.value, outcome
+    finally:
+        serve.process.send_signal(signal.SIGCONT)
+        code = serve.stop()
+        client.destroy()
+        executor.shutdown(timeout_sec=5)
+        close_down([node], context)
     assert code == 0, serve.output
 
 

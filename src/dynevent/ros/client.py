@@ -356,10 +356,15 @@ class DynamicEventClient:
 
     def _on_contact_event(self, info: Any) -> None:
         """A status publisher of the robot matched (a server process in contact: R21.4, R21.5), or
-        the last one is no longer matched (contact lost: R21.5)."""
-        if info.current_count_change > 0:
+        the last one is no longer matched (contact lost: R21.5).
+
+        ``info`` sums every change since the last event taken: a process killed and its successor
+        matched before the executor took the event read as no change of the current count (one
+        gone, one come), and the goal the dead process never saw waited for good (found in CI,
+        under load).  The total count says a publisher matched whatever left meanwhile."""
+        if info.total_count_change > 0:
             self._step(cl.ContactMade(now=self.now()))
-        elif info.current_count == 0 and info.current_count_change < 0:
+        if info.current_count == 0 and (info.current_count_change < 0 or info.total_count_change > 0):
             self._step(cl.ContactLost(now=self.now()))
 
     def _arm(self) -> None:
