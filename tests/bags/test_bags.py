@@ -265,6 +265,35 @@ def test_the_goal_statuses_published_on_a_goals_acceptance_show_what_had_ended_b
     assert ("R4.6", "accepted_busy") in {(finding.rule, finding.code) for finding in robot.report.findings}
 
 
+@pytest.mark.spec("R10.5", "R10.3")
+@pytest.mark.parametrize(
+    ("shown", "return_code", "clean"),
+    [(True, 1, True), (False, 3, True), (False, 1, False)],
+    ids=["goal-statuses", "goal-terminated", "rejected"],
+)
+def test_a_cancel_the_server_showed_came_after_its_goals_end_is_a_cancel_of_an_answered_goal(
+    tmp_path: Path, shown: bool, return_code: int, clean: bool
+) -> None:
+    """Found at 10% loss: child 1 ended and its goal was answered, but the status of that end and the
+    answer never reached the bag in time; a client then cancelled goal 1 through the action, and the
+    server refused it.  The server shows that child 1 had ended before the cancel came, by goal
+    statuses sent before it that list goal 1 succeeded, or by the refusal's return code
+    (``ERROR_GOAL_TERMINATED``: rcl_action found the goal terminated): the cancel is rightly refused
+    (R10.5), and the answer the bag lacks is not owed.  Refused as an open goal's cancel
+    (``ERROR_REJECTED``) with nothing showing the end, the refusal is the server's: R10.3."""
+    run = Conversation().begin().status(1, 1, "standby", 0)
+    run.goal(1, goal_id=1).goal_statuses((1, EXECUTING)).status(1, 2, "underway", 1)
+    run.ask(1).feedback(1, "underway", 1)
+    run.now += 6 * SECOND  # child 1 ends here: its status and answer never reach the bag
+    if shown:
+        run.goal_statuses((1, SUCCEEDED))
+    run.cancel(1, 1).cancel(1, 2, return_code=return_code)
+    run.goal(2, goal_id=2).goal_statuses((1, SUCCEEDED), (2, ACCEPTED)).status(1, 2, "underway", 2)
+    robot = _robot(check_bag(run.write(tmp_path / "bag", StoragePlugin.MCAP)))
+    found = {(finding.rule, finding.code) for finding in robot.report.findings}
+    assert found == (set() if clean else {("R10.3", "cancel_response")}), found
+
+
 @pytest.mark.spec("R2.2")
 def test_a_status_a_lossy_link_delivered_seconds_late_goes_by_the_servers_stamp(tmp_path: Path) -> None:
     """A recorder on a lossy link received the status that showed the child running seconds late, in

@@ -192,9 +192,11 @@ class Conversation:
                     writer.write(connections[topic], time, data)
         return path
 
-    def cancel(self, n: int, kind: int, clock: int = 0) -> Conversation:
+    def cancel(self, n: int, kind: int, clock: int = 0, *, return_code: int = 0) -> Conversation:
         """An action-level cancel of goal ``n`` as a client's introspection records it (``kind`` 0: the
-        request sent, 3: the response received, accepted), stamped by a clock ``clock`` ns ahead."""
+        request sent, 3: the response received) or the server's (1: the request received, 2: the
+        response sent), stamped by a clock ``clock`` ns ahead; the response accepts it
+        (``return_code`` 0) or refuses it with that code (1 rejected, 3 the goal terminated)."""
         info = ros_type("service_msgs/msg/ServiceEventInfo")(
             event_type=kind, stamp=ros_time(self.now + SECOND // 10 + clock),
             client_gid=np.ones(16, dtype=np.uint8), sequence_number=1,
@@ -202,10 +204,12 @@ class Conversation:
         goal_info = ros_type("action_msgs/msg/GoalInfo")(goal_id=ros_uuid(n), stamp=ros_time(0))
         request = ros_type("action_msgs/srv/msg/CancelGoal_Request")(goal_info=goal_info)
         response = ros_type("action_msgs/srv/msg/CancelGoal_Response")(
-            return_code=0, goals_canceling=[goal_info]
+            return_code=return_code, goals_canceling=[] if return_code else [goal_info]
         )
         event = ros_type("action_msgs/srv/msg/CancelGoal_Event")(
-            info=info, request=[request] if kind == 0 else [], response=[response] if kind == 3 else []
+            info=info,
+            request=[request] if kind in (0, 1) else [],
+            response=[response] if kind in (2, 3) else [],
         )
         return self.at(
             f"{ACTION}/_action/cancel_goal/_service_event", "action_msgs/srv/CancelGoal_Event", event

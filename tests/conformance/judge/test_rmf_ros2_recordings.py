@@ -64,7 +64,9 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
     ("stubborn", "standard"): STUBBORN,
     ("stubborn", "rmf_ros2"): STUBBORN,
     # in rmf_ros2 mode R17.1 explains the CANCELs accepted then aborted (D8), and R17.4 the WAITING
-    # canceled (D28)
+    # canceled (D28).  Its action-level cancel of the "running" NEXT came after that NEXT's child had
+    # ended (at its place already), and the adapter refused it as of a goal terminated: no D31 here,
+    # nor in the calibration run, where the child ended as the cancel came
     ("probe", "standard"): {
         ("D1", "R2.2", "status_mismatch"): 2,
         ("D1", "R4.6", "accepted_busy"): 1,
@@ -76,7 +78,6 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("D28", "R2.2", "status_mismatch"): 5,
         ("D30", "R2.2", "status_mismatch"): 1,
         ("D30", "R8.2", "feedback_not_running"): 2,
-        ("D31", "R10.3", "cancel_response"): 1,
         ("D8", "R4.13", "accepted_cancel_idle"): 3,
         ("D8", "R4.14", "accepted_cancel_id_mismatch"): 1,
         ("D9", "R7.3", "log_seq"): 40,
@@ -94,7 +95,6 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("D26", "R2.2", "status_mismatch"): 2,
         ("D28", "R2.2", "status_mismatch"): 5,
         ("D30", "R2.2", "status_mismatch"): 1,
-        ("D31", "R10.3", "cancel_response"): 1,
         ("D7", "R4.4", "accepted_uninitialized_event_type"): 1,
         ("D7", "R4.5", "accepted_unknown_event_type"): 1,
         ("D8", "R4.13", "accepted_cancel_idle"): 1,
@@ -108,7 +108,6 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("D26", "R2.2", "status_mismatch"): 2,
         ("D28", "R2.2", "status_mismatch"): 2,
         ("D30", "R2.2", "status_mismatch"): 1,
-        ("D31", "R10.3", "cancel_response"): 1,
         ("D9", "R7.3", "log_seq"): 43,
         ("answer_seen_late", "R9.2", "result"): 1,
         ("response_seen_late", "R2.2", "status_mismatch"): 24,
@@ -219,7 +218,6 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("D26", "R2.2", "status_mismatch"): 2,
         ("D28", "R2.2", "status_mismatch"): 4,
         ("D30", "R2.2", "status_mismatch"): 1,
-        ("D31", "R10.3", "cancel_response"): 1,
         ("D9", "R7.3", "log_seq"): 40,
         ("response_seen_late", "R2.2", "status_mismatch"): 18,
     },

@@ -454,7 +454,8 @@ class AnswerEvidence:
     """What a reader that may not hold every answer (a bag) knows of them at the end: the goals whose
     answer a client asked for (``asked``: a ``get_result`` request event), so that a recording could
     hold it, and the goals whose goal status showed their end (``settled``: goal UUID to ``succeeded``,
-    ``canceled`` or ``aborted``), answered whether or not a client asked.  An owed answer is missing
+    ``canceled`` or ``aborted``; ``terminated`` where a cancel's refusal showed it, which does not say
+    how), answered whether or not a client asked.  An owed answer is missing
     only when it was asked for and not settled."""
 
     asked: Container[str] = ()
@@ -543,13 +544,14 @@ class _Requests(_Part):
         refusals = self.refusable.get(uuid, {})
         return not record.accepted and any(self.same_reason(refusal, record) for refusal in refusals.values())
 
-    def ended_unseen(self) -> bool:
+    def ended_unseen(self, *, shown: bool = False) -> bool:
         """Whether an accepted goal the machine finds busy found the running child ended: a child
         whose last report was a final status (R20.2), of a goal the trace picked up mid-way (its
-        request, so its answer too, may be missing from a recording); or one whose goal the action's
-        goal statuses showed ended before (:attr:`ended_shown`: a bag whose recorder lost both the
-        answer and the status of the child's end).  The child is then taken as ended, as a client
-        takes it, and its answer is not judged."""
+        request, so its answer too, may be missing from a recording); or one whose goal the server
+        showed ended before (:attr:`ended_shown`: a bag's goal statuses, or a refusal of its cancel
+        as of a goal terminated, where the recorder lost or had not yet received both the answer and
+        the status of the child's end).  The child is then taken as ended, as a client takes it, and
+        its answer is not judged.  ``shown``: only where the server showed it."""
         state = self.replica.st
         running = state.running
         if running is None or not running.started or state.task_signal:
@@ -557,7 +559,7 @@ class _Requests(_Part):
         bound = self.goals.get(running.goal_uuid)
         if bound is None or bound.answered is not None:
             return False
-        mid_way = machine.ends_a_child(running.child_status) and bound.line == 0
+        mid_way = machine.ends_a_child(running.child_status) and bound.line == 0 and not shown
         if not mid_way and running.goal_uuid not in self.ended_shown:
             return False
         final = running.child_status if machine.ends_a_child(running.child_status) else Status.COMPLETED.value
@@ -680,6 +682,9 @@ class _Requests(_Part):
         seen = self.goals.get(record.goal_uuid)
         if seen is not None and seen.owed:
             return  # a goal the state no longer follows: its cancel is not judged either
+        running = self.replica.st.running
+        if running is not None and running.goal_uuid == record.goal_uuid:
+            self.ended_unseen(shown=True)  # the server showed it ended before the cancel came
         if self.replica.start_uncertain_for(record.goal_uuid):
             # a deferred child is cancelled at once (R10.4); a started one ends later (R10.3)
             answer = self.ahead.of_goal(record.goal_uuid)  # at once: within the next two records
