@@ -36,7 +36,7 @@ import heapq
 import importlib.resources
 import os
 import stat
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path, PurePath
 from typing import Any, NamedTuple
 
@@ -46,7 +46,15 @@ from dynevent import files
 from dynevent.bags import sent, unpack
 from dynevent.conformance.judge.observer import AnswerEvidence, Checker
 from dynevent.conformance.judge.partial import GOAL_STATUSES, PartialJudge
-from dynevent.conformance.judge.trace import SKIPS_OR_LOST, Answer, Finding, Record, Report, TraceHeader
+from dynevent.conformance.judge.trace import (
+    SKIPS_OR_LOST,
+    TERMINATED,
+    Answer,
+    Finding,
+    Record,
+    Report,
+    TraceHeader,
+)
 from dynevent.conformance.received import (
     begin_from_ros,
     feedback_from_ros,
@@ -67,7 +75,15 @@ from dynevent.errors import (
 )
 from dynevent.wire.messages import DynamicEventDescription, DynamicEventStatus, Feedback
 from dynevent.wire.names import BEGIN_TOPIC, NameKind, parse_name
-from dynevent.wire.vocab import Compatibility, DynamicState, EventType, GoalStatus, Status, Violation
+from dynevent.wire.vocab import (
+    CANCEL_GOAL_TERMINATED,
+    Compatibility,
+    DynamicState,
+    EventType,
+    GoalStatus,
+    Status,
+    Violation,
+)
 
 __all__ = [
     "HIDDEN_SUFFIXES",
@@ -144,13 +160,6 @@ CHANNELS = {
 
 #: service_msgs/ServiceEventInfo event types.
 _REQUEST_SENT, _REQUEST_RECEIVED, _RESPONSE_SENT, _RESPONSE_RECEIVED = 0, 1, 2, 3
-#: action_msgs/CancelGoal's return code for a goal already terminated when the server took the cancel
-#: (rcl_action's, from the goal's own state, before any cancel callback runs; a callback's refusal of a
-#: goal still open is ``ERROR_REJECTED``, 1)
-_GOAL_TERMINATED = 3
-#: The kind of the reader's own record of a cancel whose response said its goal had terminated: taken,
-#: where the cancel's request still waits, just before that request (:func:`_before_its_request`)
-TERMINATED = "terminated"
 #: action_msgs/GoalStatus's statuses (0, unknown, is none of a goal's); the terminal ones answer it.
 _GOAL_STATUSES = {
     1: GoalStatus.ACCEPTED,
@@ -745,10 +754,7 @@ class _Robot:
                     self._seen[key] = None
                     if len(self._seen) > _CALLS:
                         self._seen.popitem(last=False)
-                if record.kind != TERMINATED:
-                    self._order(record, stamp, sent_then, sent if server_sent else None, own=own)
-                elif _before_its_request(self._waiting, record, self._arrived):
-                    self._arrived += 1
+                self._order(record, stamp, sent_then, sent if server_sent else None, own=own)
         except InvalidMessage:
             self.refused += 1
         early = self._calls.early.pop(call, None) if call is not None else None
@@ -789,17 +795,19 @@ class _Robot:
         its place (:attr:`_Lateness.late`)."""
         while self._waiting and self._waiting[0][0] <= record.time - HOLD:  # what is due goes first
             self._release()
+        after = _after_its_request(self._waiting, record)
         guess = record.kind == "feedback" and not sent  # when it was sent, read from what came around it
         answer = self._waiting_answers.get(record.goal_uuid) if guess else None
         logged = _logged(record) if guess else 0
         overtaken = self._logged_after(logged) if logged else None
-        if overtaken is not None or answer is not None:
+        key: tuple[int, float]
+        if after is not None:
+            key = after
+        elif overtaken is not None or answer is not None:
             # feedback received after feedback the server logged later (a lossy link sent it again,
             # after those) goes before them, by its logs' time; received while its answer waits, it
             # goes before that answer; the earlier of the two where both hold
-            key: tuple[int, float] = min(
-                (item[0], item[1] - 0.5) for item in (overtaken, answer) if item is not None
-            )
+            key = min((item[0], item[1] - 0.5) for item in (overtaken, answer) if item is not None)
         elif sent:
             key = (stamp, float(self._arrived))
         elif record.goal_uuid and record.kind not in _OPENING and not own:
@@ -863,9 +871,6 @@ class _Robot:
         return self._judge
 
     def _pass(self, record: Record) -> None:
-        if record.kind == TERMINATED:  # the reader's own record: what its cancel's response showed
-            self._goals_ended([(record.goal_uuid, TERMINATED)])
-            return
         if self.keep:
             self.kept.append(record)
         if isinstance(self.judge, PartialJudge):
@@ -877,7 +882,7 @@ class _Robot:
                 # link delivers it late, or never) was accepted by now
                 if uuid in self._goals and uuid not in self._waiting_responses:
                     self.unheard_response(record, uuid)
-            self._goals_ended((uuid, status.value) for uuid, status in record.message if status.is_terminal)
+            self._goals_ended(record.message)
             return
         if record.kind in ("feedback", "result") and record.goal_uuid not in self._requested:
             self.lost_request(record)
@@ -904,16 +909,17 @@ class _Robot:
                 self._ended_by_acceptance(record.goal_uuid)
         self.judge.push(record)
 
-    def _goals_ended(self, ended: Iterable[tuple[str, str]]) -> None:
-        """The server showed goals ended (each, and how: its goal status or :data:`TERMINATED`); each one's
-        end shows its child's, unless its answer, held, says the child was cancelled (a server may answer
-        a goal as it takes a CANCEL, before the child's end: that answer is judged in its place)."""
-        for uuid, how in ended:
-            held = self._waiting_answers.get(uuid)
-            stopped = held is not None and held[3].message.status == Status.CANCELED.value
-            if uuid not in self._settled and not stopped and isinstance(self.judge, Checker):
-                self.judge.goal_ended(uuid)
-            _remember(self._settled, uuid, how)
+    def _goals_ended(self, statuses: Sequence[tuple[str, GoalStatus]], but: str = "") -> None:
+        """Goal statuses that show goals ended (all but ``but``): each goal's end shows its child's end,
+        unless its answer, among the records held, says the child was cancelled (a server may answer a
+        goal as it takes a CANCEL, before the child's end: the answer, in its place, is judged then)."""
+        for uuid, status in statuses:
+            if status.is_terminal and uuid != but:
+                held = self._waiting_answers.get(uuid)
+                stopped = held is not None and held[3].message.status == Status.CANCELED.value
+                if uuid not in self._settled and not stopped and isinstance(self.judge, Checker):
+                    self.judge.goal_ended(uuid)
+                _remember(self._settled, uuid, status.value)
 
     def _ended_by_acceptance(self, uuid: str) -> None:
         """The goal statuses the server published as it accepted goal ``uuid`` show the goals that had
@@ -923,7 +929,7 @@ class _Robot:
         end, read as accepted while it ran, R4.6)."""
         statuses = _published_on_acceptance(self._waiting, uuid)
         if statuses is not None:
-            self._goals_ended((u, status.value) for u, status in statuses if status.is_terminal and u != uuid)
+            self._goals_ended(statuses, but=uuid)
 
     def lost_request(self, record: Record) -> None:
         """``record`` names a goal whose request the bag lacks (lost on the way: a recorder that had
@@ -1016,18 +1022,20 @@ def _started_by(goals: Mapping[str, Record], status: Any) -> str | None:
     return next(iter(named or unnamed), None)
 
 
-def _before_its_request(waiting: list[tuple[int, float, int, Record]], record: Record, arrival: int) -> bool:
-    """Put ``record`` (:data:`TERMINATED`: a cancel's response said its goal had terminated before the
-    server took the request) just before that cancel's request, where the request still ``waiting``:
-    the goal's end goes there, as goal statuses show an end (found at 10% loss: a goal's answer came
-    late, the status of its child's end was lost, and the refused cancel was read as a refusal of a
-    running goal's, R10.3; and in the lab's recordings, a child that ended as the cancel came).
-    Where the request was passed on already, it was judged as it came (False)."""
+def _after_its_request(
+    waiting: list[tuple[int, float, int, Record]], record: Record
+) -> tuple[int, float] | None:
+    """Where ``record`` goes when it is a cancel's response that refused it as of a goal already
+    terminated (:data:`TERMINATED`), and the cancel's request still ``waiting``: just after that
+    request, where the judge reads it beside the request (the goal's end goes before the request).
+    Found at 10% loss: a goal's answer came late, the status of its child's end was lost, and the
+    refused cancel was read as a refusal of a running goal's (R10.3); and in the lab's recordings,
+    a child that ended as the cancel came, its records between the cancel's request and response."""
+    if record.kind != "cancel_response" or record.status != TERMINATED:
+        return None
     requests = (item for item in waiting if item[3].kind == "cancel_request")
     request = next((item for item in requests if item[3].goal_uuid == record.goal_uuid), None)
-    if request is not None:
-        heapq.heappush(waiting, (request[0], request[1] - 0.5, arrival, record))
-    return request is not None
+    return None if request is None else (request[0], request[1] + 0.25)
 
 
 def _published_on_acceptance(
@@ -1205,9 +1213,11 @@ def _cancel_goal(time: int, call: Any) -> Iterator[Record]:
         yield Record(line=time, kind="cancel_request", time=time, goal_uuid=uuid)
     else:
         canceling = {uuid_from_ros(info.goal_id) for info in response.goals_canceling}
-        if int(response.return_code) == _GOAL_TERMINATED and uuid not in canceling:
-            yield Record(line=time, kind=TERMINATED, time=time, goal_uuid=uuid)
-        yield Record(line=time, kind="cancel_response", time=time, goal_uuid=uuid, accepted=uuid in canceling)
+        ended = int(response.return_code) == CANCEL_GOAL_TERMINATED and uuid not in canceling
+        yield Record(
+            line=time, kind="cancel_response", time=time, goal_uuid=uuid, accepted=uuid in canceling,
+            status=TERMINATED if ended else "",
+        )  # fmt: skip
 
 
 _RECORDS: dict[str, Callable[[int, Any], Iterator[Record]]] = {

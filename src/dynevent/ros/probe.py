@@ -30,7 +30,7 @@ from dynevent.wire.names import (
     description_service,
     status_topic,
 )
-from dynevent.wire.vocab import GoalStatus
+from dynevent.wire.vocab import CANCEL_GOAL_TERMINATED, GoalStatus
 
 __all__ = ["VOLATILE", "RosLink"]
 
@@ -186,7 +186,8 @@ class RosLink(Link):
             response = future.result()
             canceling = [] if response is None else response.goals_canceling
             accepted.append(any(convert.uuid_from_ros(info.goal_id) == exchange.uuid for info in canceling))
-            self.hear_cancel_response(exchange, accepted[0])
+            ended = response is not None and int(response.return_code) == CANCEL_GOAL_TERMINATED
+            self.hear_cancel_response(exchange, accepted[0], terminated=ended and not accepted[0])
             answered.set()
 
         self.sent("cancel_request", goal_uuid=exchange.uuid)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import enum
 
 __all__ = [
+    "CANCEL_GOAL_TERMINATED",
     "ENDED_CHILD_STATUSES",
     "TASK_SIGNAL_LOGS",
     "TERMINAL_GOAL_STATUSES",
@@ -141,6 +142,12 @@ class GoalStatus(str, enum.Enum):
 
 
 TERMINAL_GOAL_STATUSES = frozenset({GoalStatus.SUCCEEDED, GoalStatus.CANCELED, GoalStatus.ABORTED})
+
+#: action_msgs/CancelGoal's return code ``ERROR_GOAL_TERMINATED``: the server refused an action-level
+#: cancel because the goal had already terminated when it took the request.  rcl_action gives it
+#: from the goal's own state, before any cancel callback runs (a callback's refusal of a goal still
+#: open is ``ERROR_REJECTED``, 1), so it shows the goal answered before the cancel (R10.5).
+CANCEL_GOAL_TERMINATED = 3
 
 
 class RejectReason(str, enum.Enum):

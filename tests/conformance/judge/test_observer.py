@@ -580,6 +580,38 @@ def test_an_action_level_cancel_refused_after_a_client_hears_its_goals_answer_ma
         assert ("R10.3", "cancel_response") in findings, (tap, answer_first, child, findings)
 
 
+@pytest.mark.spec("R10.5", "R10.3")
+@pytest.mark.parametrize("tap", ["client", "server"])
+def test_a_cancel_refused_as_of_a_goal_terminated_came_after_the_goals_end(tap: str) -> None:
+    """Found in the lab: the running child ended as the action-level cancel of its NEXT came, and the
+    server refused the cancel because the goal had terminated (``terminated``: ROS 2's
+    ``ERROR_GOAL_TERMINATED``), its answer and the status of the child's end recorded after the
+    refusal.  The goal had ended before the request: the refusal is right (R10.5), at either tap.
+    Refused without ``terminated``, the server refused an open goal's cancel: R10.3."""
+
+    def trace(terminated: bool) -> Trace:
+        talk = Trace()
+        talk.rows[0] = {**talk.rows[0], "tap": tap}
+        talk.started().add("cancel_request", goal_uuid=uuid(1))
+        refusal = {"terminated": True} if terminated else {}
+        talk.add("cancel_response", goal_uuid=uuid(1), accepted=False, **refusal)
+        return talk.status(1, 1, "standby", 6).result(1, "succeeded", "completed", 6)
+
+    assert trace(terminated=True).check().clean, found(trace(terminated=True).check())
+    findings = [finding[1:] for finding in found(trace(terminated=False).check())]
+    assert ("R10.3", "cancel_response") in findings, findings
+
+
+def test_a_cancel_responses_terminated_is_written_and_read_back() -> None:
+    """A probe's trace keeps what the transport said of a refused cancel (the ``terminated`` field)."""
+    writer = TraceWriter(None, fleet="f", robot="r", tap="client")
+    writer.observe("cancel_response", goal_uuid=uuid(1), accepted=False, terminated=True)
+    writer.observe("cancel_response", goal_uuid=uuid(2), accepted=False)
+    _, records = read_trace(writer.text().splitlines())
+    read = [(record.goal_uuid, record.status) for record in records]
+    assert read == [(uuid(1), "terminated"), (uuid(2), "")]
+
+
 @pytest.mark.spec("R19.1")
 def test_the_observer_keeps_the_latest_closed_goals_only_and_still_finds_a_late_second_answer() -> None:
     """Memory stays flat on a trace of any length: of the goals answered or refused, the observer keeps
@@ -1049,6 +1081,18 @@ def test_every_defect_divergences_lists_is_flagged() -> None:
         (
             '{"type": "config", "config": {"categories": {"a": {"accept": "nothing"}}}}',
             "config.categories.a.accept",
+        ),
+        (
+            '{"type": "cancel_response", "time": 1, "goal_uuid": "'
+            + "0" * 32
+            + '", "accepted": false, "terminated": "yes"}',
+            "terminated",
+        ),
+        (
+            '{"type": "cancel_response", "time": 1, "goal_uuid": "'
+            + "0" * 32
+            + '", "accepted": true, "terminated": true}',
+            "terminated",
         ),
     ],
 )

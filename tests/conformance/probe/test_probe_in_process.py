@@ -880,6 +880,42 @@ def test_a_wait_the_deadline_cut_short_is_no_failure_of_the_server() -> None:
     assert whole.verdict is Verdict.FAIL and whole.absent and "within 3 s (R19.1)" in " ".join(whole.messages)
 
 
+class _EndingFirstLink(InProcessLink):
+    """The in-process link whose child ends just as an action-level cancel of its NEXT reaches the
+    server: the cancel finds the goal answered and is refused (R10.5), and the transport says why
+    (ROS 2's ``ERROR_GOAL_TERMINATED``, which rcl_action gives from the goal's own state)."""
+
+    def __init__(self, config: ServeConfig, trace: TraceWriter) -> None:
+        super().__init__(config, trace=trace)
+        self.apart = True  # a client's view, as over DDS
+
+    def cancel(self, exchange: probe_runner.Exchange, timeout: float) -> bool | None:
+        self.step(ins.ChildFinished(status="completed", now=self.now))
+        return super().cancel(exchange, timeout)
+
+    def hear_cancel_response(
+        self, exchange: probe_runner.Exchange, accepted: bool, *, terminated: bool = False
+    ) -> None:
+        terminated = not accepted
+        super().hear_cancel_response(exchange, accepted, terminated=terminated)
+
+
+@pytest.mark.spec("R10.5")
+def test_a_cancel_refused_as_of_a_goal_terminated_leaves_the_running_cancel_case_not_run() -> None:
+    """Found in the lab: the child of action.cancel_running ended (the robot stood at its place) before
+    the cancel reached the deployed adapter, which refused it as of a goal terminated, rightly; the
+    probe reported the refusal as D31.  Where the transport says so, the case is not run, saying why,
+    and the judge finds nothing in its records."""
+    options = attrs.evolve(OPTIONS, timeout=3, deadline=1000)
+    case = [case for case in CASES if case.id == "action.cancel_running"]
+    trace = TraceWriter(None, fleet="tinyRobot", robot="tinyRobot1", tap="client")
+    link = _EndingFirstLink(CONFIG, trace)
+    said = probe_runner.run_cases(link, options, case, lambda _: None)
+    assert [(f.verdict, f.seen) for f in said] == [(Verdict.MISSING, probe_runner.CANCEL_AFTER_END)], said
+    assert '"terminated":true' in trace.text().replace(" ", "")
+    assert check_trace(trace.text().splitlines()).clean
+
+
 class _LaggingLink(InProcessLink):
     """The in-process link whose channels lag: each answer, feedback, status or goal response reaches
     the probe ``lag[kind]`` seconds after the server gave it, as channels of a lossy network do (a

@@ -26,6 +26,7 @@ from dynevent.conformance.judge.abduction import (
 )
 from dynevent.conformance.judge.trace import (
     SKIPS_OR_LOST,
+    TERMINATED,
     Answer,
     Finding,
     Record,
@@ -125,6 +126,13 @@ class _Lookahead:
     def answers(self) -> set[tuple[str, str]]:
         """The goal UUIDs and goal statuses of the answers among the records ahead."""
         return {(record.goal_uuid, record.status) for record in self.records if record.kind == "result"}
+
+    def found_ended(self, uuid: str) -> bool:
+        """Whether the next cancel response of this goal among the records ahead refused the cancel as
+        of a goal already terminated (:data:`~dynevent.conformance.judge.trace.TERMINATED`)."""
+        responses = (record for record in self.records if record.kind == "cancel_response")
+        response = next((record for record in responses if record.goal_uuid == uuid), None)
+        return response is not None and response.status == TERMINATED
 
     def of_goal(self, uuid: str) -> Record | None:
         """The next feedback or answer of this goal among the records ahead."""
@@ -547,11 +555,11 @@ class _Requests(_Part):
     def ended_unseen(self, *, shown: bool = False) -> bool:
         """Whether an accepted goal the machine finds busy found the running child ended: a child
         whose last report was a final status (R20.2), of a goal the trace picked up mid-way (its
-        request, so its answer too, may be missing from a recording); or one whose goal the server
-        showed ended before (:attr:`ended_shown`: a bag's goal statuses, or a refusal of its cancel
-        as of a goal terminated, where the recorder lost or had not yet received both the answer and
-        the status of the child's end).  The child is then taken as ended, as a client takes it, and
-        its answer is not judged.  ``shown``: only where the server showed it."""
+        request, so its answer too, may be missing from a trace); or one whose goal the server showed
+        ended before (:attr:`ended_shown`: a bag's goal statuses, or the refusal of a cancel of it as
+        of a goal terminated, where the answer and the status of the child's end came later or never).
+        The child is then taken as ended, as a client takes it, and its answer is not judged.
+        ``shown``: only where the server showed it."""
         state = self.replica.st
         running = state.running
         if running is None or not running.started or state.task_signal:
@@ -684,6 +692,8 @@ class _Requests(_Part):
             return  # a goal the state no longer follows: its cancel is not judged either
         running = self.replica.st.running
         if running is not None and running.goal_uuid == record.goal_uuid:
+            if record.status == TERMINATED or self.ahead.found_ended(record.goal_uuid):
+                _remember_goal(self.ended_shown, record.goal_uuid)  # its cancel's refusal says so
             self.ended_unseen(shown=True)  # the server showed it ended before the cancel came
         if self.replica.start_uncertain_for(record.goal_uuid):
             # a deferred child is cancelled at once (R10.4); a started one ends later (R10.3)

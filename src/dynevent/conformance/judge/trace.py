@@ -44,7 +44,7 @@ RECORD_TYPES: dict[str, frozenset[str]] = {
     "feedback": frozenset({"goal_uuid", "feedback"}),
     "result": frozenset({"goal_uuid", "status", "result"}),
     "cancel_request": frozenset({"goal_uuid"}),
-    "cancel_response": frozenset({"goal_uuid", "accepted"}),
+    "cancel_response": frozenset({"goal_uuid", "accepted", "terminated"}),
 }
 
 _REQUIRED: dict[str, frozenset[str]] = {
@@ -73,7 +73,9 @@ class Record:
     ``kind`` is the record's ``type``; ``time`` integer nanoseconds;
     ``message`` the begin or status message, the goal, the feedback or the
     result; ``accepted`` the answer of a goal or cancel response; ``status``
-    the goal status of a result; ``reason`` the reason a goal response gave.
+    the goal status of a result, or :data:`TERMINATED` for a cancel response
+    that refused a cancel as of a goal already terminated; ``reason`` the
+    reason a goal response gave.
     """
 
     line: int
@@ -94,6 +96,11 @@ class Answer:
     status: str
     result: Result
 
+
+#: The ``status`` of a cancel response (its trace field ``terminated``) that refused the cancel because
+#: the goal had terminated when the server took the request (ROS 2:
+#: :data:`dynevent.wire.vocab.CANCEL_GOAL_TERMINATED`).
+TERMINATED = "terminated"
 
 #: The ``detail`` of a ``log_seq`` finding seen apart from the server (a client's tap, a recording): a
 #: log seq that skips within a child, which a feedback lost on the way leaves as a server's skip does
@@ -251,7 +258,11 @@ def _record(data: Any, source: str, line: int) -> Record | dict[str, Any]:
         return Record(line=line, kind=kind, time=time, goal_uuid=uuid, status=status, message=result)
     if kind == "cancel_response":
         accepted = _boolean(data, "accepted", source, line)
-        return Record(line=line, kind=kind, time=time, goal_uuid=uuid, accepted=accepted)
+        terminated = "terminated" in data and _boolean(data, "terminated", source, line)
+        if accepted and terminated:
+            raise TraceError(source, line, "terminated", "an accepted cancel's goal had not terminated")
+        status = TERMINATED if terminated else ""
+        return Record(line=line, kind=kind, time=time, goal_uuid=uuid, accepted=accepted, status=status)
     return Record(line=line, kind=kind, time=time, goal_uuid=uuid)
 
 
@@ -378,11 +389,13 @@ def observation(
     message: Any = None,
     accepted: bool | None = None,
     status: GoalStatus | None = None,
+    terminated: bool = False,
 ) -> dict[str, Any]:
     """The trace record of one thing seen on the wire at ``now`` (integer nanoseconds), from either end.
 
     ``message`` is the wire mirror the record holds (a begin or status message, a goal, feedback, a
-    result); ``accepted`` the answer of a goal or cancel response; ``status`` a result's goal status.
+    result); ``accepted`` the answer of a goal or cancel response; ``status`` a result's goal status;
+    ``terminated`` a cancel response's refusal as of a goal already terminated.
     """
     row: dict[str, Any] = {"time": _seconds(now), "type": kind}
     if goal_uuid is not None:
@@ -393,6 +406,8 @@ def observation(
         row["accepted"] = accepted
     if status is not None:
         row["status"] = status.value
+    if terminated:
+        row["terminated"] = True
     return row
 
 
@@ -445,13 +460,11 @@ class TraceWriter:
         message: Any = None,
         accepted: bool | None = None,
         status: GoalStatus | None = None,
+        terminated: bool = False,
     ) -> None:
         """Write what a tap saw now (the wall clock): :func:`observation`'s record."""
-        self.write(
-            observation(
-                kind, time.time_ns(), goal_uuid=goal_uuid, message=message, accepted=accepted, status=status
-            )
-        )
+        fields = {"goal_uuid": goal_uuid, "message": message, "accepted": accepted, "status": status}
+        self.write(observation(kind, time.time_ns(), **fields, terminated=terminated))
 
     def comment(self, text: str) -> None:
         """Write a ``#`` line (skipped by readers), e.g. which probe case the next records belong to."""

@@ -109,6 +109,9 @@ class Exchange:
         #: when the server accepted it, by the server's own clock (ns since the epoch), where the
         #: transport says
         self.accepted_at: int | None = None
+        #: an action-level cancel of it was refused because the goal had terminated when the server
+        #: took the request (where the transport says: ROS 2's ``ERROR_GOAL_TERMINATED``)
+        self.cancel_found_ended = False
         self._link = link
         link.made.append(self)
 
@@ -250,8 +253,15 @@ class Link:
 
         self._heard("result", update, goal_uuid=exchange.uuid, status=status, message=result)
 
-    def hear_cancel_response(self, exchange: Exchange, accepted: bool) -> None:
-        self._heard("cancel_response", lambda: None, goal_uuid=exchange.uuid, accepted=accepted)
+    def hear_cancel_response(self, exchange: Exchange, accepted: bool, *, terminated: bool = False) -> None:
+        """The response to an action-level cancel of ``exchange``'s goal; ``terminated``: it refused the
+        cancel because the goal had terminated when the server took the request."""
+
+        def update() -> None:
+            exchange.cancel_found_ended = terminated
+
+        fields = {"goal_uuid": exchange.uuid, "accepted": accepted, "terminated": terminated}
+        self._heard("cancel_response", update, **fields)
 
     def sent(self, kind: str, **fields: Any) -> None:
         """A record of what the probe sends (a goal, a cancel request), for the trace."""
@@ -670,6 +680,8 @@ class Probe:
         """An action-level cancel of ``exchange``'s goal: accepted, refused, or None (no response)."""
         accepted = self.link.cancel(exchange, self.timeout)
         outcome = {None: "no response", True: "accepted", False: "refused"}[accepted]
+        if exchange.cancel_found_ended:
+            outcome += " as of a goal already terminated"
         self.note(
             f"sent an action-level cancel of {_describe_goal(exchange.goal).removeprefix('sent ')}: {outcome}"
         )
@@ -788,6 +800,13 @@ CUT_SHORT = "not run to its end: the run's --deadline of {deadline:g} s cut its 
 ENDED_UNSEEN = (
     "at each of the {places} place(s) given, the child was answered before a status showed it running: "
     "the robot stood there, or the link was slower than the child (children that take longer let it run)"
+)
+#: Why ``action.cancel_running`` is not run when the server refused its cancel as of a goal already
+#: terminated: the child ended before the cancel reached the server (found in the lab, where the
+#: robot stood at its place already, and the case reported the deployed adapter's refusal as D31).
+CANCEL_AFTER_END = (
+    "the child ended before the cancel reached the server, which refused it as of a goal already "
+    "terminated (rightly, R10.5): a child that takes longer lets the case run"
 )
 #: Why ``finished.ends_the_run`` is not run when the next run's status came, the INACTIVE did not, and
 #: the transport knows a status was published and not delivered meanwhile.
@@ -1576,6 +1595,8 @@ def _action_cancel_running(probe: Probe, case: Case) -> CaseFinding:
         accepted = probe.cancel(running)
         running.answered(probe.timeout)
         probe.note(f"the NEXT: {_describe_answer(running)}")
+        if running.cancel_found_ended:  # refused rightly (R10.5): the cancel came after the child's end
+            raise _Unreachable(CANCEL_AFTER_END)
         if accepted is None:
             return _fails(case, "timeout", expected, "no cancel response")
         if accepted and running.answer is None:
