@@ -294,6 +294,39 @@ def test_a_cancel_the_server_showed_came_after_its_goals_end_is_a_cancel_of_an_a
     assert found == (set() if clean else {("R10.3", "cancel_response")}), found
 
 
+@pytest.mark.spec("R2.2", "R3.4")
+def test_goal_statuses_that_list_a_goal_the_bag_lacks_just_accepted_begin_the_judgement_anew(
+    tmp_path: Path,
+) -> None:
+    """Found at 30% loss: child 1 ended and the status of that end was lost; the FINISHED that ended
+    the run reached the recorder 12 s late, request and response (after the run's INACTIVE and the
+    next run's begin: not judged).  Its only timely record was the goal statuses, listing goal 1
+    succeeded and the FINISHED accepted.  Those goal statuses list a goal the bag lacks, just
+    accepted: what it did comes after them, and the judgement begins anew at the next status (the
+    INACTIVE), not with child 1 still held running (R2.2, then R3.4 at the next begin)."""
+    run = Conversation().begin().status(1, 1, "standby", 0)
+    run.goal(1, goal_id=1).goal_statuses((1, EXECUTING)).status(1, 2, "underway", 1)
+    run.ask(1).feedback(1, "underway", 1)
+    run.now += 6 * SECOND  # child 1 ends: the status of its end and its answer never reach the bag
+    first = len(run.messages)
+    run.goal(2, event_type=3)
+    finished = run.messages[first:]  # the FINISHED's request and response, received 12 s late
+    del run.messages[first:]
+    run.goal_statuses((1, SUCCEEDED), (2, ACCEPTED)).status(1, 0, "uninitialized", 0)
+    run.now += SECOND // 2
+    run.begin(seq=2).status(2, 1, "standby", 0)
+    run.now += 12 * SECOND
+    for topic, msgtype, sent, message in finished:
+        run.at(topic, msgtype, message).sent_at(sent)
+    run.status(2, 1, "standby", 0)
+    for _, _, time, message in run.messages:  # the rest sent as they came (a recorder's publish times)
+        run.sent.setdefault(id(message), time - 1_000_000)
+    robot = _robot(check_bag(run.write(tmp_path / "bag", StoragePlugin.MCAP)))
+    assert robot.report.clean, robot.report.findings
+    assert [channel for _, channel, _ in robot.late] == ["send_goal", "send_goal"]
+    assert robot.lost == ((robot.lost[0][0], "02" * 16),)
+
+
 @pytest.mark.spec("R2.2")
 def test_a_status_a_lossy_link_delivered_seconds_late_goes_by_the_servers_stamp(tmp_path: Path) -> None:
     """A recorder on a lossy link received the status that showed the child running seconds late, in

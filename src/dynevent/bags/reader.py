@@ -692,6 +692,7 @@ class _Robot:
         self._settled: collections.OrderedDict[str, str] = collections.OrderedDict()
         self._requested: collections.OrderedDict[str, None] = collections.OrderedDict()  # goals passed on
         self._last_status: Record | None = None
+        self._listed = ""  # a goal the goal statuses listed just accepted, whose request the bag lacks
         self._before: list[Report] = []  # the judgements cut where the bag lost a goal's request
         self.lost: list[tuple[int, str]] = []
         self.unheard: list[tuple[int, str]] = []
@@ -883,6 +884,14 @@ class _Robot:
                 if uuid in self._goals and uuid not in self._waiting_responses:
                     self.unheard_response(record, uuid)
             self._goals_ended(record.message)
+            accepted = (uuid for uuid, status in record.message if status is GoalStatus.ACCEPTED)
+            unknown = next((uuid for uuid in accepted if uuid not in self._requested), None)
+            if unknown is not None and unknown not in self._waiting_goals:  # its request lost, or late
+                self._listed = unknown
+            return
+        if record.kind == "status" and self._listed and self._listed not in self._requested:
+            self.lost_request(attrs.evolve(record, goal_uuid=self._listed), seed=record)
+            self._last_status, self._listed = record, ""
             return
         if record.kind in ("feedback", "result") and record.goal_uuid not in self._requested:
             self.lost_request(record)
@@ -931,27 +940,21 @@ class _Robot:
         if statuses is not None:
             self._goals_ended(statuses, but=uuid)
 
-    def lost_request(self, record: Record) -> None:
+    def lost_request(self, record: Record, seed: Record | None = None) -> None:
         """``record`` names a goal whose request the bag lacks (lost on the way: a recorder that had
-        not yet matched a new client's publisher; or sent before the recording began): the statuses
-        around it show a child no goal explains.  What was judged within :data:`SKEW` before it is let
-        go (its findings may be that goal's doing), and the judgement begins anew, as a trace that
-        begins mid-way does, at the latest status before it (of the records not judged yet, with the
-        requests whose responses are to come, else the last status judged)."""
+        not yet matched a new client's publisher; or sent before the recording began, or so late it
+        is not judged): the statuses around it show a child no goal explains.  What was judged within
+        :data:`SKEW` before it is let go (its findings may be that goal's doing), and the judgement
+        begins anew, as a trace that begins mid-way does (:func:`_begun_anew`), or at ``seed``, the
+        first status after goal statuses that listed the goal just accepted."""
         assert isinstance(self._judge, Checker)
         report, pending = self._judge.cut()
-        since = record.time - SKEW
-        kept = tuple(finding for finding in report.findings if finding.line < since)
+        kept = tuple(finding for finding in report.findings if finding.line < record.time - SKEW)
         self._before.append(attrs.evolve(report, findings=kept))
         self.lost.append((record.time, record.goal_uuid))
-        self._judge = Checker(
-            TraceHeader(fleet=self.fleet, robot=self.robot, compatibility=self.compatibility), apart=True
-        )
-        statuses = [index for index, item in enumerate(pending) if item.kind == "status"]
-        seed = pending[statuses[-1]] if statuses else self._last_status  # the lost goal's start, or later
-        rest = pending[statuses[-1] + 1 :] if statuses else pending
-        awaiting = _awaiting(self._goals, self._passed_goals, rest)
-        for item in [seed, *awaiting, *rest] if seed is not None else [*awaiting, *rest]:
+        header = TraceHeader(fleet=self.fleet, robot=self.robot, compatibility=self.compatibility)
+        self._judge = Checker(header, apart=True)
+        for item in _begun_anew(pending, self._last_status, self._goals, self._passed_goals, seed):
             self._judge.push(item)
         _remember(self._requested, record.goal_uuid, None)  # what follows of it is the new judgement's
 
@@ -1050,6 +1053,30 @@ def _published_on_acceptance(
     ]
     statuses: Sequence[tuple[str, GoalStatus]] | None = min(arrays)[3].message if arrays else None
     return statuses if statuses is not None and dict(statuses)[uuid] is GoalStatus.ACCEPTED else None
+
+
+def _begun_anew(
+    pending: list[Record],
+    last_status: Record | None,
+    goals: Mapping[str, Record],
+    passed: Mapping[str, Record],
+    seed: Record | None,
+) -> list[Record]:
+    """What a judgement begun anew where the bag lacks a goal's request takes first, of the records
+    ``pending`` (pushed and not judged): the latest status before the goal's feedback or answer (its
+    start, or later; else ``last_status``, the last judged), the requests whose responses are to come
+    (:func:`_awaiting`), then the rest.  Or ``seed``, the first status after goal statuses that listed
+    the goal just accepted, and the requests awaiting responses, nothing before it: what the goal did
+    comes after those goal statuses (found at 30% loss: a FINISHED whose request and response came 12 s
+    late, after the run's INACTIVE, the status of the last child's end lost; the judgement begun at the
+    status before held that child running)."""
+    statuses = [index for index, item in enumerate(pending) if item.kind == "status"]
+    if seed is not None:
+        return [seed, *_awaiting(goals, passed, [])]
+    seed = pending[statuses[-1]] if statuses else last_status
+    rest = pending[statuses[-1] + 1 :] if statuses else pending
+    awaiting = _awaiting(goals, passed, rest)
+    return [seed, *awaiting, *rest] if seed is not None else [*awaiting, *rest]
 
 
 def _awaiting(goals: Mapping[str, Record], passed: Mapping[str, Record], rest: list[Record]) -> list[Record]:

@@ -108,7 +108,7 @@ def format_bag(bag: Any) -> str:
             lines.append(f"{where}: partial view: the bag lacks {', '.join(robot.absent)}")
         for time, uuid in robot.lost:
             lines.append(f"{where} @ {_bag_time(time)}: the bag lacks the request of goal {uuid}: "
-                         "judged anew from the status before it")  # fmt: skip
+                         "judged anew from a status beside it")  # fmt: skip
         for time, uuid in robot.unheard:
             lines.append(f"{where} @ {_bag_time(time)}: the bag lacks the response to goal {uuid}: read "
                          "as accepted from its feedback, answer, running child or goal status")  # fmt: skip
