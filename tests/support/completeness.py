@@ -83,6 +83,7 @@ OVER_DDS: Mapping[str, tuple[str, ...]] = {
     "R9.1": ("request.cancel_idle",),
     "R9.2": ("cancel.wrong_id",),
     "R9.3": ("cancel.running_child",),
+    "R10.1": (),
     "R10.3": ("action.cancel_running",),
     "R10.5": (),
     "R11.1": ("finished.ends_the_run",),
@@ -104,6 +105,8 @@ DDS_CANNOT_SHOW: Mapping[str, str] = {
     "R5.2": "dynevent's ROS binding submits an accepted goal, request and start in one step under its "
     "lock (R5.3): no goal is asked for between a goal's acceptance and its start, and a race it loses "
     "there is R5.3's",
+    "R10.1": "dynevent's ROS binding submits an accepted goal, request and start in one step under its "
+    "lock (R5.3): no goal waits to start for an action-level cancel to find",
     "R10.5": _BINDING.format(
         does="refuses every action-level cancel the machine does not accept (rclpy's cancel callback "
         "answers ACCEPT or REJECT)",

@@ -602,6 +602,30 @@ def test_a_cancel_refused_as_of_a_goal_terminated_came_after_the_goals_end(tap: 
     assert ("R10.3", "cancel_response") in findings, findings
 
 
+@pytest.mark.spec("R10.1", "R10.3")
+def test_an_action_level_cancel_sent_as_a_goal_is_accepted_finds_it_queued_or_started() -> None:
+    """A client cancels a NEXT as soon as it hears the NEXT accepted.  A server that had not started it
+    answers it ``cancelled while not running`` (R10.1), with no feedback; one that starts a goal with
+    its acceptance (dynevent's ROS binding) had started it, and cancels its child (R10.3): at a
+    client, the start's feedback and status may come after the cancel's request, and its answer
+    shows it ran.  At the server's tap, records come in the server's order: a cancel before any sign
+    of the start found the goal queued, and an answer of a child's end is the server's fault."""
+
+    def trace(tap: str, started: bool) -> Trace:
+        talk = Trace()
+        talk.rows[0] = {**talk.rows[0], "tap": tap}
+        talk.begin().status(1, 1, "standby", 5).next(1, 6)
+        talk.add("cancel_request", goal_uuid=uuid(1)).add("cancel_response", goal_uuid=uuid(1), accepted=True)
+        if not started:
+            return talk.result(1, "canceled", failure="cancelled while not running")
+        talk.feedback(1, "underway", 6).status(1, 2, "underway", 6)
+        return talk.result(1, "canceled", "canceled", 6).status(1, 1, "standby", 6)
+
+    for tap, started in (("client", False), ("client", True), ("server", False)):
+        assert trace(tap, started).check().clean, (tap, started, found(trace(tap, started).check()))
+    assert found(trace("server", started=True).check())
+
+
 def test_a_cancel_responses_terminated_is_written_and_read_back() -> None:
     """A probe's trace keeps what the transport said of a refused cancel (the ``terminated`` field)."""
     writer = TraceWriter(None, fleet="f", robot="r", tap="client")

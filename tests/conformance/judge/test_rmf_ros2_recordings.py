@@ -211,6 +211,31 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("D31", "R8.2", "goal_status"): 1,
         ("D9", "R7.3", "log_seq"): 48,
     },
+    # the lab's run of 2026-11-29 with action.cancel_queued (the recalibration run's build): that case
+    # and action.cancel_running both D31, in the EasyFullControl site's shape
+    ("queued", "standard"): {
+        ("D10", "R4.12", "accepted_stale_id"): 1,
+        ("D10", "R5.2", "race_not_lost"): 1,
+        ("D10", "R6.2", "child_id"): 18,
+        ("D12", "R4.11", "accepted_non_finite_stubborn_period"): 1,
+        ("D26", "R2.2", "status_mismatch"): 1,
+        ("D28", "R2.2", "status_mismatch"): 7,
+        ("D31", "R10.3", "cancel_response"): 2,
+        ("D31", "R8.2", "goal_status"): 2,
+        ("D7", "R4.4", "accepted_uninitialized_event_type"): 1,
+        ("D7", "R4.5", "accepted_unknown_event_type"): 1,
+        ("D8", "R4.13", "accepted_cancel_idle"): 2,
+        ("D8", "R4.14", "accepted_cancel_id_mismatch"): 1,
+        ("D9", "R7.3", "log_seq"): 51,
+    },
+    ("queued", "rmf_ros2"): {
+        ("D12", "R4.11", "accepted_non_finite_stubborn_period"): 1,
+        ("D26", "R2.2", "status_mismatch"): 1,
+        ("D28", "R2.2", "status_mismatch"): 2,
+        ("D31", "R10.3", "cancel_response"): 2,
+        ("D31", "R8.2", "goal_status"): 2,
+        ("D9", "R7.3", "log_seq"): 51,
+    },
     ("probe", "rmf_ros2"): {
         ("D1", "R2.2", "status_mismatch"): 3,
         ("D1", "R4.6", "accepted_busy"): 1,

@@ -1574,6 +1574,26 @@ def _late_feedback(state: State | None, status: DynamicEventStatus, ahead: list[
     return None
 
 
+def _started_before_cancel(state: State | None, record: Record, window: Iterable[Record]) -> Record | None:
+    """The first record ahead of the goal an action-level cancel ``record`` names, where it is the
+    start feedback of an accepted NEXT not yet started (see :func:`_lagged_ahead`)."""
+    if record.kind != "cancel_request" or state is None:
+        return None
+    if not any(
+        item.goal_uuid == record.goal_uuid and item.goal.event_type == EventType.NEXT for item in state.queued
+    ):
+        return None
+    ahead = next(
+        (
+            item
+            for item in window
+            if item.goal_uuid == record.goal_uuid and item.kind in ("feedback", "result")
+        ),
+        None,
+    )
+    return ahead if ahead is not None and ahead.kind == "feedback" else None
+
+
 def _lagged_ahead(rooms: _ObserverState, record: Record, window: Iterable[Record]) -> Record | None:
     """At a client, whose channels lag one another (a lossy link): the record among those ahead that
     the server sent before ``record``, on another channel.  A goal's feedback before its answer (R19.1:
@@ -1581,10 +1601,16 @@ def _lagged_ahead(rooms: _ObserverState, record: Record, window: Iterable[Record
     (R3.4: a run begins once the last has ended); with no child running, the start feedback of an
     accepted NEXT's child before a status that names that child (R6.4: its start feeds back first);
     the running child's feedback whose log entries the server made before the status that shows that
-    child's end was stamped (the two stamps are the server's clock)."""
+    child's end was stamped (the two stamps are the server's clock); the start feedback of an
+    accepted NEXT before an action-level cancel of it (a binding that starts a goal with its
+    acceptance had started it when the cancel came; one cancelled before its start is never fed
+    back, R10.1)."""
     ended = _fed_back_before(rooms.replica.state, record, window)
     if ended is not None:
         return ended
+    started = _started_before_cancel(rooms.replica.state, record, window)
+    if started is not None:
+        return started
     if record.kind == "result":
         uuid = record.goal_uuid
         return next((ahead for ahead in window if ahead.kind == "feedback" and ahead.goal_uuid == uuid), None)

@@ -322,6 +322,9 @@ CASES: tuple[Case, ...] = (
          divergences=("D28",)),
     Case("cancel.both_answered", "two CANCELs of the running child wait for its end and are both "
          "answered with its result", ("R9.3", "R4.16", "R8.3", "R19.1"), needs="child", divergences=("D1",)),
+    Case("action.cancel_queued", "an action-level cancel sent as its NEXT is accepted is accepted, and "
+         "the NEXT answered canceled: 'cancelled while not running' where it had not started, else at "
+         "its child's end", ("R10.1", "R10.3", "R8.2"), needs="child", divergences=("D31",)),
     Case("action.cancel_running", "an action-level cancel of the running NEXT is accepted and the NEXT "
          "answered canceled", ("R10.3", "R8.2"), needs="child", divergences=("D31",)),
     Case("action.cancel_answered", "an action-level cancel of an answered goal is refused", ("R10.5",),
@@ -407,8 +410,6 @@ LIVE_CANNOT_SHOW: dict[str, str] = {
     "R7.1": "a child need not report progress: a server whose children never report shows the same exchange",
     "R7.2": _NOTICE.format(what="Log; the entry still reaches the feedback"),
     "R9.4": _TASK_INPUT.format(what="interruption, which defers a child's start"),
-    "R10.1": "not yet: the in-process and driver links start an accepted goal at once, so that none is "
-    "queued for an action-level cancel to find",
     "R10.2": "not yet: no case cancels, at the action level, a CANCEL goal that waits for its child's end",
     "R10.4": _TASK_INPUT.format(what="interruption, which defers a child's start"),
     "R11.2": _NOTICE.format(what="DynamicEventFinished: the task moves on, and what next is the task's"),

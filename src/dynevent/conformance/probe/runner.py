@@ -782,13 +782,20 @@ class Probe:
         try:
             yield exchange, running.id
         finally:
-            if not exchange.answers:
-                stop = Goal(
-                    dynamic_event_seq=goal.dynamic_event_seq, event_type=EventType.CANCEL, id=running.id
-                )
+            self.stop_unanswered(exchange, running.id)
+
+    def stop_unanswered(self, exchange: Exchange, child: int | None = None) -> None:
+        """After a case: a NEXT not yet answered has its child (``child``, else the one a status shows
+        running) stopped by a CANCEL; then the robot waits, or its run has ended."""
+        if not exchange.answers:
+            status = self.link.wait_status(machine.runs_a_child, self.timeout) if child is None else None
+            child = child if status is None else status.id
+            if child is not None:
+                goal = exchange.goal
+                stop = Goal(dynamic_event_seq=goal.dynamic_event_seq, event_type=EventType.CANCEL, id=child)
                 self.send(stop)
                 exchange.answered(self.timeout)
-            self.link.wait_status(_waits_or_ended, self.timeout)
+        self.link.wait_status(_waits_or_ended, self.timeout)
 
 
 #: The shortest wait the deadline leaves (seconds): a message already on its way is still read.
@@ -1590,22 +1597,40 @@ def _aborted_with(exchange: Exchange, failure: Failure) -> bool:
 
 
 def _action_cancel_running(probe: Probe, case: Case) -> CaseFinding:
-    expected = "the cancel accepted; the NEXT answered canceled"
     with probe.child() as (running, _):
-        accepted = probe.cancel(running)
-        running.answered(probe.timeout)
-        probe.note(f"the NEXT: {_describe_answer(running)}")
-        if running.cancel_found_ended:  # refused rightly (R10.5): the cancel came after the child's end
-            raise _Unreachable(CANCEL_AFTER_END)
-        if accepted is None:
-            return _fails(case, "timeout", expected, "no cancel response")
-        if accepted and running.answer is None:
-            return _fails(case, "timeout", expected, "the NEXT not answered")
-        # the cancel refused (R10.3), or the NEXT answered other than canceled (R8.2): the judge's
-        if not accepted or (running.answer is not None and running.answer[0] is not GoalStatus.CANCELED):
-            return _seen_by_script(case, expected, f"the cancel {'accepted' if accepted else 'refused'}; "
-                                   f"the NEXT {_describe_answer(running)}")  # fmt: skip
-        return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
+        return _cancel_of_the_next(probe, case, running)
+
+
+def _action_cancel_queued(probe: Probe, case: Case) -> CaseFinding:
+    """The cancel goes as soon as the NEXT's acceptance is heard: over a link that hands an accepted
+    goal over at its next turn (in process, the driver protocol) the NEXT waits to start, and R10.1
+    answers it; over DDS, where a binding starts it with its acceptance, R10.3 does."""
+    exchange = probe.send(probe.next_goal(probe.waiting()), answer=False)
+    if not exchange.accepted:
+        raise _Unreachable(f"the NEXT whose cancel the case sends was {_describe_answer(exchange)}")
+    try:
+        return _cancel_of_the_next(probe, case, exchange)
+    finally:
+        probe.stop_unanswered(exchange)
+
+
+def _cancel_of_the_next(probe: Probe, case: Case, exchange: Exchange) -> CaseFinding:
+    """An action-level cancel of the NEXT ``exchange``, accepted, and the NEXT answered canceled."""
+    expected = "the cancel accepted; the NEXT answered canceled"
+    accepted = probe.cancel(exchange)
+    exchange.answered(probe.timeout)
+    probe.note(f"the NEXT: {_describe_answer(exchange)}")
+    if exchange.cancel_found_ended:  # refused rightly (R10.5): the cancel came after the child's end
+        raise _Unreachable(CANCEL_AFTER_END)
+    if accepted is None:
+        return _fails(case, "timeout", expected, "no cancel response")
+    if accepted and exchange.answer is None:
+        return _fails(case, "timeout", expected, "the NEXT not answered")
+    # the cancel refused (R10.1, R10.3), or the NEXT answered other than canceled (R8.2): the judge's
+    if not accepted or (exchange.answer is not None and exchange.answer[0] is not GoalStatus.CANCELED):
+        return _seen_by_script(case, expected, f"the cancel {'accepted' if accepted else 'refused'}; "
+                               f"the NEXT {_describe_answer(exchange)}")  # fmt: skip
+    return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
 def _action_cancel_answered(probe: Probe, case: Case) -> CaseFinding:
@@ -1763,6 +1788,7 @@ _CASES: dict[str, Callable[[Probe, Case], CaseFinding]] = {
     "cancel.running_child": _cancel_running_child,
     "cancel.both_answered": _cancel_both_answered,
     "action.cancel_running": _action_cancel_running,
+    "action.cancel_queued": _action_cancel_queued,
     "action.cancel_answered": _action_cancel_answered,
     "finished.ends_the_run": _finished,
     "describe.after_the_run": _describe_after,
