@@ -327,6 +327,25 @@ def test_goal_statuses_that_list_a_goal_the_bag_lacks_just_accepted_begin_the_ju
     assert robot.lost == ((robot.lost[0][0], "02" * 16),)
 
 
+def test_a_goal_the_goal_statuses_listed_and_its_feedback_then_named_begins_the_judgement_anew_once(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Goal statuses list goal 9 just accepted, a goal the bag lacks; its feedback comes before any
+    status, and begins the judgement anew there.  The statuses that follow are no new beginning, even
+    once the reader's books of the goals it has judged (the latest ``_CALLS``) let goal 9 go."""
+    from dynevent.bags import reader
+
+    monkeypatch.setattr(reader, "_CALLS", 3)
+    run = Conversation().begin().status(1, 1, "standby", 0)
+    run.goal_statuses((9, ACCEPTED)).feedback(9, "underway", 1).status(1, 2, "underway", 1)
+    run.result(9, SUCCEEDED, "completed", 1).status(1, 1, "standby", 1)
+    for n in range(2, 7):
+        run.goal(n, goal_id=n).status(1, 2, "underway", n).feedback(n, "underway", n)
+        run.result(n, SUCCEEDED, "completed", n).status(1, 1, "standby", n)
+    robot = _robot(check_bag(run.write(tmp_path / "bag", StoragePlugin.MCAP)))
+    assert [uuid for _, uuid in robot.lost] == ["09" * 16], robot.lost
+
+
 @pytest.mark.spec("R2.2")
 def test_a_status_a_lossy_link_delivered_seconds_late_goes_by_the_servers_stamp(tmp_path: Path) -> None:
     """A recorder on a lossy link received the status that showed the child running seconds late, in

@@ -36,7 +36,7 @@ import heapq
 import importlib.resources
 import os
 import stat
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Container, Iterator, Mapping, Sequence
 from pathlib import Path, PurePath
 from typing import Any, NamedTuple
 
@@ -884,14 +884,14 @@ class _Robot:
                 if uuid in self._goals and uuid not in self._waiting_responses:
                     self.unheard_response(record, uuid)
             self._goals_ended(record.message)
-            accepted = (uuid for uuid, status in record.message if status is GoalStatus.ACCEPTED)
-            unknown = next((uuid for uuid in accepted if uuid not in self._requested), None)
-            if unknown is not None and unknown not in self._waiting_goals:  # its request lost, or late
-                self._listed = unknown
+            self._listed = _unheard_of(record.message, self._requested, self._waiting_goals) or self._listed
             return
-        if record.kind == "status" and self._listed and self._listed not in self._requested:
-            self.lost_request(attrs.evolve(record, goal_uuid=self._listed), seed=record)
-            self._last_status, self._listed = record, ""
+        listed, self._listed = (self._listed, "") if record.kind == "status" else ("", self._listed)
+        if (
+            listed and listed not in self._requested
+        ):  # the first status after them (its feedback did not come first)
+            self.lost_request(attrs.evolve(record, goal_uuid=listed), seed=record)
+            self._last_status = record
             return
         if record.kind in ("feedback", "result") and record.goal_uuid not in self._requested:
             self.lost_request(record)
@@ -1023,6 +1023,13 @@ def _started_by(goals: Mapping[str, Record], status: Any) -> str | None:
     named = [uuid for uuid, goal in nexts if goal.id == status.id]
     unnamed = [uuid for uuid, goal in nexts if goal.id == 0]
     return next(iter(named or unnamed), None)
+
+
+def _unheard_of(statuses: Sequence[tuple[str, GoalStatus]], *known: Container[str]) -> str:
+    """The first goal ``statuses`` list just accepted that none of ``known`` holds (its request lost
+    on the way, or so late it is not judged), or ``""``."""
+    accepted = (uuid for uuid, status in statuses if status is GoalStatus.ACCEPTED)
+    return next((uuid for uuid in accepted if not any(uuid in goals for goals in known)), "")
 
 
 def _after_its_request(

@@ -462,8 +462,7 @@ class AnswerEvidence:
     """What a reader that may not hold every answer (a bag) knows of them at the end: the goals whose
     answer a client asked for (``asked``: a ``get_result`` request event), so that a recording could
     hold it, and the goals whose goal status showed their end (``settled``: goal UUID to ``succeeded``,
-    ``canceled`` or ``aborted``; ``terminated`` where a cancel's refusal showed it, which does not say
-    how), answered whether or not a client asked.  An owed answer is missing
+    ``canceled`` or ``aborted``), answered whether or not a client asked.  An owed answer is missing
     only when it was asked for and not settled."""
 
     asked: Container[str] = ()
