@@ -808,9 +808,9 @@ ENDED_UNSEEN = (
     "at each of the {places} place(s) given, the child was answered before a status showed it running: "
     "the robot stood there, or the link was slower than the child (children that take longer let it run)"
 )
-#: Why ``action.cancel_running`` is not run when the server refused its cancel as of a goal already
-#: terminated: the child ended before the cancel reached the server (found in the lab, where the
-#: robot stood at its place already, and the case reported the deployed adapter's refusal as D31).
+#: Why ``action.cancel_running`` (or ``action.cancel_queued``) is not run when the server refused its
+#: cancel as of a goal already terminated: the child ended before the cancel reached the server (found
+#: in the lab, where the robot stood at its place already, and the case reported the refusal as D31).
 CANCEL_AFTER_END = (
     "the child ended before the cancel reached the server, which refused it as of a goal already "
     "terminated (rightly, R10.5): a child that takes longer lets the case run"
