@@ -41,7 +41,8 @@ _THIRTY = (
     "has found another way a lossy network misleads a reader or a client, each fixed since with a test "
     "of its own (the CHANGELOG's 'found at 30% loss'); on 2026-11-29, after ten runs in eleven passed, "
     "the first CI run with 30% in it found one more (check read the run's INACTIVE status while it "
-    "still held a child running, the status of that child's end lost)"
+    "still held a child running, the status of that child's end lost), fixed the same day: 30% goes "
+    "into CI once runs beside a busy loop have passed on that fix too"
 )
 #: The shares of packets each lossy host drops, each way.
 LOSSES = [
