@@ -84,6 +84,7 @@ OVER_DDS: Mapping[str, tuple[str, ...]] = {
     "R9.2": ("cancel.wrong_id",),
     "R9.3": ("cancel.running_child",),
     "R10.1": (),
+    "R10.2": ("action.cancel_waiting",),
     "R10.3": ("action.cancel_running",),
     "R10.5": (),
     "R11.1": ("finished.ends_the_run",),

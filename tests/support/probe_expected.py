@@ -43,7 +43,7 @@ BROKEN = {
     "never_answers_cancel": {
         "next.busy": "fail", "next.busy_finished": "fail", "cancel.wrong_id": "fail",
         "cancel.seq_stale": "fail", "cancel.seq_future": "fail", "cancel.running_child": "fail",
-        "cancel.both_answered": "fail",
+        "cancel.both_answered": "fail", "action.cancel_waiting": "fail",
     },
     # every case that runs a child to its end waits for an answer that never comes (R19.1)
     "hangs_next": {
@@ -92,6 +92,7 @@ JUDGED_IN_PROCESS = {
             "cancel.seq_future",
             "cancel.running_child",
             "cancel.both_answered",
+            "action.cancel_waiting",
             "action.cancel_running",
             "action.cancel_answered",
         ],

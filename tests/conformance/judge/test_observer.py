@@ -626,6 +626,34 @@ def test_an_action_level_cancel_sent_as_a_goal_is_accepted_finds_it_queued_or_st
     assert found(trace("server", started=True).check())
 
 
+@pytest.mark.spec("R10.2", "R10.1", "R10.5", "R8.3")
+@pytest.mark.parametrize("tap", ["client", "server"])
+def test_an_action_level_cancel_of_a_cancel_goal_that_waits_for_the_childs_end(tap: str) -> None:
+    """A CANCEL of the running child (6) is accepted, then cancelled at the action level.  Started, it
+    waits for the child's end: the cancel answers it ``cancelled while not running`` and the child's
+    cancellation goes on, its NEXT aborted ``canceled`` (R10.2, R8.2); no message marks the CANCEL's
+    start, and the judge reads the same answers as of a CANCEL not yet started (R10.1).  Refused as of
+    a goal terminated: the child had ended and answered the CANCEL (R8.3) before the cancel came, and
+    the refusal is right (R10.5), its start unseen; refused otherwise, the CANCEL was open: R10.1."""
+
+    def trace(refusal: dict[str, bool] | None) -> Trace:
+        talk = Trace()
+        talk.rows[0] = {**talk.rows[0], "tap": tap}
+        talk.started().goal(2, event_type=2, id=6).add("cancel_request", goal_uuid=uuid(2))
+        if refusal is None:
+            talk.add("cancel_response", goal_uuid=uuid(2), accepted=True)
+            talk.result(2, "canceled", failure="cancelled while not running")
+            return talk.result(1, "aborted", "canceled", 6).status(1, 1, "standby", 6)
+        talk.add("cancel_response", goal_uuid=uuid(2), accepted=False, **refusal)
+        talk.result(1, "succeeded", "completed", 6).result(2, "succeeded", "completed", 6)
+        return talk.status(1, 1, "standby", 6)
+
+    for refusal in (None, {"terminated": True}):
+        assert trace(refusal).check().clean, (refusal, found(trace(refusal).check()))
+    findings = [finding[1:] for finding in found(trace({}).check())]
+    assert ("R10.1", "cancel_response") in findings, findings
+
+
 def test_a_cancel_responses_terminated_is_written_and_read_back() -> None:
     """A probe's trace keeps what the transport said of a refused cancel (the ``terminated`` field)."""
     writer = TraceWriter(None, fleet="f", robot="r", tap="client")

@@ -236,6 +236,31 @@ EXPECTED: dict[tuple[str, str], dict[tuple[str, str, str], int]] = {
         ("D31", "R8.2", "goal_status"): 2,
         ("D9", "R7.3", "log_seq"): 51,
     },
+    # the lab's run of 2026-11-29 with action.cancel_waiting (the same build): that case missing, the
+    # adapter answering the CANCEL before its cancel came (D1); the rest as in queued
+    ("waiting", "standard"): {
+        ("D10", "R4.12", "accepted_stale_id"): 1,
+        ("D10", "R5.2", "race_not_lost"): 1,
+        ("D10", "R6.2", "child_id"): 19,
+        ("D12", "R4.11", "accepted_non_finite_stubborn_period"): 1,
+        ("D26", "R2.2", "status_mismatch"): 1,
+        ("D28", "R2.2", "status_mismatch"): 8,
+        ("D31", "R10.3", "cancel_response"): 2,
+        ("D31", "R8.2", "goal_status"): 2,
+        ("D7", "R4.4", "accepted_uninitialized_event_type"): 1,
+        ("D7", "R4.5", "accepted_unknown_event_type"): 1,
+        ("D8", "R4.13", "accepted_cancel_idle"): 1,
+        ("D8", "R4.14", "accepted_cancel_id_mismatch"): 1,
+        ("D9", "R7.3", "log_seq"): 54,
+    },
+    ("waiting", "rmf_ros2"): {
+        ("D12", "R4.11", "accepted_non_finite_stubborn_period"): 1,
+        ("D26", "R2.2", "status_mismatch"): 1,
+        ("D28", "R2.2", "status_mismatch"): 4,
+        ("D31", "R10.3", "cancel_response"): 2,
+        ("D31", "R8.2", "goal_status"): 2,
+        ("D9", "R7.3", "log_seq"): 54,
+    },
     ("probe", "rmf_ros2"): {
         ("D1", "R2.2", "status_mismatch"): 3,
         ("D1", "R4.6", "accepted_busy"): 1,

@@ -3,7 +3,8 @@
 tests/data/rmf_ros2/calibration/probe-known.txt is the probe's report of a run against Open-RMF's
 own fleet adapter in the lab, remeasure/probe-known.txt that of the re-measure of a fresh build,
 easy/probe-known.txt that of the site whose robot is added through EasyFullControl (every case), and
-recalibration/probe-known.txt and queued/probe-known.txt those of the latest runs, with every case the
+recalibration/probe-known.txt, queued/probe-known.txt and waiting/probe-known.txt those of the latest
+runs, with every case the
 probe had that day
 (lab/rmf_ros2/README.md; the command and provenance in tests/data/rmf_ros2/README.md): on the
 full_control site every case but ``stubborn.clamp_notice``, whose stubborn period crashes that
@@ -28,7 +29,7 @@ DATA = Path(__file__).resolve().parents[2] / "data" / "rmf_ros2"
 #: The lab's runs, oldest first.
 RUNS = [
     DATA / name / "probe-known.txt"
-    for name in ("calibration", "remeasure", "easy", "recalibration", "queued")
+    for name in ("calibration", "remeasure", "easy", "recalibration", "queued", "waiting")
 ]
 #: The cases added to the probe after its first run, each with the first run that holds it: the runs
 #: before it were made without it.
@@ -37,6 +38,7 @@ FIRST_HELD = {
     "request.description_invalid": "recalibration",
     "request.stubborn_nan": "recalibration",
     "action.cancel_queued": "queued",
+    "action.cancel_waiting": "waiting",
 }
 #: The cases the lab's runs on the full_control site leave out, and why (the EasyFullControl site's,
 #: ``easy``, runs every case).

@@ -106,8 +106,9 @@ def test_a_case_not_run_is_never_a_pass() -> None:
     assert f"- not run: {place}" in report
 
 
-def test_known_missing_is_the_seq_wrap_for_rmf_ros2() -> None:
-    assert {"rmf_ros2": frozenset({"begin.seq_wrap"})} == probe_cases.KNOWN_MISSING
+def test_known_missing_is_the_seq_wrap_and_the_waiting_cancel_for_rmf_ros2() -> None:
+    """rmf_ros2 reaches the wrap after four billion runs, and lets no CANCEL wait (D1)."""
+    assert {"rmf_ros2": frozenset({"begin.seq_wrap", "action.cancel_waiting"})} == probe_cases.KNOWN_MISSING
     assert {case.id for case in CASES} >= probe_cases.KNOWN_MISSING["rmf_ros2"]
 
 

@@ -882,8 +882,9 @@ def test_a_wait_the_deadline_cut_short_is_no_failure_of_the_server() -> None:
 
 class _EndingFirstLink(InProcessLink):
     """The in-process link whose child ends just as an action-level cancel of its NEXT reaches the
-    server: the cancel finds the goal answered and is refused (R10.5), and the transport says why
-    (ROS 2's ``ERROR_GOAL_TERMINATED``, which rcl_action gives from the goal's own state)."""
+    server: the cancel finds the goal answered and is refused (R10.5), and the link says why, as a
+    transport does (ROS 2's ``ERROR_GOAL_TERMINATED``, which rcl_action gives from the goal's own
+    state)."""
 
     def __init__(self, config: ServeConfig, trace: TraceWriter) -> None:
         super().__init__(config, trace=trace)
@@ -893,27 +894,53 @@ class _EndingFirstLink(InProcessLink):
         self.step(ins.ChildFinished(status="completed", now=self.now))
         return super().cancel(exchange, timeout)
 
-    def hear_cancel_response(
-        self, exchange: probe_runner.Exchange, accepted: bool, *, terminated: bool = False
-    ) -> None:
-        terminated = not accepted
-        super().hear_cancel_response(exchange, accepted, terminated=terminated)
-
 
 @pytest.mark.spec("R10.5")
-def test_a_cancel_refused_as_of_a_goal_terminated_leaves_the_running_cancel_case_not_run() -> None:
+@pytest.mark.parametrize("case_id", ["action.cancel_running", "action.cancel_waiting"])
+def test_a_cancel_refused_as_of_a_goal_terminated_leaves_the_running_cancel_case_not_run(
+    case_id: str,
+) -> None:
     """Found in the lab: the child of action.cancel_running ended (the robot stood at its place) before
     the cancel reached the deployed adapter, which refused it as of a goal terminated, rightly; the
     probe reported the refusal as D31.  Where the transport says so, the case is not run, saying why,
-    and the judge finds nothing in its records."""
+    and the judge finds nothing in its records.  The same for a CANCEL's cancel: the child's end
+    answered the CANCEL (R8.3) before the cancel came."""
     options = attrs.evolve(OPTIONS, timeout=3, deadline=1000)
-    case = [case for case in CASES if case.id == "action.cancel_running"]
+    case = [case for case in CASES if case.id == case_id]
     trace = TraceWriter(None, fleet="tinyRobot", robot="tinyRobot1", tap="client")
     link = _EndingFirstLink(CONFIG, trace)
     said = probe_runner.run_cases(link, options, case, lambda _: None)
-    assert [(f.verdict, f.seen) for f in said] == [(Verdict.MISSING, probe_runner.CANCEL_AFTER_END)], said
+    why = probe_runner.CANCEL_ENDED if case_id == "action.cancel_waiting" else probe_runner.CANCEL_AFTER_END
+    assert [(f.verdict, f.seen) for f in said] == [(Verdict.MISSING, why)], said
     assert '"terminated":true' in trace.text().replace(" ", "")
     assert check_trace(trace.text().splitlines()).clean
+
+
+@pytest.mark.spec("R10.2", "R10.1", "R9.3")
+def test_the_waiting_cancel_case_cancels_a_cancel_goal_the_link_had_started() -> None:
+    """action.cancel_waiting reaches R10.2, not R10.1 (the same answers on the wire): its link's turn
+    hands the CANCEL over before the action-level cancel comes, so the machine answers by R10.2 and the
+    child's cancellation, begun by the CANCEL's start (R9.3), ends the child early."""
+    first = attrs.evolve(State.new("tinyRobot", "tinyRobot1"), seq=LAST_SEQ - 1)
+    server = RobotServer("tinyRobot", "tinyRobot1", machine_config(CONFIG), first)
+    steps: list[tuple[ins.Input, tuple[outs.Output, ...]]] = []
+
+    def stepper(event: ins.Input) -> tuple[outs.Output, ...]:
+        outputs = server.step(event)
+        steps.append((event, outputs))
+        return outputs
+
+    case = [case for case in CASES if case.id == "action.cancel_waiting"]
+    options = attrs.evolve(OPTIONS, timeout=3, deadline=1000)
+    said = probe_runner.run_cases(InProcessLink(CONFIG, stepper=stepper), options, case, lambda _: None)
+    assert [finding.verdict for finding in said] == [Verdict.PASS], said
+    cancel = next(event for event, _ in steps if isinstance(event, ins.CancelRequested))
+    started = [event.goal_uuid for event, _ in steps if isinstance(event, ins.GoalStarted)]
+    assert cancel.goal_uuid in started  # the CANCEL started before its cancel came
+    rules = {output.rule for event, outputs in steps if event is cancel for output in outputs}
+    assert rules == {"R10.2"}
+    told = [output for _, outputs in steps for output in outputs if isinstance(output, outs.CancelChild)]
+    assert [output.rule for output in told] == ["R9.3"]
 
 
 class _LaggingLink(InProcessLink):
@@ -1439,13 +1466,20 @@ def test_over_a_link_whose_channels_lag_every_case_passes_and_the_judge_finds_no
     link = _LaggingLink(config, trace, **lags)  # the trace: the records as the probe hears them, lagged
     # the next run begins (0.3 s after a run's end) before the lagged end reaches the probe: the query
     # between the two cannot be asked over such a link, and the case says so
-    options = attrs.evolve(OPTIONS, timeout=10, deadline=5000, allow_missing=("describe.after_the_run",))
+    # a CANCEL waits for its child's next report (every 0.25 s): where its acceptance comes later, the
+    # two have ended before its cancel can reach it, which the server refuses as of a goal terminated
+    waited = lags.get("response", 0.0) < 0.25
+    missing = ("describe.after_the_run",) if waited else ("describe.after_the_run", "action.cancel_waiting")
+    options = attrs.evolve(OPTIONS, timeout=10, deadline=5000, allow_missing=missing)
     findings = probe_runner.run_cases(link, options, list(CASES), lambda _: None)
     code, findings = probe_runner.conclude(findings, trace.text(), options, lambda _: None, _unasked)
     verdicts = {finding.case.id: finding for finding in findings}
     after = verdicts.pop("describe.after_the_run")
     assert after.verdict is Verdict.MISSING
     assert after.seen.startswith("run 0 began after run 4294967295 ended and before the description query")
+    if not waited:
+        ended = verdicts.pop("action.cancel_waiting")
+        assert (ended.verdict, ended.seen) == (Verdict.MISSING, probe_runner.CANCEL_ENDED), ended
     assert {case: finding.verdict for case, finding in verdicts.items()} == dict.fromkeys(
         verdicts, Verdict.PASS
     )

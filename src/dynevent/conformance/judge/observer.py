@@ -573,8 +573,25 @@ class _Requests(_Part):
         ended = ins.ChildFinished(status=final, now=self.replica.now)
         after, _ = self.replica.simulate([ended])
         self.replica.resync(after)
-        bound.let_go()
+        for uuid in (running.goal_uuid, *state.cancels):  # the CANCELs its end answered, too (R8.3)
+            if (waiting := self.goals.get(uuid)) is not None:
+                waiting.let_go()
         return True
+
+    def stops_the_child(self, uuid: str) -> bool:
+        """Is goal ``uuid`` a CANCEL of the running child, waiting for its end or queued to start?"""
+        state = self.replica.st
+        running = state.running
+        if running is None:
+            return False
+        if uuid in state.cancels:
+            return True
+        queued = next((goal for goal in state.queued if goal.goal_uuid == uuid), None)
+        return (
+            queued is not None
+            and queued.goal.event_type == EventType.CANCEL.value
+            and queued.goal.id == running.child_id
+        )
 
     def on_goal_response(self, record: Record) -> None:
         if record.goal_uuid in self.duplicates:
@@ -690,8 +707,17 @@ class _Requests(_Part):
         if seen is not None and seen.owed:
             return  # a goal the state no longer follows: its cancel is not judged either
         running = self.replica.st.running
-        if running is not None and running.goal_uuid == record.goal_uuid:
-            if record.status == TERMINATED or self.ahead.found_ended(record.goal_uuid):
+        ended = record.status == TERMINATED or self.ahead.found_ended(record.goal_uuid)
+        if running is not None and ended and self.stops_the_child(record.goal_uuid):
+            # a CANCEL of the running child the server had ended: it had started (a client's tap does
+            # not see when: the judge may hold it queued), and the child's end answered it (R8.3)
+            if record.goal_uuid not in self.replica.st.cancels:
+                started = ins.GoalStarted(goal_uuid=record.goal_uuid, now=self.replica.now)
+                self.replica.commit(*self.replica.simulate([started]))
+            _remember_goal(self.ended_shown, running.goal_uuid)
+            self.ended_unseen(shown=True)
+        elif running is not None and running.goal_uuid == record.goal_uuid:
+            if ended:
                 _remember_goal(self.ended_shown, record.goal_uuid)  # its cancel's refusal says so
             self.ended_unseen(shown=True)  # the server showed it ended before the cancel came
         if self.replica.start_uncertain_for(record.goal_uuid):

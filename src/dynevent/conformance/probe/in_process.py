@@ -114,6 +114,7 @@ class InProcessLink(Link):
         self._order = itertools.count()
         self._outbox: collections.deque[outs.Output] = collections.deque()
         self._exchanges: dict[str, Exchange] = {}
+        self._ended: set[str] = set()  # the goals the server answered: a cancel of one is refused so
         self._children: dict[int, _Child] = {}
         self.whereabouts = Whereabouts()  # where the robot stands, as its children leave it
         self._latest: DynamicEventStatus | None = None
@@ -127,6 +128,7 @@ class InProcessLink(Link):
         through here, as a binding's do)."""
         outputs = self._ask(event)
         self._outbox.extend(outputs)
+        self._ended.update(output.goal_uuid for output in outputs if isinstance(output, outs.AnswerGoal))
         return outputs
 
     def _ask(self, event: ins.Input) -> tuple[outs.Output, ...]:
@@ -251,7 +253,10 @@ class InProcessLink(Link):
         outputs = self.step(ins.CancelRequested(goal_uuid=exchange.uuid, now=self.now))
         response = next((output for output in outputs if isinstance(output, outs.CancelResponse)), None)
         if response is not None:  # the response first: rclpy answers the cancel before its effects
-            self.hear_cancel_response(exchange, response.accepted)
+            # a goal the server had answered is refused as terminated, from the goal's own state, as
+            # rcl_action does (ERROR_GOAL_TERMINATED), whatever the server's refusal says
+            terminated = not response.accepted and exchange.uuid in self._ended
+            self.hear_cancel_response(exchange, response.accepted, terminated=terminated)
         self._drain()
         return None if response is None else response.accepted
 

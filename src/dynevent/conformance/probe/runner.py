@@ -195,6 +195,12 @@ class Link:
     def wait_for_server(self, timeout: float) -> bool:
         raise NotImplementedError
 
+    def turn(self) -> None:
+        """Let the server take what is due now: a link that hands an accepted goal over at its next turn
+        (in process, the driver protocol) hands it over; a transport whose server runs on its own has
+        nothing to let happen."""
+        self.wait(lambda: False, 0)
+
     def send(self, goal: Goal) -> Exchange:
         """Send ``goal`` as a new goal (a fresh UUID); its response, feedback and answer come to the
         :class:`Exchange`."""
@@ -814,6 +820,15 @@ ENDED_UNSEEN = (
 CANCEL_AFTER_END = (
     "the child ended before the cancel reached the server, which refused it as of a goal already "
     "terminated (rightly, R10.5): a child that takes longer lets the case run"
+)
+#: Why ``action.cancel_waiting`` is not run when the server refused its cancel as of a goal already
+#: terminated: the CANCEL had ended first (found in the lab: the deployed adapter answers a CANCEL as
+#: soon as it has told the child to stop, D1).
+CANCEL_ENDED = (
+    "the CANCEL had ended before its cancel reached the server, which refused it as of a goal already "
+    "terminated (rightly, R10.5): it waits for the child's next report, which came sooner than this link "
+    "brought its acceptance (children that report less often let the case run), or it waited for "
+    "nothing (rmf_ros2 answers a CANCEL as soon as it has told the child to stop, D1)"
 )
 #: Why ``finished.ends_the_run`` is not run when the next run's status came, the INACTIVE did not, and
 #: the transport knows a status was published and not delivered meanwhile.
@@ -1614,6 +1629,54 @@ def _action_cancel_queued(probe: Probe, case: Case) -> CaseFinding:
         probe.stop_unanswered(exchange)
 
 
+def _action_cancel_waiting(probe: Probe, case: Case) -> CaseFinding:
+    """R10.2: a CANCEL of the running child waits for the child's end (R9.3); an action-level cancel of
+    that CANCEL, sent once its acceptance is heard and the link's turn has passed (a link that hands an
+    accepted goal over at its next turn starts it then), answers it ``cancelled while not running``,
+    and the child's cancellation goes on: the NEXT is answered at the child's end, which the CANCEL
+    brought early (R8.2: aborted, its result's status canceled, as for a CANCEL not cancelled)."""
+    expected = (
+        "the cancel accepted; the CANCEL answered canceled 'cancelled while not running'; the NEXT "
+        "answered at its child's end, which the CANCEL brought early (R8.2: aborted, status canceled)"
+    )
+    with probe.child() as (running, child_id):
+        status = probe.link.status or probe.any_status()
+        stop = probe.send(_goal(status, EventType.CANCEL, id=child_id), answer=False)
+        if not stop.accepted:
+            raise _Unreachable(f"the CANCEL of the running child was {_describe_answer(stop)}")
+        probe.link.turn()
+        accepted = probe.cancel(stop)
+        stop.answered(probe.timeout)
+        running.answered(probe.timeout)
+        probe.note(f"the CANCEL: {_describe_answer(stop)}; the NEXT: {_describe_answer(running)}")
+        if stop.cancel_found_ended:  # refused rightly (R10.5): the child, and its CANCEL, had ended
+            raise _Unreachable(CANCEL_ENDED)
+        if accepted is None:
+            return _fails(case, "timeout", expected, "no cancel response")
+        if stop.answer is None or running.answer is None:
+            return _fails(case, "timeout", expected, "a goal left without an answer")
+        seen = (
+            f"the cancel {'accepted' if accepted else 'refused'}; the CANCEL {_describe_answer(stop)}; "
+            f"the NEXT {_describe_answer(running)}"
+        )
+        answered = stop.answer[0] is GoalStatus.CANCELED and _failed_with(stop, Failure.NOT_RUNNING)
+        if not (accepted and answered):  # the cancel or the CANCEL's answer (R10.1, R10.2): the judge's
+            return _seen_by_script(case, expected, seen)
+        if not machine.ends_early(running.answer[1].status):
+            # the child's cancellation stopped: where records are in the server's order, the link's turn
+            # started the CANCEL before the cancel came; at a client's tap that start is unknown, and the
+            # judge reads the cancel as of a CANCEL not yet started (R10.1), which lets the child run on
+            if probe.link.apart:
+                return _seen_by_script(case, expected, seen)
+            return _fails(case, "start", expected, seen)
+        return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
+
+
+def _failed_with(exchange: Exchange, failure: Failure) -> bool:
+    answer = exchange.answer
+    return answer is not None and answer[1].execution_failure == failure.value
+
+
 def _cancel_of_the_next(probe: Probe, case: Case, exchange: Exchange) -> CaseFinding:
     """An action-level cancel of the NEXT ``exchange``, accepted, and the NEXT answered canceled."""
     expected = "the cancel accepted; the NEXT answered canceled"
@@ -1789,6 +1852,7 @@ _CASES: dict[str, Callable[[Probe, Case], CaseFinding]] = {
     "cancel.both_answered": _cancel_both_answered,
     "action.cancel_running": _action_cancel_running,
     "action.cancel_queued": _action_cancel_queued,
+    "action.cancel_waiting": _action_cancel_waiting,
     "action.cancel_answered": _action_cancel_answered,
     "finished.ends_the_run": _finished,
     "describe.after_the_run": _describe_after,
