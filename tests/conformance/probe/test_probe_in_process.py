@@ -989,6 +989,31 @@ class _LaggingLink(InProcessLink):
         self._later("begin", lambda: InProcessLink.hear_begin(self, begin))
 
 
+@pytest.mark.spec("R16.1")
+def test_a_query_answered_for_the_next_run_whose_begin_came_and_status_did_not_is_not_a_failure() -> None:
+    """Found at 30% loss across hosts: the run ended (its FINISHED answered), the next run began, and
+    the query after the run reached the server after that begin; the probe heard the next run's begin
+    but its status came only after the case's wait.  The answer is the next run's, rightly: the case
+    is not run, saying so, where it failed before ("query")."""
+
+    class NextRunStatusLate(_LaggingLink):  # run 0's statuses come 30 s late, the rest at once
+        def hear_status(self, status: Any) -> None:
+            self.lags["status"] = 30.0 if status.dynamic_event_seq == 0 else 0.0
+            super().hear_status(status)
+
+    trace = TraceWriter(None, fleet="tinyRobot", robot="tinyRobot1", keep=True, tap="client")
+    # the FINISHED's answer comes a second late: the next run begins (0.3 s after the end) before it
+    link = NextRunStatusLate(CONFIG, trace, answer=1.0)
+    options = attrs.evolve(OPTIONS, timeout=3, deadline=5000)
+    cases = [case for case in CASES if case.id in ("finished.ends_the_run", "describe.after_the_run")]
+    said = {
+        finding.case.id: finding for finding in probe_runner.run_cases(link, options, cases, lambda _: None)
+    }
+    after = said["describe.after_the_run"]
+    assert after.verdict is Verdict.MISSING, after
+    assert after.seen.startswith("run 0 began after run 4294967295 ended and before the description query")
+
+
 class _FeedbackLosingLink(_LaggingLink):
     """The lagging link that also loses for good every third feedback that carries a log entry (a
     reliable topic keeps its last messages only, and a link that repairs slowly loses older ones)."""

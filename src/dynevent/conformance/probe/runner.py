@@ -1773,11 +1773,21 @@ def _describe_after(probe: Probe, case: Case) -> CaseFinding:
         return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
     seen = f"running={got[0]}, status {got[1]!r}, id {got[3]}, description {got[2]!r}"
     if got[0] and got[1] == _STANDBY:  # a run's first status: the next run may have begun before the query
-        later = probe.link.wait_status(lambda s: seq_after(s.dynamic_event_seq, seq), probe.timeout)
+        probe.link.wait(lambda: _run_after(probe.link, seq) is not None, probe.timeout)
+        later = _run_after(probe.link, seq)
         if later is not None:
-            why = BEGAN_FIRST.format(later=later.dynamic_event_seq, ended=seq, seen=f" ({seen})")
+            why = BEGAN_FIRST.format(later=later, ended=seq, seen=f" ({seen})")
             return CaseFinding(case, Verdict.MISSING, seen=why, by_link=True)
     return _fails(case, "query", expected, seen)
+
+
+def _run_after(link: Link, seq: int) -> int | None:
+    """The seq of a run after run ``seq`` that the link has heard of, by its begin or a status (each
+    topic read apart: found at 30% loss across hosts, the next run's begin heard and its status lost
+    until after the case's wait); None where none."""
+    seqs = [begin.dynamic_event_seq for begin in list(link.begins)]
+    seqs += [status.dynamic_event_seq for status in link.history()]
+    return next((later for later in seqs if seq_after(later, seq)), None)
 
 
 _LAST_SEQ = U32_MAX
