@@ -101,8 +101,8 @@ class Case:
 class CaseFinding:
     """A case's verdict, what the spec expects and what was seen, the messages exchanged, and the
     D-number when the failure is one docs/divergences.md records; ``known`` when ``--known`` covers
-    it; ``absent`` when the failure is a message that did not come within the timeout (a trace,
-    which has no clock, shows that only when later messages prove it)."""
+    it; ``absent`` when the failure is a message that did not come within the timeout (a wait the
+    spec does not bound: the judge finds a message missing only where the trace ends without it)."""
 
     case: Case
     verdict: Verdict
@@ -349,8 +349,10 @@ CASES: tuple[Case, ...] = (
 #: (every other failure is the judge's finding on the case's records, :func:`judge_verdicts`):
 #: docs/probe.md lists them.  tests/conformance/probe/test_probe_cases.py holds the runner to them.
 UNTRACEABLE: dict[str, str] = {
-    "timeout": "a message that did not come within --timeout: a trace has no clock, and shows a message "
-    "missing only where a later record proves it",
+    "timeout": "a message that did not come within --timeout: the spec sets no time within which a server "
+    "sends it, so the judge, which holds a trace to the spec's rules, finds a message missing only where "
+    "the trace ends without it (R19.1's answer_missing) or a later record proves it lost; the wait is the "
+    "probe's own bound (a case whose message came after it is not run, saying so)",
     "transport": "how the transport offers a topic, and what a subscription made late received: a trace "
     "records the messages of one subscription, not how topics are offered",
     "configuration": "which categories, and which descriptions, the server takes: its configuration, "
