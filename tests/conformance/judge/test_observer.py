@@ -654,6 +654,26 @@ def test_an_action_level_cancel_of_a_cancel_goal_that_waits_for_the_childs_end(t
     assert ("R10.1", "cancel_response") in findings, findings
 
 
+@pytest.mark.spec("R10.2", "R9.3")
+def test_a_cancel_goals_answer_of_an_action_level_cancel_whose_request_is_lost() -> None:
+    """Found at 30% loss across hosts: a recorder heard the action-level cancel of a waiting CANCEL
+    33 s late (not judged), and then its answer, ``cancelled while not running``, read as answered
+    before its child's end (R9.3).  Seen apart from the server, that answer is R10.2's for a cancel
+    whose request the records lack; at the server's tap, which records every cancel it takes, it is
+    still R9.3's finding."""
+
+    def trace(tap: str) -> Trace:
+        talk = Trace()
+        talk.rows[0] = {**talk.rows[0], "tap": tap}
+        talk.started().goal(2, event_type=2, id=6)
+        talk.result(2, "canceled", failure="cancelled while not running")
+        return talk.result(1, "aborted", "canceled", 6).status(1, 1, "standby", 6)
+
+    assert trace("client").check().clean, found(trace("client").check())
+    findings = [finding[1:] for finding in found(trace("server").check())]
+    assert ("R9.3", "cancel_answered_early") in findings, findings
+
+
 def test_a_cancel_responses_terminated_is_written_and_read_back() -> None:
     """A probe's trace keeps what the transport said of a refused cancel (the ``terminated`` field)."""
     writer = TraceWriter(None, fleet="f", robot="r", tap="client")

@@ -256,6 +256,10 @@ def candidates(state: State, record: Record, now: int) -> Iterator[list[ins.Inpu
             yield [ins.TaskKill(now=now)]
         if first_line(result.execution_failure) == Failure.SHUTDOWN.value:
             yield [ins.Shutdown(now=now)]
+        if first_line(result.execution_failure) == Failure.NOT_RUNNING.value and (
+            uuid in order or uuid in state.cancels
+        ):  # an action-level cancel whose request the records lack (R10.1, R10.2): seen apart only
+            yield [ins.CancelRequested(goal_uuid=uuid, now=now)]
         return
     message: DynamicEventStatus = record.message
     for queued in state.queued:
@@ -307,6 +311,8 @@ def abduce(
     near = None
     exact: list[Found] = []
     for events in candidates(state, record, now):
+        if not apart and any(isinstance(event, ins.CancelRequested) for event in events):
+            continue  # a tap at the server records every cancel request it takes
         after, owed = simulate(state, events, config)
         if kind is outs.AnswerGoal:  # a feedback owed before the answer (R17.7) may have come already
             owed = [
