@@ -152,8 +152,11 @@ LOOK = 3.0
 #: How often send looks at the graph again while it waits for the robot's server.
 WAKE = 0.5
 #: How long the servers the graph shows must stay the same before send says the robot's is not among
-#: them: a fleet whose discovery is still under way shows more servers at each look.
-SETTLED = 1.5
+#: them: a fleet whose discovery is still under way shows more servers at each look.  Longer than Fast
+#: DDS's participant announcement period (3 s): a process whose first announcements were lost (a
+#: loaded machine, a lossy link) shows at its next one (found across hosts with static peers: the
+#: graph stood at one shard's robots for over 1.5 s, and send named half the fleet).
+SETTLED = 3.5
 
 
 def _found(
