@@ -78,7 +78,7 @@ def _caught(rule: str, done: subprocess.CompletedProcess[str]) -> tuple[str, ...
     if failed:
         return tuple(failed)
     _, _, judged = done.stdout.partition("the judge, over every record of the exchange: ")
-    assert f": fail: {rule} " in judged, done.stdout
+    assert f": fail: {rule} " in judged, done.stdout + done.stderr
     return ("the judge",)
 
 

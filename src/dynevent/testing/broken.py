@@ -128,6 +128,27 @@ def feedback_after_answer(types: Mapping[str, int], notes: dict[str, Any], outpu
     return output
 
 
+def _query_names_the_first_id() -> dict[str, Callable[..., Any]]:
+    """The description query answers the run's first id (its begin's) where it must answer the current
+    one: the child's once a child has run.  A change to the machine's step, which a transport's query
+    service calls as the in-process server does."""
+    original = machine.step
+
+    def step(state: Any, event: Any, config: Any) -> Any:
+        transition = original(state, event, config)
+        if not isinstance(event, ins.DescriptionQuery) or not state.active:
+            return transition
+        outputs = tuple(
+            attrs.evolve(output, response=attrs.evolve(output.response, id=state.event_id))
+            if isinstance(output, outs.DescriptionAnswer)
+            else output
+            for output in transition.outputs
+        )
+        return attrs.evolve(transition, outputs=outputs)
+
+    return {"step": step}
+
+
 DEFECTS: dict[str, Defect] = {
     "skips_seq": Defect(
         "each run's seq is the last one's plus 2 (runs 1, 3, 5)",
@@ -157,6 +178,9 @@ DEFECTS: dict[str, Defect] = {
     "wrong_feedback_id": Defect("feedback names the wrong child", rewrite=wrong_feedback_id),
     "ignores_finished": Defect("the status never says the run ended", rewrite=ignores_finished),
     "ignores_clamp": Defect("a clamped stubborn period is not warned of", rewrite=ignores_clamp),
+    "query_names_the_first_id": Defect(
+        "the description query names the run's first id, not the current one", _query_names_the_first_id()
+    ),
     "feedback_after_answer": Defect(
         "one more feedback follows a NEXT's answer", rewrite=feedback_after_answer
     ),

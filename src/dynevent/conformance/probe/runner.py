@@ -1111,13 +1111,7 @@ def _status_after_child(probe: Probe, case: Case) -> CaseFinding:
         if unpublished is None:
             raise
         return unpublished
-    goal = probe.next_goal(status)
-    exchange = probe.send(goal)
-    if not exchange.answers:
-        raise _TimedOut(f"the child did not end within {probe.timeout:g} s")
-    answer = exchange.answer
-    child = answer[1].id if answer is not None and answer[1].id else goal.id  # R8.1: the result names it
-    after = probe.link.wait_status(lambda s: s.id == child and s.status != _UNDERWAY, probe.timeout)
+    child, after = _child_ended(probe, status)
     if after is None:
         return _fails(case, "timeout", f"WAITING, id {child}", "no status after the child")
     probe.note(f"status {status_text(after)}")
@@ -1126,6 +1120,18 @@ def _status_after_child(probe: Probe, case: Case) -> CaseFinding:
     divergence = "D2" if after.dynamic_state == DynamicState.RUNNING else None
     return _fails(case, "status_after_end", f"WAITING, standby, id {child}", f"status {status_text(after)}",
                   divergence=divergence)  # fmt: skip
+
+
+def _child_ended(probe: Probe, status: DynamicEventStatus) -> tuple[int, DynamicEventStatus | None]:
+    """A child run to its end from ``status``: its id, and the status that shows it ended (its id, no
+    longer underway), or None when none came within the timeout."""
+    goal = probe.next_goal(status)
+    exchange = probe.send(goal)
+    if not exchange.answers:
+        raise _TimedOut(f"the child did not end within {probe.timeout:g} s")
+    answer = exchange.answer
+    child = answer[1].id if answer is not None and answer[1].id else goal.id  # R8.1: the result names it
+    return child, probe.link.wait_status(lambda s: s.id == child and s.status != _UNDERWAY, probe.timeout)
 
 
 def _end_unpublished(probe: Probe, case: Case) -> CaseFinding | None:
@@ -1718,16 +1724,37 @@ def _describe(probe: Probe) -> tuple[Any, str]:
 
 def _describe_query(probe: Probe, case: Case) -> CaseFinding:
     status = probe.waiting()
+    return _query_answers(probe, case, status, status.status)
+
+
+def _describe_after_child(probe: Probe, case: Case) -> CaseFinding:
+    """R16.2 once a child has ended: the query names the run's current id, the child's (asked before
+    any child, as describe.query is, the run's first id is the current one too).  The status it
+    answers is describe.query's: a status published wrongly at a child's end (R8.4, the
+    status's cases) would make a right answer differ from it."""
+    child, after = _child_ended(probe, probe.waiting())
+    if after is None:
+        raise _TimedOut(f"no status after child {child} within {probe.timeout:g} s")
+    probe.note(f"status {status_text(after)}")
+    return _query_answers(probe, case, after, None)
+
+
+def _query_answers(
+    probe: Probe, case: Case, status: DynamicEventStatus, wanted_status: str | None
+) -> CaseFinding:
+    """R16.2: the query answers running, ``status``'s id (of the latest status the robot published),
+    ``wanted_status`` (any where None) and the run's description (its begin's); ``info`` where the
+    server offers no query."""
     answer, why = _describe(probe)
     if answer is None:
         probe.note(why)
         return CaseFinding(case, Verdict.INFO, expected="an answer, where the server offers the query",
                        seen=f"{why} (a server need not offer it: rmf_ros2 does not, D17)")  # fmt: skip
     begun = [begin for begin in probe.link.begins if begin.dynamic_event_seq == status.dynamic_event_seq]
-    wanted = (True, status.status, status.id)
     got = (bool(answer.running), str(answer.status), int(answer.id))
+    wanted = (True, got[1] if wanted_status is None else wanted_status, status.id)
     probe.note(f"answer: running={got[0]} status={got[1]} id={got[2]} description={answer.description!r}")
-    expected = f"running, {status.status}, id {status.id}, the begin's description"
+    expected = f"running, {wanted_status or 'any status'}, id {status.id}, the begin's description"
     if got != wanted or (begun and answer.description != begun[-1].description):
         return _fails(
             case, "query", expected, f"running={got[0]}, {got[1]}, id {got[2]}, {answer.description!r}"
@@ -1833,6 +1860,7 @@ _CASES: dict[str, Callable[[Probe, Case], CaseFinding]] = {
     "status.latched": _status_latched,
     "status.waiting": _status_waiting,
     "describe.query": _describe_query,
+    "describe.after_child": _describe_after_child,
     "request.seq_stale": _seq_stale,
     "request.seq_future": _seq_future,
     "request.seq_stale_next": _seq_stale_next,
