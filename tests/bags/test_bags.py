@@ -708,6 +708,44 @@ def test_a_lost_request_keeps_the_goals_whose_responses_are_to_come(tmp_path: Pa
     assert robot.report.clean and [uuid for _, uuid in robot.lost] == ["01" * 16], robot
 
 
+@pytest.mark.spec("R2.2")
+def test_a_lost_request_whose_last_status_names_an_ended_child_is_judged_anew_from_the_next(
+    tmp_path: Path,
+) -> None:
+    """Found at 30% loss across hosts: the recorder lost the status of child 13's end, NEXT 13's answer
+    and the request of the NEXT that ran child 14.  Child 14's feedback shows the loss; the status
+    before it shows child 13 running, which had ended: judged anew from it, every status of child 14
+    read as wrong (R2.2).  The judgement begins anew at the next status instead (child 14's)."""
+
+    def run() -> Conversation:
+        conversation = Conversation().begin().status(1, 1, "standby", 0)
+        conversation.goal(1, goal_id=13).goal_statuses((1, EXECUTING)).ask(1)
+        conversation.feedback(1, "underway", 13).status(1, 2, "underway", 13).feedback(1, "underway", 13)
+        conversation.status(1, 1, "standby", 13).goal_statuses((1, SUCCEEDED))
+        conversation.result(1, SUCCEEDED, "completed", 13)
+        conversation.goal(2, goal_id=14).goal_statuses((1, SUCCEEDED), (2, EXECUTING)).ask(2)
+        conversation.feedback(2, "underway", 14).status(1, 2, "underway", 14).feedback(2, "underway", 14)
+        conversation.status(1, 1, "standby", 14).goal_statuses((1, SUCCEEDED), (2, SUCCEEDED))
+        return conversation.result(2, SUCCEEDED, "completed", 14).status(1, 1, "standby", 14)
+
+    def lost(topic: str, message: Any) -> bool:
+        if topic == STATUS_TOPIC:
+            return (message.id, message.status) == (13, "standby")  # child 13's end
+        if topic.endswith("get_result/_service_event"):
+            return bool(message.response) and message.response[0].result.id == 13  # its answer
+        request = topic.endswith("send_goal/_service_event") and message.info.event_type == 1
+        return request and message.info.sequence_number == 2  # NEXT 14's request
+
+    whole = run()
+    assert _robot(check_bag(whole.write(tmp_path / "whole", StoragePlugin.MCAP))).report.clean
+    lossy = run()
+    lossy.messages = [item for item in lossy.messages if not lost(item[0], item[3])]
+    assert len(lossy.messages) == len(whole.messages) - 3
+    robot = _robot(check_bag(lossy.write(tmp_path / "lossy", StoragePlugin.MCAP)))
+    assert robot.report.clean, robot.report.findings
+    assert [uuid for _, uuid in robot.lost] == ["02" * 16], robot.lost
+
+
 def test_introspection_without_contents_is_a_partial_view(tmp_path: Path) -> None:
     """send_goal introspection in METADATA mode records events without the goals: a partial view."""
     run = topics_alone(partial_clean_run())

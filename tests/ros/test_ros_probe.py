@@ -504,3 +504,38 @@ def test_a_probe_interrupted_says_what_it_ran_and_stops_without_a_traceback(tmp_
     ran = re.search(rf"SIGINT: stopped after (\d+) of {len(CASES)} case\(s\)", midway.stdout)
     assert ran is not None and 0 < int(ran[1]) < len(CASES), midway.stdout
     assert "status.latched                pass" in midway.stdout  # the report of the cases that ran
+
+
+#: ``dynevent probe`` in a process whose ROS close-down hangs (the middleware's, inside
+#: ``close_down``), bounded at 2 s instead of 20.
+_HANGS_AT_CLOSE = """
+import sys, time
+from dynevent.ros import spinning
+from dynevent.tools.cli import main
+spinning.close_down = lambda *args, **kwargs: time.sleep(600)
+spinning.Session.close.__kwdefaults__["bound"] = 2.0
+sys.exit(main(["probe", *sys.argv[1:]]))
+"""
+
+
+def test_a_close_down_that_hangs_ends_at_its_bound_after_the_report(tmp_path: Path) -> None:
+    """The probe's report (its verdicts and the run's last line) is printed, and reaches a pipe, before
+    its ROS close-down, which a bound ends (every thread's stack, exit status 1): a close-down that
+    hangs in the middleware loses no verdict (found in CI: a probe whose close-down outlasted its
+    bound printed nothing, its report held in Python's buffer at the ending)."""
+    serve = _serve(tmp_path, "hangsAtClose", "standard")
+    try:
+        process = subprocess.Popen(
+            [sys.executable, "-c", _HANGS_AT_CLOSE, "--robot", "hangsAtClose", "--timeout", "5",
+             "--cases", "status.waiting"],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=child_env(),
+        )  # fmt: skip
+        done = finish(process, 60)
+    finally:
+        serve.stop()
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert _verdicts(done.stdout) == {"status.waiting": "pass"}, done.stdout + done.stderr
+    assert "the run took" in done.stdout, done.stdout
+    # the bound's ending: every thread's stack, the main thread's in the session's close
+    assert done.stderr.startswith("Timeout (0:00:02)!"), done.stderr
+    assert re.search(r"dynevent/ros/spinning\.py\", line \d+ in close\n", done.stderr), done.stderr

@@ -894,6 +894,9 @@ class _Robot:
             self._last_status = record
             return
         if record.kind in ("feedback", "result") and record.goal_uuid not in self._requested:
+            if self._seed_names_another_child(record):  # begin anew at the next status instead
+                self._listed = record.goal_uuid
+                return
             self.lost_request(record)
         elif record.kind in _ACCEPTED_BY and record.goal_uuid in self._goals:
             self.unheard_response(record)
@@ -939,6 +942,20 @@ class _Robot:
         statuses = _published_on_acceptance(self._waiting, uuid)
         if statuses is not None:
             self._goals_ended(statuses, but=uuid)
+
+    def _seed_names_another_child(self, record: Record) -> bool:
+        """Whether the status a judgement begun anew at ``record`` (the feedback or answer of a goal
+        whose request the bag lacks) would take first shows another child running than ``record``
+        names: the statuses since it were lost, and it may show a child that has ended (found at 30% loss: the
+        status of child 13's end, its answer and the next NEXT's request lost, the judgement begun at
+        child 13 running read child 14's statuses as wrong, R2.2).  The judgement then begins at the
+        next status, as for a goal the goal statuses listed (:func:`_begun_anew`)."""
+        assert isinstance(self._judge, Checker)
+        statuses = [item for item in self._judge.pending if item.kind == "status"]
+        seed = statuses[-1] if statuses else self._last_status
+        if seed is None or seed.message.dynamic_state != DynamicState.RUNNING:
+            return False  # from WAITING (or INACTIVE) the goal's NEXT may start any child
+        return int(seed.message.id) != int(record.message.id)
 
     def lost_request(self, record: Record, seed: Record | None = None) -> None:
         """``record`` names a goal whose request the bag lacks (lost on the way: a recorder that had

@@ -1714,6 +1714,11 @@ class Checker:
         if len(self._window) > self._lookahead:
             self._judge_first()
 
+    @property
+    def pending(self) -> tuple[Record, ...]:
+        """The records pushed and not judged yet, in order (what :meth:`cut` would hand on)."""
+        return tuple(self._window)
+
     def goal_ended(self, uuid: str) -> None:
         """The action's goal statuses (a bag's, between the records pushed so far and the next)
         showed goal ``uuid`` ended: a NEXT accepted after it finds that goal's child ended, where its

@@ -5,6 +5,7 @@ Ctrl-C or SIGTERM stops it, with the findings of the cases that ended."""
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable
 
 from dynevent import files
@@ -29,23 +30,24 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
     progress = Progress("dynevent probe", len(cases), interval=0.0)
     say = progress.above(say)
     trace = _open_trace(options)  # kept in memory too: the judge reads every record of the exchange
-    try:
-        ran = run(cases, options, say, progress.show, trace=trace)
-    except ProbeInterrupted as stop:
+    with contextlib.ExitStack() as closing:  # the ROS close-down last: no report waits on the middleware
+        try:
+            ran = run(cases, options, say, progress.show, trace=trace, closing=closing)
+        except ProbeInterrupted as stop:
+            progress.close()
+            if stop.findings:
+                say(probe_cases.format_findings(stop.findings).rstrip("\n"))
+            say(f"{stop.name}: stopped after {len(stop.findings)} of {len(cases)} case(s); the rest not run")
+            return 128 + stop.signal
+        finally:
+            trace.close()
         progress.close()
-        if stop.findings:
-            say(probe_cases.format_findings(stop.findings).rstrip("\n"))
-        say(f"{stop.name}: stopped after {len(stop.findings)} of {len(cases)} case(s); the rest not run")
-        return 128 + stop.signal
-    finally:
-        trace.close()
-    progress.close()
-    if ran is None:
-        return probe_cases.EXIT_USAGE
-    findings, took = ran
-    status = probe_runner.conclude(findings, trace.text(), options, say, files.write_text)[0]
-    say(probe_runner.took(took, options))  # its bound, checkable
-    return status
+        if ran is None:
+            return probe_cases.EXIT_USAGE
+        findings, took = ran
+        status = probe_runner.conclude(findings, trace.text(), options, say, files.write_text)[0]
+        say(probe_runner.took(took, options))  # its bound, checkable
+        return status
 
 
 class ProbeInterrupted(Interrupted):
@@ -63,14 +65,30 @@ def run(
     progress: Callable[[str], None] | None = None,
     *,
     trace: TraceWriter | None = None,
+    closing: contextlib.ExitStack | None = None,
 ) -> tuple[list[probe_cases.CaseFinding], float] | None:
     """Carry out ``cases`` against the robot over DDS, writing every record of the exchange to
     ``trace``; the findings and the seconds the run took on the link's clock, from the server found
-    to the last case's end, or None when no server was found."""
+    to the last case's end, or None when no server was found.  The node stops spinning when the
+    cases end (nothing more reaches ``trace``); its close-down (:meth:`Session.close`, bounded) is
+    left to ``closing`` where given, to come after the report, else done here."""
     see_the_whole_graph()
     offline(say)
     session = Session("dynevent_probe", options.ros_args)
     link = RosLink(session.node, options.fleet, options.robot, trace)
+    with contextlib.ExitStack() as here:
+        (closing or here).callback(session.close, link.destroy)
+        return _run(session, link, cases, options, say, progress)
+
+
+def _run(
+    session: Session,
+    link: RosLink,
+    cases: list[Case],
+    options: Options,
+    say: Callable[[str], None],
+    progress: Callable[[str], None] | None,
+) -> tuple[list[probe_cases.CaseFinding], float] | None:
     if options.introspection:
         link.introspect()
     session.start()
@@ -86,7 +104,7 @@ def run(
     except Interrupted as stop:
         raise ProbeInterrupted(stop.signal, findings) from None
     finally:
-        session.close(link.destroy)
+        session.spinner.stop()
 
 
 def _open_trace(options: Options) -> TraceWriter:
