@@ -756,6 +756,50 @@ def test_a_lost_request_whose_last_status_names_an_ended_child_is_judged_anew_fr
     assert [uuid for _, uuid in robot.lost] == ["02" * 16], robot.lost
 
 
+@pytest.mark.spec("R4.11")
+def test_a_refused_goal_whose_response_was_lost_is_not_read_as_the_listed_goal_a_status_runs(
+    tmp_path: Path,
+) -> None:
+    """Found by dropping messages of a 30% run's bag: a NEXT refused for its NaN stubborn period, its
+    response lost, and a later NEXT naming the same id, its response still to come, whose child the
+    status shows running.  The server lists only goals it accepted: the later one, which the goal
+    statuses hold, is the goal the status shows started, not the refused one (read as accepted, R4.11)."""
+
+    def next_goal(run: Conversation, n: int, stubborn: float, accepted: bool | None) -> None:
+        goal = ros_type("rmf_task_msgs/action/DynamicEvent_Goal")(
+            dynamic_event_seq=1, event_type=1, category="go_to_place", description='"pantry"', id=2,
+            stubborn_period=stubborn,
+        )  # fmt: skip
+        request = ros_type("rmf_task_msgs/action/DynamicEvent_SendGoal_Request")(
+            goal_id=ros_uuid(n), goal=goal
+        )
+        run._event("send_goal", 1, n, request=request)
+        if accepted is not None:
+            response = ros_type("rmf_task_msgs/action/DynamicEvent_SendGoal_Response")(
+                accepted=accepted, stamp=ros_time(0)
+            )
+            run._event("send_goal", 2, n, response=response)
+
+    for lost in (False, True):
+        run = Conversation().begin().status(1, 1, "standby", 0)
+        next_goal(run, 1, float("nan"), None if lost else False)
+        run.now += 9 * SECOND
+        next_goal(run, 2, 0.0, None)  # its response comes after its child's start
+        run.goal_statuses((2, ACCEPTED)).status(1, 2, "underway", 2).goal_statuses((2, EXECUTING))
+        run.feedback(2, "underway", 2)
+        response = ros_type("rmf_task_msgs/action/DynamicEvent_SendGoal_Response")(
+            accepted=True, stamp=ros_time(0)
+        )
+        run._event("send_goal", 2, 2, response=response)
+        run.ask(2).status(1, 1, "standby", 2).goal_statuses((2, SUCCEEDED))
+        run.result(2, SUCCEEDED, "completed", 2)
+        run.now += 2 * SECOND
+        robot = _robot(
+            check_bag(run.status(1, 1, "standby", 2).write(tmp_path / str(lost), StoragePlugin.MCAP))
+        )
+        assert robot.report.clean, (lost, robot.report.findings)
+
+
 def test_introspection_without_contents_is_a_partial_view(tmp_path: Path) -> None:
     """send_goal introspection in METADATA mode records events without the goals: a partial view."""
     run = topics_alone(partial_clean_run())

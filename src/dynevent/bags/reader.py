@@ -692,6 +692,7 @@ class _Robot:
         self._settled: collections.OrderedDict[str, str] = collections.OrderedDict()
         self._requested: collections.OrderedDict[str, None] = collections.OrderedDict()  # goals passed on
         self._last_status: Record | None = None
+        self._listing: frozenset[str] = frozenset()  # the goals the latest goal statuses held open
         self._listed = ""  # a goal the goal statuses listed just accepted, whose request the bag lacks
         self._before: list[Report] = []  # the judgements cut where the bag lost a goal's request
         self.lost: list[tuple[int, str]] = []
@@ -884,6 +885,7 @@ class _Robot:
                 if uuid in self._goals and uuid not in self._waiting_responses:
                     self.unheard_response(record, uuid)
             self._goals_ended(record.message)
+            self._listing = frozenset(uuid for uuid, status in record.message if not status.is_terminal)
             self._listed = _unheard_of(record.message, self._requested, self._waiting_goals) or self._listed
             return
         listed, self._listed = (self._listed, "") if record.kind == "status" else ("", self._listed)
@@ -902,7 +904,9 @@ class _Robot:
             self.unheard_response(record)
         elif record.kind == "status":
             self._last_status = record
-            started = _started_by(self._goals, record.message) if self._server_introspects else None
+            started = (
+                _started_by(self._goals, record.message, self._listing) if self._server_introspects else None
+            )
             if started is not None:
                 self.unheard_response(record, started)
         if record.kind == "result":
@@ -1024,12 +1028,16 @@ class _Robot:
         )  # fmt: skip
 
 
-def _started_by(goals: Mapping[str, Record], status: Any) -> str | None:
+def _started_by(goals: Mapping[str, Record], status: Any, listing: Container[str] = ()) -> str | None:
     """The goal of ``goals`` (awaiting their responses) whose child ``status`` shows running: a NEXT of
     the status's run that names the child's id, else the first of that run that lets the server name
-    it (id 0).  A server shows a child running only once it accepted and started its NEXT.  Only where
-    the bag holds the server's own records of its goals: a response recorded by a client alone is
-    stamped as it arrives, after the statuses the server published on accepting the goal."""
+    it (id 0); of several, one the latest goal statuses held open (``listing``) first.  A server shows
+    a child running only once it accepted and started its NEXT, and lists only a goal it accepted
+    (found at 30% loss: a NEXT refused for its NaN stubborn period, its response lost, and a later
+    NEXT naming the same id, its response to come, listed and running: the refused one was read as
+    accepted, R4.11).  Only where the bag holds the server's own records of its goals: a response
+    recorded by a client alone is stamped as it arrives, after the statuses the server published on
+    accepting the goal."""
     if status.dynamic_state != DynamicState.RUNNING:
         return None
     run = status.dynamic_event_seq
@@ -1039,7 +1047,8 @@ def _started_by(goals: Mapping[str, Record], status: Any) -> str | None:
     ]  # fmt: skip
     named = [uuid for uuid, goal in nexts if goal.id == status.id]
     unnamed = [uuid for uuid, goal in nexts if goal.id == 0]
-    return next(iter(named or unnamed), None)
+    candidates = named or unnamed
+    return next((uuid for uuid in candidates if uuid in listing), next(iter(candidates), None))
 
 
 def _unheard_of(statuses: Sequence[tuple[str, GoalStatus]], *known: Container[str]) -> str:
