@@ -1187,6 +1187,8 @@ def test_a_response_whose_request_came_later_is_paired_and_a_skip_the_late_feedb
         "response_after_cut",
         "cancel_request_late",
         "ended_at_acceptance",
+        "cancelled_end_dropped",
+        "refused_response_dropped",
     ],
 )
 def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
@@ -1207,7 +1209,10 @@ def test_every_lossy_recording_of_a_correct_server_is_clean(name: str) -> None:
     lost takes first the request of a CANCEL whose response it had not judged yet; in
     ``cancel_request_late`` a NEXT answered ``canceled`` by an action-level cancel whose events came
     27 s late is no finding; in ``ended_at_acceptance`` a goal the goal statuses published on the next
-    NEXT's acceptance show succeeded (its status and answer lost) ended before that acceptance."""
+    NEXT's acceptance show succeeded (its status and answer lost) ended before that acceptance; in
+    ``cancelled_end_dropped`` a child a CANCEL stopped, the status of its end lost, is read as stopped
+    by that CANCEL's start; in ``refused_response_dropped`` a NEXT refused, its response lost, is not
+    read as accepted from the status of a later NEXT's child of the same id."""
     report = check_bag(LOADED.parent / name)
     assert report.clean, [robot.report.findings for robot in report.robots]
 

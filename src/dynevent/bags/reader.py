@@ -693,6 +693,7 @@ class _Robot:
         self._requested: collections.OrderedDict[str, None] = collections.OrderedDict()  # goals passed on
         self._last_status: Record | None = None
         self._listing: frozenset[str] = frozenset()  # the goals the latest goal statuses held open
+        self._listing_at = 0  # and their bag time
         self._listed = ""  # a goal the goal statuses listed just accepted, whose request the bag lacks
         self._before: list[Report] = []  # the judgements cut where the bag lost a goal's request
         self.lost: list[tuple[int, str]] = []
@@ -886,6 +887,7 @@ class _Robot:
                     self.unheard_response(record, uuid)
             self._goals_ended(record.message)
             self._listing = frozenset(uuid for uuid, status in record.message if not status.is_terminal)
+            self._listing_at = record.line
             self._listed = _unheard_of(record.message, self._requested, self._waiting_goals) or self._listed
             return
         listed, self._listed = (self._listed, "") if record.kind == "status" else ("", self._listed)
@@ -905,7 +907,9 @@ class _Robot:
         elif record.kind == "status":
             self._last_status = record
             started = (
-                _started_by(self._goals, record.message, self._listing) if self._server_introspects else None
+                _started_by(self._goals, record.message, self._listing, self._listing_at)
+                if self._server_introspects
+                else None
             )
             if started is not None:
                 self.unheard_response(record, started)
@@ -1028,16 +1032,19 @@ class _Robot:
         )  # fmt: skip
 
 
-def _started_by(goals: Mapping[str, Record], status: Any, listing: Container[str] = ()) -> str | None:
+def _started_by(
+    goals: Mapping[str, Record], status: Any, listing: Container[str] = (), listed_at: int = 0
+) -> str | None:
     """The goal of ``goals`` (awaiting their responses) whose child ``status`` shows running: a NEXT of
     the status's run that names the child's id, else the first of that run that lets the server name
-    it (id 0); of several, one the latest goal statuses held open (``listing``) first.  A server shows
-    a child running only once it accepted and started its NEXT, and lists only a goal it accepted
-    (found at 30% loss: a NEXT refused for its NaN stubborn period, its response lost, and a later
-    NEXT naming the same id, its response to come, listed and running: the refused one was read as
-    accepted, R4.11).  Only where the bag holds the server's own records of its goals: a response
-    recorded by a client alone is stamped as it arrives, after the statuses the server published on
-    accepting the goal."""
+    it (id 0); of several, one the latest goal statuses held open (``listing``, at bag time
+    ``listed_at``) first, and never one requested :data:`SKEW` or more before them that they do not
+    hold.  A server shows a child running only once it accepted and started its NEXT, and lists only
+    a goal it accepted (found dropping messages of a 30% run's bag: a NEXT refused for its NaN
+    stubborn period, its response lost, was read as accepted, R4.11, from the status of a later
+    NEXT's child naming the same id).  Only where the bag holds the server's own records of its
+    goals: a response recorded by a client alone is stamped as it arrives, after the statuses the
+    server published on accepting the goal."""
     if status.dynamic_state != DynamicState.RUNNING:
         return None
     run = status.dynamic_event_seq
@@ -1045,8 +1052,11 @@ def _started_by(goals: Mapping[str, Record], status: Any, listing: Container[str
         (uuid, goal.message) for uuid, goal in goals.items()
         if goal.message.event_type == EventType.NEXT and goal.message.dynamic_event_seq == run
     ]  # fmt: skip
-    named = [uuid for uuid, goal in nexts if goal.id == status.id]
-    unnamed = [uuid for uuid, goal in nexts if goal.id == 0]
+    possible = [
+        (uuid, goal) for uuid, goal in nexts if uuid in listing or goals[uuid].line > listed_at - SKEW
+    ]
+    named = [uuid for uuid, goal in possible if goal.id == status.id]
+    unnamed = [uuid for uuid, goal in possible if goal.id == 0]
     candidates = named or unnamed
     return next((uuid for uuid in candidates if uuid in listing), next(iter(candidates), None))
 
