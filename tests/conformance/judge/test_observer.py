@@ -626,6 +626,25 @@ def test_an_action_level_cancel_sent_as_a_goal_is_accepted_finds_it_queued_or_st
     assert found(trace("server", started=True).check())
 
 
+@pytest.mark.spec("R10.3", "R10.1")
+def test_a_cancelled_next_whose_answer_shows_its_child_ran_had_started_though_no_start_was_heard() -> None:
+    """Found at 30% loss across hosts: a client cancels a NEXT as soon as it hears it accepted; the
+    server had started it (R10.3) and answers it ``canceled`` with its child's id and status, but
+    the start's feedback and the RUNNING status were lost for good.  Seen apart, that answer shows
+    the goal had started when the cancel came (one cancelled before its start is answered
+    ``cancelled while not running``, R10.1).  At the server's tap, the goal was queued: R10.1's."""
+
+    def trace(tap: str) -> Trace:
+        talk = Trace()
+        talk.rows[0] = {**talk.rows[0], "tap": tap}
+        talk.begin().status(1, 1, "standby", 5).next(1, 6)
+        talk.add("cancel_request", goal_uuid=uuid(1)).add("cancel_response", goal_uuid=uuid(1), accepted=True)
+        return talk.result(1, "canceled", "canceled", 6).status(1, 1, "standby", 6)
+
+    assert trace("client").check().clean, found(trace("client").check())
+    assert ("R10.1", "result_id") in [finding[1:] for finding in found(trace("server").check())]
+
+
 @pytest.mark.spec("R10.2", "R10.1", "R10.5", "R8.3")
 @pytest.mark.parametrize("tap", ["client", "server"])
 def test_an_action_level_cancel_of_a_cancel_goal_that_waits_for_the_childs_end(tap: str) -> None:

@@ -720,6 +720,9 @@ class _Requests(_Part):
             if ended:
                 _remember_goal(self.ended_shown, record.goal_uuid)  # its cancel's refusal says so
             self.ended_unseen(shown=True)  # the server showed it ended before the cancel came
+        if self.apart and self.ran_unseen(record.goal_uuid):
+            started = ins.GoalStarted(goal_uuid=record.goal_uuid, now=self.replica.now)
+            self.replica.commit(*self.replica.simulate([started]))
         if self.replica.start_uncertain_for(record.goal_uuid):
             # a deferred child is cancelled at once (R10.4); a started one ends later (R10.3)
             answer = self.ahead.of_goal(record.goal_uuid)  # at once: within the next two records
@@ -732,6 +735,26 @@ class _Requests(_Part):
             self.replica.settle_start(started=not deferred)
         self.replica.commit(
             *self.replica.simulate([ins.CancelRequested(goal_uuid=record.goal_uuid, now=self.replica.now)])
+        )
+
+    def ran_unseen(self, uuid: str) -> bool:
+        """Seen apart: is goal ``uuid`` a NEXT the judge holds queued whose answer, the next of its
+        records ahead, shows its child ran (an answer with a child status and no ``cancelled while not
+        running``)?  A goal cancelled before its start is answered so (R10.1); one that had started
+        when the cancel came was fed back and shown running, and a lossy link can lose all of that
+        for good (found at 30% loss: the NEXT's start feedback and RUNNING status lost, its answer
+        ``canceled``, ``canceled``, read as R10.1's with a wrong id)."""
+        if not any(
+            queued.goal_uuid == uuid and queued.goal.event_type == EventType.NEXT
+            for queued in self.replica.st.queued
+        ):
+            return False
+        answer = self.ahead.of_goal(uuid)
+        return (
+            answer is not None
+            and answer.kind == "result"
+            and bool(answer.message.status)
+            and first_line(answer.message.execution_failure) != Failure.NOT_RUNNING.value
         )
 
     def on_cancel_response(self, record: Record) -> None:
