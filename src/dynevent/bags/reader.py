@@ -692,8 +692,7 @@ class _Robot:
         self._settled: collections.OrderedDict[str, str] = collections.OrderedDict()
         self._requested: collections.OrderedDict[str, None] = collections.OrderedDict()  # goals passed on
         self._last_status: Record | None = None
-        self._listing: frozenset[str] = frozenset()  # the goals the latest goal statuses held open
-        self._listing_at = 0  # and their bag time
+        self._listing: tuple[frozenset[str], int] = (frozenset(), 0)  # latest goal statuses' open goals, when
         self._listed = ""  # a goal the goal statuses listed just accepted, whose request the bag lacks
         self._before: list[Report] = []  # the judgements cut where the bag lost a goal's request
         self.lost: list[tuple[int, str]] = []
@@ -886,8 +885,8 @@ class _Robot:
                 if uuid in self._goals and uuid not in self._waiting_responses:
                     self.unheard_response(record, uuid)
             self._goals_ended(record.message)
-            self._listing = frozenset(uuid for uuid, status in record.message if not status.is_terminal)
-            self._listing_at = record.line
+            held_open = frozenset(uuid for uuid, status in record.message if not status.is_terminal)
+            self._listing = (held_open, record.line)
             self._listed = _unheard_of(record.message, self._requested, self._waiting_goals) or self._listed
             return
         listed, self._listed = (self._listed, "") if record.kind == "status" else ("", self._listed)
@@ -898,7 +897,8 @@ class _Robot:
             self._last_status = record
             return
         if record.kind in ("feedback", "result") and record.goal_uuid not in self._requested:
-            if self._seed_names_another_child(record):  # begin anew at the next status instead
+            assert isinstance(self._judge, Checker)
+            if _names_another_child(self._judge.pending, self._last_status, record):  # the next status
                 self._listed = record.goal_uuid
                 return
             self.lost_request(record)
@@ -906,12 +906,8 @@ class _Robot:
             self.unheard_response(record)
         elif record.kind == "status":
             self._last_status = record
-            started = (
-                _started_by(self._goals, record.message, self._listing, self._listing_at)
-                if self._server_introspects
-                else None
-            )
-            if started is not None:
+            started = _started_by(self._goals, record.message, *self._listing)
+            if started is not None and self._server_introspects:
                 self.unheard_response(record, started)
         if record.kind == "result":
             _remember(self._answered, record.line, record.goal_uuid)
@@ -925,8 +921,9 @@ class _Robot:
             if record.goal_uuid not in self._goals:
                 return  # the response to a goal the bag does not hold (lost, or before the recording)
             del self._goals[record.goal_uuid]
-            if record.accepted:
-                self._ended_by_acceptance(record.goal_uuid)
+            ended = _published_on_acceptance(self._waiting, record.goal_uuid) if record.accepted else None
+            if ended is not None:
+                self._goals_ended(ended, but=record.goal_uuid)
         self.judge.push(record)
 
     def _goals_ended(self, statuses: Sequence[tuple[str, GoalStatus]], but: str = "") -> None:
@@ -940,30 +937,6 @@ class _Robot:
                 if uuid not in self._settled and not stopped and isinstance(self.judge, Checker):
                     self.judge.goal_ended(uuid)
                 _remember(self._settled, uuid, status.value)
-
-    def _ended_by_acceptance(self, uuid: str) -> None:
-        """The goal statuses the server published as it accepted goal ``uuid`` show the goals that had
-        ended by then: where the bag lost the status of a child's end and the goal statuses that
-        followed it (each topic keeps one message, and the next replaced it), that end goes before
-        the acceptance, not after it (found at 30% loss: a NEXT accepted after the previous child's
-        end, read as accepted while it ran, R4.6)."""
-        statuses = _published_on_acceptance(self._waiting, uuid)
-        if statuses is not None:
-            self._goals_ended(statuses, but=uuid)
-
-    def _seed_names_another_child(self, record: Record) -> bool:
-        """Whether the status a judgement begun anew at ``record`` (the feedback or answer of a goal
-        whose request the bag lacks) would take first shows another child running than ``record``
-        names: the statuses since it were lost, and it may show a child that has ended (found at 30% loss: the
-        status of child 13's end, its answer and the next NEXT's request lost, the judgement begun at
-        child 13 running read child 14's statuses as wrong, R2.2).  The judgement then begins at the
-        next status, as for a goal the goal statuses listed (:func:`_begun_anew`)."""
-        assert isinstance(self._judge, Checker)
-        statuses = [item for item in self._judge.pending if item.kind == "status"]
-        seed = statuses[-1] if statuses else self._last_status
-        if seed is None or seed.message.dynamic_state != DynamicState.RUNNING:
-            return False  # from WAITING (or INACTIVE) the goal's NEXT may start any child
-        return int(seed.message.id) != int(record.message.id)
 
     def lost_request(self, record: Record, seed: Record | None = None) -> None:
         """``record`` names a goal whose request the bag lacks (lost on the way: a recorder that had
@@ -1084,11 +1057,30 @@ def _after_its_request(
     return None if request is None else (request[0], request[1] + 0.25)
 
 
+def _names_another_child(pending: Sequence[Record], last_status: Record | None, record: Record) -> bool:
+    """Whether the status a judgement begun anew at ``record`` (the feedback or answer of a goal whose
+    request the bag lacks) would take first, of the records ``pending`` or else ``last_status``, shows
+    another child running than ``record`` names: the statuses since were lost, and that child may have
+    ended (found at 30% loss: the status of child 13's end, its answer and the next NEXT's request
+    lost, the judgement begun at child 13 running read child 14's statuses as wrong, R2.2).  The
+    judgement then begins at the next status, as for a goal the goal statuses listed
+    (:func:`_begun_anew`)."""
+    statuses = [item for item in pending if item.kind == "status"]
+    seed = statuses[-1] if statuses else last_status
+    if seed is None or seed.message.dynamic_state != DynamicState.RUNNING:
+        return False  # from WAITING (or INACTIVE) the goal's NEXT may start any child
+    return int(seed.message.id) != int(record.message.id)
+
+
 def _published_on_acceptance(
     waiting: list[tuple[int, float, int, Record]], uuid: str
 ) -> Sequence[tuple[str, GoalStatus]] | None:
     """The goal statuses the server published as it accepted goal ``uuid``, among the records
-    ``waiting``: the first that list it, where they list it as accepted."""
+    ``waiting``: the first that list it, where they list it as accepted.  They show the goals that
+    had ended by then: where the bag lost the status of a child's end and the goal statuses that
+    followed it (each topic keeps one message, and the next replaced it), that end goes before the
+    acceptance, not after it (found at 30% loss: a NEXT accepted after the previous child's end, read
+    as accepted while it ran, R4.6)."""
     arrays = [
         item
         for item in waiting

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import contextlib
 import faulthandler
-import sys
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -176,11 +175,7 @@ def close_down(nodes: Iterable[Any], context: Any = None) -> None:
 def bounded_close(bound: float = CLOSE_BOUND) -> Iterator[None]:
     """Bound a close-down: if it has not ended after ``bound`` seconds, faulthandler writes every
     thread's stack to standard error and ends the process (exit status 1).  The watch runs outside
-    Python's lock, so it fires even if the close-down hangs inside the middleware.  What the process
-    printed before is flushed first: an ending by the watch does not flush Python's buffers."""
-    for stream in (sys.stdout, sys.stderr):
-        with contextlib.suppress(OSError, ValueError, AttributeError):  # closed, or a closed pipe's
-            stream.flush()
+    Python's lock, so it fires even if the close-down hangs inside the middleware."""
     faulthandler.dump_traceback_later(bound, exit=True)
     try:
         yield

@@ -242,22 +242,7 @@ def candidates(state: State, record: Record, now: int) -> Iterator[list[ins.Inpu
                 ]
         if running is not None and running.started:
             final = result.status if result.status in STATUSES else Status.COMPLETED.value
-            ended = ins.ChildFinished(status=final, now=now)
-            cancels = [
-                queued for queued in state.queued
-                if queued.goal.event_type == EventType.CANCEL and final == Status.CANCELED.value
-            ]  # fmt: skip
-            stoppers = [queued.goal_uuid for queued in cancels]
-            # a queued CANCEL's start (unseen apart from the server) stopped it: first where the CANCEL
-            # names this child (found dropping messages of a 30% run's bag: the status of the child's
-            # end lost, its plain end read first, the CANCEL's later answer as of one started after it)
-            naming = [queued.goal_uuid for queued in cancels if queued.goal.id == running.child_id]
-            for uuid in naming:
-                yield [ins.GoalStarted(goal_uuid=uuid, now=now), ended]
-            yield [ended]
-            for uuid in stoppers:
-                if uuid not in naming:
-                    yield [ins.GoalStarted(goal_uuid=uuid, now=now), ended]
+            yield from _child_ended(state, running.child_id, final, now)
         if running is not None and not running.started and running.goal_uuid == uuid:
             for queued in state.queued:  # a CANCEL's start cancels a deferred child at once (R9.4)
                 if queued.goal.event_type == EventType.CANCEL:
@@ -282,6 +267,25 @@ def candidates(state: State, record: Record, now: int) -> Iterator[list[ins.Inpu
         yield [ins.TaskKill(now=now)]
     if message.status == Status.CANCELED.value or message.dynamic_state == DynamicState.INACTIVE:
         yield [ins.TaskCancel(now=now)]
+
+
+def _child_ended(state: State, child: int, final: str, now: int) -> Iterator[list[ins.Input]]:
+    """The running child ``child`` ended ``final``: of itself, or, ended canceled, stopped by a queued
+    CANCEL's start (unseen apart from the server); first by a CANCEL that names it (found dropping
+    messages of a 30% run's bag: the status of the child's end lost, its plain end read first, the
+    CANCEL's later answer as of one started after it, R9.2)."""
+    ended = ins.ChildFinished(status=final, now=now)
+    cancels = [
+        queued for queued in state.queued
+        if queued.goal.event_type == EventType.CANCEL and final == Status.CANCELED.value
+    ]  # fmt: skip
+    naming = [queued for queued in cancels if queued.goal.id == child]
+    for queued in naming:
+        yield [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now), ended]
+    yield [ended]
+    for queued in cancels:
+        if queued not in naming:
+            yield [ins.GoalStarted(goal_uuid=queued.goal_uuid, now=now), ended]
 
 
 def confirmed(found: Found, upcoming: Record | None) -> bool:

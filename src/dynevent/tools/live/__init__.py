@@ -7,6 +7,7 @@ its own input before it imports one, through :func:`run_over_ros`.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import importlib.util
 import os
@@ -15,7 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
 
-__all__ = ["OFFLINE", "body", "offline", "run_over_ros", "say", "see_the_whole_graph"]
+__all__ = ["OFFLINE", "body", "flush_output", "offline", "run_over_ros", "say", "see_the_whole_graph"]
 
 T = TypeVar("T")
 
@@ -25,6 +26,15 @@ OFFLINE = (
     "process starts, so this one will not reach other hosts when the network comes up; start it once "
     "the network is up"
 )
+
+
+def flush_output() -> None:
+    """Flush what the command printed, before its ROS close-down: a close-down its bound ends
+    (:func:`dynevent.ros.spinning.bounded_close`) ends the process without flushing Python's buffers,
+    and a report still in them is lost (found in CI: a probe's)."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError, AttributeError):  # closed, or a closed pipe's
+            stream.flush()
 
 
 def offline(say: Callable[[str], None], interfaces: Path = Path("/sys/class/net")) -> bool:

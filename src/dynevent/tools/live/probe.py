@@ -20,7 +20,7 @@ from dynevent.ros.graph import no_server_text
 from dynevent.ros.probe import RosLink
 from dynevent.ros.spinning import Session
 from dynevent.tools._progress import Progress
-from dynevent.tools.live import offline, see_the_whole_graph
+from dynevent.tools.live import flush_output, offline, see_the_whole_graph
 
 __all__ = ["ProbeInterrupted", "main", "run"]
 
@@ -78,6 +78,7 @@ def run(
     link = RosLink(session.node, options.fleet, options.robot, trace)
     with contextlib.ExitStack() as here:
         (closing or here).callback(session.close, link.destroy)
+        (closing or here).callback(flush_output)  # first: what was printed reaches its reader
         return _run(session, link, cases, options, say, progress)
 
 

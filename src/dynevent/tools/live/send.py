@@ -31,7 +31,7 @@ from dynevent.ros.client import DynamicEventClient, GoalRun, GoalWaitTimeout
 from dynevent.ros.graph import graph_text, no_server_text, servers_seen
 from dynevent.ros.spinning import Session
 from dynevent.server import outputs as outs
-from dynevent.tools.live import offline, see_the_whole_graph
+from dynevent.tools.live import flush_output, offline, see_the_whole_graph
 from dynevent.wire.messages import DynamicEventStatus, Goal
 from dynevent.wire.units import SECOND
 from dynevent.wire.vocab import EventType, GoalStatus
@@ -140,6 +140,7 @@ def run(args: SendOptions, say: Callable[[str], None]) -> int:
             say(_why_refused(status, result.goal))
         return 0 if _succeeded(event_type, result) else 1
     finally:
+        flush_output()  # what was printed reaches its reader, whatever the close-down does
         session.close(client.destroy)
         if trace is not None:
             trace.close()
