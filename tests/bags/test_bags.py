@@ -575,6 +575,48 @@ def test_the_fleet_wide_begin_topic_stands_for_a_robots_own(tmp_path: Path) -> N
     assert check_bag(both.write(tmp_path / "both", StoragePlugin.MCAP)).clean
 
 
+@pytest.mark.spec("R3.3", "R2.2")
+def test_a_run_whose_begin_the_bag_lacks_is_read_as_begun_from_its_first_status(tmp_path: Path) -> None:
+    """Found at 10% loss across hosts: both copies of a run's begin (the robot's own topic's and the
+    fleet's) lost for good on the way to the recorder.  The run's WAITING status, after the last run's
+    INACTIVE one, is read as its begin's: the run is judged from there, said in ``unbegun`` and by
+    ``check``.  A status no begin explains otherwise (a run skipped, another id) is still R2.2; a
+    begin that comes after all is read, not judged again."""
+
+    def second_run(first: int, status: str = "standby", event_id: int = 5) -> Conversation:
+        run = clean_run()
+        run.status(first, 1, status, event_id)  # its begin lost
+        run.goal(3, seq=2, goal_id=6).feedback(3, "underway", 6).status(2, 2, "underway", 6)
+        run.result(3, SUCCEEDED, "completed", 6).status(2, 1, "standby", 6)
+        return run.goal(4, seq=2, event_type=3).result(4, SUCCEEDED, "completed", 5)
+
+    run = second_run(2).status(2, 0, "uninitialized", 0)
+    at = run.messages[next(i for i, item in enumerate(run.messages) if item[2] > clean_run().now)][2]
+    robot = _robot(check_bag(run.write(tmp_path / "bag", StoragePlugin.MCAP)))
+    assert robot.report.clean, robot.report.findings
+    assert robot.unbegun == ((at, 2),)
+    done = check_command(str(tmp_path / "bag"))
+    assert done.returncode == 0, done.stdout
+    said = f"@ {at // SECOND}.{at % SECOND:09d}: the bag lacks the begin of run 2: read as begun"
+    assert said in done.stdout
+    rows = [json.loads(line) for line in check_command("--json", str(tmp_path / "bag")).stdout.splitlines()]
+    assert [row for row in rows if row["type"] == "lost_begin"] == [
+        {"type": "lost_begin", "file": str(tmp_path / "bag"), "robot": f"{FLEET}/{ROBOT}",
+         "time": f"{at // SECOND}.{at % SECOND:09d}", "seq": 2}
+    ]  # fmt: skip
+    for name, broken in {"skipped": second_run(3), "running": second_run(2, "underway")}.items():
+        robot = _robot(check_bag(broken.write(tmp_path / name, StoragePlugin.MCAP)))
+        assert robot.unbegun == () and ("R2.2", at) in [(f.rule, f.line) for f in robot.report.findings]
+    late = second_run(2)
+    late.begin(2)  # received after the run's first goal had been judged
+    late.status(2, 0, "uninitialized", 0)
+    robot = _robot(check_bag(late.write(tmp_path / "late", StoragePlugin.MCAP)))
+    assert robot.report.clean and robot.unbegun == ((at, 2),), robot.report.findings
+    whole = clean_run().begin(2)
+    whole.status(2, 1, "standby", 5)
+    assert _robot(check_bag(whole.write(tmp_path / "whole", StoragePlugin.MCAP))).unbegun == ()
+
+
 def test_bags_that_cannot_be_read_are_said_in_one_line(tmp_path: Path) -> None:
     with pytest.raises(BagError, match=r"nowhere: cannot read"):
         check_bag(tmp_path / "nowhere")

@@ -197,6 +197,9 @@ class RobotReport:
     #: sent later had been judged (a lossy link on a loaded host): (bag time, channel, when sent, as the
     #: bag says); each is left unjudged, and said
     late: tuple[tuple[int, str, int], ...] = ()
+    #: where the bag lacked a run's begin (on every begin topic it recorded), its first status read as
+    #: the begin's: (the bag time of that status, the run's seq)
+    unbegun: tuple[tuple[int, int], ...] = ()
 
     @property
     def name(self) -> str:
@@ -697,6 +700,7 @@ class _Robot:
         self._before: list[Report] = []  # the judgements cut where the bag lost a goal's request
         self.lost: list[tuple[int, str]] = []
         self.unheard: list[tuple[int, str]] = []
+        self._unbegun: list[tuple[int, int]] = []  # of the judgements cut where a request was lost
         self.lateness = _Lateness()
         self._arrived = 0
         self._began: int | None = None  # the bag time of the robot's first message
@@ -947,6 +951,7 @@ class _Robot:
         first status after goal statuses that listed the goal just accepted."""
         assert isinstance(self._judge, Checker)
         report, pending = self._judge.cut()
+        self._unbegun.extend(self._judge.unbegun)
         kept = tuple(finding for finding in report.findings if finding.line < record.time - SKEW)
         self._before.append(attrs.evolve(report, findings=kept))
         self.lost.append((record.time, record.goal_uuid))
@@ -996,12 +1001,12 @@ class _Robot:
         for before in reversed(self._before):
             records = before.records + report.records
             report = attrs.evolve(report, records=records, findings=before.findings + report.findings)
-        kept = tuple(
-            finding for finding in report.findings if not self.lateness.explains(finding, self._answered)
-        )
+        explained = self.lateness.explains
+        kept = tuple(finding for finding in report.findings if not explained(finding, self._answered))
         return RobotReport(
             self.fleet, self.robot, channels, absent, attrs.evolve(report, findings=kept), not self.judged,
             self.refused, tuple(self.lost), tuple(self.unheard), tuple(self.lateness.late),
+            (*self._unbegun, *self.judge.unbegun),
         )  # fmt: skip
 
 

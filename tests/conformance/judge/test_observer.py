@@ -645,6 +645,24 @@ def test_a_cancelled_next_whose_answer_shows_its_child_ran_had_started_though_no
     assert ("R10.1", "result_id") in [finding[1:] for finding in found(trace("server").check())]
 
 
+@pytest.mark.spec("R3.3", "R2.2")
+def test_a_run_whose_begin_a_client_never_heard_is_read_as_begun_from_its_waiting_status() -> None:
+    """Found at 10% loss across hosts: both copies of a run's begin lost for good.  Seen apart, the
+    WAITING status of the run after the ended one is read as its begin's; at the server's tap, where
+    every begin is seen, it is R2.2."""
+
+    def trace(tap: str) -> Trace:
+        talk = Trace()
+        talk.rows[0] = {**talk.rows[0], "tap": tap}
+        talk.begin().status(1, 1, "standby", 5).goal(1, event_type=3).result(1, "succeeded", "completed", 5)
+        talk.status(1, 0, "uninitialized", 0).status(2, 1, "standby", 7)  # run 2's begin unheard
+        talk.next(2, 8, dynamic_event_seq=2).feedback(2, "underway", 8).status(2, 2, "underway", 8)
+        return talk.result(2, "succeeded", "completed", 8).status(2, 1, "standby", 8)
+
+    assert trace("client").check().clean, found(trace("client").check())
+    assert found(trace("server").check())[0] == (8, "R2.2", "status_mismatch")
+
+
 @pytest.mark.spec("R10.2", "R10.1", "R10.5", "R8.3")
 @pytest.mark.parametrize("tap", ["client", "server"])
 def test_an_action_level_cancel_of_a_cancel_goal_that_waits_for_the_childs_end(tap: str) -> None:

@@ -811,6 +811,9 @@ class _Runs(_Part):
         # was published, and the status after it is then not the begin's own
         self.opened_by_begin = False
         self.latched_begin: DynamicEventDescription | None = None
+        #: the runs read as begun from their first status, their begin not seen: (line, seq)
+        self.unbegun: list[tuple[int, int]] = []
+        self.begin_awaited: int | None = None  # the latest of those, while its begin may still come
 
     def sync(self, record: Record) -> bool:
         """Set the starting state from the first record; True when the record is used up."""
@@ -829,7 +832,7 @@ class _Runs(_Part):
                 f"the robot of this trace, {self.names[0]}/{self.names[1]}",
             )
         state = self.replica.st
-        if self.late_begin(message):
+        if self.late_begin(message) or self.begun_before(message):
             return
         self.begin_seen = True
         if state.shutdown:
@@ -882,6 +885,35 @@ class _Runs(_Part):
         self.begin_seen = True
         return message.dynamic_event_seq == state.seq
 
+    def begun_before(self, message: DynamicEventDescription) -> bool:
+        """The begin of the run :meth:`begin_lost` read as begun from its first status, come after
+        all: read, nothing left to judge."""
+        awaited, self.begin_awaited = self.begin_awaited, None
+        return awaited == message.dynamic_event_seq
+
+    def begin_lost(self, record: Record) -> bool:
+        """Seen apart from the server, the WAITING status a begin publishes, of the run after the one
+        that ended, with no begin of that run before it or just ahead (:func:`_response_ahead` puts one
+        that came just after it first): the run began, and its begin was lost on the way on every begin
+        topic the tap heard (found at 10% loss across hosts: the copies on the robot's own topic and on
+        the fleet's each lost for good).  The run is read as begun here, its description unknown, and
+        said (:attr:`unbegun`).  At the server's tap every begin is seen: there it is R2.2."""
+        message: DynamicEventStatus = record.message
+        state = self.replica.st
+        if not self.apart or state.active or state.shutdown or message.dynamic_state != DynamicState.WAITING:
+            return False
+        if message.dynamic_event_seq != machine.next_seq(state.seq):
+            return False
+        begin = ins.Begin(description="{}", event_id=message.id, now=self.replica.now)
+        after, _ = self.replica.simulate([begin])
+        if not same_status(machine.status_message(after, self.replica.now), message):
+            return False
+        self.replica.begin(state, begin)
+        self.replica.settle_status(message)
+        self.unbegun.append((record.line, message.dynamic_event_seq))
+        self.begin_awaited = message.dynamic_event_seq
+        return True
+
     def adopt_event_id(self, message: DynamicEventStatus) -> None:
         """The begin did not say the dynamic event's id; the WAITING status that follows does."""
         state = self.replica.st
@@ -915,6 +947,8 @@ class _Runs(_Part):
         current = self.replica.status()
         if same_status(current, message):
             return  # a repeat of the state's status (e.g. the latched message, read again)
+        if self.begin_lost(record):
+            return
         # in the server's order a step's answers and feedback come before its status: prefer a
         # candidate that owes none, then accept one whose other outputs are still to come; a tap at a
         # client may see the status first, so a candidate whose answers the next records show wins
@@ -1741,6 +1775,12 @@ class Checker:
     def pending(self) -> tuple[Record, ...]:
         """The records pushed and not judged yet, in order (what :meth:`cut` would hand on)."""
         return tuple(self._window)
+
+    @property
+    def unbegun(self) -> tuple[tuple[int, int], ...]:
+        """The runs read as begun from their first status, their begin not seen (lost on the way, seen
+        apart from the server): (line, seq)."""
+        return tuple(self._observer.runs.unbegun)
 
     def goal_ended(self, uuid: str) -> None:
         """The action's goal statuses (a bag's, between the records pushed so far and the next)

@@ -102,6 +102,9 @@ class PartialJudge:
         self.latest = 0  # the order of the goal whose feedback came first most lately
         self.due: collections.deque[_Due] = collections.deque()
         self.listed: set[str] = set()  # the goals of the latest goal status array
+        #: the runs read as begun from a status (the observer's, :attr:`Checker.unbegun`): a partial
+        #: view reads a status of a run not begun as the run's, without a begin, and says nothing
+        self.unbegun: tuple[tuple[int, int], ...] = ()
 
     def push(self, record: Record) -> None:
         """Judge the next record."""

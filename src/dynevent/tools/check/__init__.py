@@ -112,6 +112,9 @@ def format_bag(bag: Any) -> str:
         for time, uuid in robot.unheard:
             lines.append(f"{where} @ {_bag_time(time)}: the bag lacks the response to goal {uuid}: read "
                          "as accepted from its feedback, answer, running child or goal status")  # fmt: skip
+        for time, seq in robot.unbegun:
+            lines.append(f"{where} @ {_bag_time(time)}: the bag lacks the begin of run {seq}: read as begun "
+                         "from its first status")  # fmt: skip
         for time, channel, sent in robot.late:
             lines.append(f"{where} @ {_bag_time(time)}: {_late(channel, time, sent)}")
         if robot.refused:
@@ -161,6 +164,9 @@ def bag_records(bag: Any) -> list[dict[str, Any]]:
         for time, uuid in robot.unheard:
             rows.append({"type": "lost_response", "file": bag.source, "robot": robot.name,
                          "time": _bag_time(time), "goal_uuid": uuid})  # fmt: skip
+        for time, seq in robot.unbegun:
+            rows.append({"type": "lost_begin", "file": bag.source, "robot": robot.name,
+                         "time": _bag_time(time), "seq": seq})  # fmt: skip
         for time, channel, sent in robot.late:
             rows.append({"type": "late", "file": bag.source, "robot": robot.name, "time": _bag_time(time),
                          "channel": channel, "sent": _bag_time(sent)})  # fmt: skip
