@@ -658,6 +658,29 @@ class _Begins:
         return True
 
 
+class _Listings:
+    """What the action's goal statuses showed: the goals the latest held open and when it came
+    (:attr:`open`), every goal it listed (:attr:`all`), and a goal they listed first, just accepted,
+    whose request the bag lacks (:attr:`unheard`, until the next status takes it)."""
+
+    def __init__(self) -> None:
+        self.open: tuple[frozenset[str], int] = (frozenset(), 0)
+        self.all: frozenset[str] | None = None
+        self.unheard = ""
+
+    def read(self, record: Record, *known: Container[str]) -> None:
+        """Goal statuses ``record``; ``known``: the goals whose request the bag holds."""
+        held_open = frozenset(uuid for uuid, status in record.message if not status.is_terminal)
+        self.open = (held_open, record.line)
+        self.unheard = _unheard_of(record.message, self.all, *known) or self.unheard
+        self.all = frozenset(uuid for uuid, _ in record.message)
+
+    def take_unheard(self) -> str:
+        """The goal :attr:`unheard` names, which a status now takes."""
+        unheard, self.unheard = self.unheard, ""
+        return unheard
+
+
 class _Robot:
     """One robot's records, judged as they come.  A client's and the server's introspection both
     record each goal, response and answer: a record the same as one taken before is taken once (an
@@ -695,8 +718,7 @@ class _Robot:
         self._settled: collections.OrderedDict[str, str] = collections.OrderedDict()
         self._requested: collections.OrderedDict[str, None] = collections.OrderedDict()  # goals passed on
         self._last_status: Record | None = None
-        self._listing: tuple[frozenset[str], int] = (frozenset(), 0)  # latest goal statuses' open goals, when
-        self._listed = ""  # a goal the goal statuses listed just accepted, whose request the bag lacks
+        self._listings = _Listings()
         self._before: list[Report] = []  # the judgements cut where the bag lost a goal's request
         self.lost: list[tuple[int, str]] = []
         self.unheard: list[tuple[int, str]] = []
@@ -889,11 +911,9 @@ class _Robot:
                 if uuid in self._goals and uuid not in self._waiting_responses:
                     self.unheard_response(record, uuid)
             self._goals_ended(record.message)
-            held_open = frozenset(uuid for uuid, status in record.message if not status.is_terminal)
-            self._listing = (held_open, record.line)
-            self._listed = _unheard_of(record.message, self._requested, self._waiting_goals) or self._listed
+            self._listings.read(record, self._requested, self._waiting_goals)
             return
-        listed, self._listed = (self._listed, "") if record.kind == "status" else ("", self._listed)
+        listed = self._listings.take_unheard() if record.kind == "status" else ""
         if (
             listed and listed not in self._requested
         ):  # the first status after them (its feedback did not come first)
@@ -903,14 +923,14 @@ class _Robot:
         if record.kind in ("feedback", "result") and record.goal_uuid not in self._requested:
             assert isinstance(self._judge, Checker)
             if _names_another_child(self._judge.pending, self._last_status, record):  # the next status
-                self._listed = record.goal_uuid
+                self._listings.unheard = record.goal_uuid
                 return
             self.lost_request(record)
         elif record.kind in _ACCEPTED_BY and record.goal_uuid in self._goals:
             self.unheard_response(record)
         elif record.kind == "status":
             self._last_status = record
-            started = _started_by(self._goals, record.message, *self._listing)
+            started = _started_by(self._goals, record.message, *self._listings.open)
             if started is not None and self._server_introspects:
                 self.unheard_response(record, started)
         if record.kind == "result":
@@ -1039,10 +1059,18 @@ def _started_by(
     return next((uuid for uuid in candidates if uuid in listing), next(iter(candidates), None))
 
 
-def _unheard_of(statuses: Sequence[tuple[str, GoalStatus]], *known: Container[str]) -> str:
-    """The first goal ``statuses`` list just accepted that none of ``known`` holds (its request lost
-    on the way, or so late it is not judged), or ``""``."""
-    accepted = (uuid for uuid, status in statuses if status is GoalStatus.ACCEPTED)
+def _unheard_of(
+    statuses: Sequence[tuple[str, GoalStatus]], before: Container[str] | None, *known: Container[str]
+) -> str:
+    """The first goal ``statuses`` list just accepted, or list first where the goal statuses ``before``
+    them were read (executing or ended: the goal statuses of its acceptance replaced on the way),
+    that none of ``known`` holds (its request lost on the way, or so late it is not judged), or
+    ``""``."""
+    accepted = (
+        uuid
+        for uuid, status in statuses
+        if status is GoalStatus.ACCEPTED or (before is not None and uuid not in before)
+    )
     return next((uuid for uuid in accepted if not any(uuid in goals for goals in known)), "")
 
 
@@ -1081,18 +1109,25 @@ def _published_on_acceptance(
     waiting: list[tuple[int, float, int, Record]], uuid: str
 ) -> Sequence[tuple[str, GoalStatus]] | None:
     """The goal statuses the server published as it accepted goal ``uuid``, among the records
-    ``waiting``: the first that list it, where they list it as accepted.  They show the goals that
-    had ended by then: where the bag lost the status of a child's end and the goal statuses that
-    followed it (each topic keeps one message, and the next replaced it), that end goes before the
-    acceptance, not after it (found at 30% loss: a NEXT accepted after the previous child's end, read
-    as accepted while it ran, R4.6)."""
+    ``waiting``: the first that list it, where they list it as accepted, or as executing and were
+    sent before any feedback of it held (a binding that starts a goal as it accepts it publishes the
+    two arrays at once, and the second replaces the first).  They show the goals that had ended by then:
+    where the bag lost the status of a child's end and the goal statuses that followed it (each
+    topic keeps one message, and the next replaced it), that end goes before the acceptance, not
+    after it (found at 30% loss: a NEXT accepted after the previous child's end, read as accepted
+    while it ran, R4.6)."""
     arrays = [
         item
         for item in waiting
         if item[3].kind == GOAL_STATUSES and any(u == uuid for u, _ in item[3].message)
     ]
-    statuses: Sequence[tuple[str, GoalStatus]] | None = min(arrays)[3].message if arrays else None
-    return statuses if statuses is not None and dict(statuses)[uuid] is GoalStatus.ACCEPTED else None
+    if not arrays:
+        return None
+    first = min(arrays)
+    status = dict(first[3].message)[uuid]
+    fed_back = [item for item in waiting if item[3].kind == "feedback" and item[3].goal_uuid == uuid]
+    started = status is GoalStatus.EXECUTING and (not fed_back or first < min(fed_back))
+    return first[3].message if status is GoalStatus.ACCEPTED or started else None
 
 
 def _begun_anew(

@@ -740,21 +740,33 @@ class _Requests(_Part):
     def ran_unseen(self, uuid: str) -> bool:
         """Seen apart: is goal ``uuid`` a NEXT the judge holds queued whose answer, the next of its
         records ahead, shows its child ran (an answer with a child status and no ``cancelled while not
-        running``)?  A goal cancelled before its start is answered so (R10.1); one that had started
-        when the cancel came was fed back and shown running, and a lossy link can lose all of that
-        for good (found at 30% loss: the NEXT's start feedback and RUNNING status lost, its answer
-        ``canceled``, ``canceled``, read as R10.1's with a wrong id)."""
-        if not any(
-            queued.goal_uuid == uuid and queued.goal.event_type == EventType.NEXT
-            for queued in self.replica.st.queued
-        ):
+        running``), or, no record of it ahead, the only NEXT queued, whose child's id (the one its
+        start would give it, above every id used so far) a status ahead names?  A goal cancelled
+        before its start is answered so (R10.1); one that had started when the cancel came was fed
+        back and shown running, and a lossy link can lose all of that for good (found at 30% loss:
+        the NEXT's start feedback and RUNNING status lost, its answer ``canceled``, ``canceled``, read
+        as R10.1's with a wrong id; or that answer late too, and the WAITING status of its child's
+        end, naming the child, read as R2.2)."""
+        state = self.replica.st
+        nexts = [queued.goal_uuid for queued in state.queued if queued.goal.event_type == EventType.NEXT]
+        if uuid not in nexts:
             return False
         answer = self.ahead.of_goal(uuid)
-        return (
-            answer is not None
-            and answer.kind == "result"
-            and bool(answer.message.status)
-            and first_line(answer.message.execution_failure) != Failure.NOT_RUNNING.value
+        if answer is not None:
+            return (
+                answer.kind == "result"
+                and bool(answer.message.status)
+                and first_line(answer.message.execution_failure) != Failure.NOT_RUNNING.value
+            )
+        running = self.replica.simulate([ins.GoalStarted(goal_uuid=uuid, now=self.replica.now)])[0].running
+        if len(nexts) > 1 or running is None or running.goal_uuid != uuid:
+            return False  # another NEXT's start could name the same child
+        if running.child_id == state.last_id:
+            return False
+        return any(
+            record.kind == "status"
+            and (record.message.dynamic_event_seq, record.message.id) == (state.seq, running.child_id)
+            for record in self.ahead.records
         )
 
     def on_cancel_response(self, record: Record) -> None:
