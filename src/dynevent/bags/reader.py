@@ -1005,7 +1005,9 @@ class _Robot:
 
     def finish(self, source: str, end: int) -> RobotReport:
         """The robot's report; ``end`` is the bag time of the bag's last message: an answer owed by a
-        step within :data:`SKEW` of it may have been on its way when the recording stopped."""
+        step within :data:`HOLD` of it may have been on its way when the recording stopped (a lossy
+        link delivers a message that late: found leaving out of a 30% run's bag a FINISHED's answer
+        and the goal statuses that showed it, 5 s before the recording stopped)."""
         channels = tuple(sorted(self.channels))
         absent = tuple(CHANNELS[name] for name in CHANNELS if name not in self.channels)
         if SEND_GOAL in self.channels and not self.contents:
@@ -1014,7 +1016,7 @@ class _Robot:
             self._release()
         self.judge.source = f"{source}: {self.fleet}/{self.robot}"
         if isinstance(self.judge, Checker):
-            evidence = AnswerEvidence(asked=self._asked, settled=self._settled, until=end - SKEW)
+            evidence = AnswerEvidence(asked=self._asked, settled=self._settled, until=end - HOLD)
             report = self.judge.finish(evidence)
         else:
             report = self.judge.finish()

@@ -277,6 +277,10 @@ class _ServerReplica:
             for item in self._owed
         ]
 
+    def event_id_lost(self) -> None:
+        """The status that named the run's own id was lost: the run's FINISHED's answer tells it."""
+        self.event_id_unknown = True
+
     def learn_event_id_from_finished(self, event_id: int) -> None:
         """The first FINISHED of a run joined late is answered with the run's own id."""
         self.event_id_unknown = False
@@ -927,8 +931,16 @@ class _Runs(_Part):
         return True
 
     def adopt_event_id(self, message: DynamicEventStatus) -> None:
-        """The begin did not say the dynamic event's id; the WAITING status that follows does."""
+        """The begin did not say the dynamic event's id; the WAITING status that follows does.  A
+        status of the run that shows a child running came after it: seen apart, where that one was lost
+        on the way (a status topic keeps one message), the run's own id is unknown until its FINISHED's
+        answer tells it (R11.1)."""
         state = self.replica.st
+        if self.apart and self.event_id_pending and message.dynamic_state == DynamicState.RUNNING:
+            if state.active and message.dynamic_event_seq == state.seq:
+                self.event_id_pending, self.latched_begin = False, None
+                self.replica.event_id_lost()
+            return
         if not (
             self.event_id_pending
             and message.dynamic_state == DynamicState.WAITING
