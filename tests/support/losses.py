@@ -22,8 +22,13 @@ from mcap.reader import make_reader
 from mcap.writer import Writer
 
 from dynevent.bags.reader import _stored_name, typestore
-from dynevent.ros.qos import EVENTS_KEPT
-from dynevent.wire.names import BEGIN_TOPIC, BEGIN_TOPIC_DEPTH, ROBOT_BEGIN_TOPIC_DEPTH, STATUS_TOPIC_DEPTH
+from dynevent.wire.names import (
+    BEGIN_TOPIC,
+    BEGIN_TOPIC_DEPTH,
+    EVENTS_KEPT,
+    ROBOT_BEGIN_TOPIC_DEPTH,
+    STATUS_TOPIC_DEPTH,
+)
 
 #: How long a lossy link may take to repair a lost message (seconds): one let go later than this
 #: after it was sent was sent again before (at 30% loss across hosts, most repairs take under 3 s).

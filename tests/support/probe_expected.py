@@ -44,6 +44,8 @@ BROKEN = {
         "next.busy": "fail", "next.busy_finished": "fail", "cancel.wrong_id": "fail",
         "cancel.seq_stale": "fail", "cancel.seq_future": "fail", "cancel.running_child": "fail",
         "cancel.both_answered": "fail", "action.cancel_waiting": "fail",
+        # in process: the clean-up CANCEL of the child the resume started, and the CANCEL of a deferred one
+        "interrupt.deferred_start": "fail", "interrupt.cancel_deferred": "fail",
     },
     # every case that runs a child to its end waits for an answer that never comes (R19.1)
     "hangs_next": {
@@ -66,6 +68,14 @@ BROKEN = {
     "query_names_the_first_id": {"describe.after_child": "fail"},
 }  # fmt: skip
 
+
+#: Defects only the cases that interrupt the robot's task catch, which the probe runs over a link that
+#: can interrupt it (in process, the driver protocol) and leaves out over DDS.
+INTERRUPTS_IN_PROCESS = {
+    "ignores_interrupt": dict.fromkeys(
+        ["interrupt.deferred_start", "interrupt.cancel_deferred", "interrupt.action_cancel_deferred"], "fail"
+    ),
+}
 
 #: Defects no case looks for, and what the judge over the probe's exchange finds of each.
 UNSEEN_BY_CASES = {

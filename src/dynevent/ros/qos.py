@@ -8,7 +8,7 @@ from typing import Any
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-__all__ = ["EVENTS_KEPT", "introspect", "latched", "latched_publisher"]
+__all__ = ["introspect", "latched", "latched_publisher"]
 
 
 def latched(depth: int) -> QoSProfile:
@@ -30,11 +30,6 @@ def latched_publisher(node: Any, message_type: Any, topic: str, depth: int) -> A
 
     quiet = PublisherEventCallbacks(use_default_callbacks=False)
     return node.create_publisher(message_type, topic, latched(depth), event_callbacks=quiet)
-
-
-#: How many of its latest service events a server keeps for a follower that joins late (its judge
-#: follows a robot from its first goal on: that goal's event is among them).
-EVENTS_KEPT = 16
 
 
 def introspect(action: Any, node: Any, qos: QoSProfile | None = None) -> bool:

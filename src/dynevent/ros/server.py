@@ -46,7 +46,7 @@ from rclpy.task import Future
 from dynevent.errors import InvalidMessage, InvalidValue
 from dynevent.ros import convert
 from dynevent.ros.convert import DynamicEvent, RosDescription, RosStatus
-from dynevent.ros.qos import EVENTS_KEPT, introspect, latched, latched_publisher
+from dynevent.ros.qos import introspect, latched, latched_publisher
 from dynevent.server import inputs as ins
 from dynevent.server import machine
 from dynevent.server import outputs as outs
@@ -66,6 +66,7 @@ from dynevent.wire.messages import Goal
 from dynevent.wire.names import (
     BEGIN_TOPIC,
     BEGIN_TOPIC_DEPTH,
+    EVENTS_KEPT,
     ROBOT_BEGIN_TOPIC_DEPTH,
     STATUS_TOPIC_DEPTH,
     action_name,

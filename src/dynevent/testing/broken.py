@@ -149,6 +149,19 @@ def _query_names_the_first_id() -> dict[str, Callable[..., Any]]:
     return {"step": step}
 
 
+def _ignores_interrupt() -> dict[str, Callable[..., Any]]:
+    """The task's interruption changes nothing (R14.2): a NEXT started while the task is interrupted
+    starts its child at once, where R6.3 defers it until the resume."""
+    original = machine.step
+
+    def step(state: Any, event: Any, config: Any) -> Any:
+        if isinstance(event, ins.Interrupt):
+            return machine.Transition(state=state, outputs=())
+        return original(state, event, config)
+
+    return {"step": step}
+
+
 DEFECTS: dict[str, Defect] = {
     "skips_seq": Defect(
         "each run's seq is the last one's plus 2 (runs 1, 3, 5)",
@@ -180,6 +193,9 @@ DEFECTS: dict[str, Defect] = {
     "ignores_clamp": Defect("a clamped stubborn period is not warned of", rewrite=ignores_clamp),
     "query_names_the_first_id": Defect(
         "the description query names the run's first id, not the current one", _query_names_the_first_id()
+    ),
+    "ignores_interrupt": Defect(
+        "the task's interruption is ignored: a NEXT's child starts at once", _ignores_interrupt()
     ),
     "feedback_after_answer": Defect(
         "one more feedback follows a NEXT's answer", rewrite=feedback_after_answer

@@ -44,6 +44,7 @@ from dynevent.errors import InvalidName
 __all__ = [
     "BEGIN_TOPIC",
     "BEGIN_TOPIC_DEPTH",
+    "EVENTS_KEPT",
     "MAX_NAME_LENGTH",
     "ROBOT_BEGIN_TOPIC_DEPTH",
     "STATUS_TOPIC_DEPTH",
@@ -69,6 +70,9 @@ BEGIN_TOPIC_DEPTH = 100
 ROBOT_BEGIN_TOPIC_DEPTH = 1
 #: A robot's status topic keeps its last status message.
 STATUS_TOPIC_DEPTH = 1
+#: How many of its latest service events (its action's introspection) a server keeps for a follower
+#: that joins late (its judge follows a robot from its first goal on: that goal's event is among them).
+EVENTS_KEPT = 16
 
 #: ``RMW_TOPIC_MAX_NAME_LENGTH``: longest fully qualified topic or service name.
 MAX_NAME_LENGTH = 255 - 8

@@ -645,6 +645,25 @@ def test_a_cancelled_next_whose_answer_shows_its_child_ran_had_started_though_no
     assert ("R10.1", "result_id") in [finding[1:] for finding in found(trace("server").check())]
 
 
+@pytest.mark.spec("R4.13", "R4.16", "R8.2")
+def test_a_cancel_refused_at_a_client_before_late_reports_of_the_child_may_have_come_after_its_end() -> None:
+    """Found at 30% loss across hosts: the probe's CANCEL of child 6 reached the server as the child
+    ended, and was refused (no child runs, R4.13); the client heard the refusal, then six reports the
+    child had sent before its end, delivered late, then the end.  Seen apart, the refusal is read as
+    after the end and the reports as sent before it; at the server's tap, where the order is the
+    server's, the refusal came while the child ran (R4.16)."""
+
+    def trace(tap: str) -> Trace:
+        talk = Trace()
+        talk.rows[0] = {**talk.rows[0], "tap": tap}
+        talk.started().goal(2, accepted=False, event_type=2, id=6)
+        talk.feedback(1, "underway", 6, logs=(0,)).feedback(1, "underway", 6, logs=(1,))
+        return talk.status(1, 1, "standby", 6).result(1, "succeeded", "completed", 6)
+
+    assert trace("client").check().clean, found(trace("client").check())
+    assert ("R4.16", "rejected_acceptable") in [finding[1:] for finding in found(trace("server").check())]
+
+
 @pytest.mark.spec("R11.1")
 def test_a_run_whose_begins_own_status_a_client_never_heard_has_an_own_id_its_finished_tells() -> None:
     """Found leaving a message out of a lossy recording: the run's begin read latched, its WAITING

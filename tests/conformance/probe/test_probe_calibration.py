@@ -55,7 +55,9 @@ SINCE_THE_LAB: dict[str, tuple[str, str]] = {
 def _left_out(run: Path) -> set[str]:
     names = [path.parent.name for path in RUNS]
     later = {case for case, first in FIRST_HELD.items() if names.index(first) > names.index(run.parent.name)}
-    return set(SINCE_THE_LAB) | later | (set() if run.parent.name == "easy" else set(LEFT_OUT))
+    # the cases that interrupt the robot's task: the probe over DDS cannot, and leaves them out
+    interrupting = {case.id for case in probe_cases.CASES if case.interrupts}
+    return set(SINCE_THE_LAB) | later | interrupting | (set() if run.parent.name == "easy" else set(LEFT_OUT))
 
 
 VERDICT = r"(?P<verdict>pass|fail|info|known \((?P<d>D\d+)\)|missing \(allowed\)|missing)"

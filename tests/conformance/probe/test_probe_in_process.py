@@ -35,7 +35,14 @@ from dynevent.sim.config import CategorySpec, ServeConfig, machine_config
 from dynevent.testing import switched_off
 from dynevent.testing.broken import DEFECTS, broken_stepper
 from dynevent.wire.vocab import Compatibility, EventType, RejectReason
-from support.probe_expected import BROKEN, JUDGED_IN_PROCESS, RMF_ROS2_FAILS, RMF_ROS2_INFO, UNSEEN_BY_CASES
+from support.probe_expected import (
+    BROKEN,
+    INTERRUPTS_IN_PROCESS,
+    JUDGED_IN_PROCESS,
+    RMF_ROS2_FAILS,
+    RMF_ROS2_INFO,
+    UNSEEN_BY_CASES,
+)
 
 #: serve as the DDS tests run it: brief children that log often, the first run at the seq wrap.
 LAST_SEQ = 2**32 - 1
@@ -341,7 +348,24 @@ def test_a_clamp_warning_in_a_later_feedback_fails_the_case_by_the_judges_findin
 
 
 def test_every_defect_of_the_kit_is_caught_in_process() -> None:
-    assert set(DEFECTS) == set(BROKEN) | set(UNSEEN_BY_CASES) | set(JUDGED_IN_PROCESS)
+    assert set(DEFECTS) == set(BROKEN) | set(UNSEEN_BY_CASES) | set(JUDGED_IN_PROCESS) | set(
+        INTERRUPTS_IN_PROCESS
+    )
+
+
+@pytest.mark.spec("R14.2", "R6.3")
+@pytest.mark.parametrize("defect", list(INTERRUPTS_IN_PROCESS))
+def test_a_server_that_ignores_an_interruption_fails_the_cases_that_interrupt_the_task(defect: str) -> None:
+    """A trace holds no interruption (a task input), so the judge cannot tell the child that started
+    from one the interruption should have deferred: the cases' scripts fail them, on what a trace
+    cannot carry (``interrupt``)."""
+    code, findings, text = _probe(defect=defect)
+    assert code == 1, text
+    expected = {case.id: "pass" for case in CASES}
+    expected.update(INTERRUPTS_IN_PROCESS[defect])
+    assert _verdicts(findings) == expected, text
+    failed = [finding for finding in findings if finding.verdict is Verdict.FAIL]
+    assert {finding.cause for finding in failed} == {"interrupt"}, failed
 
 
 @pytest.mark.spec("R4.18", "R4.10")

@@ -168,6 +168,12 @@ def matches_exactly(output: outs.Output, record: Record) -> bool:
     return False
 
 
+def _same_but_id(output: outs.Output, record: Record) -> bool:
+    """Is ``output`` the feedback ``record`` is but for the child's id (a server that numbers children
+    itself, D10)?"""
+    return isinstance(output, outs.PublishFeedback) and output.feedback.status == record.message.status
+
+
 def _owes(owed: Owed, record: Record) -> bool:
     """Is ``record`` the owed output?"""
     output = owed.output
@@ -341,8 +347,8 @@ def abduce(
             continue
         if matches_exactly(first.output, record):
             exact.append((events, after, owed, first))
-        elif near is None:
-            near = (events, after, owed, first)
+        elif near is None or (_same_but_id(first.output, record) > _same_but_id(near[3].output, record)):
+            near = (events, after, owed, first)  # one that differs in the child's id alone first (D10)
     # candidates that agree on this record differ in what comes next: let the next record choose
     upcoming = ahead[0] if ahead else None
     for found in exact:

@@ -141,6 +141,18 @@ class _Lookahead:
                 return record
         return None
 
+    def answer_of(self, uuid: str) -> Record | None:
+        """The answer of this goal among the records ahead, where its feedback before that reports no
+        status that ends a child."""
+        for record in self.records:
+            if record.goal_uuid != uuid:
+                continue
+            if record.kind == "result":
+                return record
+            if record.kind == "feedback" and machine.ends_a_child(record.message.status):
+                return None
+        return None
+
     def confirms(self, found: Found) -> bool:
         return confirmed(found, self.upcoming)
 
@@ -688,8 +700,9 @@ class _Requests(_Part):
             # child (no report of it comes first): refused for that end (a CANCEL), or accepted as a
             # fresh goal where it was sent before that child started (a NEXT sent beside another,
             # delivered late, the status of the end lost: found at 30% loss); one sent while the
-            # child was seen running is accepted busy (rmf_ros2's D1)
-            for ended in _ended_ahead(self.replica, self.ahead):
+            # child was seen running is accepted busy (rmf_ros2's D1); the child's reports sent before
+            # its end may come between
+            for ended in _ended_ahead(self.replica, self.ahead, past_reports=not record.accepted):
                 state, owed = self.replica.simulate(ended)
                 if self.agrees(machine.accept(state, goal, self.replica.config_for(goal)), record):
                     self.replica.commit(state, owed)
@@ -1296,6 +1309,9 @@ class _Feedback(_Part):
             return
         if pending is not None:
             assert isinstance(pending.output, outs.AnswerGoal)
+            unshown = any(isinstance(item.output, outs.PublishStatus) for item in self.replica.owed)
+            if self.replica.apart and unshown and _sent_before(feedback, pending.output):
+                return  # a report sent before its child's end, which was read before any status showed it
             self.findings.differs(
                 pending.rule,
                 "feedback_not_running",
@@ -1549,11 +1565,25 @@ class _Observer:
             self.requests.note_refusals()
 
 
-def _ended_ahead(replica: _ServerReplica, ahead: _Lookahead) -> list[list[ins.Input]]:
+def _sent_before(feedback: Feedback, answer: outs.AnswerGoal) -> bool:
+    """Seen apart, may ``feedback`` be a report the answered goal's child sent before its end (a status
+    that does not end it, the child's id), delivered late by a lossy link, where the end was read
+    before any status showed it (found at 30% loss: a CANCEL refused as the child ended, its refusal
+    heard before six reports of the child and the status of its end)?"""
+    return not machine.ends_a_child(feedback.status) and feedback.id == answer.result.id
+
+
+def _ended_ahead(
+    replica: _ServerReplica, ahead: _Lookahead, *, past_reports: bool = False
+) -> list[list[ins.Input]]:
     """The running child's end, where its answer is among the records ahead (its status, from
-    ``ended_child``'s answer), after the starts of all, ..., none of the queued goals."""
+    ``ended_child``'s answer), after the starts of all, ..., none of the queued goals; the answer the
+    child's next record, or (``past_reports``) the next after its reports of a status that does not
+    end it (feedback sent before the end and delivered late, by a lossy link: found at 30% loss)."""
     running = replica.st.running
     answer = ahead.of_goal(running.goal_uuid) if running is not None and running.started else None
+    if past_reports and running is not None:
+        answer = ahead.answer_of(running.goal_uuid)
     if answer is None or answer.kind != "result" or answer.message.status not in _STATUS_VALUES:
         return []
     return _child_ends(replica, ins.ChildFinished(status=answer.message.status, now=replica.now))

@@ -260,6 +260,18 @@ class InProcessLink(Link):
         self._drain()
         return None if response is None else response.accepted
 
+    interrupts = True
+
+    def interrupt(self) -> str:
+        self.step(ins.Interrupt(now=self.now))
+        self._drain()
+        return ""
+
+    def resume(self) -> str:
+        self.step(ins.Resume(now=self.now))
+        self._drain()
+        return ""
+
     def describe(self, timeout: float) -> tuple[Any, str]:
         if not self.config.offers_description:  # as serve: none in rmf_ros2 mode (D17)
             return None, f"no description service {description_service(self.fleet, self.robot)}"

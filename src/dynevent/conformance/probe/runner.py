@@ -221,6 +221,18 @@ class Link:
         (what transient-local keeps).  It listens until the link is destroyed."""
         raise NotImplementedError
 
+    #: the link can interrupt and resume the robot's task (:meth:`interrupt`): the cases that do run
+    interrupts = False
+
+    def interrupt(self) -> str:
+        """Interrupt the robot's task (R14: a task input, which no client of the protocol sends): ``""``
+        once done, else why this link cannot (then the case that needs it is not run)."""
+        return INTERRUPT_UNOFFERED
+
+    def resume(self) -> str:
+        """Resume the robot's task (R14.3): ``""`` once done, else why this link cannot."""
+        return INTERRUPT_UNOFFERED
+
     def introspect(self) -> bool:
         """Publish the probe's own goal events where the transport can (ROS 2 introspection)."""
         return False
@@ -804,6 +816,9 @@ class Probe:
         self.link.wait_status(_waits_or_ended, self.timeout)
 
 
+#: Why a case that interrupts the robot's task is not run over a link that cannot (an interruption is
+#: the task's, and no client of the protocol sends one).
+INTERRUPT_UNOFFERED = "this link cannot interrupt the robot's task (a task input no client sends)"
 #: The shortest wait the deadline leaves (seconds): a message already on its way is still read.
 _LEAST_WAIT = 0.05
 #: Why a case whose wait the deadline cut short is not run: what it waited for might have come
@@ -1678,6 +1693,112 @@ def _action_cancel_waiting(probe: Probe, case: Case) -> CaseFinding:
         return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
+@contextmanager
+def _interrupted(probe: Probe) -> Iterator[None]:
+    """The robot's task interrupted while the block runs (R14.2), then resumed (R14.3)."""
+    why = probe.link.interrupt()
+    if why:
+        raise _Unreachable(why)
+    probe.note("the task interrupted")
+    try:
+        yield
+    finally:
+        why = probe.link.resume()
+        probe.note(f"the task not resumed: {why}" if why else "the task resumed")
+
+
+def _deferred(probe: Probe, status: DynamicEventStatus) -> tuple[Exchange, Feedback | None]:
+    """A NEXT sent while the task is interrupted, accepted, and its first feedback (None where none
+    came within the timeout): R6.3's ``queued`` where the server defers its child's start."""
+    exchange = probe.send(probe.next_goal(status), answer=False)
+    if not exchange.accepted:
+        raise _Unreachable(f"the NEXT sent while the task was interrupted was {_describe_answer(exchange)}")
+    exchange.wait(lambda: bool(exchange.feedback or exchange.answers), probe.timeout)
+    return exchange, exchange.feedback[0] if exchange.feedback else None
+
+
+#: What a deferred start shows (R6.3).
+_DEFERRED = "the NEXT's first feedback queued, its child's start deferred (R6.3)"
+
+
+def _not_deferred(case: Case, first: Feedback | None) -> CaseFinding | None:
+    """The case's failure where the NEXT sent while the task was interrupted was not deferred."""
+    if first is None:
+        return _fails(case, "timeout", _DEFERRED, "no feedback")
+    if first.status != Status.QUEUED.value:
+        return _fails(case, "interrupt", _DEFERRED, f"feedback {first.status!r} id {first.id}")
+    return None
+
+
+def _interrupt_deferred_start(probe: Probe, case: Case) -> CaseFinding:
+    """R14.2, R6.3, R14.5: while the task is interrupted a NEXT's child waits (feedback ``queued``);
+    the resume starts it."""
+    expected = f"{_DEFERRED}; the resume starts it (its next feedback, R14.5)"
+    with _interrupted(probe):
+        exchange, first = _deferred(probe, probe.waiting())
+    try:
+        failed = _not_deferred(case, first)
+        if failed is not None:
+            return failed
+        exchange.wait(lambda: len(exchange.feedback) > 1 or bool(exchange.answers), probe.timeout)
+        if len(exchange.feedback) < 2:
+            return _fails(case, "timeout", expected, "no feedback after the resume")
+        after = exchange.feedback[1]
+        return _seen_by_script(case, expected, f"feedback queued, then {after.status!r} after the resume")
+    finally:
+        probe.stop_unanswered(exchange)
+
+
+def _interrupt_cancel_deferred(probe: Probe, case: Case) -> CaseFinding:
+    """R9.4: a CANCEL of a child whose start the interruption deferred cancels it at once: the NEXT
+    and the CANCEL answered, canceled, without a resume.  (A CANCEL refused, or answered otherwise, is
+    the judge's.)"""
+    expected = "the CANCEL of the deferred child and its NEXT answered at once, canceled (R9.4)"
+    status = probe.waiting()
+    made: list[Exchange] = []
+    try:
+        with _interrupted(probe):
+            exchange, first = _deferred(probe, status)
+            made.append(exchange)
+            failed = _not_deferred(case, first)
+            if failed is not None or first is None:
+                return failed or _fails(case, "timeout", _DEFERRED, "no feedback")
+            stop = probe.send(_goal(status, EventType.CANCEL, id=first.id))
+            exchange.answered(probe.timeout)
+            seen = f"the CANCEL {_describe_answer(stop)}; the NEXT {_describe_answer(exchange)}"
+            if stop.accepted is None or (stop.accepted and (stop.answer is None or exchange.answer is None)):
+                return _fails(case, "timeout", expected, seen)
+            return _seen_by_script(case, expected, seen)
+    finally:  # once the task is resumed: a child still deferred starts, and is stopped
+        for exchange in made:
+            probe.stop_unanswered(exchange)
+
+
+def _interrupt_action_cancel_deferred(probe: Probe, case: Case) -> CaseFinding:
+    """R10.4: an action-level cancel of a NEXT whose child's start the interruption deferred is
+    accepted and answers it at once, canceled, without a resume."""
+    expected = "the cancel accepted; the NEXT answered canceled at once (R10.4)"
+    made: list[Exchange] = []
+    try:
+        with _interrupted(probe):
+            exchange, first = _deferred(probe, probe.waiting())
+            made.append(exchange)
+            failed = _not_deferred(case, first)
+            if failed is not None:
+                return failed
+            accepted = probe.cancel(exchange)
+            exchange.answered(probe.timeout)
+            if accepted is None:
+                return _fails(case, "timeout", expected, "no cancel response")
+            if accepted and exchange.answer is None:
+                return _fails(case, "timeout", expected, "the NEXT not answered")
+            seen = f"the cancel {'accepted' if accepted else 'refused'}; "
+            return _seen_by_script(case, expected, seen + f"the NEXT {_describe_answer(exchange)}")
+    finally:  # once the task is resumed
+        for exchange in made:
+            probe.stop_unanswered(exchange)
+
+
 def _failed_with(exchange: Exchange, failure: Failure) -> bool:
     answer = exchange.answer
     return answer is not None and answer[1].execution_failure == failure.value
@@ -1861,6 +1982,9 @@ _CASES: dict[str, Callable[[Probe, Case], CaseFinding]] = {
     "status.waiting": _status_waiting,
     "describe.query": _describe_query,
     "describe.after_child": _describe_after_child,
+    "interrupt.deferred_start": _interrupt_deferred_start,
+    "interrupt.cancel_deferred": _interrupt_cancel_deferred,
+    "interrupt.action_cancel_deferred": _interrupt_action_cancel_deferred,
     "request.seq_stale": _seq_stale,
     "request.seq_future": _seq_future,
     "request.seq_stale_next": _seq_stale_next,
@@ -1906,6 +2030,15 @@ def implemented() -> frozenset[str]:
     return frozenset(_CASES)
 
 
+def runnable(cases: list[Case], interrupts: bool, say: Callable[[str], None]) -> list[Case]:
+    """The ``cases`` a link runs: those that interrupt the robot's task left out where it cannot
+    (``interrupts``), saying so."""
+    left_out = [case.id for case in cases if case.interrupts and not interrupts]
+    if left_out:
+        say(f"left out: {', '.join(left_out)} ({INTERRUPT_UNOFFERED})")
+    return [case for case in cases if case.id not in left_out]
+
+
 def run_cases(
     link: Link,
     options: Options,
@@ -1918,6 +2051,7 @@ def run_cases(
     (a list the caller keeps, so that an interruption keeps those of the cases that ended); the
     findings."""
     findings = [] if findings is None else findings
+    cases = runnable(cases, link.interrupts, say)
     probe = Probe(link, options)  # the deadline runs from here: the first wait is within it too
     probe.options = _ready(link, options, cases, say, probe.timeout)
     if not link.statuses:  # _ready waited --timeout (or what the deadline left) for one
