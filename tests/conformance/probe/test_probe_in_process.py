@@ -222,17 +222,23 @@ def test_the_judge_over_every_record_finds_what_no_case_looks_for(tmp_path: Path
     assert int(suites[1].get("failures", "0")) >= 1
 
 
+def _failed_as_expected(defect: str, verdicts: dict[str, str]) -> list[CaseFinding]:
+    """The probe in process against the kit's ``defect``: the run fails, every case passes but those
+    ``verdicts`` names, which get their verdicts; the failures."""
+    code, findings, text = _probe(defect=defect)
+    assert code == 1, text
+    expected = {case.id: "pass" for case in CASES}
+    expected.update(verdicts)
+    assert _verdicts(findings) == expected, text
+    return [finding for finding in findings if finding.verdict is Verdict.FAIL]
+
+
 @pytest.mark.spec("R19.1")
 @pytest.mark.parametrize("defect", list(JUDGED_IN_PROCESS))
 def test_the_judge_fails_the_cases_whose_own_records_break_their_rules(defect: str) -> None:
     """No case's script looks at a feedback after an answer; the judge over every record finds one in
     the records of each case that runs a child, and those cases fail with its finding."""
-    code, findings, text = _probe(defect=defect)
-    assert code == 1, text
-    expected = {case.id: "pass" for case in CASES}
-    expected.update(JUDGED_IN_PROCESS[defect])
-    assert _verdicts(findings) == expected, text
-    failed = [finding for finding in findings if finding.verdict is Verdict.FAIL]
+    failed = _failed_as_expected(defect, JUDGED_IN_PROCESS[defect])
     assert all(finding.seen.startswith("the judge: feedback ") for finding in failed), failed
     assert all("R19.1" in finding.expected for finding in failed), failed
 
@@ -359,12 +365,7 @@ def test_a_server_that_ignores_an_interruption_fails_the_cases_that_interrupt_th
     """A trace holds no interruption (a task input), so the judge cannot tell the child that started
     from one the interruption should have deferred: the cases' scripts fail them, on what a trace
     cannot carry (``interrupt``)."""
-    code, findings, text = _probe(defect=defect)
-    assert code == 1, text
-    expected = {case.id: "pass" for case in CASES}
-    expected.update(INTERRUPTS_IN_PROCESS[defect])
-    assert _verdicts(findings) == expected, text
-    failed = [finding for finding in findings if finding.verdict is Verdict.FAIL]
+    failed = _failed_as_expected(defect, INTERRUPTS_IN_PROCESS[defect])
     assert {finding.cause for finding in failed} == {"interrupt"}, failed
 
 
