@@ -1581,9 +1581,9 @@ def _ended_ahead(
     child's next record, or (``past_reports``) the next after its reports of a status that does not
     end it (feedback sent before the end and delivered late, by a lossy link: found at 30% loss)."""
     running = replica.st.running
-    answer = ahead.of_goal(running.goal_uuid) if running is not None and running.started else None
-    if past_reports and running is not None:
-        answer = ahead.answer_of(running.goal_uuid)
+    if running is None or not running.started:
+        return []
+    answer = ahead.answer_of(running.goal_uuid) if past_reports else ahead.of_goal(running.goal_uuid)
     if answer is None or answer.kind != "result" or answer.message.status not in _STATUS_VALUES:
         return []
     return _child_ends(replica, ins.ChildFinished(status=answer.message.status, now=replica.now))
