@@ -50,6 +50,7 @@ __all__ = [
     "RobotNotReady",
     "SendError",
     "ServeError",
+    "TaskError",
     "TraceError",
     "UnknownCategory",
     "UnknownRobot",
@@ -349,6 +350,10 @@ class ServeError(LocalError):
 
 class RecordError(LocalError):
     """``dynevent record`` cannot run as asked (its output, its options)."""
+
+
+class TaskError(LocalError):
+    """A bad ``dynevent task`` request: the message names the flag and the value."""
 
 
 class FileError(LocalError):

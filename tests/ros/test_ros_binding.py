@@ -9,6 +9,7 @@ the public one-shot client is.
 from __future__ import annotations
 
 import threading
+import types
 from collections.abc import Iterator
 from typing import Any
 
@@ -21,7 +22,9 @@ from ros_support import WAIT, Child, Graph, wait_for
 from dynevent import client as cl
 from dynevent.ros import ChildExecution, DynamicEventClient, DynamicEventServer
 from dynevent.ros.server import latched
+from dynevent.server import inputs as ins
 from dynevent.server.machine import ServerConfig, any_description
+from dynevent.testing.switched_off import switched_off
 from dynevent.wire.names import action_name, status_topic
 
 FLEET, ROBOT = "tinyRobot", "tinyRobot1"
@@ -631,6 +634,14 @@ def test_the_description_service_answers_where_its_type_exists(graph: Graph) -> 
         '{"category": "patrol"}',
         7,
     )
+    # a machine that gives no answer (the test kit's R16.1 switched off, with the run ended) is answered
+    # with the defaults: the exception it was ended the thread of every robot of the node's lane
+    server.step(ins.Shutdown(now=server.now()))
+    with switched_off("R16.1"):
+        answer = ask()
+    assert (answer.running, answer.status, answer.description, answer.id) == (False, "", "", 0)
+    answer = ask()  # and the node still answers
+    assert (answer.running, answer.status, answer.description, answer.id) == (False, "", "", 0)
 
 
 # --------------------------------------------------------------------------- converters at the edge
@@ -783,3 +794,36 @@ def test_a_step_inside_the_drain_wakes_no_executor_and_one_from_another_thread_d
     finally:
         server._ros.wake = counted.wake
         server.shutdown()
+
+
+def _matched(total: int, current: int, current_change: int) -> Any:
+    """A status publisher's matched event as rclpy sums it since the last one taken (its own type has
+    no constructor from Python)."""
+    return types.SimpleNamespace(
+        total_count=total,
+        total_count_change=total,
+        current_count=current,
+        current_count_change=current_change,
+    )
+
+
+@pytest.mark.spec("R21.4")
+def test_the_first_match_taken_after_the_status_was_heard_asks_for_no_result(graph: Graph) -> None:
+    """The executor runs the status's callback, a goal is sent, and only then is the status publisher's
+    matched event taken (found with ``dynevent send``: a result request asked then reached the server
+    before the goal's request, was answered unknown, and the goal ended ``goal lost`` while the server
+    ran it).  That event is the match of the process the client heard: it asks for nothing.  A later
+    match, or a first that sums two publishers (one gone, one come), is a new process: it asks."""
+    heard = DynamicEventStatus(dynamic_event_seq=1, dynamic_state=1, status="standby", id=1)
+    for name, first, asks in (("late", _matched(1, 1, 1), 0), ("two", _matched(2, 1, 1), 1)):
+        client: DynamicEventClient = graph.node(
+            name, lambda node: DynamicEventClient(node, FLEET, "nobodyHere")
+        )
+        client._on_status(heard)  # the callbacks, in the order of the race: no server answers here
+        client.next("go_to_place", '{"one_of": ["pantry"]}')
+        client._on_contact_event(first)
+        (goal,) = client.state.goals
+        assert goal.asks == asks, (name, goal)
+        client._on_contact_event(_matched(1, 1, 0))  # a process gone and its successor come
+        (goal,) = client.state.goals
+        assert goal.asks == 1, (name, goal)  # asked at once (its count from this contact on)

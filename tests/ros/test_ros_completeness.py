@@ -11,6 +11,7 @@ wait it out; an answer over DDS on one machine comes within milliseconds)."""
 from __future__ import annotations
 
 import json
+import shlex
 import subprocess
 import sys
 import time
@@ -29,6 +30,11 @@ TIMEOUT = 2.0
 AT_ONCE = 2
 
 
+#: The fleet each mode's serve process serves: one name each, so that their nodes' names differ (two
+#: nodes of one name on a graph answer each other's parameter requests, ``dynevent task``'s).
+FLEETS = {"standard": OPTIONS.fleet, "rmf_ros2": f"{OPTIONS.fleet}Compat"}
+
+
 def _robot(rule: str) -> str:
     return "off_" + rule.replace(".", "_")
 
@@ -45,17 +51,21 @@ def _serve(tmp_path: Path, mode: str, measured: list[Measured]) -> Child:
     served = {"categories": categories, "rebegin": CONFIG.rebegin, "first_seq": CONFIG.first_seq}
     config.write_text(json.dumps({**served, "compatibility": mode}), encoding="utf-8")
     pairs = ",".join(f"{_robot(item.rule)}={item.rule}" for item in measured)
-    return Child([str(SCRIPT), "switched_off", pairs, "--fleet", OPTIONS.fleet, "--config", str(config),
+    return Child([str(SCRIPT), "switched_off", pairs, "--fleet", FLEETS[mode], "--config", str(config),
                   "--no-judge"])  # fmt: skip
 
 
 def _probe(item: Measured, mode: str) -> subprocess.CompletedProcess[str]:
-    """The probe over DDS, with the options of the in-process measurement, of ``item``'s robot."""
+    """The probe over DDS, with the options of the in-process measurement, of ``item``'s robot, its task
+    interrupted and resumed by ``dynevent task`` (the cases that interrupt it run)."""
     assert OPTIONS.place is not None
     known = ["--known", "rmf_ros2"] if mode == "rmf_ros2" else []
-    command = [sys.executable, "-m", "dynevent", "probe", "--fleet", OPTIONS.fleet,
-               "--robot", _robot(item.rule), "--place", OPTIONS.place, *OPTIONS.more_places,
-               "--timeout", str(TIMEOUT), *known, "--cases", *dds_cases(item)]  # fmt: skip
+    robot = _robot(item.rule)
+    task = f"{shlex.quote(sys.executable)} -m dynevent task --fleet {FLEETS[mode]} --robot {robot}"
+    tasks = ["--interrupt-command", f"{task} interrupt", "--resume-command", f"{task} resume"]
+    command = [sys.executable, "-m", "dynevent", "probe", "--fleet", FLEETS[mode],
+               "--robot", robot, "--place", OPTIONS.place, *OPTIONS.more_places,
+               "--timeout", str(TIMEOUT), *known, *tasks, "--cases", *dds_cases(item)]  # fmt: skip
     process = subprocess.Popen(
         command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=child_env()
     )

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import re
+import shlex
 import signal
 import subprocess
 import sys
@@ -22,13 +23,26 @@ from dynevent.conformance.judge import check_trace
 from dynevent.conformance.judge.trace import Finding
 from dynevent.conformance.probe.cases import CASES as ALL_CASES
 from dynevent.ros.probe import VOLATILE, RosLink
-from support.probe_expected import BROKEN, RMF_ROS2_FAILS, RMF_ROS2_INFO, UNSEEN_BY_CASES
+from support.probe_expected import (
+    BROKEN,
+    INTERRUPTS_IN_PROCESS,
+    RMF_ROS2_FAILS,
+    RMF_ROS2_INFO,
+    UNSEEN_BY_CASES,
+)
 
 #: The last seq before the wrap: serve starts there, so that the probe sees the seq wrap (R3.2).
 LAST_SEQ = 2**32 - 1
 
-#: The cases the probe runs over DDS: it cannot interrupt the robot's task, and leaves out the cases that do.
+#: The cases the probe runs over DDS without --interrupt-command and --resume-command: it cannot
+#: interrupt the robot's task then, and leaves out the cases that do.
 CASES = [case for case in ALL_CASES if not case.interrupts]
+
+
+def _task_commands(robot: str) -> tuple[str, ...]:
+    """The probe's flags that interrupt and resume ``robot``'s task: ``dynevent task`` (R14)."""
+    task = f"{shlex.quote(sys.executable)} -m dynevent task --robot {robot}"
+    return ("--interrupt-command", f"{task} interrupt", "--resume-command", f"{task} resume")
 
 
 def _config(tmp_path: Path, rebegin: float) -> Path:
@@ -75,7 +89,7 @@ def _probe(robot: str, *args: str) -> subprocess.CompletedProcess[str]:
 
 
 def _verdicts(output: str) -> dict[str, str]:
-    ids = {case.id for case in CASES}
+    ids = {case.id for case in ALL_CASES}
     verdicts = {}
     for line in output.splitlines():
         words = line.split()
@@ -146,19 +160,36 @@ def _check_agrees(
     "R3.2", "R4.2", "R4.4", "R4.13", "R7.3", "R9.3", "R10.3", "R10.5", "R11.1", "R12.2", "R16.2", "R20.1"
 )
 def test_the_standard_mode_of_serve_passes_every_case(tmp_path: Path) -> None:
+    """Every case, those that interrupt the robot's task too (through ``dynevent task``)."""
     serve = _serve(tmp_path, "probeStandard", "standard")
     try:
-        done = _probe("probeStandard", "--junit", str(tmp_path / "probe.xml"), "--trace", str(tmp_path / "t"))
+        outputs = ("--junit", str(tmp_path / "probe.xml"), "--trace", str(tmp_path / "t"))
+        done = _probe("probeStandard", *outputs, *_task_commands("probeStandard"))
     finally:
         code = serve.stop()
     assert done.returncode == 0, done.stdout + done.stderr
-    assert _verdicts(done.stdout) == {case.id: "pass" for case in CASES}, done.stdout
+    assert _verdicts(done.stdout) == {case.id: "pass" for case in ALL_CASES}, done.stdout
     assert _check_agrees(tmp_path / "t", tmp_path / "probe.xml") == set()
-    assert done.stdout.splitlines()[-2:-1] == [f"{len(CASES)} pass"], done.stdout  # then the run's time
+    assert done.stdout.splitlines()[-2:-1] == [f"{len(ALL_CASES)} pass"], done.stdout  # then the run's time
     run_took(done.stdout)
     suite = ET.parse(tmp_path / "probe.xml").getroot().find("testsuite")
-    assert suite is not None and suite.get("tests") == str(len(CASES)) and suite.get("failures") == "0"
+    assert suite is not None and suite.get("tests") == str(len(ALL_CASES)) and suite.get("failures") == "0"
     assert code == 0, serve.output
+
+
+@pytest.mark.spec("R14.2", "R6.3", "R9.4", "R10.4")
+def test_a_server_that_ignores_an_interruption_fails_the_cases_that_interrupt_it_over_dds(
+    tmp_path: Path,
+) -> None:
+    """The cases a link that cannot interrupt the task leaves out run over DDS with the task commands,
+    and fail a server whose interruption changes nothing, as in process."""
+    robot = "broken_ignores_interrupt"
+    done = _probe_broken(
+        tmp_path, "ignores_interrupt", robot, "--cases", "interrupt.*", *_task_commands(robot)
+    )
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert _verdicts(done.stdout) == INTERRUPTS_IN_PROCESS["ignores_interrupt"], done.stdout
+    assert "feedback 'underway'" in done.stdout, done.stdout
 
 
 @pytest.mark.spec("R17.4")

@@ -70,7 +70,8 @@ BROKEN = {
 
 
 #: Defects only the cases that interrupt the robot's task catch, which the probe runs over a link that
-#: can interrupt it (in process, the driver protocol) and leaves out over DDS.
+#: can interrupt it (in process, the driver protocol; over DDS with --interrupt-command and
+#: --resume-command, else it leaves them out).
 INTERRUPTS_IN_PROCESS = {
     "ignores_interrupt": dict.fromkeys(
         ["interrupt.deferred_start", "interrupt.cancel_deferred", "interrupt.action_cancel_deferred"], "fail"

@@ -362,6 +362,17 @@ def test_the_ros_package_imports_without_ros_and_its_names_say_what_is_missing()
             ["send", "--end", "--trace", "no/such/dir/t"],
             "dynevent send: --trace 'no/such/dir/t': cannot be written: No such file or directory",
         ),
+        (["task", "interrupt", "--timeout", "-1"], "dynevent task: --timeout: expected positive seconds"),
+        (["task", "resume", "--description", "{}"], "dynevent task: --description: only a begin takes one"),
+        (["task", "begin", "--description", "{nope"], "dynevent task: --description: not JSON"),
+        (
+            ["probe", "--interrupt-command", "true"],
+            "dynevent probe: --interrupt-command: needs --resume-command too",
+        ),
+        (
+            ["probe", "--loopback", "--interrupt-command", "true", "--resume-command", "true"],
+            "dynevent probe: --interrupt-command and --resume-command: for a live server; --loopback",
+        ),
     ],
 )
 def test_serve_and_send_check_their_own_input_before_they_need_ros(args: list[str], problem: str) -> None:
@@ -373,7 +384,14 @@ def test_serve_and_send_check_their_own_input_before_they_need_ros(args: list[st
 
 @pytest.mark.parametrize("blocked", ["rclpy", "rmf_task_msgs"])
 @pytest.mark.parametrize(
-    "args", [["send", "--end"], ["serve", "--seconds", "1"], ["probe"], ["record", "--seconds", "1"]]
+    "args",
+    [
+        ["send", "--end"],
+        ["serve", "--seconds", "1"],
+        ["probe"],
+        ["record", "--seconds", "1"],
+        ["task", "begin"],
+    ],
 )
 def test_without_ros_serve_and_send_say_what_is_missing_and_how_to_get_it(
     args: list[str], blocked: str

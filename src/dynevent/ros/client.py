@@ -105,6 +105,7 @@ class DynamicEventClient:
         self._runs: dict[str, GoalRun] = {}
         self._views = threading.Condition(self._lock)
         self._status_seen = False
+        self._contact_taken = False  # a matched event of the status topic was taken
         # every attribute above, the timer and the action client before the subscriptions: an executor
         # that already spins the node (a shared one) may call back as soon as a subscription exists
         group = MutuallyExclusiveCallbackGroup()
@@ -361,8 +362,16 @@ class DynamicEventClient:
         ``info`` sums every change since the last event taken: a process killed and its successor
         matched before the executor took the event read as no change of the current count (one
         gone, one come), and the goal the dead process never saw waited for good (found in CI,
-        under load).  The total count says a publisher matched whatever left meanwhile."""
-        if info.total_count_change > 0:
+        under load).  The total count says a publisher matched whatever left meanwhile.
+
+        The first event, of one publisher whose status was heard already, is the match of the process
+        the client heard, taken late (after the executor ran the status's callback, and a goal sent
+        since): no new process, and a result request sent then could reach it before the goal's
+        request and be answered as unknown (found with ``dynevent send``: a goal ended lost)."""
+        with self._lock:
+            taken_late = not self._contact_taken and self._status_seen and info.total_count_change == 1
+            self._contact_taken = True
+        if info.total_count_change > 0 and not taken_late:
             self._step(cl.ContactMade(now=self.now()))
         if info.current_count == 0 and (info.current_count_change < 0 or info.total_count_change > 0):
             self._step(cl.ContactLost(now=self.now()))

@@ -16,6 +16,7 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple
 
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.logging import LoggingSeverity
 
 from dynevent.errors import InvalidMessage
@@ -33,10 +34,28 @@ from dynevent.sim.children import SimulatedChild, Whereabouts
 from dynevent.sim.config import DEFAULT_DESCRIPTION, ServeConfig
 from dynevent.wire.messages import Goal
 
-__all__ = ["BEGIN_COMMAND_TOPIC", "CLOSE_PER_ROBOT", "LANE", "Fleet", "GoalEvent", "SimulatedChildren"]
+__all__ = [
+    "BEGIN_COMMAND_TOPIC",
+    "CLOSE_PER_ROBOT",
+    "FLEET",
+    "INTERRUPTED",
+    "LANE",
+    "Fleet",
+    "GoalEvent",
+    "SimulatedChildren",
+    "serve_node_name",
+]
 
 #: Publish a DynamicEventDescription naming a robot here to begin a dynamic event for it.
 BEGIN_COMMAND_TOPIC = "dynevent/serve/begin"
+
+#: A robot's task is interrupted while its parameter ``interrupted.<robot>`` (a bool, on the node of
+#: its shard) is true (R14): setting it interrupts or resumes the task, and a run it begins is begun
+#: so (R3.1).  A parameter, not a topic: its set is a service call, answered once the server took it.
+INTERRUPTED = "interrupted"
+
+#: The fleet a shard serves: a read-only parameter of its node.
+FLEET = "fleet"
 
 #: Robots per lane: one node and one executor thread each.  rclpy's executor walks every entity of
 #: its nodes at each wake-up, so a wake-up costs in proportion to the robots it serves: 2,000 robots
@@ -47,6 +66,13 @@ LANE = int(os.environ.get("DYNEVENT_SERVE_LANE", "64"))
 #: How much longer than :data:`~dynevent.ros.spinning.CLOSE_BOUND` a close-down may take per robot
 #: served (seconds): destroying the entities of a fleet costs more the more there are.
 CLOSE_PER_ROBOT = 0.1
+
+
+def serve_node_name(fleet: str, shard: tuple[int, int] = (1, 1)) -> str:
+    """The name of the node that holds a serve process's parameters (of its first lane): by fleet and
+    shard, so that two processes on one graph never share it."""
+    index, count = shard
+    return f"dynevent_serve_{fleet}" + ("" if count == 1 else f"_{index}_of_{count}")
 
 
 class SimulatedChildren:
@@ -144,8 +170,7 @@ class Fleet:
         self.config = config
         self.store = store
         self.machine_config = machine_config
-        index, count = config.shard
-        base = "dynevent_serve" if count == 1 else f"dynevent_serve_{index}_of_{count}"
+        base = serve_node_name(config.fleet, config.shard)
         robots = config.served()
         self.lanes = [
             _Lane(base if start == 0 else f"{base}_lane_{start // LANE}")
@@ -165,6 +190,9 @@ class Fleet:
         self._timers_lock = threading.Lock()  # begin commands arrive on lane 0's thread
         begun = self._on_begin_command
         self.node.create_subscription(RosDescription, BEGIN_COMMAND_TOPIC, begun, latched(10))
+        read_only = ParameterDescriptor(description="the fleet this node serves robots of", read_only=True)
+        self.node.declare_parameter(FLEET, config.fleet, read_only)
+        self.node.add_on_set_parameters_callback(self._on_parameters)
 
     def add(
         self,
@@ -182,6 +210,7 @@ class Fleet:
         goal's).  True when the goal requests are heard so."""
         fleet, store, lane = self.config.fleet, self.store, self.lane_of[robot]
         following: list[Callable[[], None]] = []
+        interrupted = self._declare_interrupted(robot, restored is not None and restored.interrupted)
 
         def stepped(event: ins.Input, outputs: tuple[outs.Output, ...]) -> None:
             if following and isinstance(event, (ins.GoalRequested, ins.GoalSubmitted)):
@@ -212,8 +241,25 @@ class Fleet:
         if restored is not None:
             server.restart()
         if not server.state.active:
-            server.begin(DEFAULT_DESCRIPTION, 1)
+            server.begin(DEFAULT_DESCRIPTION, 1, interrupted=interrupted)
+        elif server.state.interrupted != interrupted:  # restored, and started with the other value
+            (server.interrupt if interrupted else server.resume)()
         return heard
+
+    def _declare_interrupted(self, robot: str, restored: bool) -> bool:
+        """``robot``'s :data:`INTERRUPTED` parameter declared, as restored or as ``--ros-args -p`` sets it."""
+        descriptor = ParameterDescriptor(description=f"{robot}'s task is interrupted (R14)")
+        return bool(self.node.declare_parameter(f"{INTERRUPTED}.{robot}", restored, descriptor).value)
+
+    def _on_parameters(self, parameters: list[Any]) -> SetParametersResult:
+        """A robot's :data:`INTERRUPTED` set: its task interrupted or resumed before the set is answered."""
+        for parameter in parameters:
+            robot = parameter.name.removeprefix(f"{INTERRUPTED}.")
+            server = self.servers.get(robot) if parameter.name != robot else None
+            value = parameter.value
+            if server is not None and isinstance(value, bool) and value != server.state.interrupted:
+                (server.interrupt if value else server.resume)()
+        return SetParametersResult(successful=True)
 
     def _finished(self, robot: str) -> None:
         if self.config.rebegin > 0:
@@ -228,7 +274,8 @@ class Fleet:
             timer = self.rebegin_timers.pop(robot, None)
         if timer is not None:
             self.lane_of[robot].node.destroy_timer(timer)
-        self.servers[robot].begin(description, 1)
+        interrupted = bool(self.node.get_parameter(f"{INTERRUPTED}.{robot}").value)
+        self.servers[robot].begin(description, 1, interrupted=interrupted)
 
     def _on_begin_command(self, message: Any) -> None:
         if message.fleet == self.config.fleet and message.robot in self.servers:

@@ -355,7 +355,9 @@ class DynamicEventServer(AdapterInputs):
     def _describe(self, request: Any, response: Any) -> Any:
         with self._lock:  # a query: its one output is the answer, not an effect for the outbox (R16)
             outputs = machine.step(self._state, ins.DescriptionQuery(now=self.now()), self._config).outputs
-        answer = next(output for output in outputs if isinstance(output, outs.DescriptionAnswer))
+        answer = next((output for output in outputs if isinstance(output, outs.DescriptionAnswer)), None)
+        if answer is None:  # a machine with R16.1 switched off: an exception would end the lane's thread
+            return response
         response.running = answer.response.running
         response.status = answer.response.status
         response.description = answer.response.description

@@ -45,12 +45,8 @@ def _add_demo_command(commands: _Commands) -> None:
     )
     shape = parser.add_mutually_exclusive_group()
     shape.add_argument("--json", action="store_true", help="print one JSON object per timeline event")
-    shape.add_argument(
-        "--mermaid", action="store_true", help="print the session as a Mermaid sequence diagram"
-    )
-    parser.add_argument(
-        "--seed", type=int, default=0, metavar="N", help="seed of the message delays and the race (0)"
-    )
+    shape.add_argument("--mermaid", action="store_true", help="print it as a Mermaid sequence diagram")
+    parser.add_argument("--seed", type=int, default=0, metavar="N", help="seed of delays and the race (0)")
 
 
 def _add_check_command(commands: _Commands) -> None:
@@ -361,6 +357,12 @@ def _add_probe_command(commands: _Commands) -> None:
         help="a command that begins a dynamic event for the robot, run when a case needs one and none "
         "is active",
     )  # fmt: skip
+    for what in ("interrupt", "resume"):
+        parser.add_argument(
+            f"--{what}-command", metavar="CMD",
+            help=f"a command that {what}s the robot's task (R14) and exits 0 once it took effect: with "
+            "both, the cases that interrupt the task run (e.g. dynevent task interrupt)",
+        )  # fmt: skip
     parser.add_argument(
         "--known", choices=["rmf_ros2"],
         help="count the divergences docs/divergences.md records for rmf_ros2 as known (shown, not failing), "
@@ -478,8 +480,25 @@ def _add_send_command(commands: _Commands) -> None:
     )  # fmt: skip
 
 
+def _add_task_command(commands: _Commands) -> None:
+    parser = commands.add_parser(
+        "task",
+        help="tell a running dynevent serve what happens to a robot's task: begin, interrupt, resume",
+        description="Tell the dynevent serve of a robot what happens to its task: begin a dynamic event "
+        "(R3), interrupt the task (R14: a child that would start waits for the resume, R6.3) or resume it "
+        "(the robot's parameter interrupted.<robot>, set once the server took it).  ROS 2's own arguments "
+        "follow --ros-args.  Exit status: 0 once the serve took it, 1 when it did not, 2 on bad usage or "
+        "when no serve of the robot was found.",
+    )
+    parser.add_argument("what", choices=("begin", "interrupt", "resume"), help="what happens to the task")
+    parser.add_argument("--fleet", default="tinyRobot", help="the robot's fleet (default: %(default)s)")
+    parser.add_argument("--robot", default="tinyRobot1", help="the robot (default: %(default)s)")
+    parser.add_argument("--description", metavar="JSON", help="a begin's description (default: the serve's)")
+    parser.add_argument("--timeout", type=float, default=10.0, metavar="SECONDS", help="bound (default 10 s)")
+
+
 #: The commands that run rclpy, and so take ROS 2's own arguments after ``--ros-args``.
-ROS_COMMANDS = frozenset({"serve", "send", "probe", "record"})
+ROS_COMMANDS = frozenset({"serve", "send", "probe", "record", "task"})
 
 
 def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
@@ -525,6 +544,7 @@ COMMANDS: dict[str, Callable[[_Commands], None]] = {
     "send": _add_send_command,
     "probe": _add_probe_command,
     "record": _add_record_command,
+    "task": _add_task_command,
 }
 
 

@@ -41,6 +41,7 @@ def run(args: argparse.Namespace) -> int:
             raise ProbeError(f"--stubborn-minimum: expected seconds from 0 (got {args.stubborn_minimum})")
         for flag in ("junit", "report", "trace"):
             files.check_writable(getattr(args, flag), f"--{flag}")
+        _check_task_commands(args)
         return cases
 
     if args.list:
@@ -59,6 +60,18 @@ def run(args: argparse.Namespace) -> int:
     return run_over_ros("probe", check, probe)
 
 
+def _check_task_commands(args: argparse.Namespace) -> None:
+    """``--interrupt-command`` and ``--resume-command`` come together, and only for a live server."""
+    given = [flag for flag in ("interrupt_command", "resume_command") if getattr(args, flag)]
+    named = " and ".join(f"--{flag.replace('_', '-')}" for flag in given)
+    if len(given) == 1:
+        other = "--resume-command" if given[0] == "interrupt_command" else "--interrupt-command"
+        raise ProbeError(f"{named}: needs {other} too (a case that interrupts the task resumes it)")
+    if given and (args.loopback or args.impl):
+        where = "--loopback" if args.loopback else "--impl"
+        raise ProbeError(f"{named}: for a live server; {where} interrupts the task itself")
+
+
 def _options(args: argparse.Namespace) -> probe_runner.Options:
     """The probe's options, as the flags give them."""
     known = args.known or ""
@@ -66,6 +79,7 @@ def _options(args: argparse.Namespace) -> probe_runner.Options:
         fleet=args.fleet, robot=args.robot, place=args.place[0] if args.place else None,
         more_places=tuple(args.place[1:]) if args.place else (), category=args.category,
         timeout=args.timeout, begin_command=args.begin_command,
+        interrupt_command=args.interrupt_command, resume_command=args.resume_command,
         known=probe_cases.KNOWN.get(known, frozenset()), trace=args.trace,
         stubborn_minimum=args.stubborn_minimum, introspection=args.introspection,
         allow_missing=tuple(args.allow_missing), server_wait=args.server_wait,

@@ -355,6 +355,10 @@ class Options:
     more_places: tuple[str, ...] = ()
     timeout: float = 10.0
     begin_command: str | None = None
+    #: commands that interrupt and resume the robot's task (R14), each returning once it took effect:
+    #: the interrupt cases run over a link that cannot do it itself (DDS)
+    interrupt_command: str | None = None
+    resume_command: str | None = None
     known: frozenset[str] = frozenset()
     trace: str | None = None
     stubborn_minimum: float = 2.0
@@ -655,20 +659,10 @@ class Probe:
         return status
 
     def _run_begin_command(self) -> None:
-        """Run ``--begin-command`` (bounded by the timeout); a command that cannot run makes the case
-        missing, with why."""
-        command = self.options.begin_command or ""
-        try:
-            done = subprocess.run(
-                shlex.split(command),
-                timeout=self.timeout,
-                check=False,
-                capture_output=True,
-                text=True,
-            )
-        except (OSError, ValueError, subprocess.TimeoutExpired) as exc:
-            raise _Unreachable(f"--begin-command {command!r} did not run: {exc}") from None
-        self.note(f"ran --begin-command: exit status {done.returncode}")
+        """Run ``--begin-command``; a command that cannot run makes the case missing, with why."""
+        why = _run_command(self, "--begin-command", self.options.begin_command or "")
+        if why:
+            raise _Unreachable(why)
 
     def any_status(self) -> DynamicEventStatus:
         status = self.link.wait_status(lambda s: True, self.timeout)
@@ -822,9 +816,18 @@ class Probe:
         self.link.wait_status(_waits_or_ended, self.timeout)
 
 
+#: The least time a command of the probe's (``--begin-command``, ``--interrupt-command``,
+#: ``--resume-command``) is given, in seconds, whatever ``--timeout``: a command that is a ROS 2
+#: process of its own starts and discovers the server before it does anything (``dynevent task``:
+#: about 3 s on one host).
+COMMAND_BOUND = 15.0
+
 #: Why a case that interrupts the robot's task is not run over a link that cannot (an interruption is
 #: the task's, and no client of the protocol sends one).
-INTERRUPT_UNOFFERED = "this link cannot interrupt the robot's task (a task input no client sends)"
+INTERRUPT_UNOFFERED = (
+    "this link cannot interrupt the robot's task (a task input no client sends; over ROS 2, "
+    "--interrupt-command and --resume-command do)"
+)
 #: The shortest wait the deadline leaves (seconds): a message already on its way is still read.
 _LEAST_WAIT = 0.05
 #: Why a case whose wait the deadline cut short is not run: what it waited for might have come
@@ -1699,17 +1702,46 @@ def _action_cancel_waiting(probe: Probe, case: Case) -> CaseFinding:
         return CaseFinding(case, Verdict.PASS, expected=expected, seen="so")
 
 
+def _run_command(probe: Probe, flag: str, command: str, *, succeed: bool = False) -> str:
+    """Run ``command`` (bounded by the timeout, or :data:`COMMAND_BOUND` where that is longer), noting
+    its exit status: ``""``, or why it did not run (with ``succeed``, or did not exit 0)."""
+    try:
+        done = subprocess.run(
+            shlex.split(command),
+            timeout=max(probe.timeout, COMMAND_BOUND),
+            check=False,
+            capture_output=True,
+            text=True,
+        )
+    except (OSError, ValueError, subprocess.TimeoutExpired) as exc:
+        return f"{flag} {command!r} did not run: {exc}"
+    probe.note(f"ran {flag}: exit status {done.returncode}")
+    if succeed and done.returncode != 0:
+        said = done.stdout.strip().splitlines()[-1:] or done.stderr.strip().splitlines()[-1:]
+        return f"{flag} {command!r} exited {done.returncode}" + (f": {said[0]}" if said else "")
+    return ""
+
+
+def _task_input(probe: Probe, what: str) -> str:
+    """Interrupt or resume (``what``) the robot's task: by ``--interrupt-command`` or
+    ``--resume-command`` when given, else through the link; ``""`` once done, else why not."""
+    command = probe.options.interrupt_command if what == "interrupt" else probe.options.resume_command
+    if command:
+        return _run_command(probe, f"--{what}-command", command, succeed=True)
+    return probe.link.interrupt() if what == "interrupt" else probe.link.resume()
+
+
 @contextmanager
 def _interrupted(probe: Probe) -> Iterator[None]:
     """The robot's task interrupted while the block runs (R14.2), then resumed (R14.3)."""
-    why = probe.link.interrupt()
+    why = _task_input(probe, "interrupt")
     if why:
         raise _Unreachable(why)
     probe.note("the task interrupted")
     try:
         yield
     finally:
-        why = probe.link.resume()
+        why = _task_input(probe, "resume")
         probe.note(f"the task not resumed: {why}" if why else "the task resumed")
 
 
@@ -2065,7 +2097,7 @@ def run_cases(
     (a list the caller keeps, so that an interruption keeps those of the cases that ended); the
     findings."""
     findings = [] if findings is None else findings
-    cases = runnable(cases, link.interrupts, say)
+    cases = runnable(cases, link.interrupts or bool(options.interrupt_command), say)
     probe = Probe(link, options)  # the deadline runs from here: the first wait is within it too
     probe.options = _ready(link, options, cases, say, probe.timeout)
     if not link.statuses:  # _ready waited --timeout (or what the deadline left) for one

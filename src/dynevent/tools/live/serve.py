@@ -70,6 +70,10 @@ def _describe(output: outs.Output | outs.Rejected) -> str | None:
         return f"answer: goal …{output.goal_uuid[-8:]} {output.status.value}: {detail} id={result.id}"
     if isinstance(output, outs.Log):
         return f"log: {output.entry.tier}: {output.entry.text}"
+    if isinstance(output, outs.InterruptConfirmed):
+        return "interrupted: the task (a child that starts now waits for the resume)"
+    if isinstance(output, (outs.InterruptChild, outs.ResumeChild)):
+        return f"{'interrupt' if isinstance(output, outs.InterruptChild) else 'resume'}: child {output.id}"
     if isinstance(output, outs.DynamicEventFinished):
         return f"finished: the dynamic event ended {output.status}"
     return None
