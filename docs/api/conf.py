@@ -28,6 +28,7 @@ autodoc_mock_imports = [
     "action_msgs",
     "unique_identifier_msgs",
     "builtin_interfaces",
+    "rcl_interfaces",
 ]
 nitpicky = False
 default_role = "code"
