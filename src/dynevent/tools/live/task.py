@@ -102,8 +102,9 @@ class ServeTasks:
             for name in serve_nodes(self._node, self.fleet):
                 requests = asked.setdefault(name, [])
                 for _, future in requests:
-                    values = future.result().values if future.done() else None
-                    if values and values[0].string_value == self.fleet and values[1].type == _BOOL:
+                    reply = future.result() if future.done() else None  # None too for one cancelled
+                    values: list[Any] = list(reply.values) if reply is not None else []
+                    if len(values) == 2 and values[0].string_value == self.fleet and values[1].type == _BOOL:
                         return name
                 last, future = requests[-1] if requests else (0.0, None)
                 if now - last >= (WAKE if future is None or future.done() else RETRY):
