@@ -105,7 +105,7 @@ def test_every_check_the_probe_catches_in_process_is_caught_over_dds(tmp_path: P
         done = _probe(item, item.probe["in process"][0])
         caught = _caught(item.rule, done)
         print(f"{item.rule}: {caught} in {time.monotonic() - started:.1f} s")
-        return caught, done.stdout
+        return caught, done.stdout + done.stderr
 
     try:
         for serve in servers.values():
@@ -120,7 +120,15 @@ def test_every_check_the_probe_catches_in_process_is_caught_over_dds(tmp_path: P
     print(f"{len(seen)} checks probed over DDS in {time.monotonic() - began:.1f} s")
     assert codes == dict.fromkeys(servers, 0), {mode: serve.output for mode, serve in servers.items()}
     record = "".join(f'    "{rule}": {cases!r},\n'.replace("'", '"') for rule, cases in seen.items())
-    assert seen == dict(OVER_DDS), f"OVER_DDS differs from what DDS shows; what it shows:\n{record}"
+    served = "".join(serve.output for serve in servers.values()).splitlines()
+    differing = {  # what the probe said, and what serve said of the robot
+        rule: outputs[rule] + "\n".join(line for line in served if f"/{_robot(rule)} " in line)
+        for rule, cases in seen.items()
+        if cases != OVER_DDS.get(rule)
+    }
+    assert seen == dict(OVER_DDS), (
+        f"OVER_DDS differs from what DDS shows; what it shows:\n{record}\n{differing}"
+    )
     unexplained = [rule for rule, cases in seen.items() if not cases and rule not in DDS_CANNOT_SHOW]
     assert unexplained == [], {rule: outputs[rule] for rule in unexplained}
     stale = [rule for rule, cases in seen.items() if cases and rule in DDS_CANNOT_SHOW]

@@ -2076,9 +2076,12 @@ def implemented() -> frozenset[str]:
     return frozenset(_CASES)
 
 
-def runnable(cases: list[Case], interrupts: bool, say: Callable[[str], None]) -> list[Case]:
-    """The ``cases`` a link runs: those that interrupt the robot's task left out where it cannot
-    (``interrupts``), saying so."""
+def runnable(
+    cases: list[Case], link: type[Link] | Link, options: Options, say: Callable[[str], None]
+) -> list[Case]:
+    """The ``cases`` a link runs: those that interrupt the robot's task left out where neither the link
+    (:attr:`Link.interrupts`) nor a command of ``options`` (``--interrupt-command``) can, saying so."""
+    interrupts = link.interrupts or bool(options.interrupt_command)
     left_out = [case.id for case in cases if case.interrupts and not interrupts]
     if left_out:
         say(f"left out: {', '.join(left_out)} ({INTERRUPT_UNOFFERED})")
@@ -2097,7 +2100,7 @@ def run_cases(
     (a list the caller keeps, so that an interruption keeps those of the cases that ended); the
     findings."""
     findings = [] if findings is None else findings
-    cases = runnable(cases, link.interrupts or bool(options.interrupt_command), say)
+    cases = runnable(cases, link, options, say)
     probe = Probe(link, options)  # the deadline runs from here: the first wait is within it too
     probe.options = _ready(link, options, cases, say, probe.timeout)
     if not link.statuses:  # _ready waited --timeout (or what the deadline left) for one

@@ -29,8 +29,7 @@ def main(options: Options, cases: list[Case], say: Callable[[str], None]) -> int
     """``dynevent probe``: run the cases, print the findings, write the reports; the exit status."""
     # the whole list runs what DDS can (docs/probe.md says which it leaves out); a choice is told why
     chosen = len(cases) < len(probe_cases.CASES)
-    interrupts = RosLink.interrupts or bool(options.interrupt_command)
-    cases = probe_runner.runnable(cases, interrupts, say if chosen else lambda _: None)
+    cases = probe_runner.runnable(cases, RosLink, options, say if chosen else lambda _: None)
     if not cases:
         say("no case left to run")
         return probe_cases.EXIT_USAGE
