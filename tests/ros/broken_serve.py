@@ -2,7 +2,8 @@
 
 ``python broken_serve.py DEFECT SERVE-ARGS...``: each defect is one of the test kit's
 (:data:`dynevent.testing.broken.DEFECTS`: the same the in-process probe meets), put in the real
-server of this process only, or ``volatile_status``, which only a transport has.
+server of this process only, or ``volatile_status``, which only a transport has, or
+``faulty_callback`` (the robot ``faulty`` raises in a callback).
 
 ``python broken_serve.py switched_off ROBOT=RULE,... SERVE-ARGS...``: each robot named served with
 that one check of the machine switched off (the test kit's :mod:`dynevent.testing.switched_off`),
@@ -70,8 +71,27 @@ def _install(name: str) -> Callable[[], None]:
     return install
 
 
+def _faulty_callback() -> None:
+    """The server of the robot named ``faulty`` raises where it starts a child, inside the executor's
+    callback that carries the step out: one robot's fault, which the robots of its lane must outlive."""
+    made, carry_out = ros_server.DynamicEventServer.__init__, ros_server.DynamicEventServer._carry_out
+
+    def init(self: Any, node: Any, fleet: str, robot: str, *args: Any, **kwargs: Any) -> None:
+        made(self, node, fleet, robot, *args, **kwargs)
+        self.faulty = robot == "faulty"
+
+    def faulty_carry_out(self: Any, output: outs.Output) -> None:
+        if self.faulty and isinstance(output, outs.StartChild):
+            raise RuntimeError("a deliberate fault")
+        carry_out(self, output)
+
+    ros_server.DynamicEventServer.__init__ = init  # type: ignore[method-assign]
+    ros_server.DynamicEventServer._carry_out = faulty_carry_out  # type: ignore[method-assign]
+
+
 INSTALL: dict[str, Callable[[], None]] = {name: _install(name) for name in DEFECTS}
 INSTALL["volatile_status"] = _volatile_topics
+INSTALL["faulty_callback"] = _faulty_callback
 
 
 class _SwitchedOffLock:

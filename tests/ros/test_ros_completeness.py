@@ -21,6 +21,7 @@ from pathlib import Path
 from ros_support import Child, child_env, finish
 
 from dynevent.conformance.probe.cases import CASES
+from dynevent.tools.live.serve import CALLBACK_FAULT
 from support.completeness import CONFIG, DDS_CANNOT_SHOW, OPTIONS, OVER_DDS, Measured, dds_cases, measure
 
 SCRIPT = Path(__file__).resolve().parent / "broken_serve.py"
@@ -119,6 +120,10 @@ def test_every_check_the_probe_catches_in_process_is_caught_over_dds(tmp_path: P
     outputs = {rule: output for rule, (_, output) in ran.items()}
     print(f"{len(seen)} checks probed over DDS in {time.monotonic() - began:.1f} s")
     assert codes == dict.fromkeys(servers, 0), {mode: serve.output for mode, serve in servers.items()}
+    faults = [
+        line for serve in servers.values() for line in serve.output.splitlines() if CALLBACK_FAULT in line
+    ]
+    assert faults == [], faults  # a check switched off may not make serve's own code raise
     record = "".join(f'    "{rule}": {cases!r},\n'.replace("'", '"') for rule, cases in seen.items())
     served = "".join(serve.output for serve in servers.values()).splitlines()
     differing = {  # what the probe said, and what serve said of the robot

@@ -17,6 +17,7 @@ from ros_support import START, Child, Graph, child_env, finish, wait_for
 from dynevent import client as cl
 from dynevent.errors import ServeError
 from dynevent.ros import DynamicEventClient
+from dynevent.tools.live.serve import CALLBACK_FAULT
 from dynevent.wire.vocab import Failure, GoalStatus
 
 ROBOT = "serveRobot"
@@ -212,6 +213,31 @@ def test_serve_runs_children_of_several_robots_at_once(graph: Graph) -> None:
     finally:
         code = serve.stop()
     assert code == 0, serve.output
+
+
+def test_a_robot_whose_callback_raises_leaves_its_lane_mates_served() -> None:
+    """An exception in one robot's callback (tests/ros/broken_serve.py's ``faulty_callback``: where its
+    child starts) is one line of the live log, no traceback; the executor thread of its lane spins
+    on, and a robot of the same lane runs a child after it."""
+    script = str(Path(__file__).resolve().parent / "broken_serve.py")
+    serve = Child([script, "faulty_callback", "--rebegin", "0", "--robot", "faulty", "--robot", "sound"])
+    serve.wait_line("serving ")
+    try:
+        finish(send_in_background("--place", "pantry", timeout=3, robot="faulty"), 30)
+        serve.wait_line(CALLBACK_FAULT)
+        sound = send_in_background("--place", "pantry", timeout=30, robot="sound")
+        output = finish(sound, 60).stdout
+        assert sound.returncode == 0 and "outcome: completed" in output, output + serve.output
+    finally:
+        code = serve.stop()
+    assert code == 0, serve.output
+    said = [line for line in serve.output.splitlines() if CALLBACK_FAULT in line]
+    assert said == [
+        f"dynevent_serve_tinyRobot: {CALLBACK_FAULT} RuntimeError: a deliberate fault at broken_serve.py:"
+        f"{said[0].split('broken_serve.py:')[1].split(';')[0]}; its robots are served on (a defect: please "
+        "report it)"
+    ], serve.output
+    assert "Traceback" not in serve.output
 
 
 def test_serves_banner_names_the_namespace_every_name_is_under() -> None:

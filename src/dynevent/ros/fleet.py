@@ -148,15 +148,18 @@ _REQUEST_RECEIVED = 1
 class _Lane(Session):
     """A node of the fleet's robots, with its own single-threaded executor and thread."""
 
-    def __init__(self, name: str) -> None:
+    def __init__(self, name: str, on_fault: Callable[[str, Exception], None] | None) -> None:
         super().__init__(name)  # its thread: the name, dashed
+        if on_fault is not None:
+            self.spinner.on_fault = lambda fault: on_fault(name, fault)
         self.node.get_logger().set_level(LoggingSeverity.WARN)  # the live log says the rest
 
 
 class Fleet:
     """The robots of ``config`` one process serves (its shard), on lanes of :data:`LANE`, each from its
     state in ``store`` when it has one; with ``follow``, a node in a context of its own (started with
-    ``ros_args``) follows the robots' goal events.  ROS must be initialised (the default context)."""
+    ``ros_args``) follows the robots' goal events; ``on_fault`` hears what a callback of a lane raises
+    (the lane's name, the exception: the lane spins on).  ROS must be initialised (the default context)."""
 
     def __init__(
         self,
@@ -166,6 +169,7 @@ class Fleet:
         *,
         follow: bool = False,
         ros_args: Sequence[str] = (),
+        on_fault: Callable[[str, Exception], None] | None = None,
     ) -> None:
         self.config = config
         self.store = store
@@ -173,7 +177,7 @@ class Fleet:
         base = serve_node_name(config.fleet, config.shard)
         robots = config.served()
         self.lanes = [
-            _Lane(base if start == 0 else f"{base}_lane_{start // LANE}")
+            _Lane(base if start == 0 else f"{base}_lane_{start // LANE}", on_fault)
             for start in range(0, max(len(robots), 1), LANE)
         ]
         self.lane_of = {robot: self.lanes[position // LANE] for position, robot in enumerate(robots)}

@@ -12,7 +12,7 @@ from typing import Any
 from action_msgs.msg import GoalStatus as RosGoalStatus
 from rclpy.action import ActionClient
 from rclpy.event_handler import SubscriptionEventCallbacks
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSPolicyKind, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, QoSPolicyKind, QoSProfile
 
 from dynevent.conformance.judge.trace import TraceWriter
 from dynevent.conformance.probe.runner import Exchange, Link
@@ -81,10 +81,8 @@ class RosLink(Link):
             return
         if policy is QoSPolicyKind.DURABILITY:
             self.offered[name] = VOLATILE
-            volatile = QoSProfile(
-                history=HistoryPolicy.KEEP_LAST, depth=_READER_DEPTH, reliability=ReliabilityPolicy.RELIABLE,
-                durability=DurabilityPolicy.VOLATILE,
-            )  # fmt: skip
+            volatile = latched(_READER_DEPTH)
+            volatile.durability = DurabilityPolicy.VOLATILE
             self._subscriptions.append(self._subscribe(name, volatile))
         else:
             self.offered[name] = f"offered a QoS the probe's reader cannot match ({policy.name.lower()})"

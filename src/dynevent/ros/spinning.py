@@ -56,10 +56,13 @@ CLOSE_BOUND = 20.0
 
 
 class Spinner:
-    """``executor`` spun on a daemon thread named ``name`` until :meth:`stop`."""
+    """``executor`` spun on a daemon thread named ``name`` until :meth:`stop`.  An exception a callback
+    raises ends the thread, unless ``on_fault`` is given: then it is told, and the thread spins on (one
+    robot's fault does not stop the robots that share its executor)."""
 
-    def __init__(self, executor: Any, name: str) -> None:
+    def __init__(self, executor: Any, name: str, on_fault: Callable[[Exception], None] | None = None) -> None:
         self.executor = executor
+        self.on_fault = on_fault
         self._stopping = threading.Event()
         self._thread = threading.Thread(target=self._spin, daemon=True, name=name)
 
@@ -75,10 +78,15 @@ class Spinner:
         spin_once = getattr(self.executor, "_spin_once_impl", None)
         with contextlib.suppress(ExternalShutdownException):
             while not self._stopping.is_set():
-                if spin_once is not None:
-                    spin_once(None, self._stopping.is_set)
-                else:  # an executor without it: a bounded wait, looked at once a second
-                    self.executor.spin_once(timeout_sec=1.0)
+                try:
+                    if spin_once is not None:
+                        spin_once(None, self._stopping.is_set)
+                    else:  # an executor without it: a bounded wait, looked at once a second
+                        self.executor.spin_once(timeout_sec=1.0)
+                except Exception as fault:
+                    if self.on_fault is None or isinstance(fault, ExternalShutdownException):
+                        raise
+                    self.on_fault(fault)
 
     @contextlib.contextmanager
     def paused(self, timeout: float = 5.0) -> Iterator[None]:

@@ -25,7 +25,9 @@ import queue
 import signal
 import threading
 import time
+import traceback
 from collections.abc import Callable, Sequence
+from pathlib import Path
 
 import attrs
 
@@ -48,7 +50,10 @@ from dynevent.tools.live import offline
 from dynevent.wire._text import status_text
 from dynevent.wire.vocab import Compatibility
 
-__all__ = ["Watch", "run"]
+__all__ = ["CALLBACK_FAULT", "Watch", "run"]
+
+#: What the live log says of an exception a callback of a lane raised (its robots are served on).
+CALLBACK_FAULT = "a callback raised"
 
 
 def _describe(output: outs.Output | outs.Rejected) -> str | None:
@@ -214,7 +219,7 @@ def run(
             files.create_directory(watch.trace, "--trace")
         except FileError as exc:
             raise ServeError(str(exc)) from None
-    fleet = Fleet(config, checking, store, follow=watch.judge, ros_args=ros_args)
+    fleet = Fleet(config, checking, store, follow=watch.judge, ros_args=ros_args, on_fault=_fault_said(log))
     clients, judged = _Clients(), []
     for robot in config.served():
         judge = _Judged(config.fleet, robot, checking, watch, clients, log, _trace(config, watch, robot))
@@ -264,6 +269,20 @@ def _observer(
             say(f"{fleet}/{robot}  {line}")
 
     return observe
+
+
+def _fault_said(say: Callable[[str], None]) -> Callable[[str, Exception], None]:
+    """The live log's line of an exception a callback of a lane raised: one line, where it was raised
+    (no traceback), and that the lane spins on."""
+
+    def said(lane: str, fault: Exception) -> None:
+        frames = traceback.extract_tb(fault.__traceback__)
+        where = f" at {Path(frames[-1].filename).name}:{frames[-1].lineno}" if frames else ""
+        what = str(fault).splitlines()[0] if str(fault) else ""
+        say(f"{lane}: {CALLBACK_FAULT} {type(fault).__name__}{': ' + what if what else ''}{where}; its "
+            "robots are served on (a defect: please report it)")  # fmt: skip
+
+    return said
 
 
 def _trace(config: ServeConfig, watch: Watch, robot: str) -> TraceWriter | None:
