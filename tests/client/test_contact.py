@@ -102,13 +102,31 @@ def test_lost_contact_is_said_once_and_its_return_asks_for_the_answers_given_mea
     assert outputs == [
         BackInContact(since=10 * SECOND, now=40 * SECOND),
         AskResult(goal_uuid=first),
-        AskResult(goal_uuid=second),  # accepted or not: its request or its response may be lost
+        # accepted or not: its request or its response may be lost; its acceptance not heard, an
+        # unknown reply to this first request is no answer (it may reach the server before the goal)
+        AskResult(goal_uuid=second, contact=False),
     ]
     assert state.contact_lost_at is None
     state, outputs = feed(state, answer(first, GoalStatus.SUCCEEDED, "completed", id=2))
     assert [output.goal_uuid for output in outputs if isinstance(output, Outcome)] == [first]
     state, outputs = feed(state, Tick(now=40 * SECOND + ASK_AGAIN_PERIOD))
     assert _asked(outputs) == [second]  # the answered one is asked for no more
+    assert outputs == [AskResult(goal_uuid=second, contact=True)]  # asked again: unknown now is lost
+
+
+@pytest.mark.spec("R21.4")
+def test_a_goal_whose_acceptance_was_not_heard_is_lost_only_at_the_second_unknown() -> None:
+    """A process comes into contact after a goal was sent to it and before its response came: the
+    client's first request for the result may reach the server before the goal's own request, and an
+    unknown reply to it is no answer; the request a second later is, and the goal is lost then."""
+    state, sent = _sent(waiting())
+    state, outputs = feed(state, ContactMade(now=5 * SECOND))
+    assert outputs == [AskResult(goal_uuid=sent, contact=False)]
+    state, outputs = feed(state, Tick(now=5 * SECOND + ASK_AGAIN_PERIOD))
+    assert outputs == [AskResult(goal_uuid=sent, contact=True)]
+    accepted, _ = feed(state, GoalResponse(goal_uuid=sent, accepted=True))
+    _, outputs = feed(accepted, ContactMade(now=9 * SECOND))
+    assert outputs == [AskResult(goal_uuid=sent, contact=True)]  # accepted: the first unknown is lost
 
 
 @pytest.mark.spec("R21.5")

@@ -795,14 +795,18 @@ def _on_result(state: ClientState, event: ResultReceived) -> ClientTransition:
 
 def _ask_due(state: ClientState, now: int) -> tuple[ClientState, tuple[ClientOutput, ...]]:
     """Ask again for the result of every goal whose time to ask has come (R21.4, R21.5, R21.6); the next
-    time is one wait on, each wait twice the last, up to :data:`ASK_AGAIN_LONGEST`."""
+    time is one wait on, each wait twice the last, up to :data:`ASK_AGAIN_LONGEST`.  An unknown goal
+    is lost (``contact``) only where the server came into contact and either accepted the goal or
+    was asked once already: the first request for a goal whose acceptance was not heard may reach
+    the server before the goal's own request (R21.4)."""
     asked: list[ClientOutput] = []
     for goal in state.goals:
         if goal.ask_at is None or now < goal.ask_at:
             continue
         wait = min(ASK_AGAIN_PERIOD << min(goal.asks, 16), ASK_AGAIN_LONGEST)
         state = _replace(state, attrs.evolve(goal, ask_at=min(now + wait, U64_MAX), asks=goal.asks + 1))
-        asked.append(AskResult(goal_uuid=goal.goal_uuid, contact=not goal.shown_answered))
+        conclusive = not goal.shown_answered and (goal.accepted or goal.asks > 0)
+        asked.append(AskResult(goal_uuid=goal.goal_uuid, contact=conclusive))
     return state, tuple(asked)
 
 
