@@ -17,6 +17,7 @@ from ros_support import START, Child, Graph, child_env, finish, wait_for
 from dynevent import client as cl
 from dynevent.errors import ServeError
 from dynevent.ros import DynamicEventClient
+from dynevent.tools.live import serve as serve_body
 from dynevent.tools.live.serve import CALLBACK_FAULT
 from dynevent.wire.vocab import Failure, GoalStatus
 
@@ -238,6 +239,25 @@ def test_a_robot_whose_callback_raises_leaves_its_lane_mates_served() -> None:
         "report it)"
     ], serve.output
     assert "Traceback" not in serve.output
+
+
+def test_a_fault_of_every_pass_is_said_the_1st_10th_and_100th_time() -> None:
+    """A fault that comes back on every pass of a lane (its wait set's) does not flood the live log:
+    the same lane, type and place is said once, then with its count at each power of ten."""
+    said: list[str] = []
+    fault_said = serve_body._fault_said(said.append)
+    for _ in range(150):
+        try:
+            raise ValueError("again")
+        except ValueError as fault:
+            fault_said("lane_1", fault)
+    fault_said("lane_2", ValueError("elsewhere"))  # no traceback: no place
+    counts = [line.split("(")[1].split(" ")[0] if " times)" in line else "1" for line in said]
+    assert counts == ["1", "10", "100", "1"], said
+    assert (
+        said[-1] == f"lane_2: {CALLBACK_FAULT} ValueError: elsewhere; its robots are served on (a defect: "
+        "please report it)"
+    )
 
 
 def test_serves_banner_names_the_namespace_every_name_is_under() -> None:

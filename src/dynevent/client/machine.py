@@ -129,6 +129,7 @@ __all__ = [
     "ANSWER_GRACE",
     "ASK_AGAIN_LONGEST",
     "ASK_AGAIN_PERIOD",
+    "LOST_AFTER_ASKS",
     "SECOND",
     "ClientState",
     "ClientTransition",
@@ -157,6 +158,12 @@ ASK_AGAIN_LONGEST = 30 * SECOND
 #: it asks for it again (R21.6): the status and the answer come on channels of their own, and a
 #: network that loses packets brings the answer seconds after the status.  Integer nanoseconds.
 ANSWER_GRACE = 2 * SECOND
+#: How many requests for the result of a goal whose acceptance the client has not heard are sent on
+#: coming into contact before one answered unknown ends it lost (R21.4): the goal's own request may
+#: reach the server after them (a process just come into contact; a lossy network repairs a lost
+#: request at the writer's next heartbeat, every 3 s with Fast DDS).  The fourth goes 7 s after
+#: the contact (waits of 1, 2 and 4 s).
+LOST_AFTER_ASKS = 3
 
 _HEX = frozenset("0123456789abcdefABCDEF")
 
@@ -797,15 +804,15 @@ def _ask_due(state: ClientState, now: int) -> tuple[ClientState, tuple[ClientOut
     """Ask again for the result of every goal whose time to ask has come (R21.4, R21.5, R21.6); the next
     time is one wait on, each wait twice the last, up to :data:`ASK_AGAIN_LONGEST`.  An unknown goal
     is lost (``contact``) only where the server came into contact and either accepted the goal or
-    was asked once already: the first request for a goal whose acceptance was not heard may reach
-    the server before the goal's own request (R21.4)."""
+    was asked :data:`LOST_AFTER_ASKS` times already: a request for a goal whose acceptance was not
+    heard may reach the server before the goal's own request (R21.4)."""
     asked: list[ClientOutput] = []
     for goal in state.goals:
         if goal.ask_at is None or now < goal.ask_at:
             continue
         wait = min(ASK_AGAIN_PERIOD << min(goal.asks, 16), ASK_AGAIN_LONGEST)
         state = _replace(state, attrs.evolve(goal, ask_at=min(now + wait, U64_MAX), asks=goal.asks + 1))
-        conclusive = not goal.shown_answered and (goal.accepted or goal.asks > 0)
+        conclusive = not goal.shown_answered and (goal.accepted or goal.asks >= LOST_AFTER_ASKS)
         asked.append(AskResult(goal_uuid=goal.goal_uuid, contact=conclusive))
     return state, tuple(asked)
 

@@ -204,7 +204,7 @@ class AskResult(_ClientOutput):
 
     With ``contact`` (R21.4, R21.5), a server process came into contact that may hold the answer the
     last one could not deliver: a server that does not know the goal is answered as R21.4 says (the
-    goal is lost; for a goal whose acceptance was not heard, from the second request on).  Without it
+    goal is lost; for a goal whose acceptance was not heard, from the fourth request on).  Without it
     (R21.6), the robot's status showed the goal answered and the answer has not come: a server that
     does not know the goal has not received it yet, and that reply is no answer (the machine asks
     again).  Whatever else the server answers goes to the machine as a

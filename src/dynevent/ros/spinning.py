@@ -50,15 +50,18 @@ def init(ros_args: Sequence[str] = (), context: Any = None) -> None:
 
 #: How often :meth:`Spinner.stop` wakes the spinning thread while it waits for it to leave (seconds).
 WAKE_EVERY = 0.1
+#: How long a spinning thread with ``on_fault`` pauses after an exception (seconds).
+FAULT_PAUSE = 0.1
 #: The longest a process's ROS close-down may take (seconds); then it is ended with every thread's
 #: stack on standard error (:func:`bounded_close`).
 CLOSE_BOUND = 20.0
 
 
 class Spinner:
-    """``executor`` spun on a daemon thread named ``name`` until :meth:`stop`.  An exception a callback
-    raises ends the thread, unless ``on_fault`` is given: then it is told, and the thread spins on (one
-    robot's fault does not stop the robots that share its executor)."""
+    """``executor`` spun on a daemon thread named ``name`` until :meth:`stop`.  An exception the executor
+    raises (a callback's) ends the thread, unless ``on_fault`` is given: then it is told, and the thread
+    spins on after :data:`FAULT_PAUSE` (one robot's fault does not stop the robots that share its
+    executor, and a fault of every pass costs no core)."""
 
     def __init__(self, executor: Any, name: str, on_fault: Callable[[Exception], None] | None = None) -> None:
         self.executor = executor
@@ -87,6 +90,7 @@ class Spinner:
                     if self.on_fault is None or isinstance(fault, ExternalShutdownException):
                         raise
                     self.on_fault(fault)
+                    self._stopping.wait(FAULT_PAUSE)  # a fault of every pass (its wait set's) costs no core
 
     @contextlib.contextmanager
     def paused(self, timeout: float = 5.0) -> Iterator[None]:

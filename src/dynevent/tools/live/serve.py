@@ -273,14 +273,21 @@ def _observer(
 
 def _fault_said(say: Callable[[str], None]) -> Callable[[str, Exception], None]:
     """The live log's line of an exception a callback of a lane raised: one line, where it was raised
-    (no traceback), and that the lane spins on."""
+    (no traceback), and that the lane spins on.  The same fault again (its lane, type and place) is
+    said the 10th, 100th, ... time, with its count."""
+    seen: dict[tuple[str, str, str], int] = {}
 
     def said(lane: str, fault: Exception) -> None:
         frames = traceback.extract_tb(fault.__traceback__)
         where = f" at {Path(frames[-1].filename).name}:{frames[-1].lineno}" if frames else ""
+        key = (lane, type(fault).__name__, where)
+        count = seen[key] = seen.get(key, 0) + 1
+        if count > 1 and str(count).rstrip("0") != "1":
+            return
         what = str(fault).splitlines()[0] if str(fault) else ""
-        say(f"{lane}: {CALLBACK_FAULT} {type(fault).__name__}{': ' + what if what else ''}{where}; its "
-            "robots are served on (a defect: please report it)")  # fmt: skip
+        again = f" ({count} times)" if count > 1 else ""
+        say(f"{lane}: {CALLBACK_FAULT} {type(fault).__name__}{': ' + what if what else ''}{where}{again}; "
+            "its robots are served on (a defect: please report it)")  # fmt: skip
 
     return said
 
