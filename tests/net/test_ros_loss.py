@@ -5,7 +5,6 @@ server, and serve's client judge finds nothing against a correct client."""
 
 from __future__ import annotations
 
-import os
 import sys
 import time
 from collections.abc import Callable
@@ -35,21 +34,8 @@ def _verdicts(junit: Path) -> dict[str, str]:
     return verdicts
 
 
-#: 30% is opt-in until #51 item 4 is done: why.
-_THIRTY = (
-    "opt-in (DYNEVENT_NET_LOSS=1) until #51 item 4 is done: at 30% beside a busy loop, each failing run "
-    "has found another way a lossy network misleads a reader or a client, each fixed since with a test "
-    "of its own (the CHANGELOG's 'found at 30% loss'); on 2026-11-29 the misreadings that leaving out "
-    "of the day's bags what a reliable writer can lose for good found were fixed (tests/bags/"
-    "test_losses.py holds it in CI), and of the runs after, the first found one more (a CANCEL refused "
-    "as its child ended, heard before the child's late reports: fixed): 30% goes into CI once runs in a "
-    "row find nothing new"
-)
 #: The shares of packets each lossy host drops, each way.
-LOSSES = [
-    10,
-    pytest.param(30, marks=pytest.mark.skipif(os.environ.get("DYNEVENT_NET_LOSS") != "1", reason=_THIRTY)),
-]
+LOSSES = [10, 30]
 
 
 @pytest.mark.spec("R19.1", "R8.2", "R5.2")
