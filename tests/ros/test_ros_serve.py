@@ -223,13 +223,17 @@ def test_a_robot_whose_callback_raises_leaves_its_lane_mates_served() -> None:
     script = str(Path(__file__).resolve().parent / "broken_serve.py")
     serve = Child([script, "faulty_callback", "--rebegin", "0", "--robot", "faulty", "--robot", "sound"])
     serve.wait_line("serving ")
+    # its child never starts: its send would wait out its bound (long enough to find the robot under
+    # load, where discovery alone once took more than 3 s), and is ended once the test is done with it
+    faulty = send_in_background("--place", "pantry", timeout=60, robot="faulty")
     try:
-        finish(send_in_background("--place", "pantry", timeout=3, robot="faulty"), 30)
         serve.wait_line(CALLBACK_FAULT)
         sound = send_in_background("--place", "pantry", timeout=30, robot="sound")
         output = finish(sound, 60).stdout
         assert sound.returncode == 0 and "outcome: completed" in output, output + serve.output
     finally:
+        faulty.kill()  # no CANCEL of the goal whose child never started
+        finish(faulty, 10)
         code = serve.stop()
     assert code == 0, serve.output
     said = [line for line in serve.output.splitlines() if CALLBACK_FAULT in line]
