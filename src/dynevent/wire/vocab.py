@@ -348,6 +348,7 @@ class Violation(enum.Enum):
     ANSWER_NOT_ACCEPTED = ("answer_not_accepted", "R19.1")
     ANSWER_NOT_OPEN = ("unexpected_answer", "R19.1")
     ANSWER_MISSING = ("answer_missing", "R19.1")
+    RESPONSE_MISSING = ("response_missing", "R19.1")
     SECOND_ANSWER = ("second_answer", "R19.1")
     AFTER_ANSWER = ("after_answer", "R19.1")
     NEVER_ANSWERED = ("never_answered", "R19.1")

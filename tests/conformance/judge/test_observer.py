@@ -1478,3 +1478,56 @@ def test_the_latched_begin_of_an_ended_run_read_after_its_status_is_no_new_run()
     skipped = after.replace('"dynamic_event_seq":6', '"dynamic_event_seq":7')
     report = check_trace(_latched(5, 0, "uninitialized", 0) + skipped)
     assert [(finding.rule, finding.code) for finding in report.findings] == [("R3.1", "begin_seq")]
+
+
+# --------------------------------------------------------------------------- a trace heard out to its end
+
+
+@pytest.mark.spec("R19.1")
+def test_a_request_never_responded_to_is_missing_only_where_the_trace_says_it_heard_the_server_out() -> None:
+    """An ``end`` record (the tap heard the server out: the probe writes it over a link that lost
+    nothing) makes what the trace lacks by then the judge's: a goal request with no response, at its
+    request's line.  Without it the trace may have stopped while the response was on its way."""
+    trace = Trace().begin().status(1, 1, "standby", 5).add("goal", goal_uuid=uuid(1), goal={
+        "dynamic_event_seq": 1, "event_type": 3})  # fmt: skip
+    asked = trace.line
+    assert trace.check().clean
+    trace.add("end")
+    assert found(trace.check()) == [(asked, "R19.1", "response_missing")]
+    finding = trace.check().findings[0]
+    assert uuid(1) in finding.message and finding.expected == "a response, accepted or rejected (R19.1)"
+    # a clean trace heard out stays clean: every response and answer came
+    whole = Trace().started().result(1, "succeeded", "completed", 6).status(1, 1, "standby", 6).add("end")
+    assert whole.check().clean, found(whole.check())
+
+
+@pytest.mark.spec("R19.1", "R5.1", "R11.1")
+def test_a_goal_accepted_and_never_started_by_the_trace_s_end_owes_what_its_start_owes() -> None:
+    """A FINISHED accepted and never answered: a client's tap does not see a goal start, so the trace
+    could end before it; heard out, the server had started it (the transport starts a goal it
+    accepted), and the answer its start owes is missing.  A CANCEL of the running child owes nothing
+    at its start, and a NEXT whose child still runs nothing yet: a child's end is the robot's."""
+    finished = Trace().begin().status(1, 1, "standby", 5).goal(1, event_type=3)
+    accepted = finished.line - 1
+    assert finished.check().clean
+    assert found(finished.add("end").check()) == [(accepted, "R19.1", "answer_missing")]
+    running = Trace().started().goal(2, event_type=2, id=6).add("end")
+    assert running.check().clean, found(running.check())
+
+
+@pytest.mark.spec("R19.1", "R10.3")
+def test_an_action_level_cancel_never_responded_to_is_missing_where_the_trace_heard_the_server_out() -> None:
+    trace = Trace().started().add("cancel_request", goal_uuid=uuid(1))
+    asked = trace.line
+    assert trace.check().clean
+    assert found(trace.add("end").check()) == [(asked, "R19.1", "response_missing")]
+
+
+def test_a_record_after_the_end_record_is_unreadable() -> None:
+    trace = Trace().started().add("end")
+    end = trace.line
+    trace.status(1, 2, "underway", 6)
+    with pytest.raises(
+        TraceError, match=rf"t\.jsonl:{end + 1}: type: a record after the trace's end \(line {end}\)"
+    ):
+        trace.check()

@@ -545,3 +545,43 @@ def test_docs_probe_lists_the_causes_a_script_fails_a_case_for() -> None:
         PROBE_DOC.write_text(fresh, encoding="utf-8")
     how = "DYNEVENT_UPDATE_CAUSES=1 pytest tests/conformance/probe/test_probe_cases.py"
     assert all(marker in text for marker in CAUSES) and text == fresh, f"docs/probe.md's list is stale: {how}"
+
+
+@pytest.mark.spec("R19.1")
+def test_a_case_that_waited_in_vain_fails_by_the_judge_where_its_records_show_what_never_came() -> (
+    None
+):
+    """A case whose script waited out --timeout for NEXT 6's answer (``absent``): the trace shows the
+    child's end (its WAITING status) and no answer by its end, so the verdict is the judge's
+    (R19.1 answer_missing), not the script's wait; the judge's section does not say it twice."""
+    lines = _late_feedback().replace(LATE_FEEDBACK + "\n", "").splitlines()
+    text = "\n".join(line for line in lines if not line.startswith('{"time":103,"type":"result"')) + "\n"
+    case = next(case for case in probe_cases.CASES if case.id == "next.runs_a_child")
+    waited = probe_cases.CaseFinding(
+        case, probe_cases.Verdict.FAIL, expected="an answer", seen="no answer within 3 s", absent=True,
+        cause="timeout",
+    )  # fmt: skip
+    verdicts, judged = probe_cases.judge_verdicts(text, [waited])
+    (verdict,) = verdicts
+    assert (verdict.verdict, verdict.cause, verdict.absent) == (probe_cases.Verdict.FAIL, "judge", False)
+    assert verdict.seen.startswith("the judge: goal 00000000000000000000000000000001 never answered")
+    assert verdict.expected.endswith("(R19.1)") and judged == [], (verdict, judged)
+    # where the trace does not show it (the child still running at its end), the script's wait stands
+    running = text[: text.index('{"time":103,"type":"status"')]
+    assert probe_cases.judge_verdicts(running, [waited]) == ([waited], [])
+
+
+def test_a_known_divergence_in_a_cases_records_never_hides_a_failure_beside_it() -> None:
+    """Two findings of the judge in one case's records, the first a divergence --known covers (D9, a
+    log seq repeated) and the second not (R19.1, an answer missing): the case fails, counted."""
+    text = CLEAN.replace('"logs":[{"seq":1,', '"logs":[{"seq":0,', 1)
+    text = "\n".join(line for line in text.splitlines() if not line.startswith('{"time":103,"type":"result"'))
+    text = _with_cases(text + "\n", ("feedback.log_seq", '"goal_uuid":"00000000000000000000000000000001"'))
+    verdicts, judged = probe_cases.judge_verdicts(
+        text, [_finding("feedback.log_seq", probe_cases.Verdict.PASS)], known=KNOWN["rmf_ros2"]
+    )
+    (verdict,) = verdicts
+    assert verdict.verdict is probe_cases.Verdict.FAIL and not verdict.known, verdict
+    assert verdict.seen.startswith("the judge: goal 00000000000000000000000000000001 never answered"), verdict
+    assert verdict.divergence is None and any("R7.3 log_seq" in said for said in verdict.messages), verdict
+    assert probe_cases.exit_status(verdicts, judged) == probe_cases.EXIT_FAILED

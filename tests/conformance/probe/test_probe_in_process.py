@@ -1757,3 +1757,38 @@ def test_a_cancel_refused_while_its_child_runs_is_no_verdict_over_a_link_that_lo
     assert quiet.statuses_missed == 0
     finding = findings["cancel.both_answered"]
     assert (finding.verdict, finding.cause) == (Verdict.FAIL, "both_answered"), finding
+
+
+class _UnrespondingLink(InProcessLink):
+    """A link to a server that never responds to a FINISHED's request (a server over DDS may hang in
+    its goal callback; the in-process binding always answers one): the request reaches the server,
+    which takes it, and no response comes."""
+
+    def deliver(self, exchange: probe_runner.Exchange) -> None:
+        if exchange.goal.event_type != EventType.FINISHED:
+            InProcessLink.deliver(self, exchange)
+
+
+@pytest.mark.spec("R19.1")
+def test_a_request_never_responded_to_fails_by_the_judge_where_the_probe_heard_the_server_out() -> None:
+    """The cases that send a FINISHED wait out --timeout for its response; the run's end, over a link
+    that lost nothing, says in the trace that the probe heard the server out, and the judge finds each
+    such request never responded to (R19.1 response_missing): those cases fail with its finding, not
+    with the script's wait.  A trace without that end record (a run cut short) is not judged so."""
+    trace = TraceWriter(None, fleet=OPTIONS.fleet, robot=OPTIONS.robot, keep=True)
+    options = attrs.evolve(OPTIONS, deadline=1000)
+    findings = probe_runner.run_cases(
+        _UnrespondingLink(CONFIG, trace=trace), options, list(CASES), lambda _: None
+    )
+    text = trace.text()
+    assert '"type":"end"' in text.splitlines()[-1], text.splitlines()[-1]
+    code, verdicts = probe_runner.conclude(findings, text, options, lambda _: None, _unasked)
+    assert code == probe_cases.EXIT_FAILED
+    stale = next(finding for finding in verdicts if finding.case.id == "request.seq_stale")
+    assert (stale.verdict, stale.cause, stale.absent) == (Verdict.FAIL, "judge", False), stale
+    assert "never responded to" in stale.seen and stale.expected.endswith("(R19.1)"), stale
+    before = next(finding for finding in findings if finding.case.id == "request.seq_stale")
+    assert (before.verdict, before.cause) == (Verdict.FAIL, "timeout"), before  # the script's wait
+    cut = "\n".join(text.splitlines()[:-1]) + "\n"  # no end record: the script's wait stands
+    unheard = probe_runner.conclude(findings, cut, options, lambda _: None, _unasked)[1]
+    assert next(finding for finding in unheard if finding.case.id == "request.seq_stale") == before

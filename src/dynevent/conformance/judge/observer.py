@@ -397,6 +397,11 @@ class _Goals:
         """A client requested ``goal`` as ``uuid``, on ``line``, the record judged now."""
         self._seen[uuid] = GoalSeen(goal=goal, line=line, order=self._replica.order)
 
+    def unresponded(self) -> list[tuple[str, GoalSeen]]:
+        """The goals requested in the trace whose response it never shows, in the order requested."""
+        found = [(uuid, seen) for uuid, seen in self._seen.items() if seen.line and not seen.responded]
+        return sorted(found, key=lambda item: item[1].line)
+
     def bind_unknown(self, uuid: str, running_goal: bool = True) -> GoalSeen | None:
         """What the trace showed of this goal; a goal it never showed may have begun before it.
 
@@ -1429,6 +1434,47 @@ class _Answers(_Part):
                 missing.rule, missing.code, message, expected, line=item.line, detail=detail
             )
 
+    def heard_out(self) -> None:
+        """At a trace's ``end`` record, where the tap heard the server out: every goal request the
+        trace shows, never responded to, is missing its response, and so is every action-level cancel
+        request (a server responds in the step that takes a request, R19.1); and every accepted goal
+        the state still holds queued has started (the transport starts a goal it accepted, R5, no
+        client's doing), so that an answer its start owes, never seen, is missing too.  Each is
+        reported at the request."""
+        missing = Violation.RESPONSE_MISSING
+        for uuid, seen in self.goals.unresponded():
+            self.findings.differs(
+                missing.rule, missing.code, f"goal {uuid}'s request never responded to (by the trace's end)",
+                f"a response, accepted or rejected ({missing.rule})", line=seen.line,
+            )  # fmt: skip
+        replica, answer = self.replica, Violation.ANSWER_MISSING
+        for item in replica.owed:
+            if isinstance(item.output, outs.CancelResponse):
+                uuid = item.output.goal_uuid
+                self.findings.differs(
+                    missing.rule, missing.code,
+                    f"the action-level cancel of goal {uuid} never responded to (by the trace's end)",
+                    f"a cancel response, accepted or rejected ({missing.rule})", line=item.line,
+                )  # fmt: skip
+        if replica.state is None:
+            return
+        state = replica.st
+        for queued in state.queued:
+            started = ins.GoalStarted(goal_uuid=queued.goal_uuid, now=replica.now)
+            transition = machine.step(state, started, replica.config_for(queued.goal))
+            state = transition.state
+            for output in transition.outputs:
+                if not isinstance(output, outs.AnswerGoal):
+                    continue
+                owing = self.goals.get(output.goal_uuid)
+                if owing is None or not owing.accepted or owing.answered is not None or owing.owed:
+                    continue
+                self.findings.differs(
+                    answer.rule, answer.code,
+                    f"goal {output.goal_uuid} never answered (by the trace's end, where it had started)",
+                    f"one terminal answer ({answer.rule})", line=owing.line,
+                )  # fmt: skip
+
     def started_unseen(self, record: Record) -> bool:
         """A CANCEL's start shows nothing on the wire: its answer may say it waited for the last child."""
         state = self.replica.st
@@ -1816,10 +1862,18 @@ class Checker:
         self._count = 0
         self._client = header.tap == "client"
         self._lookahead = CLIENT_LOOKAHEAD if self._client else LOOKAHEAD
+        self._end: int | None = None  # the line of the end record: the tap heard the server out
 
     def push(self, record: Record) -> None:
         """Take the next record; the one :data:`LOOKAHEAD` records before it (:data:`CLIENT_LOOKAHEAD`
-        at a client) is judged."""
+        at a client) is judged.  An ``end`` record (the tap heard the server out) is the last."""
+        if self._end is not None:
+            raise TraceError(
+                self.source, record.line, "type", f"a record after the trace's end (line {self._end})"
+            )
+        if record.kind == "end":
+            self._end = record.line
+            return
         self._window.append(record)
         self._pushed += 1
         if len(self._window) > self._lookahead:
@@ -1844,10 +1898,13 @@ class Checker:
 
     def finish(self, evidence: AnswerEvidence | None = None) -> Report:
         """Judge what is held, then what never came (answers owed; ``evidence``: which answers the
-        reader could have shown, see :class:`AnswerEvidence`); the report."""
+        reader could have shown, see :class:`AnswerEvidence`; after an ``end`` record, responses
+        too); the report."""
         while self._window:
             self._judge_first()
         self._observer.answers.never_seen(evidence)
+        if self._end is not None:
+            self._observer.answers.heard_out()
         return Report(source=self.source, records=self._count, findings=self._observer.rooms.findings.all())
 
     def cut(self) -> tuple[Report, list[Record]]:

@@ -45,6 +45,7 @@ RECORD_TYPES: dict[str, frozenset[str]] = {
     "result": frozenset({"goal_uuid", "status", "result"}),
     "cancel_request": frozenset({"goal_uuid"}),
     "cancel_response": frozenset({"goal_uuid", "accepted", "terminated"}),
+    "end": frozenset(),
 }
 
 _REQUIRED: dict[str, frozenset[str]] = {
@@ -57,6 +58,7 @@ _REQUIRED: dict[str, frozenset[str]] = {
     "result": frozenset({"goal_uuid", "status", "result"}),
     "cancel_request": frozenset({"goal_uuid"}),
     "cancel_response": frozenset({"goal_uuid", "accepted"}),
+    "end": frozenset(),
 }
 
 STATUSES = frozenset(status.value for status in Status)
@@ -226,6 +228,8 @@ def _record(data: Any, source: str, line: int) -> Record | dict[str, Any]:
     if kind in ("begin", "status"):
         cls = DynamicEventDescription if kind == "begin" else DynamicEventStatus
         return Record(line=line, kind=kind, time=time, message=_wire(cls, data, "message", source, line))
+    if kind == "end":
+        return Record(line=line, kind=kind, time=time)
     uuid = _uuid(data, source, line)
     if kind == "goal":
         goal = _wire(Goal, data, "goal", source, line)

@@ -171,8 +171,10 @@ def judge_exchange(text: str, findings: Sequence[CaseFinding], known: Iterable[s
     but those of a rule a case that holds it failed on (its verdict says so already); ``known`` are
     the divergences ``--known`` covers (:data:`KNOWN`)."""
     covered = frozenset(known)
-    failed = {
-        finding.case.id: set(finding.case.rules) for finding in findings if finding.verdict is Verdict.FAIL
+    failed = {  # a wait in vain is the judge's to decide where the trace shows what never came
+        finding.case.id: set(finding.case.rules)
+        for finding in findings
+        if finding.verdict is Verdict.FAIL and not finding.absent
     }
     case_at: list[str] = [""]
     goal_at: list[str] = [""]  # the goal a line's record names
@@ -204,8 +206,10 @@ def judge_verdicts(
     """The cases' verdicts, the judge's (:func:`judge_exchange`, over the probe's trace ``text``): a
     case carried out whose own records hold a finding of the judge on one of its rules, or on R19.1
     (every goal answered exactly once, which each case holds its goals to), fails with that finding
-    (``cause`` ``"judge"``), its divergence and whether ``known`` covers it; a case's script fails it
-    only for what a trace cannot carry (:data:`UNTRACEABLE`).  An uncertain finding (an open item of
+    (``cause`` ``"judge"``), its divergence and whether ``known`` covers it, and so does a case whose
+    script waited in vain (``absent``) where its records show what never came (an answer a step owed,
+    or, in a trace that ends heard out, a response); a case's script fails it only for what a trace
+    cannot carry (:data:`UNTRACEABLE`).  An uncertain finding (an open item of
     the judge) fails no case; a case whose ``doubt`` says the link may have caused what the judge
     found is not run, saying so, and its findings are uncertain.  The findings, and what the judge
     found that no case's verdict says: the section beside the cases."""
@@ -213,7 +217,8 @@ def judge_verdicts(
 
     def mine_of(scripted: CaseFinding, items: list[Judged]) -> list[Judged]:
         case = scripted.case
-        if not case.trace_shows_failure or scripted.verdict not in (Verdict.PASS, Verdict.INFO):
+        waited = scripted.verdict is Verdict.FAIL and scripted.absent  # for what the trace may show missing
+        if not case.trace_shows_failure or not (scripted.verdict in (Verdict.PASS, Verdict.INFO) or waited):
             return []
         rules = {*case.rules, "R19.1"}
         return [
@@ -234,7 +239,8 @@ def judge_verdicts(
                 scripted, verdict=Verdict.MISSING, seen=f"{scripted.doubt} (the judge found: "
                 f"{_first_of(scripted, judged)})", by_link=True,
             )  # fmt: skip
-        elif mine := mine_of(scripted, judged):
+        elif mine := sorted(mine_of(scripted, judged), key=lambda item: item.known):
+            # one that --known does not cover first: a known divergence never hides a failure beside it
             first = mine[0].finding
             divergence = mine[0].label if mine[0].label.startswith("D") else None
             said = [
@@ -245,7 +251,7 @@ def judge_verdicts(
             finding = attrs.evolve(
                 scripted, verdict=Verdict.FAIL, expected=expected,
                 seen=f"the judge: {first.message}", divergence=divergence, known=mine[0].known,
-                messages=(*scripted.messages, *said), cause="judge",
+                messages=(*scripted.messages, *said), cause="judge", absent=False,
             )  # fmt: skip
             taken.update(id(item) for item in mine)
         verdicts.append(finding)
@@ -366,10 +372,14 @@ CASES: tuple[Case, ...] = (
 #: (every other failure is the judge's finding on the case's records, :func:`judge_verdicts`):
 #: docs/probe.md lists them.  tests/conformance/probe/test_probe_cases.py holds the runner to them.
 UNTRACEABLE: dict[str, str] = {
-    "timeout": "a message that did not come within --timeout: the spec sets no time within which a server "
-    "sends it, so the judge, which holds a trace to the spec's rules, finds a message missing only where "
-    "the trace ends without it (R19.1's answer_missing) or a later record proves it lost; the wait is the "
-    "probe's own bound (a case whose message came after it is not run, saying so)",
+    "timeout": "a message that did not come within --timeout, where the trace does not show it owed: "
+    "the spec sets no time within which a server sends anything, so the judge finds a message missing "
+    "only where the trace ends without it, and only what the machine owes by then: an answer a step "
+    "owed (R19.1's answer_missing), and, where the probe heard the server out (the trace's end record, "
+    "written over a link that lost nothing), a response to a request (response_missing); a case that "
+    "waited in vain for one of those fails with the judge's finding.  What no step owes by a time, "
+    "a child's end (the robot's) and the status or feedback it brings, is the probe's own bound (a case "
+    "whose message came after it is not run, saying so)",
     "transport": "how the transport offers a topic, and what a subscription made late received: a trace "
     "records the messages of one subscription, not how topics are offered",
     "configuration": "which categories, and which descriptions, the server takes: its configuration, "

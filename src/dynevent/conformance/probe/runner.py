@@ -286,9 +286,18 @@ class Link:
 
     def sent(self, kind: str, **fields: Any) -> None:
         """A record of what the probe sends (a goal, a cancel request), for the trace."""
-        if self._trace is not None:
-            with self._changed:
+        with self._changed:
+            if self._trace is not None:
                 self._trace.observe(kind, **fields)
+
+    def end(self) -> None:
+        """The trace's ``end`` record: the probe heard the server out (every request had its response,
+        or --timeout passed once more, over a link that lost nothing); what comes after it is not
+        traced."""
+        with self._changed:
+            if self._trace is not None:
+                self._trace.observe("end")
+            self._trace = None
 
     def _heard(self, kind: str, update: Callable[[], None], **fields: Any) -> None:
         with self._changed:
@@ -302,8 +311,8 @@ class Link:
 
     def mark(self, text: str) -> None:
         """A comment in the trace: what the records after it belong to."""
-        if self._trace is not None:
-            with self._changed:
+        with self._changed:
+            if self._trace is not None:
                 self._trace.comment(text)
 
     @property
@@ -2117,17 +2126,27 @@ def run_cases(
             progress(f"{case.id} ...")
         findings.append(probe.run(case))
     # what a case waited for in vain may still be on its way over a lossy link (the last cases' most
-    # of all): the run's end waits for it, once, within --timeout and what the deadline leaves
+    # of all), and so may the response to a goal the last case sent: the run's end waits for them,
+    # once, within --timeout and what the deadline leaves
     pending = [finding for finding in findings if finding.absent and finding.verdict is Verdict.FAIL]
-    if pending and not probe.past_deadline:
-        link.wait(lambda: all(_came_late(probe, finding) for finding in pending), probe.timeout)
+    if not probe.past_deadline:
+        link.wait(lambda: _heard_out(probe, pending), probe.timeout)
     findings[:] = [_fell_silent(probe, _late(probe, finding)) for finding in findings]
     lost = _losses(probe.link, findings)
     # what never came, log seqs that skip, a CANCEL refused before the end was heard: no verdict over
     # a link that lost messages
     if lost is not None:
         findings[:] = [_lossy(finding, lost) for finding in findings]
+    elif not (probe.past_deadline or link.cut_off):
+        link.end()  # heard out: the judge finds a request never responded to (R19.1)
     return findings
+
+
+def _heard_out(probe: Probe, pending: list[CaseFinding]) -> bool:
+    """Whether what the ``pending`` cases waited for in vain has come since, and every goal sent has
+    had its response."""
+    came = all(_came_late(probe, finding) for finding in pending)
+    return came and all(made.accepted is not None for made in probe.link.made)
 
 
 def _hear_out_status(probe: Probe) -> None:
