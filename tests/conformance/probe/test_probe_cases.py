@@ -548,9 +548,7 @@ def test_docs_probe_lists_the_causes_a_script_fails_a_case_for() -> None:
 
 
 @pytest.mark.spec("R19.1")
-def test_a_case_that_waited_in_vain_fails_by_the_judge_where_its_records_show_what_never_came() -> (
-    None
-):
+def test_a_case_that_waited_in_vain_fails_by_the_judge_where_its_records_show_what_never_came() -> None:
     """A case whose script waited out --timeout for NEXT 6's answer (``absent``): the trace shows the
     child's end (its WAITING status) and no answer by its end, so the verdict is the judge's
     (R19.1 answer_missing), not the script's wait; the judge's section does not say it twice."""
@@ -569,6 +567,16 @@ def test_a_case_that_waited_in_vain_fails_by_the_judge_where_its_records_show_wh
     # where the trace does not show it (the child still running at its end), the script's wait stands
     running = text[: text.index('{"time":103,"type":"status"')]
     assert probe_cases.judge_verdicts(running, [waited]) == ([waited], [])
+    # nor does a finding that says nothing of what never came take the wait over: a divergence --known
+    # covers (D9, a log seq repeated) would hide the wait, and the case fails counted for its wait,
+    # which says the rest of what it failed on its rules
+    repeated = running.replace('"logs":[{"seq":1,', '"logs":[{"seq":0,', 1)
+    logs = attrs.evolve(waited, case=next(case for case in probe_cases.CASES if case.id == "feedback.log_seq"))
+    verdicts, judged = probe_cases.judge_verdicts(
+        repeated.replace("# case next.runs_a_child", "# case feedback.log_seq"), [logs], known=KNOWN["rmf_ros2"]
+    )
+    assert (verdicts, judged) == ([logs], []), (verdicts, judged)
+    assert probe_cases.exit_status(verdicts, judged) == probe_cases.EXIT_FAILED
 
 
 def test_a_known_divergence_in_a_cases_records_never_hides_a_failure_beside_it() -> None:

@@ -1790,5 +1790,13 @@ def test_a_request_never_responded_to_fails_by_the_judge_where_the_probe_heard_t
     before = next(finding for finding in findings if finding.case.id == "request.seq_stale")
     assert (before.verdict, before.cause) == (Verdict.FAIL, "timeout"), before  # the script's wait
     cut = "\n".join(text.splitlines()[:-1]) + "\n"  # no end record: the script's wait stands
+    # the run does not say it heard the server out where it cannot: past its deadline, or over a link
+    # that showed it lost messages (a status its writer numbered that never came)
+    for link_options, missed in ((attrs.evolve(OPTIONS, deadline=8), 0), (options, 1)):
+        short = TraceWriter(None, fleet=OPTIONS.fleet, robot=OPTIONS.robot, keep=True)
+        link = _UnrespondingLink(CONFIG, trace=short)
+        link.statuses_missed = missed
+        probe_runner.run_cases(link, link_options, list(CASES), lambda _: None)
+        assert '"type":"end"' not in short.text(), (link_options.deadline, missed)
     unheard = probe_runner.conclude(findings, cut, options, lambda _: None, _unasked)[1]
     assert next(finding for finding in unheard if finding.case.id == "request.seq_stale") == before

@@ -35,6 +35,7 @@ from dynevent.conformance.judge.trace import Finding as JudgeFinding
 from dynevent.conformance.vectors.xml_report import xml_document, xml_safe
 from dynevent.descriptions.reading import GoToPlace, read
 from dynevent.errors import DyneventError
+from dynevent.wire.vocab import Violation
 
 __all__ = [
     "CASES",
@@ -174,7 +175,7 @@ def judge_exchange(text: str, findings: Sequence[CaseFinding], known: Iterable[s
     failed = {  # a wait in vain is the judge's to decide where the trace shows what never came
         finding.case.id: set(finding.case.rules)
         for finding in findings
-        if finding.verdict is Verdict.FAIL and not finding.absent
+        if finding.verdict is Verdict.FAIL and not _waited(finding)
     }
     case_at: list[str] = [""]
     goal_at: list[str] = [""]  # the goal a line's record names
@@ -200,6 +201,17 @@ def judge_exchange(text: str, findings: Sequence[CaseFinding], known: Iterable[s
     return judged
 
 
+#: The judge's findings that say a message never came (by the trace's end): a case that waited in vain
+#: for one is the judge's to decide (:func:`judge_verdicts`).
+NEVER_CAME = frozenset({Violation.ANSWER_MISSING.code, Violation.RESPONSE_MISSING.code})
+
+
+def _waited(finding: CaseFinding) -> bool:
+    """A case its script failed for a wait in vain (``absent``), where its records may show what
+    never came: the judge's to decide when they do."""
+    return finding.verdict is Verdict.FAIL and finding.absent and finding.case.trace_shows_failure
+
+
 def judge_verdicts(
     text: str, findings: Sequence[CaseFinding], known: Iterable[str] = ()
 ) -> tuple[list[CaseFinding], list[Judged]]:
@@ -217,15 +229,19 @@ def judge_verdicts(
 
     def mine_of(scripted: CaseFinding, items: list[Judged]) -> list[Judged]:
         case = scripted.case
-        waited = scripted.verdict is Verdict.FAIL and scripted.absent  # for what the trace may show missing
-        if not case.trace_shows_failure or not (scripted.verdict in (Verdict.PASS, Verdict.INFO) or waited):
+        if not case.trace_shows_failure or not (
+            scripted.verdict in (Verdict.PASS, Verdict.INFO) or _waited(scripted)
+        ):
             return []
         rules = {*case.rules, "R19.1"}
-        return [
+        mine = [
             item
             for item in items
             if item.case == case.id and not item.uncertain and item.finding.rule in rules
         ]
+        if _waited(scripted) and not any(item.finding.code in NEVER_CAME for item in mine):
+            return []  # the trace does not show what the case waited for never came: its wait stands
+        return mine
 
     disturbed = {finding.case.id for finding in findings if finding.by_link}
     disturbed |= {finding.case.id for finding in findings if finding.doubt and mine_of(finding, judged)}
@@ -254,6 +270,11 @@ def judge_verdicts(
                 messages=(*scripted.messages, *said), cause="judge", absent=False,
             )  # fmt: skip
             taken.update(id(item) for item in mine)
+        elif _waited(scripted):  # its wait stands, and says the rest of what it failed on its rules
+            rules = set(scripted.case.rules)
+            taken.update(
+                id(item) for item in judged if item.case == scripted.case.id and item.finding.rule in rules
+            )
         verdicts.append(finding)
     return verdicts, [item for item in judged if id(item) not in taken]
 

@@ -114,6 +114,7 @@ class Exchange:
         self.cancel_found_ended = False
         #: a response to an action-level cancel of it came (the last, where more than one was sent)
         self.cancel_heard = False
+        self.cancel_asked = False  # an action-level cancel of it was sent
         self._link = link
         link.made.append(self)
 
@@ -287,13 +288,16 @@ class Link:
     def sent(self, kind: str, **fields: Any) -> None:
         """A record of what the probe sends (a goal, a cancel request), for the trace."""
         with self._changed:
+            if kind == "cancel_request":
+                for made in self.made:
+                    made.cancel_asked = made.cancel_asked or made.uuid == fields["goal_uuid"]
             if self._trace is not None:
                 self._trace.observe(kind, **fields)
 
     def end(self) -> None:
-        """The trace's ``end`` record: the probe heard the server out (every request had its response,
-        or --timeout passed once more, over a link that lost nothing); what comes after it is not
-        traced."""
+        """The trace's ``end`` record: the probe heard the server out (it waited, within --timeout once
+        more, for every response and answer it expected, over a link that showed no loss or lateness);
+        what comes after it is not traced."""
         with self._changed:
             if self._trace is not None:
                 self._trace.observe("end")
@@ -2137,16 +2141,23 @@ def run_cases(
     # a link that lost messages
     if lost is not None:
         findings[:] = [_lossy(finding, lost) for finding in findings]
-    elif not (probe.past_deadline or link.cut_off):
-        link.end()  # heard out: the judge finds a request never responded to (R19.1)
+    elif not (
+        probe.past_deadline or link.cut_off or any(made.accepted is not None for made in probe.given_up)
+    ):
+        link.end()  # heard out: the judge finds what the machine owed by now and never came (R19.1)
     return findings
 
 
 def _heard_out(probe: Probe, pending: list[CaseFinding]) -> bool:
     """Whether what the ``pending`` cases waited for in vain has come since, and every goal sent has
-    had its response."""
+    had its response, accepted its answer, and every action-level cancel its response."""
     came = all(_came_late(probe, finding) for finding in pending)
-    return came and all(made.accepted is not None for made in probe.link.made)
+    return came and all(
+        made.accepted is not None
+        and (not made.accepted or made.answers)
+        and made.cancel_heard >= made.cancel_asked
+        for made in probe.link.made
+    )
 
 
 def _hear_out_status(probe: Probe) -> None:
