@@ -170,6 +170,8 @@ def test_the_standard_mode_of_serve_passes_every_case(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stdout + done.stderr
     assert _verdicts(done.stdout) == {case.id: "pass" for case in ALL_CASES}, done.stdout
     assert _check_agrees(tmp_path / "t", tmp_path / "probe.xml") == set()
+    # over a link that lost nothing the probe heard the server out: the trace says so, last
+    assert '"type":"end"' in (tmp_path / "t").read_text("utf-8").splitlines()[-1]
     assert done.stdout.splitlines()[-2:-1] == [f"{len(ALL_CASES)} pass"], done.stdout  # then the run's time
     run_took(done.stdout)
     suite = ET.parse(tmp_path / "probe.xml").getroot().find("testsuite")
