@@ -571,9 +571,13 @@ def test_a_case_that_waited_in_vain_fails_by_the_judge_where_its_records_show_wh
     # covers (D9, a log seq repeated) would hide the wait, and the case fails counted for its wait,
     # which says the rest of what it failed on its rules
     repeated = running.replace('"logs":[{"seq":1,', '"logs":[{"seq":0,', 1)
-    logs = attrs.evolve(waited, case=next(case for case in probe_cases.CASES if case.id == "feedback.log_seq"))
+    logs = attrs.evolve(
+        waited, case=next(case for case in probe_cases.CASES if case.id == "feedback.log_seq")
+    )
     verdicts, judged = probe_cases.judge_verdicts(
-        repeated.replace("# case next.runs_a_child", "# case feedback.log_seq"), [logs], known=KNOWN["rmf_ros2"]
+        repeated.replace("# case next.runs_a_child", "# case feedback.log_seq"),
+        [logs],
+        known=KNOWN["rmf_ros2"],
     )
     assert (verdicts, judged) == ([logs], []), (verdicts, judged)
     assert probe_cases.exit_status(verdicts, judged) == probe_cases.EXIT_FAILED

@@ -1538,6 +1538,8 @@ def _clamp_notice(probe: Probe, case: Case) -> CaseFinding:
     expected = (
         f"a warning log entry in the first feedback (stubborn period {period:g} s, minimum {minimum:g} s)"
     )
+    if exchange.accepted is False:  # no child to warn of: whether the refusal was right is the judge's
+        raise _Unreachable(f"the NEXT whose clamp the case looks for was {_describe_answer(exchange)}")
     if not exchange.feedback:
         return _fails(case, "timeout", expected, f"{_describe_answer(exchange)}, no feedback")
     warnings = [(i, entry) for i, feedback in enumerate(exchange.feedback) for entry in feedback.logs
