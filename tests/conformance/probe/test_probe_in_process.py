@@ -1577,10 +1577,10 @@ class _DownLink(InProcessLink):
     """The in-process link that goes down for good once ``after`` goal requests have gone through:
     nothing reaches the server, and nothing of it reaches the probe (a host's cable pulled)."""
 
-    def __init__(self, config: ServeConfig, after: int) -> None:
+    def __init__(self, config: ServeConfig, after: int, trace: TraceWriter | None = None) -> None:
         self.after = after
         self.sent_through = 0
-        super().__init__(config)
+        super().__init__(config, trace=trace)
 
     @property
     def down(self) -> bool:
@@ -1800,3 +1800,36 @@ def test_a_request_never_responded_to_fails_by_the_judge_where_the_probe_heard_t
         assert '"type":"end"' not in short.text(), (link_options.deadline, missed)
     unheard = probe_runner.conclude(findings, cut, options, lambda _: None, _unasked)[1]
     assert next(finding for finding in unheard if finding.case.id == "request.seq_stale") == before
+
+
+class _LateResponseLink(InProcessLink):
+    """A link that delivers the first FINISHED's request (and so its response) ``lag`` seconds late."""
+
+    def __init__(self, config: ServeConfig, lag: float, trace: TraceWriter) -> None:
+        self.lag = lag
+        self.delayed = False
+        super().__init__(config, trace=trace)
+
+    def deliver(self, exchange: probe_runner.Exchange) -> None:
+        if exchange.goal.event_type != EventType.FINISHED or self.delayed:
+            InProcessLink.deliver(self, exchange)
+            return
+        self.delayed = True
+        self._at(self.now + round(self.lag * 1_000_000_000), lambda: InProcessLink.deliver(self, exchange))
+
+
+@pytest.mark.spec("R19.1")
+def test_the_run_says_it_heard_the_server_out_only_over_a_link_that_showed_no_lag() -> None:
+    """No end record, so that the judge holds the server to nothing the link may have kept: over a link
+    that went down mid-run (the server taken as silent), nor over one that delivered a response after
+    its case gave up on it; over the same link without the lag, the trace ends heard out."""
+    options = attrs.evolve(OPTIONS, deadline=1000)
+    down = TraceWriter(None, fleet=OPTIONS.fleet, robot=OPTIONS.robot, keep=True)
+    probe_runner.run_cases(_DownLink(CONFIG, after=5, trace=down), options, list(CASES), lambda _: None)
+    assert '"type":"end"' not in down.text()
+    for lag, heard_out in ((options.timeout + 1, False), (0.0, True)):
+        late = TraceWriter(None, fleet=OPTIONS.fleet, robot=OPTIONS.robot, keep=True)
+        findings = probe_runner.run_cases(
+            _LateResponseLink(CONFIG, lag, late), options, list(CASES), lambda _: None
+        )
+        assert ('"type":"end"' in late.text().splitlines()[-1]) == heard_out, (lag, findings)

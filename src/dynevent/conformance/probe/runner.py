@@ -114,7 +114,9 @@ class Exchange:
         self.cancel_found_ended = False
         #: a response to an action-level cancel of it came (the last, where more than one was sent)
         self.cancel_heard = False
-        self.cancel_asked = False  # an action-level cancel of it was sent
+        #: how many action-level cancels of it were sent, and how many responses to them came
+        self.cancels_asked = 0
+        self.cancels_heard = 0
         self._link = link
         link.made.append(self)
 
@@ -281,6 +283,7 @@ class Link:
         def update() -> None:
             exchange.cancel_found_ended = terminated
             exchange.cancel_heard = True
+            exchange.cancels_heard += 1
 
         fields = {"goal_uuid": exchange.uuid, "accepted": accepted, "terminated": terminated}
         self._heard("cancel_response", update, **fields)
@@ -290,7 +293,8 @@ class Link:
         with self._changed:
             if kind == "cancel_request":
                 for made in self.made:
-                    made.cancel_asked = made.cancel_asked or made.uuid == fields["goal_uuid"]
+                    if made.uuid == fields["goal_uuid"]:
+                        made.cancels_asked += 1
             if self._trace is not None:
                 self._trace.observe(kind, **fields)
 
@@ -535,6 +539,9 @@ class Probe:
         self.heard_later: dict[str, Callable[[], bool]] = {}
         #: the goals a case ended without their response (the server may take them later), in order
         self.given_up: list[Exchange] = []
+        #: the same, kept to the run's end (:attr:`given_up` lets go of those waited for once): one whose
+        #: response came after all shows the link late, and the run does not say it heard the server out
+        self.abandoned: list[Exchange] = []
 
     @property
     def timeout(self) -> float:
@@ -573,6 +580,7 @@ class Probe:
         heard, earlier = self.link.heard, [made for made in self.link.made if made.accepted is None]
         sent = len(self.link.made)
         self.given_up.extend(made for made in earlier if made not in self.given_up)
+        self.abandoned.extend(made for made in earlier if made not in self.abandoned)
         timed_out = False
         try:
             if case.needs in ("child", "place") and self.options.place is None:
@@ -2135,6 +2143,9 @@ def run_cases(
     # of all), and so may the response to a goal the last case sent: the run's end waits for them,
     # once, within --timeout and what the deadline leaves
     pending = [finding for finding in findings if finding.absent and finding.verdict is Verdict.FAIL]
+    probe.abandoned.extend(
+        made for made in link.made if made.accepted is None and made not in probe.abandoned
+    )
     if not probe.past_deadline:
         link.wait(lambda: _heard_out(probe, pending), probe.timeout)
     findings[:] = [_fell_silent(probe, _late(probe, finding)) for finding in findings]
@@ -2143,11 +2154,17 @@ def run_cases(
     # a link that lost messages
     if lost is not None:
         findings[:] = [_lossy(finding, lost) for finding in findings]
-    elif not (
-        probe.past_deadline or link.cut_off or any(made.accepted is not None for made in probe.given_up)
-    ):
+    elif not (probe.past_deadline or link.cut_off or _lagged(probe, findings)):
         link.end()  # heard out: the judge finds what the machine owed by now and never came (R19.1)
     return findings
+
+
+def _lagged(probe: Probe, findings: list[CaseFinding]) -> bool:
+    """Whether the run showed the link lagging or gone: a response that came after its case gave up on
+    it, or a case not run for the link's sake (the server fell silent, a case's messages came late or
+    were lost, an earlier case's goal came late)."""
+    late = any(made.accepted is not None for made in probe.abandoned)
+    return late or any(finding.by_link for finding in findings)
 
 
 def _heard_out(probe: Probe, pending: list[CaseFinding]) -> bool:
@@ -2157,7 +2174,7 @@ def _heard_out(probe: Probe, pending: list[CaseFinding]) -> bool:
     return came and all(
         made.accepted is not None
         and (not made.accepted or made.answers)
-        and made.cancel_heard >= made.cancel_asked
+        and made.cancels_heard >= made.cancels_asked
         for made in probe.link.made
     )
 
