@@ -443,6 +443,39 @@ def test_a_goal_whose_response_a_client_never_heard_is_read_as_accepted_from_its
     assert divergences.label(report.findings[0]) in divergences.OPEN_ITEMS
 
 
+@pytest.mark.spec("R2.2", "R6.4", "R11.1", "R19.1")
+@pytest.mark.parametrize("tap", ["client", "server"])
+def test_statuses_heard_of_goals_whose_responses_never_came_are_read_as_their_starts(tap: str) -> None:
+    """Seen at a client across a link that held the action's responses back (found at 30% loss: a
+    NEXT's and a FINISHED's responses never heard, their statuses heard at once): the status of the
+    NEXT's child running, heard before any of its feedback, is its start, the goal read as accepted;
+    the start feedback and a report made before the status of the child's end, both delivered after
+    it, go before it (feedback comes in the order sent); the INACTIVE status is the FINISHED's end of
+    the run.  Only the NEXT's answer is missing, as an open item (``answer_lost``).  At the server's
+    own tap nothing is held back: the statuses of goals never responded to disagree with the state."""
+    talk = Trace()
+    talk.rows[0] = {**talk.rows[0], "tap": tap}
+    talk.begin()
+    _stamped_status(talk, 1, "standby", 5, 100.0)
+    talk.add("goal", goal_uuid=uuid(1), goal={"dynamic_event_seq": 1, "event_type": 1,
+             "category": "go_to_place", "description": '"pantry"', "id": 6})  # fmt: skip
+    _stamped_status(talk, 2, "underway", 6, 101.0)  # before any feedback of the child
+    running = talk.line
+    _stamped_status(talk, 1, "standby", 6, 108.0)  # its end
+    talk.feedback(1, "underway", 6)  # its start, delivered late
+    _logged_feedback(talk, 1, 6, 0, 102.0)  # made before the end's status, delivered after it
+    talk.add("goal", goal_uuid=uuid(2), goal={"dynamic_event_seq": 1, "event_type": 3})
+    _stamped_status(talk, 0, "uninitialized", 0, 109.0)  # the FINISHED's end of the run
+    report = talk.check()
+    if tap == "client":
+        assert [(finding.rule, finding.code, finding.detail) for finding in report.findings] == [
+            ("R19.1", "answer_missing", "response_unheard")
+        ], found(report)
+        assert divergences.label(report.findings[0]) in divergences.OPEN_ITEMS
+    else:
+        assert (running, "R2.2", "status_mismatch") in found(report), found(report)
+
+
 @pytest.mark.spec("R4.13", "R4.16")
 def test_a_cancel_refused_at_a_client_before_it_hears_the_childs_end_may_have_come_after_that_end() -> None:
     """Seen at a client across a lossy link: a CANCEL of the running child, delivered after the child's

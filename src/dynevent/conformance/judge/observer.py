@@ -1013,6 +1013,8 @@ class _Runs(_Part):
                 found, best = (state, owed), rank
         if found is None:
             found = self.ended_unanswered(message)
+        if found is None and self.apart:
+            found = self.started_unheard(record)
         if found is not None:
             state, owed = found
             self.replica.forget_channel("status")
@@ -1026,6 +1028,30 @@ class _Runs(_Part):
             seen=message,
             owed=current,
         )
+
+    def started_unheard(self, record: Record) -> tuple[State, list[Owed]] | None:
+        """Seen apart, a status no candidate explains: the start of a goal awaiting its response, none
+        ahead, that the machine accepts now and whose start publishes that status; the first such in
+        the order requested, taken as accepted, its response unheard (a lossy link holds responses
+        back, or loses them, while statuses come on their own channel: found at 30% loss, a NEXT's
+        child and a FINISHED's end of the run heard, their responses never)."""
+        replica = self.replica
+        ahead = {item.goal_uuid for item in self.ahead.records if item.kind == "goal_response"}
+        for uuid, seen in self.goals.unresponded():
+            config = replica.config_for(seen.goal)
+            if uuid in ahead or not isinstance(machine.accept(replica.st, seen.goal, config), outs.Accepted):
+                continue
+            requested = ins.GoalRequested(goal_uuid=uuid, goal=seen.goal, now=replica.now)
+            accepted, _ = replica.simulate([requested])
+            for events in candidates(accepted, record, replica.now):
+                state, owed = replica.simulate([requested, *events])
+                published = [item.output for item in owed if isinstance(item.output, outs.PublishStatus)]
+                if published and same_status(published[-1].message, record.message):
+                    seen.respond(True)
+                    seen.unheard()
+                    replica.learn(seen.goal)
+                    return state, owed
+        return None
 
     def finished_unseen(self, state: State) -> State:
         """Seen apart from the server, a new run's begin while a FINISHED of the active run is
@@ -1829,8 +1855,9 @@ def _lagged_ahead(rooms: _ObserverState, record: Record, window: Iterable[Record
 
 
 def _fed_back_before(state: State | None, record: Record, window: Iterable[Record]) -> Record | None:
-    """The running child's feedback, among the records ahead, whose last log entry was made before
-    ``record``, a status that shows that child ended, was stamped (see :func:`_lagged_ahead`)."""
+    """The running child's first feedback among the records ahead, where one of them (it, or one
+    after it: feedback comes in the order sent) has a last log entry made before ``record``, a
+    status that shows that child ended, was stamped (see :func:`_lagged_ahead`)."""
     running = state.running if state is not None else None
     if record.kind != "status" or running is None or not running.started:
         return None
@@ -1838,11 +1865,13 @@ def _fed_back_before(state: State | None, record: Record, window: Iterable[Recor
     if machine.runs_a_child(status) and status.id == running.child_id:
         return None
     stamped = status.time.sec * 1_000_000_000 + status.time.nanosec
+    first: Record | None = None  # the child's feedback comes in the order sent: the first ahead goes first
     for ahead in window:
-        if ahead.kind != "feedback" or ahead.goal_uuid != running.goal_uuid or not ahead.message.logs:
+        if ahead.kind != "feedback" or ahead.goal_uuid != running.goal_uuid:
             continue
-        if ahead.message.logs[-1].unix_millis_time * 1_000_000 < stamped:
-            return ahead
+        first = first or ahead
+        if ahead.message.logs and ahead.message.logs[-1].unix_millis_time * 1_000_000 < stamped:
+            return first
     return None
 
 
