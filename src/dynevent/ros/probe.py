@@ -51,6 +51,8 @@ class RosLink(Link):
     """The probe's :class:`~dynevent.conformance.probe.runner.Link` over DDS: the robot's status and begin
     topics, and an action client without a client machine."""
 
+    channels_lag = True  # each reliable DDS channel delivers in order, held back by a message lost
+
     def __init__(self, node: Any, fleet: str, robot: str, trace: TraceWriter | None = None) -> None:
         super().__init__(fleet, robot, trace)
         self._node = node

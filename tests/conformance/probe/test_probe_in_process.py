@@ -1692,6 +1692,44 @@ def test_a_silence_the_link_ends_later_is_heard_out_and_the_run_goes_on(after: i
     assert len(stopped) > len(CASES) // 2 and [f for f in longer if f.verdict is Verdict.FAIL] == [], longer
 
 
+class _NetworkBlackoutLink(_BlackoutLink):
+    """The blackout link as a network carries it (each channel held back on its own): the description
+    query, on a channel of its own, still answers, unless ``query_held``."""
+
+    channels_lag = True
+
+    def __init__(self, config: ServeConfig, after: int, length: float, *, query_held: bool = False) -> None:
+        self.query_held = query_held
+        super().__init__(config, after, length)
+
+    def describe(self, timeout: float) -> tuple[Any, str]:
+        if self.query_held and self.up_at is not None and self.now < self.up_at:
+            self.wait(lambda: False, timeout)
+            return None, f"the description service did not answer within {timeout:g} s"
+        return super().describe(timeout)
+
+
+@pytest.mark.spec("R16.1", "R19.1")
+def test_a_silence_of_the_actions_channel_while_the_query_answers_is_the_links_lag() -> None:
+    """Found at 30% loss across hosts: the action's responses held back 40 s (one lost, the rest
+    behind it), past the three cases' waits and the wait once more, and the probe took the server
+    as having stopped answering (38 of 41 cases not run).  Over a network, a server that answers its
+    description query then is answering: the run goes on, and no case fails for the lag.  Where the
+    query is held back too, the server is taken as silent, as before."""
+    options = attrs.evolve(OPTIONS, deadline=1000)
+    gap = (probe_runner.SILENT_AFTER + 2) * options.timeout + options.timeout / 2  # past the wait once more
+    link = _NetworkBlackoutLink(CONFIG, 4, gap)
+    findings = probe_runner.run_cases(link, options, list(CASES), lambda _: None)
+    assert [f for f in findings if f.verdict is Verdict.FAIL] == [], findings
+    assert not any(f.seen.startswith(probe_runner.STOPPED_ANSWERING) for f in findings), findings
+    late = [f for f in findings if f.seen.startswith(probe_runner.LATE.format(timeout=options.timeout))]
+    assert len(late) > probe_runner.SILENT_AFTER, findings  # the silence went on past the wait once more
+    assert sum(f.verdict is Verdict.PASS for f in findings) == len(CASES) - len(late), findings
+    held = _NetworkBlackoutLink(CONFIG, 4, gap, query_held=True)
+    stopped = probe_runner.run_cases(held, options, list(CASES), lambda _: None)
+    assert sum(f.seen.startswith(probe_runner.STOPPED_ANSWERING) for f in stopped) > len(CASES) // 2, stopped
+
+
 class _SlowCancelLink(_LaggingLink):
     """The lagging link whose responses to action-level cancels come ``cancel_lag`` seconds after the
     server gave them."""
