@@ -398,9 +398,8 @@ UNTRACEABLE: dict[str, str] = {
     "only where the trace ends without it, and only what the machine owes by then: an answer a step "
     "owed (R19.1's answer_missing), and, where the probe heard the server out (the trace's end record, "
     "written within the deadline over a link that showed no loss or lateness), a response to a request "
-    "(response_missing) and the "
-    "answer a queued goal's start owes; a case that "
-    "waited in vain for one of those fails with the judge's finding.  What no step owes by a time, "
+    "(response_missing) and the answer a queued goal's start owes; a case that waited in vain for one "
+    "of those fails with the judge's finding.  What no step owes by a time, "
     "a child's end (the robot's) and the status or feedback it brings, and a status or begin, which the "
     "next one may take the place of on its topic (each keeps one message), is the probe's own bound (a "
     "case whose message came after it is not run, saying so)",

@@ -112,8 +112,6 @@ class Exchange:
         #: an action-level cancel of it was refused because the goal had terminated when the server
         #: took the request (where the transport says: ROS 2's ``ERROR_GOAL_TERMINATED``)
         self.cancel_found_ended = False
-        #: a response to an action-level cancel of it came (the last, where more than one was sent)
-        self.cancel_heard = False
         #: how many action-level cancels of it were sent, and how many responses to them came
         self.cancels_asked = 0
         self.cancels_heard = 0
@@ -129,6 +127,11 @@ class Exchange:
 
     def answered(self, timeout: float) -> bool:
         return self.wait(lambda: bool(self.answers) or self.accepted is False, timeout)
+
+    @property
+    def cancel_heard(self) -> bool:
+        """A response to an action-level cancel of it came."""
+        return self.cancels_heard > 0
 
     @property
     def answer(self) -> tuple[GoalStatus, Result] | None:
@@ -286,7 +289,6 @@ class Link:
 
         def update() -> None:
             exchange.cancel_found_ended = terminated
-            exchange.cancel_heard = True
             exchange.cancels_heard += 1
 
         fields = {"goal_uuid": exchange.uuid, "accepted": accepted, "terminated": terminated}
