@@ -14,6 +14,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from dynevent.conformance.judge import Report, TraceError, check_trace, divergences, read_trace, step_records
+from dynevent.conformance.judge.observer import CLIENT_LOOKAHEAD
 from dynevent.conformance.judge.trace import TAPS, TraceWriter
 from dynevent.server import inputs as ins
 from dynevent.server import machine
@@ -474,6 +475,32 @@ def test_statuses_heard_of_goals_whose_responses_never_came_are_read_as_their_st
         assert divergences.label(report.findings[0]) in divergences.OPEN_ITEMS
     else:
         assert (running, "R2.2", "status_mismatch") in found(report), found(report)
+
+
+@pytest.mark.spec("R19.1")
+@pytest.mark.parametrize("accepted", [True, False])
+def test_a_response_heard_after_its_goal_was_read_as_accepted_from_its_start(accepted: bool) -> None:
+    """Seen at a client: a NEXT's response held back past the records the judge looks ahead (a lossy
+    link sent it again 30 s late), its start and answer heard long before, so that the goal was read
+    as accepted.  An acceptance heard then agrees; a refusal contradicts the start the server
+    showed (R19.1 response_mismatch).  Neither is a record the trace cannot hold."""
+    talk = Trace()
+    talk.rows[0] = {**talk.rows[0], "tap": "client"}
+    talk.begin()
+    _stamped_status(talk, 1, "standby", 5, 100.0)
+    talk.add("goal", goal_uuid=uuid(1), goal={"dynamic_event_seq": 1, "event_type": 1,
+             "category": "go_to_place", "description": '"pantry"', "id": 6})  # fmt: skip
+    talk.feedback(1, "underway", 6)
+    _stamped_status(talk, 2, "underway", 6, 101.0)
+    talk.result(1, "succeeded", "completed", 6)
+    _stamped_status(talk, 1, "standby", 6, 102.0)
+    for _ in range(CLIENT_LOOKAHEAD):  # the latched status, read again by late subscribers
+        _stamped_status(talk, 1, "standby", 6, 102.0)
+    talk.add("goal_response", goal_uuid=uuid(1), accepted=accepted)
+    late = talk.line
+    report = talk.check()
+    expected = [] if accepted else [(late, "R19.1", "response_mismatch")]
+    assert found(report) == expected
 
 
 @pytest.mark.spec("R4.13", "R4.16")

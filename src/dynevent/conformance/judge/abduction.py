@@ -76,6 +76,10 @@ class GoalSeen:
         """Its response was never heard: read as accepted from its feedback or answer."""
         self.heard = False
 
+    def heard_late(self) -> None:
+        """The response it was read without came after all, past the records looked ahead."""
+        self.heard = True
+
     def answer(self, line: int, stopped: bool = False) -> None:
         """Its terminal answer came, on ``line``; ``stopped``: it says the child was cancelled."""
         self.answered, self.stopped = line, stopped

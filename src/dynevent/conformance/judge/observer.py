@@ -619,6 +619,9 @@ class _Requests(_Part):
             self.duplicates.discard(record.goal_uuid)
             return
         seen = self.goals.get(record.goal_uuid)
+        if seen is not None and seen.responded and not seen.heard:
+            self.heard_late(seen, record)
+            return
         if seen is None or seen.responded:
             raise Unreadable("goal_uuid", "no goal record with this uuid awaits a response")
         seen.respond(record.accepted)
@@ -670,6 +673,18 @@ class _Requests(_Part):
             f"{goal_text(goal)} rejected{said}",
             "accepted: the goal passes every check of R4",
         )
+
+    def heard_late(self, seen: GoalSeen, record: Record) -> None:
+        """Seen apart: the response of a goal read as accepted from its start (its feedback, answer or
+        a status), which came after the records looked ahead: a lossy link sent it again late.  A
+        refusal contradicts the start the server showed."""
+        seen.heard_late()
+        if not record.accepted:
+            self.findings.flag(
+                Violation.RESPONSE_MISMATCH,
+                f"goal {record.goal_uuid} rejected",
+                "accepted: the server showed its start before",
+            )
 
     def agrees(self, decision: outs.Decision, record: Record) -> bool:
         if isinstance(decision, outs.Accepted) != record.accepted:
