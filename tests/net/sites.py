@@ -94,8 +94,10 @@ class RosSite:
     def close(self) -> None:
         """Remove the site (its processes end with it); what each process printed is kept in the
         site's folder (``<host>-<n>.log``, in the order started), so that a failed run can be read."""
-        self.site.close()
-        for host in self.site.hosts.values():
-            for number, process in enumerate(host.processes):
-                lines = [" ".join(process.argv[4:]), *process.lines]
-                (self.folder / f"{host.name}-{number}.log").write_text("\n".join(lines) + "\n", "utf-8")
+        try:
+            self.site.close()
+        finally:
+            for host in self.site.hosts.values():
+                for number, process in enumerate(host.processes):
+                    lines = [" ".join(process.argv[4:]), *list(process.lines)]
+                    (self.folder / f"{host.name}-{number}.log").write_text("\n".join(lines) + "\n", "utf-8")

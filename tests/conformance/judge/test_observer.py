@@ -503,6 +503,55 @@ def test_a_response_heard_after_its_goal_was_read_as_accepted_from_its_start(acc
     assert found(report) == expected
 
 
+def _next_request(talk: Trace, n: int, event_id: int) -> None:
+    talk.add("goal", goal_uuid=uuid(n), goal={"dynamic_event_seq": 1, "event_type": 1,
+             "category": "go_to_place", "description": '"pantry"', "id": event_id})  # fmt: skip
+
+
+@pytest.mark.spec("R4.13", "R5.1", "R19.1")
+def test_a_status_is_not_read_as_the_start_of_a_goal_a_state_since_its_request_refused() -> None:
+    """Seen at a client: a NEXT sent while child 6 ran (refused busy), the same NEXT sent again after
+    that child's end, and the status of child 7 running heard before either response, both held
+    back past the records looked ahead.  The first request met a state that refuses it, so the
+    status is the second's start; the refusal and the acceptance heard late agree with that."""
+    talk = Trace()
+    talk.rows[0] = {**talk.rows[0], "tap": "client"}
+    talk.begin()
+    _stamped_status(talk, 1, "standby", 5, 100.0)
+    talk.next(1, 6).feedback(1, "underway", 6)
+    _stamped_status(talk, 2, "underway", 6, 101.0)
+    _next_request(talk, 2, 7)  # while child 6 runs: refused busy
+    talk.result(1, "succeeded", "completed", 6)
+    _stamped_status(talk, 1, "standby", 6, 102.0)
+    _next_request(talk, 3, 7)  # again, after the end: accepted
+    _stamped_status(talk, 2, "underway", 7, 103.0)
+    talk.feedback(3, "underway", 7).result(3, "succeeded", "completed", 7)
+    _stamped_status(talk, 1, "standby", 7, 104.0)
+    for _ in range(CLIENT_LOOKAHEAD):  # the latched status, read again by late subscribers
+        _stamped_status(talk, 1, "standby", 7, 104.0)
+    talk.add("goal_response", goal_uuid=uuid(2), accepted=False, reason="busy")
+    talk.add("goal_response", goal_uuid=uuid(3), accepted=True)
+    assert found(talk.check()) == []
+
+
+@pytest.mark.spec("R19.1")
+def test_a_goal_read_as_accepted_from_its_start_is_missing_its_response_in_a_trace_heard_out() -> None:
+    """A trace that ends heard out (its end record): a NEXT whose child ran and was answered, its
+    response never heard.  At a client it was read as accepted from its start, and is still missing
+    its response (R19.1: a server responds in the step that takes a request)."""
+    talk = Trace()
+    talk.rows[0] = {**talk.rows[0], "tap": "client"}
+    talk.begin()
+    _stamped_status(talk, 1, "standby", 5, 100.0)
+    _next_request(talk, 1, 6)
+    request = talk.line
+    _stamped_status(talk, 2, "underway", 6, 101.0)
+    talk.feedback(1, "underway", 6).result(1, "succeeded", "completed", 6)
+    _stamped_status(talk, 1, "standby", 6, 102.0)
+    talk.add("end")
+    assert found(talk.check()) == [(request, "R19.1", "response_missing")]
+
+
 @pytest.mark.spec("R4.13", "R4.16")
 def test_a_cancel_refused_at_a_client_before_it_hears_the_childs_end_may_have_come_after_that_end() -> None:
     """Seen at a client across a lossy link: a CANCEL of the running child, delivered after the child's

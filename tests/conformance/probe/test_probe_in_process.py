@@ -1698,9 +1698,15 @@ class _NetworkBlackoutLink(_BlackoutLink):
 
     channels_lag = True
 
-    def __init__(self, config: ServeConfig, after: int, length: float, *, query_held: bool = False) -> None:
-        self.query_held = query_held
+    def __init__(
+        self, config: ServeConfig, after: int, length: float, *, query_held: bool = False, lost: bool = False
+    ) -> None:
+        self.query_held, self.lost = query_held, lost
         super().__init__(config, after, length)
+
+    def hear_response(self, exchange: probe_runner.Exchange, accepted: bool) -> None:
+        if not (self.lost and self.up_at is not None and self.now < self.up_at):
+            super().hear_response(exchange, accepted)  # ``lost``: a response in the blackout never comes
 
     def describe(self, timeout: float) -> tuple[Any, str]:
         if self.query_held and self.up_at is not None and self.now < self.up_at:
@@ -1714,8 +1720,9 @@ def test_a_silence_of_the_actions_channel_while_the_query_answers_is_the_links_l
     """Found at 30% loss across hosts: the action's responses held back 40 s (one lost, the rest
     behind it), past the three cases' waits and the wait once more, and the probe took the server
     as having stopped answering (38 of 41 cases not run).  Over a network, a server that answers its
-    description query then is answering: the run goes on, and no case fails for the lag.  Where the
-    query is held back too, the server is taken as silent, as before."""
+    description query then is answering: the run goes on, and no case fails for the lag, nor for a
+    response the link lost for good (not run, saying so).  Where the query is held back too, the
+    server is taken as silent, as before."""
     options = attrs.evolve(OPTIONS, deadline=1000)
     gap = (probe_runner.SILENT_AFTER + 2) * options.timeout + options.timeout / 2  # past the wait once more
     link = _NetworkBlackoutLink(CONFIG, 4, gap)
@@ -1728,6 +1735,11 @@ def test_a_silence_of_the_actions_channel_while_the_query_answers_is_the_links_l
     held = _NetworkBlackoutLink(CONFIG, 4, gap, query_held=True)
     stopped = probe_runner.run_cases(held, options, list(CASES), lambda _: None)
     assert sum(f.seen.startswith(probe_runner.STOPPED_ANSWERING) for f in stopped) > len(CASES) // 2, stopped
+    # responses the link lost for good, while the server answered its query: no verdict, saying why
+    lossy = _NetworkBlackoutLink(CONFIG, 4, gap, lost=True)
+    lost = probe_runner.run_cases(lossy, options, list(CASES), lambda _: None)
+    assert [f for f in lost if f.verdict is Verdict.FAIL] == [], lost
+    assert sum(f.seen.startswith(probe_runner.HELD_BACK) for f in lost) >= probe_runner.SILENT_AFTER, lost
 
 
 class _SlowCancelLink(_LaggingLink):

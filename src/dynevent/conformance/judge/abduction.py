@@ -67,6 +67,7 @@ class GoalSeen:
     stopped: bool = False  # its answer says its child was cancelled
     owed: bool = False  # dropped from the state on resynchronisation: its answers are not judged
     heard: bool = True  # False: its response was read from its feedback or answer, never heard
+    refusable: bool = False  # seen apart: a state the server passed through since its request refuses it
 
     def respond(self, accepted: bool) -> None:
         """The server answered the request: accepted or refused."""
@@ -75,6 +76,10 @@ class GoalSeen:
     def unheard(self) -> None:
         """Its response was never heard: read as accepted from its feedback or answer."""
         self.heard = False
+
+    def refusable_since(self) -> None:
+        """Seen apart: a state the server passed through since its request refuses it."""
+        self.refusable = True
 
     def heard_late(self) -> None:
         """The response it was read without came after all, past the records looked ahead."""

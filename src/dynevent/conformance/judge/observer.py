@@ -397,9 +397,14 @@ class _Goals:
         """A client requested ``goal`` as ``uuid``, on ``line``, the record judged now."""
         self._seen[uuid] = GoalSeen(goal=goal, line=line, order=self._replica.order)
 
-    def unresponded(self) -> list[tuple[str, GoalSeen]]:
-        """The goals requested in the trace whose response it never shows, in the order requested."""
-        found = [(uuid, seen) for uuid, seen in self._seen.items() if seen.line and not seen.responded]
+    def unresponded(self, *, unheard: bool = False) -> list[tuple[str, GoalSeen]]:
+        """The goals requested in the trace whose response it never shows, in the order requested;
+        ``unheard``: those read as accepted from their start, their response never heard, too."""
+        found = [
+            (uuid, seen)
+            for uuid, seen in self._seen.items()
+            if seen.line and (not seen.responded or (unheard and not seen.heard))
+        ]
         return sorted(found, key=lambda item: item[1].line)
 
     def bind_unknown(self, uuid: str, running_goal: bool = True) -> GoalSeen | None:
@@ -564,6 +569,7 @@ class _Requests(_Part):
             decision = machine.accept(self.replica.st, seen.goal, self.replica.config_for(seen.goal))
             if isinstance(decision, outs.Rejected):
                 refusals.setdefault(decision.reason, decision)
+                seen.refusable_since()
 
     def refused_earlier(self, uuid: str, record: Record) -> bool:
         """Seen apart: a state the server passed through after the request was sent, before the
@@ -854,6 +860,7 @@ class _Runs(_Part):
         # the records were seen away from the server (a client, a recorder on the network): a step's
         # answers may come after its status, on another channel
         self.apart = apart
+        self.client = header.tap == "client"  # a tap at a client, whose channels lag one another
         self.event_id_pending = False
         self.begin_seen = False
         # the trace opened with a begin: a tap at a client may have read it latched, long after it
@@ -1028,7 +1035,7 @@ class _Runs(_Part):
                 found, best = (state, owed), rank
         if found is None:
             found = self.ended_unanswered(message)
-        if found is None and self.apart:
+        if found is None and self.client:
             found = self.started_unheard(record)
         if found is not None:
             state, owed = found
@@ -1045,16 +1052,20 @@ class _Runs(_Part):
         )
 
     def started_unheard(self, record: Record) -> tuple[State, list[Owed]] | None:
-        """Seen apart, a status no candidate explains: the start of a goal awaiting its response, none
-        ahead, that the machine accepts now and whose start publishes that status; the first such in
-        the order requested, taken as accepted, its response unheard (a lossy link holds responses
-        back, or loses them, while statuses come on their own channel: found at 30% loss, a NEXT's
-        child and a FINISHED's end of the run heard, their responses never)."""
+        """At a client, a status no candidate explains: the start of a goal awaiting its response, none
+        ahead, that the machine accepts now, no state since its request refused (its response may be
+        that refusal, heard later), and whose start publishes that status; where exactly one goal
+        does, it is taken as accepted, its response unheard (a lossy link holds responses back, or
+        loses them, while statuses come on their own channel: found at 30% loss, a NEXT's child and a
+        FINISHED's end of the run heard, their responses never)."""
         replica = self.replica
         ahead = {item.goal_uuid for item in self.ahead.records if item.kind == "goal_response"}
+        found: list[tuple[GoalSeen, tuple[State, list[Owed]]]] = []
         for uuid, seen in self.goals.unresponded():
             config = replica.config_for(seen.goal)
-            if uuid in ahead or not isinstance(machine.accept(replica.st, seen.goal, config), outs.Accepted):
+            if uuid in ahead or seen.refusable:
+                continue
+            if not isinstance(machine.accept(replica.st, seen.goal, config), outs.Accepted):
                 continue
             requested = ins.GoalRequested(goal_uuid=uuid, goal=seen.goal, now=replica.now)
             accepted, _ = replica.simulate([requested])
@@ -1062,11 +1073,15 @@ class _Runs(_Part):
                 state, owed = replica.simulate([requested, *events])
                 published = [item.output for item in owed if isinstance(item.output, outs.PublishStatus)]
                 if published and same_status(published[-1].message, record.message):
-                    seen.respond(True)
-                    seen.unheard()
-                    replica.learn(seen.goal)
-                    return state, owed
-        return None
+                    found.append((seen, (state, owed)))
+                    break
+        if len(found) != 1:
+            return None
+        seen, explained = found[0]
+        seen.respond(True)
+        seen.unheard()
+        replica.learn(seen.goal)
+        return explained
 
     def finished_unseen(self, state: State) -> State:
         """Seen apart from the server, a new run's begin while a FINISHED of the active run is
@@ -1477,13 +1492,14 @@ class _Answers(_Part):
 
     def heard_out(self) -> None:
         """At a trace's ``end`` record, where the tap heard the server out: every goal request the
-        trace shows, never responded to, is missing its response, and so is every action-level cancel
+        trace shows, never responded to (or read as accepted from its start, its response never
+        heard), is missing its response, and so is every action-level cancel
         request (a server responds in the step that takes a request, R19.1); and every accepted goal
         the state still holds queued has started (the transport starts a goal it accepted, R5, no
         client's doing), so that an answer its start owes, never seen, is missing too.  Each is
         reported at the request."""
         missing = Violation.RESPONSE_MISSING
-        for uuid, seen in self.goals.unresponded():
+        for uuid, seen in self.goals.unresponded(unheard=True):
             self.findings.differs(
                 missing.rule, missing.code, f"goal {uuid}'s request never responded to (by the trace's end)",
                 f"a response, accepted or rejected ({missing.rule})", line=seen.line,

@@ -406,6 +406,12 @@ class Options:
 #: probe takes it as silent and reports the rest as not run (the vector runner stops after three
 #: timeouts in a row too).
 SILENT_AFTER = 3
+#: Why a case of a silence of the action's channel, while the server answered its description query,
+#: is not run where its response never came (:func:`_answers_aside`).
+HELD_BACK = (
+    "the action's responses were held back on the link (the server answered its description query "
+    "meanwhile), and this case's never came"
+)
 
 #: Why the cases after :data:`SILENT_AFTER` timeouts in a row are not run.
 STOPPED_ANSWERING = (
@@ -524,6 +530,8 @@ class Probe:
         #: whether the server had sent the probe anything (a status, an answer to a query) before them
         self.heard_before_silence = False
         self.silence_waited = False  # a silence was waited out once more (_hear_out_silence) in vain
+        #: the cases of a silence the server's description query then showed the link's (_answers_aside)
+        self.held_back: list[str] = []
         self.status_waited = False  # the first status was waited for once more (_hear_out_status)
         #: the cases that sent a goal request and heard no response to it
         self.unresponded: set[str] = set()
@@ -2209,7 +2217,10 @@ def _hear_out_silence(probe: Probe) -> None:
     if not probe.silent or not probe.heard_before_silence or probe.silence_waited or probe.past_deadline:
         return
     heard = probe.link.heard
-    if probe.link.wait(lambda: probe.link.heard != heard, probe.timeout) or _answers_aside(probe):
+    if probe.link.wait(lambda: probe.link.heard != heard, probe.timeout):
+        probe.silent_cases = []
+    elif _answers_aside(probe):
+        probe.held_back.extend(probe.silent_cases)
         probe.silent_cases = []
     else:
         probe.silence_waited = True  # waited out once: the server is taken as silent
@@ -2262,14 +2273,17 @@ def _fell_silent(probe: Probe, finding: CaseFinding) -> CaseFinding:
     as having stopped answering (:attr:`Probe.silent`), whose goal request heard no response, where
     the server had responded to goal requests before: a server that responds to no request any more,
     mid-run, is not told from a link that has gone down, so the case is not run, saying why, like
-    those after it.  A server that never responded, or a wait for a status or an answer that
-    never came while requests were responded to, is failed for it."""
+    those after it.  So is one of a silence the server's description query showed the link's
+    (:data:`HELD_BACK`): its response held back on a channel that lost it.  A server that never
+    responded, or a wait for a status or an answer that never came while requests were responded
+    to, is failed for it."""
     silence = probe.silent and probe.answered_before_silence and finding.case.id in probe.silent_cases
-    if not (silence and finding.case.id in probe.unresponded):
+    held = finding.case.id in probe.held_back
+    if not ((silence or held) and finding.case.id in probe.unresponded):
         return finding
     if finding.verdict is not Verdict.FAIL or not finding.absent:
         return finding
-    seen = f"{STOPPED_ANSWERING}, from this case on ({finding.seen})"
+    seen = f"{HELD_BACK if held else STOPPED_ANSWERING + ', from this case on'} ({finding.seen})"
     return attrs.evolve(finding, verdict=Verdict.MISSING, seen=seen, absent=False, by_link=True)
 
 
@@ -2288,11 +2302,12 @@ def _lossy(finding: CaseFinding, lost: str) -> CaseFinding:
 
 def _losses(link: Link, findings: list[CaseFinding]) -> str | None:
     """What shows the link lost or delayed the server's messages during the run: statuses its writer
-    numbered that never came, and cases whose messages came after ``--timeout`` or were lost."""
+    numbered that never came, and cases whose messages came after ``--timeout``, were lost, or were
+    held back while the server answered its description query."""
     seen = []
     if link.statuses_missed:
         seen.append(f"{link.statuses_missed} status(es) published and never delivered")
-    prefixes = (LATE.split("{", 1)[0], FEEDBACK_LOST.split("{", 1)[0])
+    prefixes = (LATE.split("{", 1)[0], FEEDBACK_LOST.split("{", 1)[0], HELD_BACK)
     late = sum(1 for finding in findings if finding.seen.startswith(prefixes))
     if late:
         seen.append(f"{late} case(s) whose messages came late or were lost")
