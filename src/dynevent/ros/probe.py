@@ -196,19 +196,21 @@ class RosLink(Link):
 
     def describe(self, timeout: float) -> tuple[Any, str]:
         """The description query's answer (R16), or None and why there is none: no service type in
-        this installation, no service for the robot, or no answer within ``timeout``."""
+        this installation, no service for the robot, or no answer within ``timeout`` (the service's
+        discovery included)."""
         service = convert.describe_type()
         if service is None:
             return None, "this installation's rmf_task_msgs has no DescribeDynamicEvent service type"
         if self._describer is None:  # one client for the run: a query after the first needs no discovery
             self._describer = self._node.create_client(service, description_service(self.fleet, self.robot))
         client = self._describer
+        deadline = time.monotonic() + timeout  # the service found and its answer, within ``timeout`` in all
         if not client.wait_for_service(timeout_sec=min(timeout, _SERVICE_WAIT)):
             return None, f"no description service {description_service(self.fleet, self.robot)}"
         answered = threading.Event()
         future = client.call_async(service.Request())
         future.add_done_callback(lambda _: answered.set())
-        if not answered.wait(timeout):
+        if not answered.wait(max(deadline - time.monotonic(), 0.0)):
             return None, f"the description service did not answer within {timeout:g} s"
         return future.result(), ""
 
