@@ -1742,6 +1742,28 @@ def test_a_silence_of_the_actions_channel_while_the_query_answers_is_the_links_l
     assert sum(f.seen.startswith(probe_runner.HELD_BACK) for f in lost) >= probe_runner.SILENT_AFTER, lost
 
 
+class _GoalsUnansweredLink(InProcessLink):
+    """Over a network: a server that publishes its status and answers its description query, and never
+    takes a goal request (its action server hung)."""
+
+    channels_lag = True
+
+    def deliver(self, exchange: probe_runner.Exchange) -> None:
+        return
+
+
+@pytest.mark.spec("R16.1", "R19.1")
+def test_a_server_that_answers_its_query_and_never_a_goal_fails_the_cases_that_asked_it() -> None:
+    """The description query asked in a silence shows the link's lag only for a server that had
+    responded to goal requests before: one that never responded to any, while it answers its query,
+    fails the cases that waited for a response (none is put down to the link)."""
+    findings = probe_runner.run_cases(
+        _GoalsUnansweredLink(CONFIG), attrs.evolve(OPTIONS, deadline=1000), list(CASES), lambda _: None
+    )
+    assert any(f.verdict is Verdict.FAIL and f.absent for f in findings), findings
+    assert not any(f.seen.startswith(probe_runner.HELD_BACK) for f in findings), findings
+
+
 class _SlowCancelLink(_LaggingLink):
     """The lagging link whose responses to action-level cancels come ``cancel_lag`` seconds after the
     server gave them."""

@@ -2220,7 +2220,8 @@ def _hear_out_silence(probe: Probe) -> None:
     if probe.link.wait(lambda: probe.link.heard != heard, probe.timeout):
         probe.silent_cases = []
     elif _answers_aside(probe):
-        probe.held_back.extend(probe.silent_cases)
+        if probe.answered_before_silence:  # a server that never responded to a goal is failed for it
+            probe.held_back.extend(probe.silent_cases)
         probe.silent_cases = []
     else:
         probe.silence_waited = True  # waited out once: the server is taken as silent
@@ -2274,11 +2275,14 @@ def _fell_silent(probe: Probe, finding: CaseFinding) -> CaseFinding:
     the server had responded to goal requests before: a server that responds to no request any more,
     mid-run, is not told from a link that has gone down, so the case is not run, saying why, like
     those after it.  So is one of a silence the server's description query showed the link's
-    (:data:`HELD_BACK`): its response held back on a channel that lost it.  A server that never
+    (:data:`HELD_BACK`), where the server had responded to goal requests before: its response held
+    back on a channel that lost it.  A server that never
     responded, or a wait for a status or an answer that never came while requests were responded
     to, is failed for it."""
     silence = probe.silent and probe.answered_before_silence and finding.case.id in probe.silent_cases
-    held = finding.case.id in probe.held_back
+    held = finding.case.id in probe.held_back and any(
+        made.accepted is None for made in probe.unanswered.get(finding.case.id, [])
+    )  # its response still never came
     if not ((silence or held) and finding.case.id in probe.unresponded):
         return finding
     if finding.verdict is not Verdict.FAIL or not finding.absent:
