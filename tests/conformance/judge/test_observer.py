@@ -409,6 +409,23 @@ def _stamped_status(talk: Trace, phase: int, status: str, event_id: int, at: flo
     talk.add("status", message=message)
 
 
+def _next_request(talk: Trace, n: int, event_id: int) -> None:
+    """Goal ``n``'s request: a NEXT of run 1 with id ``event_id``, no response."""
+    talk.add("goal", goal_uuid=uuid(n), goal={"dynamic_event_seq": 1, "event_type": 1,
+             "category": "go_to_place", "description": '"pantry"', "id": event_id})  # fmt: skip
+
+
+def _next_awaiting(tap: str = "client") -> Trace:
+    """A trace at ``tap``: run 1 begun, its status standby (event 5), and NEXT 1 (id 6) requested, its
+    response not (yet) heard."""
+    talk = Trace()
+    talk.rows[0] = {**talk.rows[0], "tap": tap}
+    talk.begin()
+    _stamped_status(talk, 1, "standby", 5, 100.0)
+    _next_request(talk, 1, 6)
+    return talk
+
+
 def _logged_feedback(talk: Trace, n: int, event_id: int, seq: int, at: float) -> None:
     """Goal ``n``'s feedback carrying log entry ``seq``, made ``at`` (seconds)."""
     entry = {"seq": seq, "tier": "info", "unix_millis_time": round(at * 1000), "text": "moving"}
@@ -424,12 +441,7 @@ def test_a_goal_whose_response_a_client_never_heard_is_read_as_accepted_from_its
     the late feedback as sent before the status (their stamps are the server's).  The answer never
     came: missing, but as an open item of the judge (``answer_lost``), since the client that lost the
     response may have lost the answer the same way."""
-    talk = Trace()
-    talk.rows[0] = {**talk.rows[0], "tap": "client"}
-    talk.begin()
-    _stamped_status(talk, 1, "standby", 5, 100.0)
-    talk.add("goal", goal_uuid=uuid(1), goal={"dynamic_event_seq": 1, "event_type": 1,
-             "category": "go_to_place", "description": '"pantry"', "id": 6})  # fmt: skip
+    talk = _next_awaiting()
     talk.feedback(1, "underway", 6)
     _stamped_status(talk, 2, "underway", 6, 101.0)
     _logged_feedback(talk, 1, 6, 0, 102.0)
@@ -454,12 +466,7 @@ def test_statuses_heard_of_goals_whose_responses_never_came_are_read_as_their_st
     it, go before it (feedback comes in the order sent); the INACTIVE status is the FINISHED's end of
     the run.  Only the NEXT's answer is missing, as an open item (``answer_lost``).  At the server's
     own tap nothing is held back: the statuses of goals never responded to disagree with the state."""
-    talk = Trace()
-    talk.rows[0] = {**talk.rows[0], "tap": tap}
-    talk.begin()
-    _stamped_status(talk, 1, "standby", 5, 100.0)
-    talk.add("goal", goal_uuid=uuid(1), goal={"dynamic_event_seq": 1, "event_type": 1,
-             "category": "go_to_place", "description": '"pantry"', "id": 6})  # fmt: skip
+    talk = _next_awaiting(tap)
     _stamped_status(talk, 2, "underway", 6, 101.0)  # before any feedback of the child
     running = talk.line
     _stamped_status(talk, 1, "standby", 6, 108.0)  # its end
@@ -484,12 +491,7 @@ def test_a_response_heard_after_its_goal_was_read_as_accepted_from_its_start(acc
     link sent it again 30 s late), its start and answer heard long before, so that the goal was read
     as accepted.  An acceptance heard then agrees; a refusal contradicts the start the server
     showed (R19.1 response_mismatch).  Neither is a record the trace cannot hold."""
-    talk = Trace()
-    talk.rows[0] = {**talk.rows[0], "tap": "client"}
-    talk.begin()
-    _stamped_status(talk, 1, "standby", 5, 100.0)
-    talk.add("goal", goal_uuid=uuid(1), goal={"dynamic_event_seq": 1, "event_type": 1,
-             "category": "go_to_place", "description": '"pantry"', "id": 6})  # fmt: skip
+    talk = _next_awaiting()
     talk.feedback(1, "underway", 6)
     _stamped_status(talk, 2, "underway", 6, 101.0)
     talk.result(1, "succeeded", "completed", 6)
@@ -501,11 +503,6 @@ def test_a_response_heard_after_its_goal_was_read_as_accepted_from_its_start(acc
     report = talk.check()
     expected = [] if accepted else [(late, "R19.1", "response_mismatch")]
     assert found(report) == expected
-
-
-def _next_request(talk: Trace, n: int, event_id: int) -> None:
-    talk.add("goal", goal_uuid=uuid(n), goal={"dynamic_event_seq": 1, "event_type": 1,
-             "category": "go_to_place", "description": '"pantry"', "id": event_id})  # fmt: skip
 
 
 @pytest.mark.spec("R4.13", "R5.1", "R19.1")
@@ -539,11 +536,7 @@ def test_a_goal_read_as_accepted_from_its_start_is_missing_its_response_in_a_tra
     """A trace that ends heard out (its end record): a NEXT whose child ran and was answered, its
     response never heard.  At a client it was read as accepted from its start, and is still missing
     its response (R19.1: a server responds in the step that takes a request)."""
-    talk = Trace()
-    talk.rows[0] = {**talk.rows[0], "tap": "client"}
-    talk.begin()
-    _stamped_status(talk, 1, "standby", 5, 100.0)
-    _next_request(talk, 1, 6)
+    talk = _next_awaiting()
     request = talk.line
     _stamped_status(talk, 2, "underway", 6, 101.0)
     talk.feedback(1, "underway", 6).result(1, "succeeded", "completed", 6)
